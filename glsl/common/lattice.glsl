@@ -1,0 +1,89 @@
+// The global sample lattice (DESIGN invariant 1) and the one span-marching
+// function every march kernel uses. Sample k sits at t_k = t_enter + k * dt,
+// always computed from k; skipping moves k, never accumulates dt.
+// Needs ray.glsl, volume.glsl and tf.glsl.
+#ifndef LACUNA_LATTICE_GLSL
+#define LACUNA_LATTICE_GLSL
+
+struct March {
+    Ray ray;
+    float t_enter; // entry into the volume box (0 when the eye is inside)
+    float t_exit;  // exit from the volume box
+    float dt;
+    int k;         // next lattice index to sample
+    bool done;     // past t_exit, or terminated early
+    vec4 acc;      // premultiplied RGBA, front to back
+};
+
+float lattice_t(March m, int k) {
+    precise float t = m.t_enter + float(k) * m.dt;
+    return t;
+}
+
+// Sets up the march for a ray; false when the ray misses the volume box.
+bool march_begin(Ray ray, float dt, out March m) {
+    vec2 hit = intersect_box(ray, vec3(0.0), vec3(params.dims.xyz));
+    m.ray = ray;
+    m.t_enter = max(hit.x, 0.0);
+    m.t_exit = hit.y;
+    m.dt = dt;
+    m.k = 0;
+    m.acc = vec4(0.0);
+    m.done = !(m.t_enter < m.t_exit);
+    return !m.done;
+}
+
+// Advances k to the first lattice point at or past t (never backwards).
+void march_skip_to(inout March m, float t) {
+    if (m.done) {
+        return;
+    }
+    if (!(t < m.t_exit)) {
+        m.done = true;
+        return;
+    }
+    int k = max(m.k, int(ceil((t - m.t_enter) / m.dt)));
+    // ceil of a rounded quotient can be one off either way: fix it on t_k itself.
+    while (k > m.k && lattice_t(m, k - 1) >= t) {
+        k -= 1;
+    }
+    while (lattice_t(m, k) < t) {
+        k += 1;
+    }
+    m.k = k;
+    if (!(lattice_t(m, k) < m.t_exit)) {
+        m.done = true;
+    }
+}
+
+// Composites one sample of weight w voxels (opacity correction to unit length).
+void composite(inout March m, vec4 c, float w) {
+    if (c.a > 0.0) {
+        precise float a = 1.0 - pow(1.0 - min(c.a, 1.0), w);
+        precise float transmit = 1.0 - m.acc.a;
+        m.acc.rgb += transmit * a * c.rgb;
+        m.acc.a += transmit * a;
+    }
+}
+
+// Marches every lattice sample with t_k < t_end (and < t_exit), front to back.
+// Each sample stands for [t_k, t_k + dt) clipped to the box, so the last one
+// of the ray is weighted by its remaining length.
+void march_span(inout March m, float t_end) {
+    float stop = min(t_end, m.t_exit);
+    while (!m.done) {
+        float t = lattice_t(m, m.k);
+        if (!(t < stop)) {
+            break;
+        }
+        float w = min(m.dt, m.t_exit - t);
+        vec4 c = tf_lookup(sample_volume(m.ray.org + t * m.ray.dir));
+        composite(m, c, w);
+        m.k += 1;
+        if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {
+            m.done = true;
+        }
+    }
+}
+
+#endif

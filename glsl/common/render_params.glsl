@@ -1,0 +1,23 @@
+// Per-frame render parameters (std140 uniform block), written by
+// src/render/params.rs::RenderParams; keep both in the same order.
+#ifndef LACUNA_RENDER_PARAMS_GLSL
+#define LACUNA_RENDER_PARAMS_GLSL
+
+layout(std140, set = 0, binding = PARAMS_BINDING) uniform RenderParamsBlock {
+    // Pixel (x, y) maps to the point base + (x + 0.5) * du + (y + 0.5) * dv,
+    // all in voxel space (box [0, N] per axis, voxel i centred at i + 0.5).
+    vec4 base;
+    vec4 du;
+    vec4 dv;
+    // xyz: orthographic ray direction, or the perspective eye; w: 0 = ortho, 1 = perspective.
+    vec4 eye_or_dir;
+    // xyz: volume dimensions in voxels; w: transfer-function LUT entries.
+    uvec4 dims;
+    // x, y: image size in pixels.
+    uvec4 image;
+    // x: step dt in voxels; y: early-ray-termination alpha (> 1 = off);
+    // z, w: value normalisation, v = (texel - z) * w.
+    vec4 march;
+} params;
+
+#endif

@@ -1,0 +1,61 @@
+//! The one error type. Every variant renders as a single line that names what
+//! is wrong (a path, a dimension, a value, a device limit).
+
+use std::path::PathBuf;
+
+/// Result alias used across the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file exists but its contents are not what its format requires.
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+    /// A command-line or API value is malformed or out of range.
+    #[error("invalid {what} '{value}': {message}")]
+    Invalid { what: &'static str, value: String, message: String },
+    /// The request exceeds a limit of the Vulkan device.
+    #[error("{what} exceeds the device limit {limit} = {max} on {device}")]
+    DeviceLimit { what: String, limit: &'static str, max: u64, device: String },
+    /// No usable Vulkan driver or device.
+    #[error("{0}")]
+    NoDevice(String),
+    /// A Vulkan call failed.
+    #[error("Vulkan error in {call}: {result}")]
+    Vulkan { call: &'static str, result: ash::vk::Result },
+    /// GPU memory allocation failed.
+    #[error("GPU memory allocation for {what} failed: {message}")]
+    Memory { what: String, message: String },
+}
+
+impl Error {
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+
+    pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
+        Error::Format { path: path.into(), message: message.into() }
+    }
+
+    pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Invalid { what, value: value.into(), message: message.into() }
+    }
+}
+
+/// Attaches the failing Vulkan entry point to an `ash` result.
+pub(crate) trait VkContext<T> {
+    fn vk(self, call: &'static str) -> Result<T>;
+}
+
+impl<T> VkContext<T> for std::result::Result<T, ash::vk::Result> {
+    fn vk(self, call: &'static str) -> Result<T> {
+        self.map_err(|result| Error::Vulkan { call, result })
+    }
+}

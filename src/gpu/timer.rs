@@ -1,0 +1,95 @@
+//! GPU timestamps for named passes. Ticks are masked to the queue's
+//! `timestampValidBits` and scaled by `timestampPeriod` (ns per tick).
+
+use super::Context;
+use crate::error::{Error, Result, VkContext};
+use crate::timings::Timings;
+use ash::vk;
+
+pub struct Timer {
+    ctx: Context,
+    pool: vk::QueryPool,
+    capacity: u32,
+    passes: Vec<(String, u32)>,
+    open: Option<usize>,
+}
+
+/// Handle of a pass opened with [`Timer::begin`].
+#[derive(Clone, Copy, Debug)]
+pub struct Pass(usize);
+
+impl Timer {
+    /// A timer for up to `max_passes` passes per recording.
+    pub fn new(ctx: &Context, max_passes: u32) -> Result<Self> {
+        let capacity = max_passes.max(1) * 2;
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
+        let pool = unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        Ok(Timer { ctx: ctx.clone(), pool, capacity, passes: Vec::new(), open: None })
+    }
+
+    /// Whether this device's queue writes timestamps at all.
+    pub fn supported(&self) -> bool {
+        self.ctx.info().timestamp_valid_bits > 0 && self.ctx.info().timestamp_period > 0.0
+    }
+
+    /// Resets every query; record before the first pass of a recording.
+    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
+        self.passes.clear();
+        self.open = None;
+        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+    }
+
+    fn write(&self, cmd: vk::CommandBuffer, query: u32) {
+        // ALL_COMMANDS: the timestamp waits for all earlier work, so a pass
+        // measures its own commands, not the tail of the one before.
+        unsafe { self.ctx.device().cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, query) };
+    }
+
+    /// Opens pass `name`; passes do not nest.
+    pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Pass> {
+        assert!(self.open.is_none(), "timer pass opened while another is open");
+        let first = self.passes.len() as u32 * 2;
+        if first + 2 > self.capacity {
+            return Err(Error::invalid("timer pass", name, format!("more than {} passes in one recording", self.capacity / 2)));
+        }
+        self.write(cmd, first);
+        self.passes.push((name.to_string(), first));
+        self.open = Some(self.passes.len() - 1);
+        Ok(Pass(self.passes.len() - 1))
+    }
+
+    pub fn end(&mut self, cmd: vk::CommandBuffer, pass: Pass) {
+        assert_eq!(self.open, Some(pass.0), "timer pass ended out of order");
+        self.write(cmd, self.passes[pass.0].1 + 1);
+        self.open = None;
+    }
+
+    /// Reads the passes recorded since the last reset; call after the
+    /// submission completed. Empty when the queue has no timestamps.
+    pub fn results(&self) -> Result<Timings> {
+        let mut timings = Timings::default();
+        if self.passes.is_empty() || !self.supported() {
+            return Ok(timings);
+        }
+        let n = self.passes.len() as u32 * 2;
+        let mut ticks = vec![0u64; n as usize];
+        unsafe { self.ctx.device().get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
+            .vk("vkGetQueryPoolResults")?;
+        let info = self.ctx.info();
+        let mask = if info.timestamp_valid_bits >= 64 { u64::MAX } else { (1u64 << info.timestamp_valid_bits) - 1 };
+        for (name, first) in &self.passes {
+            let start = ticks[*first as usize] & mask;
+            let end = ticks[*first as usize + 1] & mask;
+            // Wraps around once at most within a pass.
+            let delta = end.wrapping_sub(start) & mask;
+            timings.push(name.clone(), delta as f64 * info.timestamp_period as f64 / 1e6);
+        }
+        Ok(timings)
+    }
+}
+
+impl Drop for Timer {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device().destroy_query_pool(self.pool, None) };
+    }
+}

@@ -1,0 +1,82 @@
+//! Validation messenger: collects every warning and error the Khronos
+//! validation layer (with synchronization validation) reports, so tests and
+//! `--validate` runs can fail on any of them instead of scrolling past logs.
+
+use ash::vk;
+use std::ffi::{c_void, CStr};
+use std::fmt;
+use std::sync::{Arc, Mutex};
+
+pub const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// One message reported by the validation layer.
+#[derive(Clone, Debug)]
+pub struct ValidationMessage {
+    pub severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    /// The VUID or hazard name, e.g. `SYNC-HAZARD-READ-AFTER-WRITE`.
+    pub id: String,
+    pub text: String,
+}
+
+impl fmt::Display for ValidationMessage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let sev = if self.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) { "error" } else { "warning" };
+        write!(f, "[{sev}] {}: {}", self.id, self.text)
+    }
+}
+
+pub(crate) type MessageStore = Arc<Mutex<Vec<ValidationMessage>>>;
+
+/// Owns the debug-utils messenger; the store outlives it through the `Arc`.
+pub(crate) struct Messenger {
+    loader: ash::ext::debug_utils::Instance,
+    handle: vk::DebugUtilsMessengerEXT,
+    // Boxed so the pointer handed to Vulkan stays put.
+    _user: Box<MessageStore>,
+    pub store: MessageStore,
+}
+
+unsafe extern "system" fn on_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user.is_null() {
+        return vk::FALSE;
+    }
+    let data = &*data;
+    let text = data.message_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let id = data.message_id_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let store = &*(user as *const MessageStore);
+    if let Ok(mut v) = store.lock() {
+        v.push(ValidationMessage { severity, id, text });
+    }
+    vk::FALSE
+}
+
+impl Messenger {
+    pub(crate) fn new(entry: &ash::Entry, instance: &ash::Instance) -> crate::Result<Self> {
+        use crate::error::VkContext;
+        let loader = ash::ext::debug_utils::Instance::new(entry, instance);
+        let store: MessageStore = Arc::new(Mutex::new(Vec::new()));
+        let user = Box::new(store.clone());
+        let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(on_message))
+            .user_data(&*user as *const MessageStore as *mut c_void);
+        let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
+        Ok(Messenger { loader, handle, _user: user, store })
+    }
+}
+
+impl Drop for Messenger {
+    fn drop(&mut self) {
+        unsafe { self.loader.destroy_debug_utils_messenger(self.handle, None) };
+    }
+}

@@ -1,0 +1,284 @@
+//! The `lacuna` command line: parses, calls the library, prints.
+
+use clap::{Args, Parser, Subcommand};
+use lacuna::gpu::{Context, ContextOptions};
+use lacuna::render::{self, Accel, Camera, Frame, Projection, RenderSettings, Renderer};
+use lacuna::volume::{BrickGrid, LoadOptions, RawLayout, BRICK};
+use lacuna::{Error, Result, TransferFunction, Volume};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "lacuna", version, about = "Vulkan direct volume renderer for comparing empty space skipping structures")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render one frame and print GPU time per pass.
+    Render(RenderArgs),
+    /// Describe a volume: dims, type, spacing, values; occupancy under a TF.
+    Info(InfoArgs),
+    /// Compare two EXR frames (exit 1 if --max-abs is exceeded, 2 on bad input).
+    Diff(DiffArgs),
+    /// List Vulkan devices (select one with LACUNA_DEVICE=<index or name>).
+    Devices,
+}
+
+#[derive(Args)]
+struct VolumeArgs {
+    /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
+    volume: String,
+    /// Dimensions of a raw file whose name does not give them (WxHxD).
+    #[arg(long, requires = "voxel_type")]
+    dims: Option<String>,
+    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
+    #[arg(long = "type", id = "voxel_type", requires = "dims")]
+    voxel_type: Option<String>,
+}
+
+impl VolumeArgs {
+    fn load(&self) -> Result<Volume> {
+        let raw = match (&self.dims, &self.voxel_type) {
+            (Some(d), Some(t)) => Some(RawLayout { dims: lacuna::volume::parse_dims(d)?, ty: lacuna::volume::parse_type(t)? }),
+            _ => None,
+        };
+        Volume::load(&self.volume, &LoadOptions { raw })
+    }
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
+    #[arg(long)]
+    tf: Option<String>,
+    /// Empty space skipping structure.
+    #[arg(long, default_value = "naive")]
+    accel: String,
+    /// Image size WxH.
+    #[arg(long, default_value = "1024x1024")]
+    size: String,
+    /// Orbit camera AZIMUTH,ELEVATION in degrees.
+    #[arg(long, default_value = "30,20", allow_hyphen_values = true)]
+    camera: String,
+    /// Perspective projection with this vertical field of view (degrees); default orthographic.
+    #[arg(long)]
+    perspective: Option<f64>,
+    /// Perspective eye distance from the centre, in bounding-sphere radii (default: fit).
+    #[arg(long, requires = "perspective")]
+    distance: Option<f64>,
+    /// Sample step in voxels.
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    step: f32,
+    /// Early ray termination at this accumulated alpha (default off).
+    #[arg(long, allow_hyphen_values = true)]
+    ert: Option<f32>,
+    /// Write the frame as OpenEXR (RGBA f32, premultiplied).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Enable Vulkan validation with synchronization validation; fail on any message.
+    #[arg(long)]
+    validate: bool,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Transfer function for occupancy (default: the generator's, if any).
+    #[arg(long)]
+    tf: Option<String>,
+}
+
+#[derive(Args)]
+struct DiffArgs {
+    a: PathBuf,
+    b: PathBuf,
+    /// Fail (exit 1) when the max abs difference exceeds this.
+    #[arg(long, allow_hyphen_values = true)]
+    max_abs: Option<f64>,
+    /// Write a PNG heatmap of per-pixel differences.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+}
+
+fn context(validate: bool) -> Result<Context> {
+    let mut options = ContextOptions::from_env();
+    options.validation |= validate;
+    Context::new(&options)
+}
+
+fn tf_for(spec: Option<&str>, volume: &Volume) -> Result<Option<TransferFunction>> {
+    match spec.map(str::to_string).or_else(|| volume.default_tf.clone()) {
+        Some(s) => Ok(Some(TransferFunction::parse(&s)?)),
+        None => Ok(None),
+    }
+}
+
+fn render(args: &RenderArgs) -> Result<ExitCode> {
+    // Validate every argument before any expensive work.
+    let accel: Accel = args.accel.parse()?;
+    let (width, height) = render::parse_size(&args.size)?;
+    let (azimuth_deg, elevation_deg) = Camera::parse_orbit(&args.camera)?;
+    let projection = match args.perspective {
+        Some(fov_deg) => Projection::Perspective { fov_deg, distance: args.distance },
+        None => Projection::Orthographic,
+    };
+    let settings = RenderSettings {
+        width,
+        height,
+        camera: Camera { azimuth_deg, elevation_deg, projection },
+        step: args.step,
+        ert: args.ert,
+    };
+    settings.validate()?;
+    if let Some(tf) = &args.tf {
+        TransferFunction::parse(tf)?;
+    }
+    let volume = args.volume.load()?;
+    let tf = tf_for(args.tf.as_deref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
+    settings.params(volume.dims, volume.spacing, volume.norm)?;
+
+    let ctx = context(args.validate)?;
+    let renderer = Renderer::new(&ctx)?;
+    let gpu_volume = lacuna::volume::GpuVolume::upload(&ctx, &volume)?;
+    let lut = tf.upload(&ctx)?;
+    let (mut frame, timings) = renderer.render(accel, &gpu_volume, &lut, &settings)?;
+
+    let info = ctx.info();
+    println!("device  {} ({})", info.name, info.driver);
+    println!("volume  {} ({}x{}x{} {})", volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type);
+    println!("tf      {}", tf.spec);
+    println!("frame   {width}x{height}, {}, step {}, accel {accel}", settings.camera.describe(), settings.step);
+    println!("GPU time per pass:\n{timings}");
+    if let Some(out) = &args.out {
+        let meta = &mut frame.metadata;
+        meta.insert("volume".into(), volume.name.clone());
+        meta.insert("tf".into(), tf.spec.clone());
+        meta.insert("accel".into(), accel.to_string());
+        meta.insert("camera".into(), settings.camera.describe());
+        meta.insert("step".into(), settings.step.to_string());
+        meta.insert("ert".into(), settings.ert.map_or("off".into(), |e| e.to_string()));
+        meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
+        meta.insert("gpu_ms".into(), format!("{:.4}", timings.get("march").unwrap_or(f64::NAN)));
+        frame.write_exr(out)?;
+        println!("wrote {}", out.display());
+    }
+    let messages = ctx.take_validation_messages();
+    if !messages.is_empty() {
+        for m in &messages {
+            eprintln!("validation: {m}");
+        }
+        eprintln!("error: {} Vulkan validation message(s)", messages.len());
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn info(args: &InfoArgs) -> Result<ExitCode> {
+    if let Some(tf) = &args.tf {
+        TransferFunction::parse(tf)?;
+    }
+    let v = args.volume.load()?;
+    println!("volume   {}", v.name);
+    println!("dims     {}x{}x{} ({} voxels)", v.dims[0], v.dims[1], v.dims[2], v.voxel_count());
+    println!("type     {}", v.source_type);
+    println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
+    println!("values   {} .. {}", v.value_range[0], v.value_range[1]);
+    let mut bins = [0u64; 10];
+    for i in 0..v.data.len() {
+        let n = v.normalize(v.data.texel(i));
+        bins[((n * 10.0) as usize).min(9)] += 1;
+    }
+    let total = v.voxel_count() as f64;
+    println!("histogram of normalised values (10 bins, % of voxels):");
+    let cells: Vec<String> = bins.iter().enumerate().map(|(i, c)| format!("[{:.1},{:.1}{} {:.2}", i as f32 / 10.0, (i + 1) as f32 / 10.0, if i == 9 { "]" } else { ")" }, 100.0 * *c as f64 / total)).collect();
+    for row in cells.chunks(5) {
+        println!("  {}", row.join("  "));
+    }
+    if let Some(tf) = tf_for(args.tf.as_deref(), &v)? {
+        let visible = (0..v.data.len()).filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0).count();
+        let grid = BrickGrid::new(&v, BRICK, 1);
+        let active = grid.active(&tf).iter().filter(|a| **a).count();
+        println!("tf       {}", tf.spec);
+        println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
+        println!("active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)", 100.0 * active as f64 / grid.len() as f64, BRICK, active, grid.len());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn diff(args: &DiffArgs) -> Result<ExitCode> {
+    if let Some(m) = args.max_abs {
+        if !(m >= 0.0) {
+            return Err(Error::invalid("max-abs", m.to_string(), "must be a number >= 0"));
+        }
+    }
+    let a = Frame::read_exr(&args.a)?;
+    let b = Frame::read_exr(&args.b)?;
+    let stats = render::diff(&a, &b)?;
+    println!("{stats}");
+    if let Some(path) = &args.heatmap {
+        render::diff::write_heatmap(&a, &b, path, None)?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(m) = args.max_abs {
+        if stats.max_abs > m {
+            eprintln!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
+            return Ok(ExitCode::from(1));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn devices() -> Result<ExitCode> {
+    let list = lacuna::gpu::list_devices()?;
+    if list.is_empty() {
+        return Err(Error::NoDevice("no Vulkan device found; install a driver (Debian: apt install mesa-vulkan-drivers libvulkan1)".into()));
+    }
+    for d in list {
+        println!(
+            "{}: {} ({}, Vulkan {}, {}){}",
+            d.index,
+            d.name,
+            d.device_type,
+            d.api,
+            d.driver,
+            if d.usable { "" } else { " [unusable: needs Vulkan 1.3, compute, VK_KHR_push_descriptor]" }
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+                let _ = e.print();
+                return ExitCode::from(if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand { 2 } else { 0 });
+            }
+            // One line: clap's first line names the bad argument.
+            let text = e.render().to_string();
+            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            return ExitCode::from(2);
+        }
+    };
+    let result = match &cli.command {
+        Command::Render(a) => render(a),
+        Command::Info(a) => info(a),
+        Command::Diff(a) => diff(a),
+        Command::Devices => devices(),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! Orbit camera (azimuth, elevation about the volume centre; y up) with an
+//! orthographic projection fitted to the projected volume box, or a
+//! perspective one. Built in physical space, handed to shaders in voxel space.
+
+use super::params::RenderParams;
+use crate::error::{Error, Result};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Zoomed so the projected volume box fills the viewport (the paper's setup).
+    Orthographic,
+    /// Vertical field of view in degrees; `distance` from the volume centre in
+    /// units of the box's bounding-sphere radius (None: the sphere just fits;
+    /// below 1 the eye can sit inside the volume).
+    Perspective { fov_deg: f64, distance: Option<f64> },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub azimuth_deg: f64,
+    pub elevation_deg: f64,
+    pub projection: Projection,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { azimuth_deg: 30.0, elevation_deg: 20.0, projection: Projection::Orthographic }
+    }
+}
+
+/// (sin, cos) of an angle in degrees, exact at multiples of 90 so
+/// axis-aligned views have direction components that are exactly 0.
+fn sincos_deg(deg: f64) -> (f64, f64) {
+    let quarter = deg / 90.0;
+    if quarter.fract() == 0.0 {
+        return match (quarter as i64).rem_euclid(4) {
+            0 => (0.0, 1.0),
+            1 => (1.0, 0.0),
+            2 => (0.0, -1.0),
+            _ => (-1.0, 0.0),
+        };
+    }
+    deg.to_radians().sin_cos()
+}
+
+type V3 = [f64; 3];
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn scale(a: V3, s: f64) -> V3 {
+    a.map(|c| c * s)
+}
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+impl Camera {
+    /// Parses `AZIMUTH,ELEVATION` in degrees.
+    pub fn parse_orbit(s: &str) -> Result<(f64, f64)> {
+        let bad = || Error::invalid("camera", s, "expected AZIMUTH,ELEVATION in degrees");
+        let (a, e) = s.split_once(',').ok_or_else(bad)?;
+        let a: f64 = a.trim().parse().map_err(|_| bad())?;
+        let e: f64 = e.trim().parse().map_err(|_| bad())?;
+        if !a.is_finite() || !e.is_finite() {
+            return Err(bad());
+        }
+        Ok((a, e))
+    }
+
+    pub fn describe(&self) -> String {
+        match self.projection {
+            Projection::Orthographic => format!("ortho az={} el={}", self.azimuth_deg, self.elevation_deg),
+            Projection::Perspective { fov_deg, distance } => format!(
+                "persp az={} el={} fov={} distance={}",
+                self.azimuth_deg,
+                self.elevation_deg,
+                fov_deg,
+                distance.map_or("fit".to_string(), |d| d.to_string())
+            ),
+        }
+    }
+
+    /// The camera part of `RenderParams` for a volume of `dims` voxels with
+    /// `spacing`, rendered at `width` x `height`.
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+        if let Projection::Perspective { fov_deg, distance } = self.projection {
+            if !(fov_deg > 0.0 && fov_deg < 180.0) {
+                return Err(Error::invalid("field of view", fov_deg.to_string(), "must be in (0, 180) degrees"));
+            }
+            if distance.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
+                return Err(Error::invalid("camera distance", format!("{distance:?}"), "must be finite and >= 0"));
+            }
+        }
+        let extent: V3 = [0, 1, 2].map(|a| dims[a] as f64 * spacing[a] as f64);
+        let centre = scale(extent, 0.5);
+        let radius = dot(centre, centre).sqrt();
+        let (sa, ca) = sincos_deg(self.azimuth_deg);
+        let (se, ce) = sincos_deg(self.elevation_deg);
+        let to_eye: V3 = [ce * sa, se, ce * ca];
+        let forward = scale(to_eye, -1.0);
+        let right: V3 = [ca, 0.0, -sa];
+        let up = cross(right, forward);
+        let (w, h) = (width as f64, height as f64);
+        let to_voxel = |p: V3| [0, 1, 2].map(|a| (p[a] / spacing[a] as f64) as f32);
+        let v4 = |p: [f32; 3], w: f32| [p[0], p[1], p[2], w];
+        let mut params = RenderParams::default();
+        match self.projection {
+            Projection::Orthographic => {
+                let mut half = [0.0f64; 2];
+                for i in 0..8 {
+                    let corner = [0, 1, 2].map(|a| if i >> a & 1 == 1 { centre[a] } else { -centre[a] });
+                    half[0] = half[0].max(dot(corner, right).abs());
+                    half[1] = half[1].max(dot(corner, up).abs());
+                }
+                let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
+                // Ray origins on a plane in front of the whole volume.
+                let plane = add(centre, scale(to_eye, radius + 1.0));
+                let base = add(add(plane, scale(right, -pixel * w / 2.0)), scale(up, pixel * h / 2.0));
+                params.base = v4(to_voxel(base), 0.0);
+                params.du = v4(to_voxel(scale(right, pixel)), 0.0);
+                params.dv = v4(to_voxel(scale(up, -pixel)), 0.0);
+                let d = to_voxel(forward);
+                let n = (d.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
+                params.eye_or_dir = v4(d.map(|c| (c as f64 / n) as f32), 0.0);
+            }
+            Projection::Perspective { fov_deg, distance } => {
+                let half_fov = (fov_deg / 2.0).to_radians();
+                let dist = distance.map_or(radius / half_fov.sin(), |d| d * radius);
+                let eye = add(centre, scale(to_eye, dist));
+                let hh = half_fov.tan();
+                let hw = hh * w / h;
+                let base = add(add(add(eye, forward), scale(right, -hw)), scale(up, hh));
+                params.base = v4(to_voxel(base), 0.0);
+                params.du = v4(to_voxel(scale(right, 2.0 * hw / w)), 0.0);
+                params.dv = v4(to_voxel(scale(up, -2.0 * hh / h)), 0.0);
+                params.eye_or_dir = v4(to_voxel(eye), 1.0);
+            }
+        }
+        params.dims = [dims[0], dims[1], dims[2], crate::tf::LUT_SIZE as u32];
+        params.image = [width, height, 0, 0];
+        Ok(params)
+    }
+}

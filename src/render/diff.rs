@@ -1,0 +1,103 @@
+//! Frame comparison: rmse, psnr, max abs difference over all RGBA channels,
+//! and the count of pixels that differ at all; optional PNG heatmap.
+
+use super::frame::{write_atomically, Frame};
+use crate::error::{Error, Result};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct DiffStats {
+    pub rmse: f64,
+    /// Peak signal 1.0; infinite for identical frames.
+    pub psnr: f64,
+    pub max_abs: f64,
+    /// Pixels where any channel differs (bitwise; NaN equals only itself).
+    pub differing: u64,
+    pub pixels: u64,
+}
+
+impl std::fmt::Display for DiffStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "rmse {:.6e}  psnr {}  max_abs {:.6e}  differing {} of {} pixels",
+            self.rmse,
+            if self.psnr.is_infinite() { "inf dB".to_string() } else { format!("{:.2} dB", self.psnr) },
+            self.max_abs,
+            self.differing,
+            self.pixels
+        )
+    }
+}
+
+fn channel_diff(a: f32, b: f32) -> f64 {
+    if a.to_bits() == b.to_bits() {
+        0.0
+    } else if a.is_finite() && b.is_finite() {
+        (a as f64 - b as f64).abs()
+    } else {
+        f64::INFINITY
+    }
+}
+
+fn pixel_diff(a: [f32; 4], b: [f32; 4]) -> f64 {
+    (0..4).map(|c| channel_diff(a[c], b[c])).fold(0.0, f64::max)
+}
+
+pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(Error::invalid(
+            "frames",
+            format!("{}x{} vs {}x{}", a.width, a.height, b.width, b.height),
+            "sizes differ",
+        ));
+    }
+    let mut sum = 0.0f64;
+    let mut max_abs = 0.0f64;
+    let mut differing = 0u64;
+    for (pa, pb) in a.pixels.iter().zip(&b.pixels) {
+        let mut any = false;
+        for c in 0..4 {
+            let d = channel_diff(pa[c], pb[c]);
+            any |= pa[c].to_bits() != pb[c].to_bits();
+            sum += d * d;
+            max_abs = max_abs.max(d);
+        }
+        differing += any as u64;
+    }
+    let n = (a.pixels.len() * 4).max(1) as f64;
+    let rmse = (sum / n).sqrt();
+    let psnr = if rmse == 0.0 { f64::INFINITY } else { 20.0 * (1.0 / rmse).log10() };
+    Ok(DiffStats { rmse, psnr, max_abs, differing, pixels: a.pixels.len() as u64 })
+}
+
+/// Writes a PNG of the per-pixel max abs difference: black where equal, then
+/// blue to red up to `scale` (default: the frame's max difference).
+pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> Result<()> {
+    diff(a, b)?;
+    let diffs: Vec<f64> = a.pixels.iter().zip(&b.pixels).map(|(pa, pb)| pixel_diff(*pa, *pb)).collect();
+    let top = scale.unwrap_or_else(|| diffs.iter().cloned().filter(|d| d.is_finite()).fold(0.0, f64::max));
+    let mut rgb = Vec::with_capacity(diffs.len() * 3);
+    for d in diffs {
+        let px = if d == 0.0 {
+            [0, 0, 0]
+        } else if !d.is_finite() {
+            [255, 255, 255]
+        } else {
+            let t = if top > 0.0 { (d / top).clamp(0.0, 1.0) } else { 1.0 };
+            // Non-zero differences are never black, however small.
+            let t = 0.15 + 0.85 * t;
+            [(255.0 * t) as u8, (64.0 * (1.0 - t)) as u8, (255.0 * (1.0 - t)) as u8]
+        };
+        rgb.extend_from_slice(&px);
+    }
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| Error::io(path, e))?;
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), a.width, a.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| Error::format(path, e.to_string()))?;
+        writer.write_image_data(&rgb).map_err(|e| Error::format(path, e.to_string()))?;
+        writer.finish().map_err(|e| Error::format(path, e.to_string()))
+    })
+}

@@ -1,0 +1,188 @@
+//! Marcher dispatch: one kernel per traversal style, a render target, and the
+//! `record_*` functions that only record into a caller's command buffer.
+
+use super::frame::Frame;
+use super::params::RenderParams;
+use super::settings::RenderSettings;
+use crate::error::{Error, Result};
+use crate::gpu::record::{self, Access};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::timings::Timings;
+use crate::volume::GpuVolume;
+
+/// The empty-space-skipping structure a frame is marched with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Accel {
+    /// Every lattice sample from entry to exit.
+    Naive,
+}
+
+impl Accel {
+    pub const ALL: [Accel; 1] = [Accel::Naive];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Accel::Naive => "naive",
+        }
+    }
+}
+
+impl std::str::FromStr for Accel {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Accel::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| Error::invalid("accel", s, format!("expected one of: {}", Accel::ALL.map(|a| a.name()).join(", "))))
+    }
+}
+
+impl std::fmt::Display for Accel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+const LOCAL: [u32; 3] = [8, 8, 1];
+
+/// Where a frame goes: the RGBA f32 frame buffer, its parameter block, and a
+/// host-visible copy for readback.
+pub struct RenderTarget {
+    pub width: u32,
+    pub height: u32,
+    pub frame: Buffer,
+    pub params: Buffer,
+    readback: Buffer,
+}
+
+impl RenderTarget {
+    /// Checks the frame against `maxStorageBufferRange` and the dispatch limits.
+    pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(Error::invalid("size", format!("{width}x{height}"), "width and height must be > 0"));
+        }
+        let info = ctx.info();
+        let bytes = width as u64 * height as u64 * 16;
+        info.check(format!("frame {width}x{height} ({bytes} bytes)"), "maxStorageBufferRange", bytes, info.max_storage_buffer_range)?;
+        record::groups_for(info, "frame", [width, height, 1], LOCAL)?;
+        let frame = Buffer::new(ctx, "frame", bytes, vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::GpuOnly)?;
+        let params = Buffer::new(
+            ctx,
+            "render params",
+            std::mem::size_of::<RenderParams>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let readback = Buffer::new(ctx, "frame readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+        Ok(RenderTarget { width, height, frame, params, readback })
+    }
+
+    /// Reads the frame recorded by `Renderer::record_readback`, after the
+    /// submission completed.
+    pub fn read(&self) -> Frame {
+        let bytes = self.readback.mapped().expect("readback buffer is host visible");
+        let n = self.width as usize * self.height as usize;
+        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
+        Frame::new(self.width, self.height, pixels)
+    }
+}
+
+/// The march kernels of every accel, created once per context.
+pub struct Renderer {
+    ctx: Context,
+    naive: Kernel,
+}
+
+impl Renderer {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let bindings = [D::UNIFORM_BUFFER, D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER, D::STORAGE_BUFFER];
+        Ok(Renderer { ctx: ctx.clone(), naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &bindings, 0)? })
+    }
+
+    /// Records one frame into `cmd`: parameter update, then the march pass
+    /// (timed as "march" when `timer` is given).
+    ///
+    /// Barriers. Before: the volume image is in SHADER_READ_ONLY_OPTIMAL and
+    /// its upload and the TF buffer's are visible to compute reads (true after
+    /// `GpuVolume::upload` / `TransferFunction::upload`, which wait). Recorded
+    /// here: earlier uses of `target` in the same command buffer (compute
+    /// reads of the parameters, transfer reads of the frame) are ordered
+    /// before this frame's writes. After: the frame buffer is written in the
+    /// compute stage; read it only after a barrier from `Access::COMPUTE_WRITE`
+    /// (`record_readback` records one).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        accel: Accel,
+        target: &RenderTarget,
+        volume: &GpuVolume,
+        tf: &Buffer,
+        settings: &RenderSettings,
+    ) -> Result<()> {
+        if (settings.width, settings.height) != (target.width, target.height) {
+            return Err(Error::invalid(
+                "size",
+                format!("{}x{}", settings.width, settings.height),
+                format!("render target is {}x{}", target.width, target.height),
+            ));
+        }
+        let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
+        let groups = record::groups_for(self.ctx.info(), "frame", [target.width, target.height, 1], LOCAL)?;
+        let device = self.ctx.device();
+        // Earlier frames on this target: their parameter reads and frame
+        // readback must finish before this frame overwrites them.
+        record::barrier(device, cmd, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
+        record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
+        unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_UNIFORM_READ);
+        let kernel = match accel {
+            Accel::Naive => &self.naive,
+        };
+        let bindings = [
+            Binding::Uniform(&target.params),
+            Binding::Sampled(volume.image.view, volume.sampler),
+            Binding::Storage(tf),
+            Binding::Storage(&target.frame),
+        ];
+        match timer {
+            Some(timer) => {
+                let pass = timer.begin(cmd, "march")?;
+                kernel.dispatch(cmd, &bindings, &[], groups);
+                timer.end(cmd, pass);
+            }
+            None => kernel.dispatch(cmd, &bindings, &[], groups),
+        }
+        Ok(())
+    }
+
+    /// Records the copy of the frame to the host-visible readback buffer,
+    /// with the barriers before (compute write -> transfer read) and after
+    /// (transfer write -> host read).
+    pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) {
+        let device = self.ctx.device();
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: target.frame.size() }];
+        unsafe { device.cmd_copy_buffer(cmd, target.frame.raw, target.readback.raw, &region) };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+    }
+
+    /// Renders one frame: records, submits, waits, reads back. Returns the
+    /// frame and the GPU time of each pass ("march", "readback").
+    pub fn render(&self, accel: Accel, volume: &GpuVolume, tf: &Buffer, settings: &RenderSettings) -> Result<(Frame, Timings)> {
+        settings.validate()?;
+        let target = RenderTarget::new(&self.ctx, settings.width, settings.height)?;
+        let mut timer = Timer::new(&self.ctx, 4)?;
+        self.ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record(cmd, Some(&mut timer), accel, &target, volume, tf, settings)?;
+            let pass = timer.begin(cmd, "readback")?;
+            self.record_readback(cmd, &target);
+            timer.end(cmd, pass);
+            Ok(())
+        })?;
+        Ok((target.read(), timer.results()?))
+    }
+}

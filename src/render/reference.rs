@@ -1,0 +1,111 @@
+//! CPU reference of the naive marcher: the same ray setup, lattice, trilinear
+//! sampling, LUT lookup and compositing as the GLSL, in f32, for tests.
+
+use super::frame::Frame;
+use super::params::RenderParams;
+use crate::tf::TransferFunction;
+use crate::volume::Volume;
+use rayon::prelude::*;
+
+type V3 = [f32; 3];
+
+fn normalize(v: V3) -> V3 {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|c| c / n)
+}
+
+/// As `intersect_box` in `glsl/common/ray.glsl`.
+pub fn intersect_box(org: V3, dir: V3, lo: V3, hi: V3) -> (f32, f32) {
+    let (mut t0, mut t1) = (-3.4e38f32, 3.4e38f32);
+    for a in 0..3 {
+        if dir[a] == 0.0 {
+            if org[a] < lo[a] || org[a] > hi[a] {
+                return (1.0, -1.0);
+            }
+        } else {
+            let inv = 1.0 / dir[a];
+            let ta = (lo[a] - org[a]) * inv;
+            let tb = (hi[a] - org[a]) * inv;
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+    }
+    (t0, t1)
+}
+
+/// Trilinear sample with clamp-to-edge at voxel-space point `p`.
+pub fn sample(volume: &Volume, p: V3) -> f32 {
+    let hi = volume.dims.map(|d| d as i64 - 1);
+    let q = p.map(|c| c - 0.5);
+    let fl = q.map(f32::floor);
+    let f = [0, 1, 2].map(|a| q[a] - fl[a]);
+    let i = fl.map(|c| c as i64);
+    let texel = |dx: i64, dy: i64, dz: i64| {
+        let c = [i[0] + dx, i[1] + dy, i[2] + dz];
+        let c = [0, 1, 2].map(|a| c[a].clamp(0, hi[a]) as u32);
+        volume.data.texel(volume.index(c[0], c[1], c[2]))
+    };
+    let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
+    let c00 = mix(texel(0, 0, 0), texel(1, 0, 0), f[0]);
+    let c10 = mix(texel(0, 1, 0), texel(1, 1, 0), f[0]);
+    let c01 = mix(texel(0, 0, 1), texel(1, 0, 1), f[0]);
+    let c11 = mix(texel(0, 1, 1), texel(1, 1, 1), f[0]);
+    let raw = mix(mix(c00, c10, f[1]), mix(c01, c11, f[1]), f[2]);
+    volume.normalize(raw)
+}
+
+/// The premultiplied RGBA of one pixel.
+pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y: u32) -> [f32; 4] {
+    let v3 = |v: [f32; 4]| [v[0], v[1], v[2]];
+    let (base, du, dv) = (v3(p.base), v3(p.du), v3(p.dv));
+    let point = [0, 1, 2].map(|a| base[a] + (x as f32 + 0.5) * du[a] + (y as f32 + 0.5) * dv[a]);
+    let (org, dir) = if p.eye_or_dir[3] == 0.0 {
+        (point, normalize(v3(p.eye_or_dir)))
+    } else {
+        let eye = v3(p.eye_or_dir);
+        (eye, normalize([0, 1, 2].map(|a| point[a] - eye[a])))
+    };
+    let hi = volume.dims.map(|d| d as f32);
+    let (t_near, t_exit) = intersect_box(org, dir, [0.0; 3], hi);
+    let t_enter = t_near.max(0.0);
+    let dt = p.march[0];
+    let ert = p.march[1];
+    let mut acc = [0f32; 4];
+    if !(t_enter < t_exit) {
+        return acc;
+    }
+    let mut k = 0u32;
+    loop {
+        let t = t_enter + k as f32 * dt;
+        if !(t < t_exit) {
+            break;
+        }
+        let w = dt.min(t_exit - t);
+        let pos = [0, 1, 2].map(|a| org[a] + t * dir[a]);
+        let c = tf.lookup(sample(volume, pos));
+        if c[3] > 0.0 {
+            let a = 1.0 - (1.0 - c[3].min(1.0)).powf(w);
+            let transmit = 1.0 - acc[3];
+            for ch in 0..3 {
+                acc[ch] += transmit * a * c[ch];
+            }
+            acc[3] += transmit * a;
+        }
+        k += 1;
+        if acc[3] >= ert {
+            break;
+        }
+    }
+    acc
+}
+
+/// Renders a whole frame on the CPU (parallel over rows).
+pub fn render(volume: &Volume, tf: &TransferFunction, p: &RenderParams) -> Frame {
+    let (w, h) = (p.image[0], p.image[1]);
+    let pixels: Vec<[f32; 4]> = (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| trace(volume, tf, p, x, y))
+        .collect();
+    Frame::new(w, h, pixels)
+}

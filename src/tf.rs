@@ -1,0 +1,269 @@
+//! Transfer functions: an RGBA lookup table over normalised values [0, 1],
+//! linearly interpolated between entries exactly as `glsl/common/tf.glsl`
+//! does, plus the max-alpha range query that classification relies on.
+//!
+//! Alpha is opacity per voxel of path length; the marcher corrects it for
+//! the step size. Specs: `ramp:LO:HI[:ALPHA]`, `band:LO:HI[:ALPHA]`,
+//! `spike:CENTER:WIDTH[:ALPHA]`, or a ParaView-exported JSON colormap file.
+
+use crate::error::{Error, Result};
+use crate::gpu::{vk, Buffer, Context};
+use std::path::Path;
+
+/// LUT entries: fine enough that a spike one LUT step wide is narrower than
+/// the gap between adjacent 8-bit values (1/255).
+pub const LUT_SIZE: usize = 1024;
+
+#[derive(Clone, Debug)]
+pub struct TransferFunction {
+    /// The spec it was made from.
+    pub spec: String,
+    lut: Vec<[f32; 4]>,
+    /// Sparse table: `max_table[k][i]` = max alpha of entries i .. i + 2^k.
+    max_table: Vec<Vec<f32>>,
+}
+
+/// The default colour ramp (dark violet through orange to pale yellow).
+fn colormap(t: f32) -> [f32; 3] {
+    const STOPS: [(f32, [f32; 3]); 5] = [
+        (0.0, [0.05, 0.03, 0.25]),
+        (0.25, [0.30, 0.10, 0.55]),
+        (0.5, [0.80, 0.25, 0.35]),
+        (0.75, [0.98, 0.60, 0.15]),
+        (1.0, [1.0, 0.95, 0.70]),
+    ];
+    let t = t.clamp(0.0, 1.0);
+    for w in STOPS.windows(2) {
+        let ((t0, c0), (t1, c1)) = (w[0], w[1]);
+        if t <= t1 {
+            let f = (t - t0) / (t1 - t0);
+            return [0, 1, 2].map(|i| c0[i] + (c1[i] - c0[i]) * f);
+        }
+    }
+    STOPS[4].1
+}
+
+fn entry_value(i: usize) -> f32 {
+    i as f32 / (LUT_SIZE - 1) as f32
+}
+
+impl TransferFunction {
+    /// Builds a TF from a LUT of exactly `LUT_SIZE` entries with alpha in [0, 1].
+    pub fn from_lut(spec: impl Into<String>, lut: Vec<[f32; 4]>) -> Result<Self> {
+        let spec = spec.into();
+        if lut.len() != LUT_SIZE {
+            return Err(Error::invalid("transfer function", spec, format!("LUT has {} entries, expected {LUT_SIZE}", lut.len())));
+        }
+        if lut.iter().flatten().any(|c| !c.is_finite() || *c < 0.0) || lut.iter().any(|e| e[3] > 1.0) {
+            return Err(Error::invalid("transfer function", spec, "LUT values must be finite, >= 0, alpha <= 1"));
+        }
+        let mut max_table = vec![lut.iter().map(|e| e[3]).collect::<Vec<f32>>()];
+        let mut k = 1;
+        while (1 << k) <= LUT_SIZE {
+            let prev = &max_table[k - 1];
+            let half = 1 << (k - 1);
+            let next: Vec<f32> = (0..=LUT_SIZE - (1 << k)).map(|i| prev[i].max(prev[i + half])).collect();
+            max_table.push(next);
+            k += 1;
+        }
+        Ok(TransferFunction { spec, lut, max_table })
+    }
+
+    /// Parses a spec, or reads a ParaView JSON file when `spec` names one.
+    pub fn parse(spec: &str) -> Result<Self> {
+        let path = Path::new(spec);
+        if spec.to_lowercase().ends_with(".json") || path.is_file() {
+            return Self::from_paraview_json(path);
+        }
+        let parts: Vec<&str> = spec.split(':').collect();
+        let bad = |why: &str| Error::invalid("transfer function", spec, why.to_string());
+        let nums: Vec<f32> = parts[1..]
+            .iter()
+            .map(|p| p.parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| bad(&format!("'{p}' is not a finite number"))))
+            .collect::<Result<_>>()?;
+        let alpha = |i: usize| -> Result<f32> {
+            let a = nums.get(i).copied().unwrap_or(1.0);
+            if (0.0..=1.0).contains(&a) {
+                Ok(a)
+            } else {
+                Err(bad("ALPHA must be in [0, 1]"))
+            }
+        };
+        let arity = |min: usize, form: &str| -> Result<()> {
+            if nums.len() < min || nums.len() > min + 1 {
+                Err(bad(&format!("expected {form}")))
+            } else {
+                Ok(())
+            }
+        };
+        let lut: Vec<[f32; 4]> = match parts[0] {
+            "ramp" => {
+                arity(2, "ramp:LO:HI[:ALPHA]")?;
+                let (lo, hi, a) = (nums[0], nums[1], alpha(2)?);
+                if lo >= hi {
+                    return Err(bad("LO must be below HI"));
+                }
+                (0..LUT_SIZE)
+                    .map(|i| {
+                        let v = entry_value(i);
+                        let t = ((v - lo) / (hi - lo)).clamp(0.0, 1.0);
+                        let c = colormap(v);
+                        [c[0], c[1], c[2], a * t]
+                    })
+                    .collect()
+            }
+            "band" => {
+                arity(2, "band:LO:HI[:ALPHA]")?;
+                let (lo, hi, a) = (nums[0], nums[1], alpha(2)?);
+                if lo > hi {
+                    return Err(bad("LO must not exceed HI"));
+                }
+                (0..LUT_SIZE)
+                    .map(|i| {
+                        let v = entry_value(i);
+                        let c = colormap(v);
+                        [c[0], c[1], c[2], if v >= lo && v <= hi { a } else { 0.0 }]
+                    })
+                    .collect()
+            }
+            "spike" => {
+                arity(2, "spike:CENTER:WIDTH[:ALPHA]")?;
+                let (centre, width, a) = (nums[0], nums[1], alpha(2)?);
+                if width <= 0.0 {
+                    return Err(bad("WIDTH must be > 0"));
+                }
+                if !(0.0..=1.0).contains(&centre) {
+                    return Err(bad("CENTER must be in [0, 1]"));
+                }
+                // The entry nearest the centre always carries the peak, so a
+                // spike narrower than one LUT step is not lost.
+                let nearest = (centre * (LUT_SIZE - 1) as f32).round() as usize;
+                (0..LUT_SIZE)
+                    .map(|i| {
+                        let v = entry_value(i);
+                        let tri = (1.0 - (v - centre).abs() / (width / 2.0)).max(0.0);
+                        let c = colormap(centre);
+                        [c[0], c[1], c[2], if i == nearest { a } else { a * tri }]
+                    })
+                    .collect()
+            }
+            _ => return Err(bad("expected ramp:LO:HI[:ALPHA], band:LO:HI[:ALPHA], spike:CENTER:WIDTH[:ALPHA] or a .json file")),
+        };
+        Self::from_lut(spec, lut)
+    }
+
+    /// A ParaView colormap export: `RGBPoints` (x, r, g, b)* and optional
+    /// opacity `Points` (x, alpha, midpoint, sharpness)*; midpoint and
+    /// sharpness are ignored (linear segments). The x range of `RGBPoints` is
+    /// mapped onto the volume's normalised [0, 1] ("rescale to data range").
+    /// Without `Points` opacity ramps linearly from 0 to 1 over that range.
+    pub fn from_paraview_json(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let json: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
+        let map = match &json {
+            serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
+            other => other.clone(),
+        };
+        let numbers = |key: &str, stride: usize| -> Result<Option<Vec<f64>>> {
+            let Some(v) = map.get(key) else { return Ok(None) };
+            let arr = v.as_array().ok_or_else(|| Error::format(path, format!("'{key}' is not an array")))?;
+            let nums: Option<Vec<f64>> = arr.iter().map(|x| x.as_f64().filter(|f| f.is_finite())).collect();
+            let nums = nums.ok_or_else(|| Error::format(path, format!("'{key}' holds a value that is not a finite number")))?;
+            if nums.is_empty() || nums.len() % stride != 0 {
+                return Err(Error::format(path, format!("'{key}' must hold groups of {stride} numbers")));
+            }
+            Ok(Some(nums))
+        };
+        let rgb = numbers("RGBPoints", 4)?.ok_or_else(|| Error::format(path, "no 'RGBPoints' array (not a ParaView colormap export)"))?;
+        let opacity = numbers("Points", 4)?;
+        let xs: Vec<f64> = rgb.chunks(4).map(|c| c[0]).collect();
+        let (x0, x1) = (xs[0], xs[xs.len() - 1]);
+        if xs.windows(2).any(|w| w[1] < w[0]) {
+            return Err(Error::format(path, "'RGBPoints' x values must be ascending"));
+        }
+        if x1 <= x0 {
+            return Err(Error::format(path, "'RGBPoints' spans an empty range"));
+        }
+        if let Some(op) = &opacity {
+            if op.chunks(4).any(|c| !(0.0..=1.0).contains(&c[1])) {
+                return Err(Error::format(path, "opacity 'Points' values must be in [0, 1]"));
+            }
+        }
+        // Piecewise-linear interpolation over (x, values...) groups of `stride`.
+        let interp = |pts: &[f64], stride: usize, x: f64, channel: usize| -> f64 {
+            let groups: Vec<&[f64]> = pts.chunks(stride).collect();
+            if x <= groups[0][0] {
+                return groups[0][channel];
+            }
+            for w in groups.windows(2) {
+                if x <= w[1][0] {
+                    let span = w[1][0] - w[0][0];
+                    let f = if span > 0.0 { (x - w[0][0]) / span } else { 1.0 };
+                    return w[0][channel] + (w[1][channel] - w[0][channel]) * f;
+                }
+            }
+            groups[groups.len() - 1][channel]
+        };
+        let lut = (0..LUT_SIZE)
+            .map(|i| {
+                let x = x0 + (x1 - x0) * entry_value(i) as f64;
+                let a = match &opacity {
+                    Some(op) => interp(op, 4, x, 1),
+                    None => entry_value(i) as f64,
+                };
+                [interp(&rgb, 4, x, 1) as f32, interp(&rgb, 4, x, 2) as f32, interp(&rgb, 4, x, 3) as f32, a as f32]
+            })
+            .collect();
+        Self::from_lut(path.display().to_string(), lut)
+    }
+
+    pub fn lut(&self) -> &[[f32; 4]] {
+        &self.lut
+    }
+
+    /// RGBA at normalised value `v`, bit-for-bit the GLSL `tf_lookup`.
+    pub fn lookup(&self, v: f32) -> [f32; 4] {
+        let x = v * (LUT_SIZE - 1) as f32;
+        let fl = x.floor();
+        let i = (fl as usize).min(LUT_SIZE - 1);
+        let j = (i + 1).min(LUT_SIZE - 1);
+        let f = x - fl;
+        let (a, b) = (self.lut[i], self.lut[j]);
+        [0, 1, 2, 3].map(|c| a[c] * (1.0 - f) + b[c] * f)
+    }
+
+    /// Max of alpha over entries `i..=j`.
+    fn max_entries(&self, i: usize, j: usize) -> f32 {
+        let len = j - i + 1;
+        let k = usize::BITS as usize - 1 - len.leading_zeros() as usize;
+        self.max_table[k][i].max(self.max_table[k][j + 1 - (1 << k)])
+    }
+
+    /// Conservative max alpha over every value in [lo, hi]: covers the LUT
+    /// entries any interpolated lookup there can touch, widened by one entry
+    /// each side for rounding (DESIGN invariant 2). O(1).
+    pub fn max_alpha(&self, lo: f32, hi: f32) -> f32 {
+        if lo > hi {
+            return 0.0;
+        }
+        let lo = if lo.is_nan() { 0.0 } else { lo.clamp(0.0, 1.0) };
+        let hi = if hi.is_nan() { 1.0 } else { hi.clamp(0.0, 1.0) };
+        let scale = (LUT_SIZE - 1) as f32;
+        let i = ((lo * scale).floor() as usize).saturating_sub(1);
+        let j = ((hi * scale).ceil() as usize + 1).min(LUT_SIZE - 1);
+        self.max_entries(i, j)
+    }
+
+    /// Uploads the LUT as a storage buffer of `vec4`.
+    pub fn upload(&self, ctx: &Context) -> Result<Buffer> {
+        Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), vk::BufferUsageFlags::STORAGE_BUFFER)
+    }
+}
+
+impl std::str::FromStr for TransferFunction {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Self::parse(s)
+    }
+}

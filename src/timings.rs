@@ -1,0 +1,46 @@
+//! Named phase timings in milliseconds, GPU (timestamps) and CPU (`Instant`).
+
+use std::fmt;
+use std::time::Instant;
+
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Timings {
+    /// (phase name, milliseconds), in the order the phases ran.
+    pub phases: Vec<(String, f64)>,
+}
+
+impl Timings {
+    pub fn push(&mut self, name: impl Into<String>, ms: f64) {
+        self.phases.push((name.into(), ms));
+    }
+
+    /// Runs `f` and records its wall time as phase `name`.
+    pub fn cpu<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let value = f();
+        self.push(name, start.elapsed().as_secs_f64() * 1e3);
+        value
+    }
+
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.phases.iter().find(|(n, _)| n == name).map(|(_, ms)| *ms)
+    }
+
+    pub fn total(&self) -> f64 {
+        self.phases.iter().map(|(_, ms)| ms).sum()
+    }
+
+    pub fn extend(&mut self, other: Timings) {
+        self.phases.extend(other.phases);
+    }
+}
+
+impl fmt::Display for Timings {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let width = self.phases.iter().map(|(n, _)| n.len()).max().unwrap_or(0).max(5);
+        for (name, ms) in &self.phases {
+            writeln!(f, "  {name:<width$}  {ms:>10.3} ms")?;
+        }
+        write!(f, "  {:<width$}  {:>10.3} ms", "total", self.total())
+    }
+}

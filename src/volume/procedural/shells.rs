@@ -1,0 +1,20 @@
+//! Thin concentric spherical shells about the volume centre, each with its own
+//! value, about two voxels thick at any size.
+
+pub fn generate(dims: [u32; 3], count: u32) -> Vec<u8> {
+    let centre = dims.map(|d| d as f32 / 2.0);
+    let radius = 0.45 * *dims.iter().min().unwrap() as f32;
+    let half_thickness = (radius * 0.01).max(1.0);
+    super::fill(dims, |x, y, z| {
+        let p = [x, y, z].map(|c| c as f32 + 0.5);
+        let r = (0..3).map(|a| (p[a] - centre[a]).powi(2)).sum::<f32>().sqrt();
+        let mut best = 0.0f32;
+        for i in 0..count {
+            let ri = radius * (i + 1) as f32 / count as f32;
+            let profile = (1.0 - (r - ri).abs() / half_thickness).max(0.0);
+            let peak = 0.4 + 0.6 * (i + 1) as f32 / count as f32;
+            best = best.max(profile * peak);
+        }
+        (best * 255.0).round() as u8
+    })
+}

@@ -1,0 +1,88 @@
+//! Volume specs: a file path, or a procedural `NAME:SIZE[:PARAM]`.
+
+use super::procedural::Generator;
+use super::raw::RawLayout;
+use super::Volume;
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Options that apply to file loaders.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// Layout of a raw file whose name does not encode it (`--dims`, `--type`).
+    pub raw: Option<RawLayout>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum VolumeSpec {
+    File(PathBuf),
+    Procedural { generator: Generator, dims: [u32; 3], param: Option<f64> },
+}
+
+impl VolumeSpec {
+    pub fn parse(spec: &str, options: &LoadOptions) -> Result<Self> {
+        let path = Path::new(spec);
+        if options.raw.is_some() || path.exists() {
+            return Ok(VolumeSpec::File(path.to_path_buf()));
+        }
+        let mut parts = spec.split(':');
+        let name = parts.next().unwrap_or("");
+        let looks_procedural = spec.contains(':') && !name.contains(['/', '\\', '.']);
+        if !looks_procedural {
+            return Ok(VolumeSpec::File(path.to_path_buf()));
+        }
+        let generator = Generator::from_name(name).ok_or_else(|| {
+            Error::invalid("volume", spec, format!("no such file, and '{name}' is not a generator ({})", Generator::names().join(", ")))
+        })?;
+        let size = parts.next().unwrap_or("");
+        let dims = if size.contains('x') {
+            super::raw::parse_dims(size)?
+        } else {
+            let n: u32 = size
+                .parse()
+                .map_err(|_| Error::invalid("volume", spec, "expected NAME:SIZE[:PARAM] with SIZE an integer or WxHxD"))?;
+            [n; 3]
+        };
+        super::check_dims(dims, spec)?;
+        let param = match parts.next() {
+            None => None,
+            Some(p) => Some(
+                p.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| Error::invalid("volume", spec, format!("parameter '{p}' is not a number")))?,
+            ),
+        };
+        if parts.next().is_some() {
+            return Err(Error::invalid("volume", spec, "expected NAME:SIZE[:PARAM]"));
+        }
+        Ok(VolumeSpec::Procedural { generator, dims, param })
+    }
+
+    pub fn load(&self, options: &LoadOptions) -> Result<Volume> {
+        match self {
+            VolumeSpec::Procedural { generator, dims, param } => generator.generate(*dims, *param),
+            VolumeSpec::File(path) => load_file(path, options),
+        }
+    }
+}
+
+fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
+    if options.raw.is_some() || name.ends_with(".raw") {
+        if !path.exists() {
+            return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory")));
+        }
+        return super::raw::load(path, options.raw, None);
+    }
+    if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+        return super::nrrd::load(path);
+    }
+    if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+        return super::nifti::load(path);
+    }
+    if !path.exists() {
+        return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory")));
+    }
+    Err(Error::format(path, "unknown volume format (expected .raw, .nrrd, .nhdr, .nii, .nii.gz, or NAME:SIZE for a generator)"))
+}

@@ -1,0 +1,219 @@
+//! The ash layer: validation catches a planted hazard, kernels and barriers,
+//! buffers, timestamps, adoption of a host device, device limits.
+
+mod common;
+use common::{assert_clean, gpu};
+use lacuna::gpu::record;
+use lacuna::gpu::{shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use lacuna::Error;
+
+fn copy_kernel(ctx: &Context) -> Kernel {
+    use vk::DescriptorType as D;
+    Kernel::new(ctx, "prims/copy", shaders::PRIMS_COPY, &[D::STORAGE_BUFFER, D::STORAGE_BUFFER], 16).unwrap()
+}
+
+fn storage(ctx: &Context, name: &str, words: &[u32]) -> Buffer {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+    Buffer::with_data(ctx, name, bytemuck::cast_slice(words), usage).unwrap()
+}
+
+fn push(count: u32, groups_x: u32) -> Vec<u8> {
+    bytemuck::cast_slice(&[count, 0, 0, groups_x]).to_vec()
+}
+
+/// Two dependent dispatches (a -> b, then b -> c); `with_barrier` decides
+/// whether the read-after-write on b is ordered.
+fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
+    let n = 4096u32;
+    let input: Vec<u32> = (0..n).map(|i| i.wrapping_mul(2654435761)).collect();
+    let a = storage(ctx, "a", &input);
+    let b = storage(ctx, "b", &vec![0; n as usize]);
+    let c = storage(ctx, "c", &vec![0; n as usize]);
+    let kernel = copy_kernel(ctx);
+    let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
+    ctx.submit_and_wait(|cmd| {
+        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n, groups[0]), groups);
+        if with_barrier {
+            record::compute_to_compute(ctx.device(), cmd);
+        }
+        kernel.dispatch(cmd, &[Binding::Storage(&b), Binding::Storage(&c)], &push(n, groups[0]), groups);
+        Ok(())
+    })
+    .unwrap();
+    bytemuck::pod_collect_to_vec(&c.download(0, n as u64 * 4).unwrap())
+}
+
+#[test]
+fn validation_catches_a_missing_barrier_between_dependent_dispatches() {
+    let ctx = gpu();
+    assert!(ctx.validation_enabled());
+    chained_copies(&ctx, false);
+    let messages = ctx.take_validation_messages();
+    assert!(
+        messages.iter().any(|m| m.id.contains("SYNC-HAZARD-READ-AFTER-WRITE") || m.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
+        "expected a read-after-write hazard, got: {messages:?}"
+    );
+}
+
+#[test]
+fn dependent_dispatches_with_a_barrier_are_clean_and_correct() {
+    let ctx = gpu();
+    let out = chained_copies(&ctx, true);
+    let expected: Vec<u32> = (0..4096u32).map(|i| i.wrapping_mul(2654435761)).collect();
+    assert_eq!(out, expected);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
+    let ctx = gpu();
+    // Pretend the row limit is tiny by splitting explicitly: 1000 items, 3 groups per row.
+    let n = 1000u32;
+    let input: Vec<u32> = (0..n).map(|i| i ^ 0xA5A5_5A5A).collect();
+    let a = storage(&ctx, "a", &input);
+    let b = storage(&ctx, "b", &vec![0; n as usize]);
+    let kernel = copy_kernel(&ctx);
+    let groups_x = 3u32;
+    let groups = [groups_x, n.div_ceil(64).div_ceil(groups_x), 1];
+    ctx.submit_and_wait(|cmd| {
+        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n, groups_x), groups);
+        Ok(())
+    })
+    .unwrap();
+    let out: Vec<u32> = bytemuck::pod_collect_to_vec(&b.download(0, n as u64 * 4).unwrap());
+    assert_eq!(out, input);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn buffers_round_trip_through_staging_at_odd_offsets() {
+    let ctx = gpu();
+    let buf = Buffer::new(&ctx, "rt", 1000, vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::GpuOnly).unwrap();
+    let data: Vec<u8> = (0..600u32).map(|i| (i * 7 % 251) as u8).collect();
+    buf.upload(100, &data).unwrap();
+    assert_eq!(buf.download(100, 600).unwrap(), data);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn timer_reports_named_passes_in_order() {
+    let ctx = gpu();
+    let n = 1 << 16;
+    let a = storage(&ctx, "a", &vec![7; n]);
+    let b = storage(&ctx, "b", &vec![0; n]);
+    let kernel = copy_kernel(&ctx);
+    let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
+    let mut timer = Timer::new(&ctx, 2).unwrap();
+    assert!(timer.supported(), "lavapipe and every GPU we target have timestamps");
+    ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let p = timer.begin(cmd, "first")?;
+        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n as u32, groups[0]), groups);
+        timer.end(cmd, p);
+        record::compute_to_compute(ctx.device(), cmd);
+        let p = timer.begin(cmd, "second")?;
+        kernel.dispatch(cmd, &[Binding::Storage(&b), Binding::Storage(&a)], &push(n as u32, groups[0]), groups);
+        timer.end(cmd, p);
+        Ok(())
+    })
+    .unwrap();
+    let t = timer.results().unwrap();
+    let names: Vec<&str> = t.phases.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["first", "second"]);
+    assert!(t.phases.iter().all(|(_, ms)| ms.is_finite() && *ms >= 0.0));
+    // A third pass exceeds the capacity of two and is a clean error.
+    let err = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            for name in ["a", "b", "c"] {
+                let p = timer.begin(cmd, name)?;
+                timer.end(cmd, p);
+            }
+            Ok(())
+        })
+        .unwrap_err();
+    assert!(matches!(err, Error::Invalid { what: "timer pass", .. }), "{err}");
+    assert_clean(&ctx);
+}
+
+#[test]
+fn adopted_device_is_used_but_not_destroyed() {
+    let entry = unsafe { ash::Entry::load() }.unwrap();
+    let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
+    let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
+    let exts = [ash::ext::debug_utils::NAME.as_ptr()];
+    let sync = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync);
+    let info = vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers).enabled_extension_names(&exts).push_next(&mut features);
+    let instance = unsafe { entry.create_instance(&info, None) }.unwrap();
+    let pd = unsafe { instance.enumerate_physical_devices() }.unwrap()[0];
+    let family = unsafe { instance.get_physical_device_queue_family_properties(pd) }
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        .unwrap() as u32;
+    let prio = [1.0];
+    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&prio)];
+    let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
+    let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+    let dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&dev_exts).push_next(&mut v13);
+    let device = unsafe { instance.create_device(pd, &dinfo, None) }.unwrap();
+    let queue = unsafe { device.get_device_queue(family, 0) };
+
+    let ctx = Context::adopt(AdoptInfo {
+        entry: Some(entry.clone()),
+        instance: instance.clone(),
+        physical_device: pd,
+        device: device.clone(),
+        queue,
+        queue_family: family,
+    })
+    .unwrap();
+    assert!(!ctx.owns_device());
+    let out = chained_copies(&ctx, true);
+    assert_eq!(out[1], 2654435761);
+    assert_clean(&ctx);
+    drop(ctx);
+    // The host's device still works after lacuna let go of it.
+    unsafe {
+        device.device_wait_idle().unwrap();
+        let pool = device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None).unwrap();
+        device.destroy_command_pool(pool, None);
+        device.destroy_device(None);
+        instance.destroy_instance(None);
+    }
+}
+
+#[test]
+fn adopting_a_queue_family_that_does_not_exist_is_an_error() {
+    let ctx = gpu();
+    let err = Context::adopt(AdoptInfo {
+        entry: None,
+        instance: ctx.instance().clone(),
+        physical_device: ctx.physical_device(),
+        device: ctx.device().clone(),
+        queue: vk::Queue::null(),
+        queue_family: 99,
+    })
+    .err()
+    .unwrap();
+    assert!(err.to_string().contains("queue family '99'"), "{err}");
+}
+
+#[test]
+fn limits_are_checked_by_name_before_use() {
+    let ctx = gpu();
+    let info = ctx.info().clone();
+    assert!(info.subgroup_size > 0 && info.max_storage_buffer_range > 0);
+    // A frame larger than maxStorageBufferRange.
+    let side = ((info.max_storage_buffer_range / 16) as f64).sqrt() as u32 + 1;
+    let err = lacuna::render::RenderTarget::new(&ctx, side, side).err().unwrap();
+    assert!(matches!(err, Error::DeviceLimit { limit: "maxStorageBufferRange", .. }), "{err}");
+    // A dispatch wider than maxComputeWorkGroupCount[0].
+    let err = record::groups_for(&info, "test", [u32::MAX, 1, 1], [1, 1, 1]).unwrap_err();
+    assert!(err.to_string().contains("maxComputeWorkGroupCount[0]"), "{err}");
+    // 2-D linear dispatch splits long rows.
+    let g = record::groups_linear(&info, "test", info.max_compute_work_group_count[0] as u64 * 64 * 3 + 1, 64).unwrap();
+    assert_eq!(g[0], info.max_compute_work_group_count[0]);
+    assert_eq!(g[1], 4);
+    assert_clean(&ctx);
+}

@@ -1,0 +1,164 @@
+//! The naive marcher against the CPU reference of the same integral on the
+//! same lattice (max abs <= 1e-4), and against the analytic transmittance of
+//! a homogeneous medium.
+
+mod common;
+use common::{gpu, max_abs, render};
+use lacuna::render::reference;
+use lacuna::render::{Accel, Camera, Projection, RenderSettings};
+use lacuna::volume::{VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+fn settings(size: u32, az: f64, el: f64, projection: Projection) -> RenderSettings {
+    RenderSettings { width: size, height: size, camera: Camera { azimuth_deg: az, elevation_deg: el, projection }, step: 0.5, ert: None }
+}
+
+const PERSP: Projection = Projection::Perspective { fov_deg: 40.0, distance: None };
+
+fn check_against_reference(volume: &Volume, tf: &TransferFunction, s: &RenderSettings) {
+    let ctx = gpu();
+    let frame = render(&ctx, volume, tf, s, Accel::Naive);
+    let params = s.params(volume.dims, volume.spacing, volume.norm).unwrap();
+    let cpu = reference::render(volume, tf, &params);
+    let err = max_abs(&frame, &cpu);
+    assert!(err <= 1e-4, "{} {}: GPU vs CPU max abs {err}", volume.name, s.camera.describe());
+    // The frame is not trivially empty.
+    assert!(frame.pixels.iter().any(|p| p[3] > 0.01), "{}: empty frame", volume.name);
+}
+
+#[test]
+fn generators_match_the_cpu_reference_orthographic_and_perspective() {
+    for spec in ["menger:27", "nbody:48", "vessels:40", "turbulence:32", "shells:36"] {
+        let v = Volume::load(spec, &Default::default()).unwrap();
+        let tf = TransferFunction::parse(v.default_tf.as_ref().unwrap()).unwrap();
+        check_against_reference(&v, &tf, &settings(64, 30.0, 20.0, Projection::Orthographic));
+        check_against_reference(&v, &tf, &settings(48, -115.0, 35.0, PERSP));
+    }
+}
+
+#[test]
+fn axis_aligned_views_and_odd_dims_match_the_reference() {
+    // Dims that are not multiples of 8, anisotropic spacing, and rays with
+    // direction components exactly 0 passing through voxel faces.
+    let mut v = Volume::load("turbulence:37x29x41", &Default::default()).unwrap();
+    v.spacing = [1.0, 1.5, 0.75];
+    let tf = TransferFunction::parse("ramp:0.4:1:0.3").unwrap();
+    for (az, el) in [(0.0, 0.0), (90.0, 0.0), (180.0, 0.0), (0.0, 90.0), (0.0, -90.0), (45.0, 35.264)] {
+        check_against_reference(&v, &tf, &settings(40, az, el, Projection::Orthographic));
+    }
+}
+
+#[test]
+fn camera_inside_the_volume_and_early_termination_match_the_reference() {
+    let v = Volume::load("menger:27", &Default::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.3:1:0.5").unwrap();
+    let inside = Projection::Perspective { fov_deg: 70.0, distance: Some(0.1) };
+    check_against_reference(&v, &tf, &settings(48, 10.0, 5.0, inside));
+    let mut s = settings(48, 30.0, 20.0, Projection::Orthographic);
+    s.ert = Some(0.9);
+    check_against_reference(&v, &tf, &s);
+    // ERT only truncates rays that reached the threshold; others are untouched.
+    let ctx = gpu();
+    let cut = render(&ctx, &v, &tf, &s, Accel::Naive);
+    s.ert = None;
+    let full = render(&ctx, &v, &tf, &s, Accel::Naive);
+    let mut truncated = 0;
+    for (c, f) in cut.pixels.iter().zip(&full.pixels) {
+        if c[3] < 0.9 {
+            assert_eq!(c, f, "a ray below the ERT threshold changed");
+        } else {
+            assert!(c[3] <= f[3]);
+            truncated += (c != f) as u32;
+        }
+    }
+    assert!(truncated > 0, "ERT at 0.9 should cut some rays of an opaque sponge");
+}
+
+#[test]
+fn a_spike_visible_only_through_interpolation_is_rendered() {
+    // Two voxel values, 0 and 1; the spike at 0.5 is narrower than their gap,
+    // so only interpolated samples between them can hit it.
+    let dims = [16, 16, 16];
+    let data: Vec<u8> = (0..16 * 16 * 16).map(|i| if (i % 16) < 8 { 0 } else { 255 }).collect();
+    let v = Volume::new("halves", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let tf = TransferFunction::parse("spike:0.5:0.001").unwrap();
+    assert_eq!(tf.lookup(0.0)[3], 0.0);
+    assert_eq!(tf.lookup(1.0)[3], 0.0);
+    // Looking down -x with step 0.5, every ray samples x = 8.0 exactly, where
+    // the interpolated value is 0.5.
+    let s = settings(32, 90.0, 0.0, Projection::Orthographic);
+    check_against_reference(&v, &tf, &s);
+}
+
+/// Chord length of a ray through the box [0, dims], in f64.
+fn chord(org: [f64; 3], dir: [f64; 3], dims: [u32; 3]) -> f64 {
+    let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+    for a in 0..3 {
+        if dir[a] == 0.0 {
+            if org[a] < 0.0 || org[a] > dims[a] as f64 {
+                return 0.0;
+            }
+            continue;
+        }
+        let ta = (0.0 - org[a]) / dir[a];
+        let tb = (dims[a] as f64 - org[a]) / dir[a];
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    (t1 - t0.max(0.0)).max(0.0)
+}
+
+#[test]
+fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
+    let dims = [24, 20, 28];
+    let n = dims.iter().product::<u32>() as usize;
+    let v = Volume::new("constant", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(vec![77; n])).unwrap();
+    let alpha = 0.05f64;
+    let sigma = -(1.0 - alpha).ln();
+    let tf = TransferFunction::parse(&format!("band:0:1:{alpha}")).unwrap();
+    let ctx = gpu();
+    for (az, el, step) in [(0.0, 0.0, 0.5), (33.0, 21.0, 0.37), (60.0, -40.0, 1.3)] {
+        let mut s = settings(48, az, el, Projection::Orthographic);
+        s.step = step;
+        let frame = render(&ctx, &v, &tf, &s, Accel::Naive);
+        let p = s.params(v.dims, v.spacing, v.norm).unwrap();
+        let dir = [p.eye_or_dir[0] as f64, p.eye_or_dir[1] as f64, p.eye_or_dir[2] as f64];
+        let len = (dir.iter().map(|c| c * c).sum::<f64>()).sqrt();
+        let dir = dir.map(|c| c / len);
+        let mut hits = 0;
+        for y in 0..48 {
+            for x in 0..48 {
+                let org = [0, 1, 2].map(|a| p.base[a] as f64 + (x as f64 + 0.5) * p.du[a] as f64 + (y as f64 + 0.5) * p.dv[a] as f64);
+                let l = chord(org, dir, dims);
+                let expected = 1.0 - (-sigma * l).exp();
+                let got = frame.pixel(x, y)[3] as f64;
+                assert!((got - expected).abs() <= 1e-3, "az {az} el {el} step {step} pixel ({x},{y}): alpha {got} vs 1-exp(-sigma L) {expected} (L {l})");
+                hits += (l > 1.0) as u32;
+            }
+        }
+        assert!(hits > 100, "the box should cover many pixels");
+    }
+}
+
+#[test]
+fn rendering_is_deterministic_bit_for_bit() {
+    let v = Volume::load("nbody:40", &Default::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:1").unwrap();
+    let s = settings(64, 12.0, 34.0, PERSP);
+    let ctx = gpu();
+    let a = render(&ctx, &v, &tf, &s, Accel::Naive);
+    let b = render(&ctx, &v, &tf, &s, Accel::Naive);
+    assert_eq!(lacuna::render::diff(&a, &b).unwrap().differing, 0);
+}
+
+#[test]
+fn degenerate_volumes_render() {
+    // 1 x 1 x N and a single voxel.
+    for dims in [[1, 1, 20], [1, 1, 1], [3, 1, 2]] {
+        let n = dims.iter().product::<u32>() as usize;
+        let data: Vec<u8> = (0..n).map(|i| (i * 37 % 256) as u8).collect();
+        let v = Volume::new("tiny", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+        let tf = TransferFunction::parse("band:0:1:0.5").unwrap();
+        check_against_reference(&v, &tf, &settings(16, 20.0, 10.0, Projection::Orthographic));
+    }
+}
