@@ -20,16 +20,28 @@ pub enum Error {
     Format { path: PathBuf, message: String },
     /// A command-line or API value is malformed or out of range.
     #[error("invalid {what} '{value}': {message}")]
-    Invalid { what: &'static str, value: String, message: String },
+    Invalid {
+        what: &'static str,
+        value: String,
+        message: String,
+    },
     /// The request exceeds a limit of the Vulkan device.
     #[error("{what} exceeds the device limit {limit} = {max} on {device}")]
-    DeviceLimit { what: String, limit: &'static str, max: u64, device: String },
+    DeviceLimit {
+        what: String,
+        limit: &'static str,
+        max: u64,
+        device: String,
+    },
     /// No usable Vulkan driver or device.
     #[error("{0}")]
     NoDevice(String),
     /// A Vulkan call failed.
     #[error("Vulkan error in {call}: {result}")]
-    Vulkan { call: &'static str, result: ash::vk::Result },
+    Vulkan {
+        call: &'static str,
+        result: ash::vk::Result,
+    },
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },
@@ -37,15 +49,29 @@ pub enum Error {
 
 impl Error {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        Error::Io {
+            path: path.into(),
+            source,
+        }
     }
 
     pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
-        Error::Format { path: path.into(), message: message.into() }
+        Error::Format {
+            path: path.into(),
+            message: message.into(),
+        }
     }
 
-    pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::Invalid { what, value: value.into(), message: message.into() }
+    pub fn invalid(
+        what: &'static str,
+        value: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        Error::Invalid {
+            what,
+            value: value.into(),
+            message: message.into(),
+        }
     }
 }
 

@@ -9,7 +9,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "lacuna", version, about = "Vulkan direct volume renderer for comparing empty space skipping structures")]
+#[command(
+    name = "lacuna",
+    version,
+    about = "Vulkan direct volume renderer for comparing empty space skipping structures"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -42,7 +46,10 @@ struct VolumeArgs {
 impl VolumeArgs {
     fn load(&self) -> Result<Volume> {
         let raw = match (&self.dims, &self.voxel_type) {
-            (Some(d), Some(t)) => Some(RawLayout { dims: lacuna::volume::parse_dims(d)?, ty: lacuna::volume::parse_type(t)? }),
+            (Some(d), Some(t)) => Some(RawLayout {
+                dims: lacuna::volume::parse_dims(d)?,
+                ty: lacuna::volume::parse_type(t)?,
+            }),
             _ => None,
         };
         Volume::load(&self.volume, &LoadOptions { raw })
@@ -113,7 +120,10 @@ fn context(validate: bool) -> Result<Context> {
 }
 
 fn tf_for(spec: Option<&str>, volume: &Volume) -> Result<Option<TransferFunction>> {
-    match spec.map(str::to_string).or_else(|| volume.default_tf.clone()) {
+    match spec
+        .map(str::to_string)
+        .or_else(|| volume.default_tf.clone())
+    {
         Some(s) => Ok(Some(TransferFunction::parse(&s)?)),
         None => Ok(None),
     }
@@ -125,13 +135,20 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let (width, height) = render::parse_size(&args.size)?;
     let (azimuth_deg, elevation_deg) = Camera::parse_orbit(&args.camera)?;
     let projection = match args.perspective {
-        Some(fov_deg) => Projection::Perspective { fov_deg, distance: args.distance },
+        Some(fov_deg) => Projection::Perspective {
+            fov_deg,
+            distance: args.distance,
+        },
         None => Projection::Orthographic,
     };
     let settings = RenderSettings {
         width,
         height,
-        camera: Camera { azimuth_deg, elevation_deg, projection },
+        camera: Camera {
+            azimuth_deg,
+            elevation_deg,
+            projection,
+        },
         step: args.step,
         ert: args.ert,
     };
@@ -151,9 +168,16 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
     let info = ctx.info();
     println!("device  {} ({})", info.name, info.driver);
-    println!("volume  {} ({}x{}x{} {})", volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type);
+    println!(
+        "volume  {} ({}x{}x{} {})",
+        volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
+    );
     println!("tf      {}", tf.spec);
-    println!("frame   {width}x{height}, {}, step {}, accel {accel}", settings.camera.describe(), settings.step);
+    println!(
+        "frame   {width}x{height}, {}, step {}, accel {accel}",
+        settings.camera.describe(),
+        settings.step
+    );
     println!("GPU time per pass:\n{timings}");
     if let Some(out) = &args.out {
         let meta = &mut frame.metadata;
@@ -162,9 +186,15 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         meta.insert("accel".into(), accel.to_string());
         meta.insert("camera".into(), settings.camera.describe());
         meta.insert("step".into(), settings.step.to_string());
-        meta.insert("ert".into(), settings.ert.map_or("off".into(), |e| e.to_string()));
+        meta.insert(
+            "ert".into(),
+            settings.ert.map_or("off".into(), |e| e.to_string()),
+        );
         meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
-        meta.insert("gpu_ms".into(), format!("{:.4}", timings.get("march").unwrap_or(f64::NAN)));
+        meta.insert(
+            "gpu_ms".into(),
+            format!("{:.4}", timings.get("march").unwrap_or(f64::NAN)),
+        );
         frame.write_exr(out)?;
         println!("wrote {}", out.display());
     }
@@ -185,9 +215,18 @@ fn info(args: &InfoArgs) -> Result<ExitCode> {
     }
     let v = args.volume.load()?;
     println!("volume   {}", v.name);
-    println!("dims     {}x{}x{} ({} voxels)", v.dims[0], v.dims[1], v.dims[2], v.voxel_count());
+    println!(
+        "dims     {}x{}x{} ({} voxels)",
+        v.dims[0],
+        v.dims[1],
+        v.dims[2],
+        v.voxel_count()
+    );
     println!("type     {}", v.source_type);
-    println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
+    println!(
+        "spacing  {} x {} x {}",
+        v.spacing[0], v.spacing[1], v.spacing[2]
+    );
     println!("values   {} .. {}", v.value_range[0], v.value_range[1]);
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {
@@ -196,25 +235,52 @@ fn info(args: &InfoArgs) -> Result<ExitCode> {
     }
     let total = v.voxel_count() as f64;
     println!("histogram of normalised values (10 bins, % of voxels):");
-    let cells: Vec<String> = bins.iter().enumerate().map(|(i, c)| format!("[{:.1},{:.1}{} {:.2}", i as f32 / 10.0, (i + 1) as f32 / 10.0, if i == 9 { "]" } else { ")" }, 100.0 * *c as f64 / total)).collect();
+    let cells: Vec<String> = bins
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            format!(
+                "[{:.1},{:.1}{} {:.2}",
+                i as f32 / 10.0,
+                (i + 1) as f32 / 10.0,
+                if i == 9 { "]" } else { ")" },
+                100.0 * *c as f64 / total
+            )
+        })
+        .collect();
     for row in cells.chunks(5) {
         println!("  {}", row.join("  "));
     }
     if let Some(tf) = tf_for(args.tf.as_deref(), &v)? {
-        let visible = (0..v.data.len()).filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0).count();
+        let visible = (0..v.data.len())
+            .filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0)
+            .count();
         let grid = BrickGrid::new(&v, BRICK, 1);
         let active = grid.active(&tf).iter().filter(|a| **a).count();
         println!("tf       {}", tf.spec);
-        println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
-        println!("active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)", 100.0 * active as f64 / grid.len() as f64, BRICK, active, grid.len());
+        println!(
+            "visible  {:.3} % of voxels (alpha > 0)",
+            100.0 * visible as f64 / total
+        );
+        println!(
+            "active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)",
+            100.0 * active as f64 / grid.len() as f64,
+            BRICK,
+            active,
+            grid.len()
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
 
 fn diff(args: &DiffArgs) -> Result<ExitCode> {
     if let Some(m) = args.max_abs {
-        if !(m >= 0.0) {
-            return Err(Error::invalid("max-abs", m.to_string(), "must be a number >= 0"));
+        if m.is_nan() || m < 0.0 {
+            return Err(Error::invalid(
+                "max-abs",
+                m.to_string(),
+                "must be a number >= 0",
+            ));
         }
     }
     let a = Frame::read_exr(&args.a)?;
@@ -247,7 +313,11 @@ fn devices() -> Result<ExitCode> {
             d.device_type,
             d.api,
             d.driver,
-            if d.usable { "" } else { " [unusable: needs Vulkan 1.3, compute, VK_KHR_push_descriptor]" }
+            if d.usable {
+                ""
+            } else {
+                " [unusable: needs Vulkan 1.3, compute, VK_KHR_push_descriptor]"
+            }
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -258,13 +328,27 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
                 let _ = e.print();
-                return ExitCode::from(if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand { 2 } else { 0 });
+                return ExitCode::from(
+                    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                        2
+                    } else {
+                        0
+                    },
+                );
             }
             // One line: clap's first line names the bad argument.
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            eprintln!(
+                "{}",
+                text.lines().next().unwrap_or("error: invalid arguments")
+            );
             return ExitCode::from(2);
         }
     };

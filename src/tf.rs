@@ -52,21 +52,37 @@ impl TransferFunction {
     pub fn from_lut(spec: impl Into<String>, lut: Vec<[f32; 4]>) -> Result<Self> {
         let spec = spec.into();
         if lut.len() != LUT_SIZE {
-            return Err(Error::invalid("transfer function", spec, format!("LUT has {} entries, expected {LUT_SIZE}", lut.len())));
+            return Err(Error::invalid(
+                "transfer function",
+                spec,
+                format!("LUT has {} entries, expected {LUT_SIZE}", lut.len()),
+            ));
         }
-        if lut.iter().flatten().any(|c| !c.is_finite() || *c < 0.0) || lut.iter().any(|e| e[3] > 1.0) {
-            return Err(Error::invalid("transfer function", spec, "LUT values must be finite, >= 0, alpha <= 1"));
+        if lut.iter().flatten().any(|c| !c.is_finite() || *c < 0.0)
+            || lut.iter().any(|e| e[3] > 1.0)
+        {
+            return Err(Error::invalid(
+                "transfer function",
+                spec,
+                "LUT values must be finite, >= 0, alpha <= 1",
+            ));
         }
         let mut max_table = vec![lut.iter().map(|e| e[3]).collect::<Vec<f32>>()];
         let mut k = 1;
         while (1 << k) <= LUT_SIZE {
             let prev = &max_table[k - 1];
             let half = 1 << (k - 1);
-            let next: Vec<f32> = (0..=LUT_SIZE - (1 << k)).map(|i| prev[i].max(prev[i + half])).collect();
+            let next: Vec<f32> = (0..=LUT_SIZE - (1 << k))
+                .map(|i| prev[i].max(prev[i + half]))
+                .collect();
             max_table.push(next);
             k += 1;
         }
-        Ok(TransferFunction { spec, lut, max_table })
+        Ok(TransferFunction {
+            spec,
+            lut,
+            max_table,
+        })
     }
 
     /// Parses a spec, or reads a ParaView JSON file when `spec` names one.
@@ -79,7 +95,12 @@ impl TransferFunction {
         let bad = |why: &str| Error::invalid("transfer function", spec, why.to_string());
         let nums: Vec<f32> = parts[1..]
             .iter()
-            .map(|p| p.parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| bad(&format!("'{p}' is not a finite number"))))
+            .map(|p| {
+                p.parse::<f32>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| bad(&format!("'{p}' is not a finite number")))
+            })
             .collect::<Result<_>>()?;
         let alpha = |i: usize| -> Result<f32> {
             let a = nums.get(i).copied().unwrap_or(1.0);
@@ -118,11 +139,15 @@ impl TransferFunction {
                 if lo > hi {
                     return Err(bad("LO must not exceed HI"));
                 }
+                // A band inside [0, 1] but narrower than one LUT step keeps its nearest entry.
+                let nearest = (((lo + hi) / 2.0).clamp(0.0, 1.0) * (LUT_SIZE - 1) as f32).round() as usize;
+                let holds_entry = hi < 0.0 || lo > 1.0 || (0..LUT_SIZE).any(|i| (lo..=hi).contains(&entry_value(i)));
                 (0..LUT_SIZE)
                     .map(|i| {
                         let v = entry_value(i);
                         let c = colormap(v);
-                        [c[0], c[1], c[2], if v >= lo && v <= hi { a } else { 0.0 }]
+                        let inside = (lo..=hi).contains(&v) || (!holds_entry && i == nearest);
+                        [c[0], c[1], c[2], if inside { a } else { 0.0 }]
                     })
                     .collect()
             }
@@ -159,35 +184,61 @@ impl TransferFunction {
     /// Without `Points` opacity ramps linearly from 0 to 1 over that range.
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let json: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
+        let json: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
         let map = match &json {
             serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
             other => other.clone(),
         };
         let numbers = |key: &str, stride: usize| -> Result<Option<Vec<f64>>> {
-            let Some(v) = map.get(key) else { return Ok(None) };
-            let arr = v.as_array().ok_or_else(|| Error::format(path, format!("'{key}' is not an array")))?;
-            let nums: Option<Vec<f64>> = arr.iter().map(|x| x.as_f64().filter(|f| f.is_finite())).collect();
-            let nums = nums.ok_or_else(|| Error::format(path, format!("'{key}' holds a value that is not a finite number")))?;
+            let Some(v) = map.get(key) else {
+                return Ok(None);
+            };
+            let arr = v
+                .as_array()
+                .ok_or_else(|| Error::format(path, format!("'{key}' is not an array")))?;
+            let nums: Option<Vec<f64>> = arr
+                .iter()
+                .map(|x| x.as_f64().filter(|f| f.is_finite()))
+                .collect();
+            let nums = nums.ok_or_else(|| {
+                Error::format(
+                    path,
+                    format!("'{key}' holds a value that is not a finite number"),
+                )
+            })?;
             if nums.is_empty() || nums.len() % stride != 0 {
-                return Err(Error::format(path, format!("'{key}' must hold groups of {stride} numbers")));
+                return Err(Error::format(
+                    path,
+                    format!("'{key}' must hold groups of {stride} numbers"),
+                ));
             }
             Ok(Some(nums))
         };
-        let rgb = numbers("RGBPoints", 4)?.ok_or_else(|| Error::format(path, "no 'RGBPoints' array (not a ParaView colormap export)"))?;
+        let rgb = numbers("RGBPoints", 4)?.ok_or_else(|| {
+            Error::format(
+                path,
+                "no 'RGBPoints' array (not a ParaView colormap export)",
+            )
+        })?;
         let opacity = numbers("Points", 4)?;
         let xs: Vec<f64> = rgb.chunks(4).map(|c| c[0]).collect();
         let (x0, x1) = (xs[0], xs[xs.len() - 1]);
         if xs.windows(2).any(|w| w[1] < w[0]) {
-            return Err(Error::format(path, "'RGBPoints' x values must be ascending"));
+            return Err(Error::format(
+                path,
+                "'RGBPoints' x values must be ascending",
+            ));
         }
         if x1 <= x0 {
             return Err(Error::format(path, "'RGBPoints' spans an empty range"));
         }
         if let Some(op) = &opacity {
             if op.chunks(4).any(|c| !(0.0..=1.0).contains(&c[1])) {
-                return Err(Error::format(path, "opacity 'Points' values must be in [0, 1]"));
+                return Err(Error::format(
+                    path,
+                    "opacity 'Points' values must be in [0, 1]",
+                ));
             }
         }
         // Piecewise-linear interpolation over (x, values...) groups of `stride`.
@@ -199,7 +250,11 @@ impl TransferFunction {
             for w in groups.windows(2) {
                 if x <= w[1][0] {
                     let span = w[1][0] - w[0][0];
-                    let f = if span > 0.0 { (x - w[0][0]) / span } else { 1.0 };
+                    let f = if span > 0.0 {
+                        (x - w[0][0]) / span
+                    } else {
+                        1.0
+                    };
                     return w[0][channel] + (w[1][channel] - w[0][channel]) * f;
                 }
             }
@@ -212,7 +267,12 @@ impl TransferFunction {
                     Some(op) => interp(op, 4, x, 1),
                     None => entry_value(i) as f64,
                 };
-                [interp(&rgb, 4, x, 1) as f32, interp(&rgb, 4, x, 2) as f32, interp(&rgb, 4, x, 3) as f32, a as f32]
+                [
+                    interp(&rgb, 4, x, 1) as f32,
+                    interp(&rgb, 4, x, 2) as f32,
+                    interp(&rgb, 4, x, 3) as f32,
+                    a as f32,
+                ]
             })
             .collect();
         Self::from_lut(path.display().to_string(), lut)
@@ -257,7 +317,12 @@ impl TransferFunction {
 
     /// Uploads the LUT as a storage buffer of `vec4`.
     pub fn upload(&self, ctx: &Context) -> Result<Buffer> {
-        Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), vk::BufferUsageFlags::STORAGE_BUFFER)
+        Buffer::with_data(
+            ctx,
+            "transfer function",
+            bytemuck::cast_slice(&self.lut),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
     }
 }
 

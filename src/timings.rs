@@ -23,7 +23,10 @@ impl Timings {
     }
 
     pub fn get(&self, name: &str) -> Option<f64> {
-        self.phases.iter().find(|(n, _)| n == name).map(|(_, ms)| *ms)
+        self.phases
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, ms)| *ms)
     }
 
     pub fn total(&self) -> f64 {
@@ -37,7 +40,13 @@ impl Timings {
 
 impl fmt::Display for Timings {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let width = self.phases.iter().map(|(n, _)| n.len()).max().unwrap_or(0).max(5);
+        let width = self
+            .phases
+            .iter()
+            .map(|(n, _)| n.len())
+            .max()
+            .unwrap_or(0)
+            .max(5);
         for (name, ms) in &self.phases {
             writeln!(f, "  {name:<width$}  {ms:>10.3} ms")?;
         }

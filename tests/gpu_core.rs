@@ -4,12 +4,21 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::gpu::record;
-use lacuna::gpu::{shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use lacuna::gpu::{
+    shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer,
+};
 use lacuna::Error;
 
 fn copy_kernel(ctx: &Context) -> Kernel {
     use vk::DescriptorType as D;
-    Kernel::new(ctx, "prims/copy", shaders::PRIMS_COPY, &[D::STORAGE_BUFFER, D::STORAGE_BUFFER], 16).unwrap()
+    Kernel::new(
+        ctx,
+        "prims/copy",
+        shaders::PRIMS_COPY,
+        &[D::STORAGE_BUFFER, D::STORAGE_BUFFER],
+        16,
+    )
+    .unwrap()
 }
 
 fn storage(ctx: &Context, name: &str, words: &[u32]) -> Buffer {
@@ -32,11 +41,21 @@ fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
     let kernel = copy_kernel(ctx);
     let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n, groups[0]), groups);
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(&a), Binding::Storage(&b)],
+            &push(n, groups[0]),
+            groups,
+        );
         if with_barrier {
             record::compute_to_compute(ctx.device(), cmd);
         }
-        kernel.dispatch(cmd, &[Binding::Storage(&b), Binding::Storage(&c)], &push(n, groups[0]), groups);
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(&b), Binding::Storage(&c)],
+            &push(n, groups[0]),
+            groups,
+        );
         Ok(())
     })
     .unwrap();
@@ -50,7 +69,10 @@ fn validation_catches_a_missing_barrier_between_dependent_dispatches() {
     chained_copies(&ctx, false);
     let messages = ctx.take_validation_messages();
     assert!(
-        messages.iter().any(|m| m.id.contains("SYNC-HAZARD-READ-AFTER-WRITE") || m.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
+        messages
+            .iter()
+            .any(|m| m.id.contains("SYNC-HAZARD-READ-AFTER-WRITE")
+                || m.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
         "expected a read-after-write hazard, got: {messages:?}"
     );
 }
@@ -76,7 +98,12 @@ fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
     let groups_x = 3u32;
     let groups = [groups_x, n.div_ceil(64).div_ceil(groups_x), 1];
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n, groups_x), groups);
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(&a), Binding::Storage(&b)],
+            &push(n, groups_x),
+            groups,
+        );
         Ok(())
     })
     .unwrap();
@@ -88,7 +115,14 @@ fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
 #[test]
 fn buffers_round_trip_through_staging_at_odd_offsets() {
     let ctx = gpu();
-    let buf = Buffer::new(&ctx, "rt", 1000, vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::GpuOnly).unwrap();
+    let buf = Buffer::new(
+        &ctx,
+        "rt",
+        1000,
+        vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::GpuOnly,
+    )
+    .unwrap();
     let data: Vec<u8> = (0..600u32).map(|i| (i * 7 % 251) as u8).collect();
     buf.upload(100, &data).unwrap();
     assert_eq!(buf.download(100, 600).unwrap(), data);
@@ -104,15 +138,28 @@ fn timer_reports_named_passes_in_order() {
     let kernel = copy_kernel(&ctx);
     let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
     let mut timer = Timer::new(&ctx, 2).unwrap();
-    assert!(timer.supported(), "lavapipe and every GPU we target have timestamps");
+    assert!(
+        timer.supported(),
+        "lavapipe and every GPU we target have timestamps"
+    );
     ctx.submit_and_wait(|cmd| {
         timer.reset(cmd);
         let p = timer.begin(cmd, "first")?;
-        kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Storage(&b)], &push(n as u32, groups[0]), groups);
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(&a), Binding::Storage(&b)],
+            &push(n as u32, groups[0]),
+            groups,
+        );
         timer.end(cmd, p);
         record::compute_to_compute(ctx.device(), cmd);
         let p = timer.begin(cmd, "second")?;
-        kernel.dispatch(cmd, &[Binding::Storage(&b), Binding::Storage(&a)], &push(n as u32, groups[0]), groups);
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(&b), Binding::Storage(&a)],
+            &push(n as u32, groups[0]),
+            groups,
+        );
         timer.end(cmd, p);
         Ok(())
     })
@@ -132,7 +179,16 @@ fn timer_reports_named_passes_in_order() {
             Ok(())
         })
         .unwrap_err();
-    assert!(matches!(err, Error::Invalid { what: "timer pass", .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            Error::Invalid {
+                what: "timer pass",
+                ..
+            }
+        ),
+        "{err}"
+    );
     assert_clean(&ctx);
 }
 
@@ -144,7 +200,11 @@ fn adopted_device_is_used_but_not_destroyed() {
     let exts = [ash::ext::debug_utils::NAME.as_ptr()];
     let sync = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync);
-    let info = vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers).enabled_extension_names(&exts).push_next(&mut features);
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&exts)
+        .push_next(&mut features);
     let instance = unsafe { entry.create_instance(&info, None) }.unwrap();
     let pd = unsafe { instance.enumerate_physical_devices() }.unwrap()[0];
     let family = unsafe { instance.get_physical_device_queue_family_properties(pd) }
@@ -152,10 +212,15 @@ fn adopted_device_is_used_but_not_destroyed() {
         .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
         .unwrap() as u32;
     let prio = [1.0];
-    let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&prio)];
+    let queues = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(family)
+        .queue_priorities(&prio)];
     let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
-    let dinfo = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&dev_exts).push_next(&mut v13);
+    let dinfo = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&dev_exts)
+        .push_next(&mut v13);
     let device = unsafe { instance.create_device(pd, &dinfo, None) }.unwrap();
     let queue = unsafe { device.get_device_queue(family, 0) };
 
@@ -176,7 +241,12 @@ fn adopted_device_is_used_but_not_destroyed() {
     // The host's device still works after lacuna let go of it.
     unsafe {
         device.device_wait_idle().unwrap();
-        let pool = device.create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None).unwrap();
+        let pool = device
+            .create_command_pool(
+                &vk::CommandPoolCreateInfo::default().queue_family_index(family),
+                None,
+            )
+            .unwrap();
         device.destroy_command_pool(pool, None);
         device.destroy_device(None);
         instance.destroy_instance(None);
@@ -206,13 +276,33 @@ fn limits_are_checked_by_name_before_use() {
     assert!(info.subgroup_size > 0 && info.max_storage_buffer_range > 0);
     // A frame larger than maxStorageBufferRange.
     let side = ((info.max_storage_buffer_range / 16) as f64).sqrt() as u32 + 1;
-    let err = lacuna::render::RenderTarget::new(&ctx, side, side).err().unwrap();
-    assert!(matches!(err, Error::DeviceLimit { limit: "maxStorageBufferRange", .. }), "{err}");
+    let err = lacuna::render::RenderTarget::new(&ctx, side, side)
+        .err()
+        .unwrap();
+    assert!(
+        matches!(
+            err,
+            Error::DeviceLimit {
+                limit: "maxStorageBufferRange",
+                ..
+            }
+        ),
+        "{err}"
+    );
     // A dispatch wider than maxComputeWorkGroupCount[0].
     let err = record::groups_for(&info, "test", [u32::MAX, 1, 1], [1, 1, 1]).unwrap_err();
-    assert!(err.to_string().contains("maxComputeWorkGroupCount[0]"), "{err}");
+    assert!(
+        err.to_string().contains("maxComputeWorkGroupCount[0]"),
+        "{err}"
+    );
     // 2-D linear dispatch splits long rows.
-    let g = record::groups_linear(&info, "test", info.max_compute_work_group_count[0] as u64 * 64 * 3 + 1, 64).unwrap();
+    let g = record::groups_linear(
+        &info,
+        "test",
+        info.max_compute_work_group_count[0] as u64 * 64 * 3 + 1,
+        64,
+    )
+    .unwrap();
     assert_eq!(g[0], info.max_compute_work_group_count[0]);
     assert_eq!(g[1], 4);
     assert_clean(&ctx);

@@ -27,7 +27,10 @@ impl ContextOptions {
     /// Options from the environment: `LACUNA_VALIDATE=1`, `LACUNA_DEVICE`.
     pub fn from_env() -> Self {
         let validation = std::env::var("LACUNA_VALIDATE").is_ok_and(|v| !v.is_empty() && v != "0");
-        ContextOptions { validation, device: None }
+        ContextOptions {
+            validation,
+            device: None,
+        }
     }
 }
 
@@ -57,7 +60,12 @@ pub struct DeviceInfo {
 impl DeviceInfo {
     pub fn api_string(&self) -> String {
         let v = self.api_version;
-        format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
+        format!(
+            "{}.{}.{}",
+            vk::api_version_major(v),
+            vk::api_version_minor(v),
+            vk::api_version_patch(v)
+        )
     }
 
     pub fn type_string(&self) -> &'static str {
@@ -71,9 +79,20 @@ impl DeviceInfo {
     }
 
     /// Fails with a message naming `limit` when `value > max`.
-    pub fn check(&self, what: impl Into<String>, limit: &'static str, value: u64, max: u64) -> Result<()> {
+    pub fn check(
+        &self,
+        what: impl Into<String>,
+        limit: &'static str,
+        value: u64,
+        max: u64,
+    ) -> Result<()> {
         if value > max {
-            return Err(Error::DeviceLimit { what: what.into(), limit, max, device: self.name.clone() });
+            return Err(Error::DeviceLimit {
+                what: what.into(),
+                limit,
+                max,
+                device: self.name.clone(),
+            });
         }
         Ok(())
     }
@@ -140,10 +159,14 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
     let mut layers = Vec::new();
     let mut extensions = Vec::new();
     let features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-    let mut validation_features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&features);
+    let mut validation_features =
+        vk::ValidationFeaturesEXT::default().enabled_validation_features(&features);
     if validation {
-        let available = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-        let found = available.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
+        let available = unsafe { entry.enumerate_instance_layer_properties() }
+            .vk("vkEnumerateInstanceLayerProperties")?;
+        let found = available
+            .iter()
+            .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
         if !found {
             return Err(Error::NoDevice(
                 "validation requested but VK_LAYER_KHRONOS_validation is not installed (Debian: apt install vulkan-validationlayers)"
@@ -164,7 +187,10 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
         vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
             Error::NoDevice(format!("no Vulkan 1.3 driver is installed; {INSTALL_HINT}"))
         }
-        result => Error::Vulkan { call: "vkCreateInstance", result },
+        result => Error::Vulkan {
+            call: "vkCreateInstance",
+            result,
+        },
     })
 }
 
@@ -188,14 +214,24 @@ fn compute_family(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option<(u
 
 fn supports_push_descriptor(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::khr::push_descriptor::NAME))
+    exts.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .is_ok_and(|n| n == ash::khr::push_descriptor::NAME)
+    })
 }
 
-fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid_bits: u32) -> DeviceInfo {
+fn device_info(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    timestamp_valid_bits: u32,
+) -> DeviceInfo {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut v11 = vk::PhysicalDeviceVulkan11Properties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut v11).push_next(&mut driver);
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut subgroup)
+        .push_next(&mut v11)
+        .push_next(&mut driver);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let p = props2.properties;
     let l = p.limits;
@@ -206,9 +242,18 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid
         .map(|h| h.size)
         .max()
         .unwrap_or(0);
-    let name = p.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = p
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_name = driver
+        .driver_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_info = driver
+        .driver_info_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     DeviceInfo {
         name,
         driver: format!("{driver_name} {driver_info}").trim().to_string(),
@@ -230,7 +275,9 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid
 
 fn usable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     let p = unsafe { instance.get_physical_device_properties(pd) };
-    p.api_version >= vk::API_VERSION_1_3 && compute_family(instance, pd).is_some() && supports_push_descriptor(instance, pd)
+    p.api_version >= vk::API_VERSION_1_3
+        && compute_family(instance, pd).is_some()
+        && supports_push_descriptor(instance, pd)
 }
 
 fn summaries(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceSummary)>> {
@@ -265,15 +312,29 @@ pub fn list_devices() -> Result<Vec<DeviceSummary>> {
 fn select(instance: &ash::Instance, selector: Option<&str>) -> Result<vk::PhysicalDevice> {
     let all = summaries(instance)?;
     if all.is_empty() {
-        return Err(Error::NoDevice(format!("no Vulkan device found; {INSTALL_HINT}")));
+        return Err(Error::NoDevice(format!(
+            "no Vulkan device found; {INSTALL_HINT}"
+        )));
     }
-    let listing = || all.iter().map(|(_, s)| format!("{}: {}", s.index, s.name)).collect::<Vec<_>>().join(", ");
+    let listing = || {
+        all.iter()
+            .map(|(_, s)| format!("{}: {}", s.index, s.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     if let Some(sel) = selector.filter(|s| !s.is_empty()) {
         let found = match sel.parse::<usize>() {
             Ok(i) => all.iter().find(|(_, s)| s.index == i),
-            Err(_) => all.iter().find(|(_, s)| s.name.to_lowercase().contains(&sel.to_lowercase())),
+            Err(_) => all
+                .iter()
+                .find(|(_, s)| s.name.to_lowercase().contains(&sel.to_lowercase())),
         };
-        let (pd, s) = found.ok_or_else(|| Error::NoDevice(format!("LACUNA_DEVICE '{sel}' matches no device (have {})", listing())))?;
+        let (pd, s) = found.ok_or_else(|| {
+            Error::NoDevice(format!(
+                "LACUNA_DEVICE '{sel}' matches no device (have {})",
+                listing()
+            ))
+        })?;
         if !s.usable {
             return Err(Error::NoDevice(format!(
                 "device '{}' lacks Vulkan 1.3, a compute queue or VK_KHR_push_descriptor",
@@ -307,12 +368,22 @@ impl Context {
         let entry = load_entry()?;
         let instance = create_instance(&entry, options.validation)?;
         let built = (|| {
-            let messenger = if options.validation { Some(Messenger::new(&entry, &instance)?) } else { None };
-            let selector = options.device.clone().or_else(|| std::env::var("LACUNA_DEVICE").ok());
+            let messenger = if options.validation {
+                Some(Messenger::new(&entry, &instance)?)
+            } else {
+                None
+            };
+            let selector = options
+                .device
+                .clone()
+                .or_else(|| std::env::var("LACUNA_DEVICE").ok());
             let pd = select(&instance, selector.as_deref())?;
-            let (family, _) = compute_family(&instance, pd).expect("selected device has a compute queue");
+            let (family, _) =
+                compute_family(&instance, pd).expect("selected device has a compute queue");
             let priorities = [1.0];
-            let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+            let queues = [vk::DeviceQueueCreateInfo::default()
+                .queue_family_index(family)
+                .queue_priorities(&priorities)];
             let extensions = [ash::khr::push_descriptor::NAME.as_ptr()];
             let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
             let info = vk::DeviceCreateInfo::default()
@@ -324,9 +395,16 @@ impl Context {
             Ok((messenger, pd, device, queue, family))
         })();
         match built {
-            Ok((messenger, pd, device, queue, family)) => {
-                Self::assemble(Some(entry), instance, pd, device, queue, family, messenger, true)
-            }
+            Ok((messenger, pd, device, queue, family)) => Self::assemble(
+                Some(entry),
+                instance,
+                pd,
+                device,
+                queue,
+                family,
+                messenger,
+                true,
+            ),
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };
                 Err(e)
@@ -342,12 +420,23 @@ impl Context {
     /// Adopts a host's instance, device and queue. lacuna creates its own
     /// allocator and command pool on them and destroys only those.
     pub fn adopt(host: AdoptInfo) -> Result<Self> {
-        let families = unsafe { host.instance.get_physical_device_queue_family_properties(host.physical_device) };
+        let families = unsafe {
+            host.instance
+                .get_physical_device_queue_family_properties(host.physical_device)
+        };
         let family = families.get(host.queue_family as usize).ok_or_else(|| {
-            Error::invalid("queue family", host.queue_family.to_string(), "not a queue family of this device")
+            Error::invalid(
+                "queue family",
+                host.queue_family.to_string(),
+                "not a queue family of this device",
+            )
         })?;
         if !family.queue_flags.contains(vk::QueueFlags::COMPUTE) {
-            return Err(Error::invalid("queue family", host.queue_family.to_string(), "does not support compute"));
+            return Err(Error::invalid(
+                "queue family",
+                host.queue_family.to_string(),
+                "does not support compute",
+            ));
         }
         let messenger = match &host.entry {
             Some(entry) => Some(Messenger::new(entry, &host.instance)?),
@@ -377,7 +466,9 @@ impl Context {
         owned: bool,
     ) -> Result<Self> {
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let bits = families.get(family as usize).map_or(0, |f| f.timestamp_valid_bits);
+        let bits = families
+            .get(family as usize)
+            .map_or(0, |f| f.timestamp_valid_bits);
         let info = device_info(&instance, pd, bits);
         let cleanup = |instance: &ash::Instance, device: &ash::Device| {
             if owned {
@@ -399,7 +490,10 @@ impl Context {
             Err(e) => {
                 drop(messenger);
                 cleanup(&instance, &device);
-                return Err(Error::Memory { what: "allocator".into(), message: e.to_string() });
+                return Err(Error::Memory {
+                    what: "allocator".into(),
+                    message: e.to_string(),
+                });
             }
         };
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -411,7 +505,10 @@ impl Context {
                 drop(allocator);
                 drop(messenger);
                 cleanup(&instance, &device);
-                return Err(Error::Vulkan { call: "vkCreateCommandPool", result });
+                return Err(Error::Vulkan {
+                    call: "vkCreateCommandPool",
+                    result,
+                });
             }
         };
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
@@ -464,41 +561,64 @@ impl Context {
 
     /// Every validation message collected so far (empty without validation).
     pub fn validation_messages(&self) -> Vec<ValidationMessage> {
-        self.inner.messenger.as_ref().map(|m| m.store.lock().unwrap().clone()).unwrap_or_default()
+        self.inner
+            .messenger
+            .as_ref()
+            .map(|m| m.store.lock().unwrap().clone())
+            .unwrap_or_default()
     }
 
     /// Returns and clears the collected validation messages.
     pub fn take_validation_messages(&self) -> Vec<ValidationMessage> {
-        self.inner.messenger.as_ref().map(|m| std::mem::take(&mut *m.store.lock().unwrap())).unwrap_or_default()
+        self.inner
+            .messenger
+            .as_ref()
+            .map(|m| std::mem::take(&mut *m.store.lock().unwrap()))
+            .unwrap_or_default()
     }
 
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
-        self.inner.allocator.lock().unwrap_or_else(|p| p.into_inner())
+        self.inner
+            .allocator
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
     }
 
     /// Records commands with `record`, submits them and waits for completion.
-    pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+    pub fn submit_and_wait<T>(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
+    ) -> Result<T> {
         let device = self.device();
-        let pool = self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+        let pool = self
+            .inner
+            .command_pool
+            .lock()
+            .unwrap_or_else(|p| p.into_inner());
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let cmd =
+            unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            let begin = vk::CommandBufferBeginInfo::default()
+                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
             let value = record(cmd);
             unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let value = value?;
-            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
+                .vk("vkCreateFence")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
             let submitted = {
                 let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
                 unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
             };
-            let waited = submitted.and_then(|_| unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            let waited = submitted.and_then(|_| {
+                unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
+            });
             unsafe { device.destroy_fence(fence, None) };
             waited.map(|_| value)
         })();
@@ -512,7 +632,13 @@ impl Drop for Inner {
         unsafe {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);
+            self.device.destroy_command_pool(
+                *self
+                    .command_pool
+                    .get_mut()
+                    .unwrap_or_else(|p| p.into_inner()),
+                None,
+            );
             if self.owned {
                 self.device.destroy_device(None);
             }
@@ -524,4 +650,3 @@ impl Drop for Inner {
         }
     }
 }
-

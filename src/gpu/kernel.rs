@@ -41,12 +41,25 @@ pub struct Kernel {
 impl Kernel {
     /// `bindings` lists the descriptor type of bindings 0.. of set 0;
     /// `push_size` is the push-constant block size in bytes (0 for none).
-    pub fn new(ctx: &Context, name: &'static str, spirv: &[u32], bindings: &[vk::DescriptorType], push_size: u32) -> Result<Self> {
+    pub fn new(
+        ctx: &Context,
+        name: &'static str,
+        spirv: &[u32],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+    ) -> Result<Self> {
         let info = ctx.info();
-        info.check(format!("push constants of kernel {name}"), "maxPushConstantsSize", push_size as u64, info.max_push_constants_size as u64)?;
+        info.check(
+            format!("push constants of kernel {name}"),
+            "maxPushConstantsSize",
+            push_size as u64,
+            info.max_push_constants_size as u64,
+        )?;
         let device = ctx.device();
-        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None) }
-            .vk("vkCreateShaderModule")?;
+        let module = unsafe {
+            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
+        }
+        .vk("vkCreateShaderModule")?;
         let mut kernel = Kernel {
             ctx: ctx.clone(),
             name,
@@ -71,36 +84,65 @@ impl Kernel {
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&slots);
-        kernel.set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }.vk("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::COMPUTE, offset: 0, size: push_size }];
+        kernel.set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
+            .vk("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::COMPUTE,
+            offset: 0,
+            size: push_size,
+        }];
         let set_layouts = [kernel.set_layout];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
         if push_size > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
+        kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .vk("vkCreatePipelineLayout")?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
-        let create = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(kernel.layout)];
-        kernel.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
-            .map_err(|(_, r)| r)
-            .vk("vkCreateComputePipelines")?[0];
+        let create = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(kernel.layout)];
+        kernel.pipeline =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
+                .map_err(|(_, r)| r)
+                .vk("vkCreateComputePipelines")?[0];
         Ok(kernel)
     }
 
     /// Binds the pipeline, pushes `bindings` and `push` constants, and
     /// dispatches `groups` workgroups. Records only; no barriers.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) {
-        assert_eq!(bindings.len(), self.bindings.len(), "kernel {}: binding count", self.name);
-        assert_eq!(push.len() as u32, self.push_size, "kernel {}: push constant size", self.name);
+    pub fn dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        bindings: &[Binding],
+        push: &[u8],
+        groups: [u32; 3],
+    ) {
+        assert_eq!(
+            bindings.len(),
+            self.bindings.len(),
+            "kernel {}: binding count",
+            self.name
+        );
+        assert_eq!(
+            push.len() as u32,
+            self.push_size,
+            "kernel {}: push constant size",
+            self.name
+        );
         let device = self.ctx.device();
         let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .iter()
             .map(|b| match *b {
                 Binding::Storage(buf) | Binding::Uniform(buf) => [buf.descriptor()],
-                Binding::StorageRange(buf, offset, range) => [vk::DescriptorBufferInfo { buffer: buf.raw, offset, range }],
+                Binding::StorageRange(buf, offset, range) => [vk::DescriptorBufferInfo {
+                    buffer: buf.raw,
+                    offset,
+                    range,
+                }],
                 Binding::Sampled(..) => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
@@ -120,8 +162,14 @@ impl Kernel {
             .enumerate()
             .map(|(i, b)| {
                 let ty = b.descriptor_type();
-                assert_eq!(ty, self.bindings[i], "kernel {}: binding {i} type", self.name);
-                let w = vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(ty);
+                assert_eq!(
+                    ty, self.bindings[i],
+                    "kernel {}: binding {i} type",
+                    self.name
+                );
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_binding(i as u32)
+                    .descriptor_type(ty);
                 match b {
                     Binding::Sampled(..) => w.image_info(&image_infos[i]),
                     _ => w.buffer_info(&buffer_infos[i]),
@@ -130,7 +178,13 @@ impl Kernel {
             .collect();
         unsafe {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            self.ctx.inner.push_descriptor.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &writes);
+            self.ctx.inner.push_descriptor.cmd_push_descriptor_set(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &writes,
+            );
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }

@@ -22,12 +22,26 @@ pub struct Buffer {
 
 impl Buffer {
     /// A buffer of `size` bytes (at least 4: Vulkan has no empty buffers).
-    pub fn new(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation) -> Result<Self> {
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
         let size = size.max(4);
         let info = ctx.info();
-        info.check(format!("buffer '{name}' of {size} bytes"), "maxMemoryAllocationSize", size, info.max_memory_allocation_size)?;
+        info.check(
+            format!("buffer '{name}' of {size} bytes"),
+            "maxMemoryAllocationSize",
+            size,
+            info.max_memory_allocation_size,
+        )?;
         let device = ctx.device();
-        let create = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let create = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&create, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -41,20 +55,45 @@ impl Buffer {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(Error::Memory { what: format!("buffer '{name}' ({size} bytes)"), message: e.to_string() });
+                return Err(Error::Memory {
+                    what: format!("buffer '{name}' ({size} bytes)"),
+                    message: e.to_string(),
+                });
             }
         };
-        if let Err(result) = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+        if let Err(result) =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+        {
             let _ = ctx.allocator().free(allocation);
             unsafe { device.destroy_buffer(raw, None) };
-            return Err(Error::Vulkan { call: "vkBindBufferMemory", result });
+            return Err(Error::Vulkan {
+                call: "vkBindBufferMemory",
+                result,
+            });
         }
-        Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
+        Ok(Buffer {
+            ctx: ctx.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+            name: name.to_string(),
+        })
     }
 
     /// A device-local storage buffer filled from `data` through staging.
-    pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Self> {
-        let buffer = Buffer::new(ctx, name, data.len() as u64, usage | vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+    pub fn with_data(
+        ctx: &Context,
+        name: &str,
+        data: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Self> {
+        let buffer = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
         buffer.upload(0, data)?;
         Ok(buffer)
     }
@@ -81,12 +120,26 @@ impl Buffer {
         let mut done = 0u64;
         while done < data.len() as u64 {
             let n = (data.len() as u64 - done).min(STAGING_CHUNK);
-            let mut staging = Buffer::new(&self.ctx, "staging upload", n, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+            let mut staging = Buffer::new(
+                &self.ctx,
+                "staging upload",
+                n,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
             staging.mapped_mut().expect("staging is host visible")[..n as usize]
                 .copy_from_slice(&data[done as usize..(done + n) as usize]);
             self.ctx.submit_and_wait(|cmd| {
-                let region = [vk::BufferCopy { src_offset: 0, dst_offset: offset + done, size: n }];
-                unsafe { self.ctx.device().cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
+                let region = [vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: offset + done,
+                    size: n,
+                }];
+                unsafe {
+                    self.ctx
+                        .device()
+                        .cmd_copy_buffer(cmd, staging.raw, self.raw, &region)
+                };
                 Ok(())
             })?;
             done += n;
@@ -102,22 +155,38 @@ impl Buffer {
         while (out.len() as u64) < len {
             let done = out.len() as u64;
             let n = (len - done).min(STAGING_CHUNK);
-            let staging = Buffer::new(&self.ctx, "staging readback", n, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+            let staging = Buffer::new(
+                &self.ctx,
+                "staging readback",
+                n,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?;
             self.ctx.submit_and_wait(|cmd| {
-                let region = [vk::BufferCopy { src_offset: offset + done, dst_offset: 0, size: n }];
+                let region = [vk::BufferCopy {
+                    src_offset: offset + done,
+                    dst_offset: 0,
+                    size: n,
+                }];
                 let device = self.ctx.device();
                 unsafe { device.cmd_copy_buffer(cmd, self.raw, staging.raw, &region) };
                 record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
-            out.extend_from_slice(&staging.mapped().expect("readback is host visible")[..n as usize]);
+            out.extend_from_slice(
+                &staging.mapped().expect("readback is host visible")[..n as usize],
+            );
         }
         Ok(out)
     }
 
     /// A whole-buffer descriptor range.
     pub fn descriptor(&self) -> vk::DescriptorBufferInfo {
-        vk::DescriptorBufferInfo { buffer: self.raw, offset: 0, range: vk::WHOLE_SIZE }
+        vk::DescriptorBufferInfo {
+            buffer: self.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }
     }
 }
 
@@ -143,22 +212,48 @@ pub struct Image3d {
 impl Image3d {
     /// Creates the image and uploads `data` (tightly packed, x fastest) in
     /// z-slabs; leaves it in `SHADER_READ_ONLY_OPTIMAL`, visible to compute.
-    pub fn with_data(ctx: &Context, name: &str, format: vk::Format, extent: [u32; 3], texel_bytes: u64, data: &[u8]) -> Result<Self> {
+    pub fn with_data(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: [u32; 3],
+        texel_bytes: u64,
+        data: &[u8],
+    ) -> Result<Self> {
         let info = ctx.info();
         let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
         let largest = *extent.iter().max().unwrap() as u64;
-        info.check(dims.clone(), "maxImageDimension3D", largest, info.max_image_dimension_3d as u64)?;
+        info.check(
+            dims.clone(),
+            "maxImageDimension3D",
+            largest,
+            info.max_image_dimension_3d as u64,
+        )?;
         let bytes = extent.iter().map(|&e| e as u64).product::<u64>() * texel_bytes;
         assert_eq!(bytes, data.len() as u64, "image data size");
-        info.check(format!("{dims} ({bytes} bytes)"), "maxMemoryAllocationSize", bytes, info.max_memory_allocation_size)?;
+        info.check(
+            format!("{dims} ({bytes} bytes)"),
+            "maxMemoryAllocationSize",
+            bytes,
+            info.max_memory_allocation_size,
+        )?;
         if info.device_local_bytes > 0 {
-            info.check(format!("{dims} ({bytes} bytes)"), "device-local heap size", bytes, info.device_local_bytes)?;
+            info.check(
+                format!("{dims} ({bytes} bytes)"),
+                "device-local heap size",
+                bytes,
+                info.device_local_bytes,
+            )?;
         }
         let device = ctx.device();
         let create = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_3D)
             .format(format)
-            .extent(vk::Extent3D { width: extent[0], height: extent[1], depth: extent[2] })
+            .extent(vk::Extent3D {
+                width: extent[0],
+                height: extent[1],
+                depth: extent[2],
+            })
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
@@ -177,10 +272,20 @@ impl Image3d {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_image(raw, None) };
-                return Err(Error::Memory { what: format!("{dims} ({bytes} bytes)"), message: e.to_string() });
+                return Err(Error::Memory {
+                    what: format!("{dims} ({bytes} bytes)"),
+                    message: e.to_string(),
+                });
             }
         };
-        let mut image = Image3d { ctx: ctx.clone(), raw, view: vk::ImageView::null(), allocation: Some(allocation), format, extent };
+        let mut image = Image3d {
+            ctx: ctx.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            allocation: Some(allocation),
+            format,
+            extent,
+        };
         let a = image.allocation.as_ref().unwrap();
         unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
         let view_info = vk::ImageViewCreateInfo::default()
@@ -188,7 +293,8 @@ impl Image3d {
             .view_type(vk::ImageViewType::TYPE_3D)
             .format(format)
             .subresource_range(record::COLOR_RANGE);
-        image.view = unsafe { device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+        image.view =
+            unsafe { device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
         image.upload(texel_bytes, data)?;
         Ok(image)
     }
@@ -203,18 +309,61 @@ impl Image3d {
             let n = slices_per_chunk.min(d - z);
             let start = (z as u64 * slice_bytes) as usize;
             let len = (n as u64 * slice_bytes) as usize;
-            let mut staging = Buffer::new(&self.ctx, "staging volume", len as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
-            staging.mapped_mut().expect("staging is host visible")[..len].copy_from_slice(&data[start..start + len]);
+            let mut staging = Buffer::new(
+                &self.ctx,
+                "staging volume",
+                len as u64,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
+            staging.mapped_mut().expect("staging is host visible")[..len]
+                .copy_from_slice(&data[start..start + len]);
             let first = z == 0;
             let last = z + n == d;
             self.ctx.submit_and_wait(|cmd| {
-                let (old, src) = if first { (vk::ImageLayout::UNDEFINED, Access::NONE) } else { (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE) };
-                record::image_barrier(device, cmd, self.raw, old, vk::ImageLayout::TRANSFER_DST_OPTIMAL, src, Access::TRANSFER_WRITE);
+                let (old, src) = if first {
+                    (vk::ImageLayout::UNDEFINED, Access::NONE)
+                } else {
+                    (
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        Access::TRANSFER_WRITE,
+                    )
+                };
+                record::image_barrier(
+                    device,
+                    cmd,
+                    self.raw,
+                    old,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    src,
+                    Access::TRANSFER_WRITE,
+                );
                 let region = [vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 })
-                    .image_offset(vk::Offset3D { x: 0, y: 0, z: z as i32 })
-                    .image_extent(vk::Extent3D { width: w, height: h, depth: n })];
-                unsafe { device.cmd_copy_buffer_to_image(cmd, staging.raw, self.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &region) };
+                    .image_subresource(vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: 0,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    })
+                    .image_offset(vk::Offset3D {
+                        x: 0,
+                        y: 0,
+                        z: z as i32,
+                    })
+                    .image_extent(vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: n,
+                    })];
+                unsafe {
+                    device.cmd_copy_buffer_to_image(
+                        cmd,
+                        staging.raw,
+                        self.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &region,
+                    )
+                };
                 if last {
                     record::image_barrier(
                         device,

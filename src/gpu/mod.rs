@@ -9,10 +9,10 @@ pub mod shaders;
 mod timer;
 mod validation;
 
+pub use ash::vk;
 pub use context::{list_devices, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
+pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
 pub use memory::{Buffer, Image3d};
 pub use timer::{Pass, Timer};
 pub use validation::ValidationMessage;
-pub use ash::vk;
-pub use gpu_allocator::MemoryLocation;

@@ -17,26 +17,44 @@ pub struct Access {
 }
 
 impl Access {
-    pub const NONE: Access = Access { stage: vk::PipelineStageFlags2::NONE, access: vk::AccessFlags2::NONE };
-    pub const COMPUTE_READ: Access =
-        Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_READ };
-    pub const COMPUTE_WRITE: Access =
-        Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_WRITE };
+    pub const NONE: Access = Access {
+        stage: vk::PipelineStageFlags2::NONE,
+        access: vk::AccessFlags2::NONE,
+    };
+    pub const COMPUTE_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+        access: vk::AccessFlags2::SHADER_READ,
+    };
+    pub const COMPUTE_WRITE: Access = Access {
+        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+        access: vk::AccessFlags2::SHADER_WRITE,
+    };
     pub const COMPUTE_READ_WRITE: Access = Access {
         stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
-        access: vk::AccessFlags2::from_raw(vk::AccessFlags2::SHADER_READ.as_raw() | vk::AccessFlags2::SHADER_WRITE.as_raw()),
+        access: vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::SHADER_READ.as_raw() | vk::AccessFlags2::SHADER_WRITE.as_raw(),
+        ),
     };
     /// Uniform reads in compute (a parameter block written by `vkCmdUpdateBuffer`).
-    pub const COMPUTE_UNIFORM_READ: Access =
-        Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::UNIFORM_READ };
+    pub const COMPUTE_UNIFORM_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+        access: vk::AccessFlags2::UNIFORM_READ,
+    };
     /// Any transfer write. The source stage is ALL_TRANSFER rather than CLEAR or
     /// COPY: Debian's validation layer 1.3.239 reports a false hazard after
     /// `vkCmdFillBuffer` when the source stage is CLEAR.
-    pub const TRANSFER_WRITE: Access =
-        Access { stage: vk::PipelineStageFlags2::ALL_TRANSFER, access: vk::AccessFlags2::TRANSFER_WRITE };
-    pub const TRANSFER_READ: Access =
-        Access { stage: vk::PipelineStageFlags2::ALL_TRANSFER, access: vk::AccessFlags2::TRANSFER_READ };
-    pub const HOST_READ: Access = Access { stage: vk::PipelineStageFlags2::HOST, access: vk::AccessFlags2::HOST_READ };
+    pub const TRANSFER_WRITE: Access = Access {
+        stage: vk::PipelineStageFlags2::ALL_TRANSFER,
+        access: vk::AccessFlags2::TRANSFER_WRITE,
+    };
+    pub const TRANSFER_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::ALL_TRANSFER,
+        access: vk::AccessFlags2::TRANSFER_READ,
+    };
+    pub const HOST_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::HOST,
+        access: vk::AccessFlags2::HOST_READ,
+    };
 }
 
 pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
@@ -60,7 +78,12 @@ pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Access, dst: A
 
 /// The barrier between two dependent compute dispatches.
 pub fn compute_to_compute(device: &ash::Device, cmd: vk::CommandBuffer) {
-    barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ_WRITE);
+    barrier(
+        device,
+        cmd,
+        Access::COMPUTE_WRITE,
+        Access::COMPUTE_READ_WRITE,
+    );
 }
 
 /// An image layout transition with its memory dependency.
@@ -90,12 +113,26 @@ pub fn image_barrier(
 
 /// Workgroup counts covering `threads` invocations with `local` threads per
 /// group along each axis, checked against `maxComputeWorkGroupCount`.
-pub fn groups_for(info: &DeviceInfo, what: &str, threads: [u32; 3], local: [u32; 3]) -> Result<[u32; 3]> {
+pub fn groups_for(
+    info: &DeviceInfo,
+    what: &str,
+    threads: [u32; 3],
+    local: [u32; 3],
+) -> Result<[u32; 3]> {
     let mut groups = [0; 3];
     for a in 0..3 {
         groups[a] = threads[a].div_ceil(local[a]);
-        let limit = ["maxComputeWorkGroupCount[0]", "maxComputeWorkGroupCount[1]", "maxComputeWorkGroupCount[2]"][a];
-        info.check(format!("{what}: {} workgroups", groups[a]), limit, groups[a] as u64, info.max_compute_work_group_count[a] as u64)?;
+        let limit = [
+            "maxComputeWorkGroupCount[0]",
+            "maxComputeWorkGroupCount[1]",
+            "maxComputeWorkGroupCount[2]",
+        ][a];
+        info.check(
+            format!("{what}: {} workgroups", groups[a]),
+            limit,
+            groups[a] as u64,
+            info.max_compute_work_group_count[a] as u64,
+        )?;
     }
     Ok(groups)
 }
@@ -108,6 +145,11 @@ pub fn groups_linear(info: &DeviceInfo, what: &str, count: u64, local: u32) -> R
     let max_x = info.max_compute_work_group_count[0] as u64;
     let x = total.min(max_x);
     let y = total.div_ceil(x);
-    info.check(format!("{what}: {count} items"), "maxComputeWorkGroupCount[1]", y, info.max_compute_work_group_count[1] as u64)?;
+    info.check(
+        format!("{what}: {count} items"),
+        "maxComputeWorkGroupCount[1]",
+        y,
+        info.max_compute_work_group_count[1] as u64,
+    )?;
     Ok([x as u32, y as u32, 1])
 }

@@ -22,9 +22,18 @@ impl Timer {
     /// A timer for up to `max_passes` passes per recording.
     pub fn new(ctx: &Context, max_passes: u32) -> Result<Self> {
         let capacity = max_passes.max(1) * 2;
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity);
-        let pool = unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
-        Ok(Timer { ctx: ctx.clone(), pool, capacity, passes: Vec::new(), open: None })
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(capacity);
+        let pool =
+            unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        Ok(Timer {
+            ctx: ctx.clone(),
+            pool,
+            capacity,
+            passes: Vec::new(),
+            open: None,
+        })
     }
 
     /// Whether this device's queue writes timestamps at all.
@@ -36,21 +45,39 @@ impl Timer {
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.passes.clear();
         self.open = None;
-        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_reset_query_pool(cmd, self.pool, 0, self.capacity)
+        };
     }
 
     fn write(&self, cmd: vk::CommandBuffer, query: u32) {
         // ALL_COMMANDS: the timestamp waits for all earlier work, so a pass
         // measures its own commands, not the tail of the one before.
-        unsafe { self.ctx.device().cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, query) };
+        unsafe {
+            self.ctx.device().cmd_write_timestamp2(
+                cmd,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                self.pool,
+                query,
+            )
+        };
     }
 
     /// Opens pass `name`; passes do not nest.
     pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Pass> {
-        assert!(self.open.is_none(), "timer pass opened while another is open");
+        assert!(
+            self.open.is_none(),
+            "timer pass opened while another is open"
+        );
         let first = self.passes.len() as u32 * 2;
         if first + 2 > self.capacity {
-            return Err(Error::invalid("timer pass", name, format!("more than {} passes in one recording", self.capacity / 2)));
+            return Err(Error::invalid(
+                "timer pass",
+                name,
+                format!("more than {} passes in one recording", self.capacity / 2),
+            ));
         }
         self.write(cmd, first);
         self.passes.push((name.to_string(), first));
@@ -73,16 +100,30 @@ impl Timer {
         }
         let n = self.passes.len() as u32 * 2;
         let mut ticks = vec![0u64; n as usize];
-        unsafe { self.ctx.device().get_query_pool_results(self.pool, 0, &mut ticks, vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT) }
-            .vk("vkGetQueryPoolResults")?;
+        unsafe {
+            self.ctx.device().get_query_pool_results(
+                self.pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
         let info = self.ctx.info();
-        let mask = if info.timestamp_valid_bits >= 64 { u64::MAX } else { (1u64 << info.timestamp_valid_bits) - 1 };
+        let mask = if info.timestamp_valid_bits >= 64 {
+            u64::MAX
+        } else {
+            (1u64 << info.timestamp_valid_bits) - 1
+        };
         for (name, first) in &self.passes {
             let start = ticks[*first as usize] & mask;
             let end = ticks[*first as usize + 1] & mask;
             // Wraps around once at most within a pass.
             let delta = end.wrapping_sub(start) & mask;
-            timings.push(name.clone(), delta as f64 * info.timestamp_period as f64 / 1e6);
+            timings.push(
+                name.clone(),
+                delta as f64 * info.timestamp_period as f64 / 1e6,
+            );
         }
         Ok(timings)
     }

@@ -20,7 +20,14 @@ pub struct ValidationMessage {
 
 impl fmt::Display for ValidationMessage {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let sev = if self.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) { "error" } else { "warning" };
+        let sev = if self
+            .severity
+            .contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        {
+            "error"
+        } else {
+            "warning"
+        };
         write!(f, "[{sev}] {}: {}", self.id, self.text)
     }
 }
@@ -46,8 +53,14 @@ unsafe extern "system" fn on_message(
         return vk::FALSE;
     }
     let data = &*data;
-    let text = data.message_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let id = data.message_id_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let text = data
+        .message_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let id = data
+        .message_id_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let store = &*(user as *const MessageStore);
     if let Ok(mut v) = store.lock() {
         v.push(ValidationMessage { severity, id, text });
@@ -62,7 +75,10 @@ impl Messenger {
         let store: MessageStore = Arc::new(Mutex::new(Vec::new()));
         let user = Box::new(store.clone());
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                     | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -70,8 +86,14 @@ impl Messenger {
             )
             .pfn_user_callback(Some(on_message))
             .user_data(&*user as *const MessageStore as *mut c_void);
-        let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
-        Ok(Messenger { loader, handle, _user: user, store })
+        let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }
+            .vk("vkCreateDebugUtilsMessengerEXT")?;
+        Ok(Messenger {
+            loader,
+            handle,
+            _user: user,
+            store,
+        })
     }
 }
 

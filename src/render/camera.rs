@@ -24,7 +24,11 @@ pub struct Camera {
 
 impl Default for Camera {
     fn default() -> Self {
-        Camera { azimuth_deg: 30.0, elevation_deg: 20.0, projection: Projection::Orthographic }
+        Camera {
+            azimuth_deg: 30.0,
+            elevation_deg: 20.0,
+            projection: Projection::Orthographic,
+        }
     }
 }
 
@@ -54,7 +58,11 @@ fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 impl Camera {
@@ -72,7 +80,9 @@ impl Camera {
 
     pub fn describe(&self) -> String {
         match self.projection {
-            Projection::Orthographic => format!("ortho az={} el={}", self.azimuth_deg, self.elevation_deg),
+            Projection::Orthographic => {
+                format!("ortho az={} el={}", self.azimuth_deg, self.elevation_deg)
+            }
             Projection::Perspective { fov_deg, distance } => format!(
                 "persp az={} el={} fov={} distance={}",
                 self.azimuth_deg,
@@ -85,13 +95,27 @@ impl Camera {
 
     /// The camera part of `RenderParams` for a volume of `dims` voxels with
     /// `spacing`, rendered at `width` x `height`.
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+    pub fn params(
+        &self,
+        dims: [u32; 3],
+        spacing: [f32; 3],
+        width: u32,
+        height: u32,
+    ) -> Result<RenderParams> {
         if let Projection::Perspective { fov_deg, distance } = self.projection {
             if !(fov_deg > 0.0 && fov_deg < 180.0) {
-                return Err(Error::invalid("field of view", fov_deg.to_string(), "must be in (0, 180) degrees"));
+                return Err(Error::invalid(
+                    "field of view",
+                    fov_deg.to_string(),
+                    "must be in (0, 180) degrees",
+                ));
             }
             if distance.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
-                return Err(Error::invalid("camera distance", format!("{distance:?}"), "must be finite and >= 0"));
+                return Err(Error::invalid(
+                    "camera distance",
+                    format!("{distance:?}"),
+                    "must be finite and >= 0",
+                ));
             }
         }
         let extent: V3 = [0, 1, 2].map(|a| dims[a] as f64 * spacing[a] as f64);
@@ -111,14 +135,25 @@ impl Camera {
             Projection::Orthographic => {
                 let mut half = [0.0f64; 2];
                 for i in 0..8 {
-                    let corner = [0, 1, 2].map(|a| if i >> a & 1 == 1 { centre[a] } else { -centre[a] });
+                    let corner = [0, 1, 2].map(|a| {
+                        if i >> a & 1 == 1 {
+                            centre[a]
+                        } else {
+                            -centre[a]
+                        }
+                    });
                     half[0] = half[0].max(dot(corner, right).abs());
                     half[1] = half[1].max(dot(corner, up).abs());
                 }
-                let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
+                let pixel = (2.0 * half[0] / w)
+                    .max(2.0 * half[1] / h)
+                    .max(f64::MIN_POSITIVE);
                 // Ray origins on a plane in front of the whole volume.
                 let plane = add(centre, scale(to_eye, radius + 1.0));
-                let base = add(add(plane, scale(right, -pixel * w / 2.0)), scale(up, pixel * h / 2.0));
+                let base = add(
+                    add(plane, scale(right, -pixel * w / 2.0)),
+                    scale(up, pixel * h / 2.0),
+                );
                 params.base = v4(to_voxel(base), 0.0);
                 params.du = v4(to_voxel(scale(right, pixel)), 0.0);
                 params.dv = v4(to_voxel(scale(up, -pixel)), 0.0);

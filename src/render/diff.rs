@@ -22,7 +22,11 @@ impl std::fmt::Display for DiffStats {
             f,
             "rmse {:.6e}  psnr {}  max_abs {:.6e}  differing {} of {} pixels",
             self.rmse,
-            if self.psnr.is_infinite() { "inf dB".to_string() } else { format!("{:.2} dB", self.psnr) },
+            if self.psnr.is_infinite() {
+                "inf dB".to_string()
+            } else {
+                format!("{:.2} dB", self.psnr)
+            },
             self.max_abs,
             self.differing,
             self.pixels
@@ -67,16 +71,37 @@ pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
     }
     let n = (a.pixels.len() * 4).max(1) as f64;
     let rmse = (sum / n).sqrt();
-    let psnr = if rmse == 0.0 { f64::INFINITY } else { 20.0 * (1.0 / rmse).log10() };
-    Ok(DiffStats { rmse, psnr, max_abs, differing, pixels: a.pixels.len() as u64 })
+    let psnr = if rmse == 0.0 {
+        f64::INFINITY
+    } else {
+        20.0 * (1.0 / rmse).log10()
+    };
+    Ok(DiffStats {
+        rmse,
+        psnr,
+        max_abs,
+        differing,
+        pixels: a.pixels.len() as u64,
+    })
 }
 
 /// Writes a PNG of the per-pixel max abs difference: black where equal, then
 /// blue to red up to `scale` (default: the frame's max difference).
 pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> Result<()> {
     diff(a, b)?;
-    let diffs: Vec<f64> = a.pixels.iter().zip(&b.pixels).map(|(pa, pb)| pixel_diff(*pa, *pb)).collect();
-    let top = scale.unwrap_or_else(|| diffs.iter().cloned().filter(|d| d.is_finite()).fold(0.0, f64::max));
+    let diffs: Vec<f64> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(pa, pb)| pixel_diff(*pa, *pb))
+        .collect();
+    let top = scale.unwrap_or_else(|| {
+        diffs
+            .iter()
+            .cloned()
+            .filter(|d| d.is_finite())
+            .fold(0.0, f64::max)
+    });
     let mut rgb = Vec::with_capacity(diffs.len() * 3);
     for d in diffs {
         let px = if d == 0.0 {
@@ -84,10 +109,18 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         } else if !d.is_finite() {
             [255, 255, 255]
         } else {
-            let t = if top > 0.0 { (d / top).clamp(0.0, 1.0) } else { 1.0 };
+            let t = if top > 0.0 {
+                (d / top).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
             // Non-zero differences are never black, however small.
             let t = 0.15 + 0.85 * t;
-            [(255.0 * t) as u8, (64.0 * (1.0 - t)) as u8, (255.0 * (1.0 - t)) as u8]
+            [
+                (255.0 * t) as u8,
+                (64.0 * (1.0 - t)) as u8,
+                (255.0 * (1.0 - t)) as u8,
+            ]
         };
         rgb.extend_from_slice(&px);
     }
@@ -96,8 +129,14 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), a.width, a.height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(|e| Error::format(path, e.to_string()))?;
-        writer.write_image_data(&rgb).map_err(|e| Error::format(path, e.to_string()))?;
-        writer.finish().map_err(|e| Error::format(path, e.to_string()))
+        let mut writer = encoder
+            .write_header()
+            .map_err(|e| Error::format(path, e.to_string()))?;
+        writer
+            .write_image_data(&rgb)
+            .map_err(|e| Error::format(path, e.to_string()))?;
+        writer
+            .finish()
+            .map_err(|e| Error::format(path, e.to_string()))
     })
 }

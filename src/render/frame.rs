@@ -19,9 +19,16 @@ const PREFIX: &str = "lacuna.";
 
 /// Writes to `path` through a sibling temporary file and a rename.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let name = path.file_name().and_then(|n| n.to_str()).ok_or_else(|| Error::invalid("output path", path.display().to_string(), "has no file name"))?;
+    let name = path.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
+        Error::invalid(
+            "output path",
+            path.display().to_string(),
+            "has no file name",
+        )
+    })?;
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
+    let result = write(&tmp)
+        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -31,7 +38,12 @@ pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) ->
 impl Frame {
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {
         assert_eq!(pixels.len(), width as usize * height as usize);
-        Frame { width, height, pixels, metadata: BTreeMap::new() }
+        Frame {
+            width,
+            height,
+            pixels,
+            metadata: BTreeMap::new(),
+        }
     }
 
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
@@ -46,10 +58,18 @@ impl Frame {
             let c = pixels[p.y() * w + p.x()];
             (c[0], c[1], c[2], c[3])
         });
-        let layer = Layer::new((w, h), LayerAttributes::named("lacuna"), Encoding::SMALL_LOSSLESS, channels);
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::named("lacuna"),
+            Encoding::SMALL_LOSSLESS,
+            channels,
+        );
         let mut image = Image::from_layer(layer);
         for (k, v) in &self.metadata {
-            image.attributes.other.insert(Text::from(format!("{PREFIX}{k}").as_str()), AttributeValue::Text(Text::from(v.as_str())));
+            image.attributes.other.insert(
+                Text::from(format!("{PREFIX}{k}").as_str()),
+                AttributeValue::Text(Text::from(v.as_str())),
+            );
         }
         write_atomically(path, |tmp| {
             image.write().to_file(tmp).map_err(|e| match e {
@@ -67,17 +87,26 @@ impl Frame {
         let image = read_first_rgba_layer_from_file(
             path,
             |res: Vec2<usize>, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-            |(w, px): &mut (usize, Vec<[f32; 4]>), p: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+            |(w, px): &mut (usize, Vec<[f32; 4]>),
+             p: Vec2<usize>,
+             (r, g, b, a): (f32, f32, f32, f32)| {
                 px[p.y() * *w + p.x()] = [r, g, b, a];
             },
         )
         .map_err(|e| match e {
-            exr::error::Error::Io(io) => crate::Error::format(path, format!("cannot read EXR: {io}")),
+            exr::error::Error::Io(io) => {
+                crate::Error::format(path, format!("cannot read EXR: {io}"))
+            }
             other => crate::Error::format(path, format!("not a readable RGBA EXR: {other}")),
         })?;
         let size = image.layer_data.size;
         let mut metadata = BTreeMap::new();
-        for (k, v) in image.attributes.other.iter().chain(image.layer_data.attributes.other.iter()) {
+        for (k, v) in image
+            .attributes
+            .other
+            .iter()
+            .chain(image.layer_data.attributes.other.iter())
+        {
             let key = k.to_string();
             if let (Some(stripped), AttributeValue::Text(t)) = (key.strip_prefix(PREFIX), v) {
                 metadata.insert(stripped.to_string(), t.to_string());

@@ -33,7 +33,16 @@ impl std::str::FromStr for Accel {
         Accel::ALL
             .into_iter()
             .find(|a| a.name() == s)
-            .ok_or_else(|| Error::invalid("accel", s, format!("expected one of: {}", Accel::ALL.map(|a| a.name()).join(", "))))
+            .ok_or_else(|| {
+                Error::invalid(
+                    "accel",
+                    s,
+                    format!(
+                        "expected one of: {}",
+                        Accel::ALL.map(|a| a.name()).join(", ")
+                    ),
+                )
+            })
     }
 }
 
@@ -59,13 +68,28 @@ impl RenderTarget {
     /// Checks the frame against `maxStorageBufferRange` and the dispatch limits.
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Self> {
         if width == 0 || height == 0 {
-            return Err(Error::invalid("size", format!("{width}x{height}"), "width and height must be > 0"));
+            return Err(Error::invalid(
+                "size",
+                format!("{width}x{height}"),
+                "width and height must be > 0",
+            ));
         }
         let info = ctx.info();
         let bytes = width as u64 * height as u64 * 16;
-        info.check(format!("frame {width}x{height} ({bytes} bytes)"), "maxStorageBufferRange", bytes, info.max_storage_buffer_range)?;
+        info.check(
+            format!("frame {width}x{height} ({bytes} bytes)"),
+            "maxStorageBufferRange",
+            bytes,
+            info.max_storage_buffer_range,
+        )?;
         record::groups_for(info, "frame", [width, height, 1], LOCAL)?;
-        let frame = Buffer::new(ctx, "frame", bytes, vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::GpuOnly)?;
+        let frame = Buffer::new(
+            ctx,
+            "frame",
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
         let params = Buffer::new(
             ctx,
             "render params",
@@ -73,14 +97,29 @@ impl RenderTarget {
             vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
-        let readback = Buffer::new(ctx, "frame readback", bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
-        Ok(RenderTarget { width, height, frame, params, readback })
+        let readback = Buffer::new(
+            ctx,
+            "frame readback",
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        Ok(RenderTarget {
+            width,
+            height,
+            frame,
+            params,
+            readback,
+        })
     }
 
     /// Reads the frame recorded by `Renderer::record_readback`, after the
     /// submission completed.
     pub fn read(&self) -> Frame {
-        let bytes = self.readback.mapped().expect("readback buffer is host visible");
+        let bytes = self
+            .readback
+            .mapped()
+            .expect("readback buffer is host visible");
         let n = self.width as usize * self.height as usize;
         let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
         Frame::new(self.width, self.height, pixels)
@@ -96,8 +135,16 @@ pub struct Renderer {
 impl Renderer {
     pub fn new(ctx: &Context) -> Result<Self> {
         use vk::DescriptorType as D;
-        let bindings = [D::UNIFORM_BUFFER, D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER, D::STORAGE_BUFFER];
-        Ok(Renderer { ctx: ctx.clone(), naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &bindings, 0)? })
+        let bindings = [
+            D::UNIFORM_BUFFER,
+            D::COMBINED_IMAGE_SAMPLER,
+            D::STORAGE_BUFFER,
+            D::STORAGE_BUFFER,
+        ];
+        Ok(Renderer {
+            ctx: ctx.clone(),
+            naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &bindings, 0)?,
+        })
     }
 
     /// Records one frame into `cmd`: parameter update, then the march pass
@@ -130,14 +177,24 @@ impl Renderer {
             ));
         }
         let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
-        let groups = record::groups_for(self.ctx.info(), "frame", [target.width, target.height, 1], LOCAL)?;
+        let groups = record::groups_for(
+            self.ctx.info(),
+            "frame",
+            [target.width, target.height, 1],
+            LOCAL,
+        )?;
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
         record::barrier(device, cmd, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_UNIFORM_READ);
+        record::barrier(
+            device,
+            cmd,
+            Access::TRANSFER_WRITE,
+            Access::COMPUTE_UNIFORM_READ,
+        );
         let kernel = match accel {
             Accel::Naive => &self.naive,
         };
@@ -164,14 +221,24 @@ impl Renderer {
     pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) {
         let device = self.ctx.device();
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
-        let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: target.frame.size() }];
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: target.frame.size(),
+        }];
         unsafe { device.cmd_copy_buffer(cmd, target.frame.raw, target.readback.raw, &region) };
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
     }
 
     /// Renders one frame: records, submits, waits, reads back. Returns the
     /// frame and the GPU time of each pass ("march", "readback").
-    pub fn render(&self, accel: Accel, volume: &GpuVolume, tf: &Buffer, settings: &RenderSettings) -> Result<(Frame, Timings)> {
+    pub fn render(
+        &self,
+        accel: Accel,
+        volume: &GpuVolume,
+        tf: &Buffer,
+        settings: &RenderSettings,
+    ) -> Result<(Frame, Timings)> {
         settings.validate()?;
         let target = RenderTarget::new(&self.ctx, settings.width, settings.height)?;
         let mut timer = Timer::new(&self.ctx, 4)?;

@@ -55,6 +55,8 @@ pub fn sample(volume: &Volume, p: V3) -> f32 {
 }
 
 /// The premultiplied RGBA of one pixel.
+// Negated comparisons mirror the GLSL: a NaN bound stops the march.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y: u32) -> [f32; 4] {
     let v3 = |v: [f32; 4]| [v[0], v[1], v[2]];
     let (base, du, dv) = (v3(p.base), v3(p.du), v3(p.dv));

@@ -17,7 +17,13 @@ pub struct RenderSettings {
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        RenderSettings { width: 1024, height: 1024, camera: Camera::default(), step: 0.5, ert: None }
+        RenderSettings {
+            width: 1024,
+            height: 1024,
+            camera: Camera::default(),
+            step: 0.5,
+            ert: None,
+        }
     }
 }
 
@@ -25,8 +31,14 @@ impl Default for RenderSettings {
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let bad = |why: &str| Error::invalid("size", s, why.to_string());
     let (w, h) = s.split_once('x').ok_or_else(|| bad("expected WxH"))?;
-    let w: u32 = w.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
-    let h: u32 = h.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| bad("expected WxH with integers"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| bad("expected WxH with integers"))?;
     if w == 0 || h == 0 {
         return Err(bad("width and height must be > 0"));
     }
@@ -36,10 +48,18 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
 impl RenderSettings {
     pub fn validate(&self) -> Result<()> {
         if self.width == 0 || self.height == 0 {
-            return Err(Error::invalid("size", format!("{}x{}", self.width, self.height), "width and height must be > 0"));
+            return Err(Error::invalid(
+                "size",
+                format!("{}x{}", self.width, self.height),
+                "width and height must be > 0",
+            ));
         }
         if !(self.step.is_finite() && self.step > 0.0) {
-            return Err(Error::invalid("step", self.step.to_string(), "must be a finite number > 0 (voxels)"));
+            return Err(Error::invalid(
+                "step",
+                self.step.to_string(),
+                "must be a finite number > 0 (voxels)",
+            ));
         }
         if let Some(e) = self.ert {
             if !(e > 0.0 && e <= 1.0) {
@@ -50,7 +70,12 @@ impl RenderSettings {
     }
 
     /// Full shader parameters for a volume.
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
+    pub fn params(
+        &self,
+        dims: [u32; 3],
+        spacing: [f32; 3],
+        norm: [f32; 2],
+    ) -> Result<RenderParams> {
         self.validate()?;
         let mut p = self.camera.params(dims, spacing, self.width, self.height)?;
         p.march = [self.step, self.ert.unwrap_or(ERT_OFF), norm[0], norm[1]];

@@ -76,16 +76,31 @@ fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8
 /// f32 values normalised over their finite range; non-finite values are an error.
 fn normalized_f32(values: Vec<f64>, path: &Path) -> Result<VoxelData> {
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(Error::format(path, format!("voxel {i} is not a finite number")));
+        return Err(Error::format(
+            path,
+            format!("voxel {i} is not a finite number"),
+        ));
     }
     let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
     let hi = values.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
-    Ok(VoxelData::F32(values.into_iter().map(|v| ((v - lo) * scale) as f32).collect()))
+    Ok(VoxelData::F32(
+        values
+            .into_iter()
+            .map(|v| ((v - lo) * scale) as f32)
+            .collect(),
+    ))
 }
 
 /// Decodes `bytes` (exactly dims x type size) into a volume.
-pub fn decode(path: &Path, bytes: &[u8], ty: VoxelType, little: bool, dims: [u32; 3], spacing: [f32; 3]) -> Result<Volume> {
+pub fn decode(
+    path: &Path,
+    bytes: &[u8],
+    ty: VoxelType,
+    little: bool,
+    dims: [u32; 3],
+    spacing: [f32; 3],
+) -> Result<Volume> {
     let n = super::check_dims(dims, &path.display().to_string())?;
     let expected = n * ty.bytes() as u64;
     if bytes.len() as u64 != expected {
@@ -105,21 +120,69 @@ pub fn decode(path: &Path, bytes: &[u8], ty: VoxelType, little: bool, dims: [u32
     let (data, range) = match ty {
         VoxelType::U8 => (VoxelData::U8(bytes.to_vec()), None),
         // Signed integers shift into the unsigned range so they stay native.
-        VoxelType::I8 => (VoxelData::U8(bytes.iter().map(|&b| (b as i8 as i16 + 128) as u8).collect()), Some(-128.0)),
-        VoxelType::U16 => (VoxelData::U16(words::<2>(bytes, little).map(u16::from_le_bytes).collect()), None),
+        VoxelType::I8 => (
+            VoxelData::U8(
+                bytes
+                    .iter()
+                    .map(|&b| (b as i8 as i16 + 128) as u8)
+                    .collect(),
+            ),
+            Some(-128.0),
+        ),
+        VoxelType::U16 => (
+            VoxelData::U16(words::<2>(bytes, little).map(u16::from_le_bytes).collect()),
+            None,
+        ),
         VoxelType::I16 => (
-            VoxelData::U16(words::<2>(bytes, little).map(|w| (i16::from_le_bytes(w) as i32 + 32768) as u16).collect()),
+            VoxelData::U16(
+                words::<2>(bytes, little)
+                    .map(|w| (i16::from_le_bytes(w) as i32 + 32768) as u16)
+                    .collect(),
+            ),
             Some(-32768.0),
         ),
-        VoxelType::U32 => (normalized_f32(words::<4>(bytes, little).map(|w| u32::from_le_bytes(w) as f64).collect(), path)?, None),
-        VoxelType::I32 => (normalized_f32(words::<4>(bytes, little).map(|w| i32::from_le_bytes(w) as f64).collect(), path)?, None),
-        VoxelType::F32 => (normalized_f32(words::<4>(bytes, little).map(|w| f32::from_le_bytes(w) as f64).collect(), path)?, None),
-        VoxelType::F64 => (normalized_f32(words::<8>(bytes, little).map(f64::from_le_bytes).collect(), path)?, None),
+        VoxelType::U32 => (
+            normalized_f32(
+                words::<4>(bytes, little)
+                    .map(|w| u32::from_le_bytes(w) as f64)
+                    .collect(),
+                path,
+            )?,
+            None,
+        ),
+        VoxelType::I32 => (
+            normalized_f32(
+                words::<4>(bytes, little)
+                    .map(|w| i32::from_le_bytes(w) as f64)
+                    .collect(),
+                path,
+            )?,
+            None,
+        ),
+        VoxelType::F32 => (
+            normalized_f32(
+                words::<4>(bytes, little)
+                    .map(|w| f32::from_le_bytes(w) as f64)
+                    .collect(),
+                path,
+            )?,
+            None,
+        ),
+        VoxelType::F64 => (
+            normalized_f32(
+                words::<8>(bytes, little).map(f64::from_le_bytes).collect(),
+                path,
+            )?,
+            None,
+        ),
     };
     let mut volume = Volume::new(path.display().to_string(), dims, spacing, ty, data)?;
     // Report the range in source units.
     volume.value_range = match (ty, range) {
-        (_, Some(offset)) => [volume.value_range[0] + offset, volume.value_range[1] + offset],
+        (_, Some(offset)) => [
+            volume.value_range[0] + offset,
+            volume.value_range[1] + offset,
+        ],
         (VoxelType::U8 | VoxelType::U16, None) => volume.value_range,
         _ => source_range(bytes, ty, little),
     };

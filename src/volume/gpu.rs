@@ -23,7 +23,14 @@ impl GpuVolume {
             VoxelData::U16(v) => (vk::Format::R16_UNORM, bytemuck::cast_slice(v)),
             VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
         };
-        let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
+        let image = Image3d::with_data(
+            ctx,
+            &volume.name,
+            format,
+            volume.dims,
+            volume.texel_bytes(),
+            bytes,
+        )?;
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::NEAREST)
             .min_filter(vk::Filter::NEAREST)
@@ -33,7 +40,14 @@ impl GpuVolume {
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .unnormalized_coordinates(false);
         let sampler = unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
-        Ok(GpuVolume { ctx: ctx.clone(), image, sampler, dims: volume.dims, spacing: volume.spacing, norm: volume.norm })
+        Ok(GpuVolume {
+            ctx: ctx.clone(),
+            image,
+            sampler,
+            dims: volume.dims,
+            spacing: volume.spacing,
+            norm: volume.norm,
+        })
     }
 }
 

@@ -73,11 +73,19 @@ pub struct Volume {
 /// Checks dims are non-zero and their product fits memory indexing.
 pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
     if dims.contains(&0) {
-        return Err(Error::invalid("dimensions", format!("{}x{}x{}", dims[0], dims[1], dims[2]), format!("{what} has a zero dimension")));
+        return Err(Error::invalid(
+            "dimensions",
+            format!("{}x{}x{}", dims[0], dims[1], dims[2]),
+            format!("{what} has a zero dimension"),
+        ));
     }
     let n = dims.iter().map(|&d| d as u64).product::<u64>();
     if n > isize::MAX as u64 / 8 {
-        return Err(Error::invalid("dimensions", format!("{}x{}x{}", dims[0], dims[1], dims[2]), "too many voxels to address"));
+        return Err(Error::invalid(
+            "dimensions",
+            format!("{}x{}x{}", dims[0], dims[1], dims[2]),
+            "too many voxels to address",
+        ));
     }
     Ok(n)
 }
@@ -86,14 +94,28 @@ impl Volume {
     /// Builds a volume from stored values; computes the value range and the
     /// texel normalisation. `source_range` gives the range in source units
     /// (defaults to the stored range).
-    pub fn new(name: impl Into<String>, dims: [u32; 3], spacing: [f32; 3], source_type: VoxelType, data: VoxelData) -> Result<Self> {
+    pub fn new(
+        name: impl Into<String>,
+        dims: [u32; 3],
+        spacing: [f32; 3],
+        source_type: VoxelType,
+        data: VoxelData,
+    ) -> Result<Self> {
         let name = name.into();
         let n = check_dims(dims, &name)?;
         if data.len() as u64 != n {
-            return Err(Error::invalid("voxel data", name, format!("{} values for {} voxels", data.len(), n)));
+            return Err(Error::invalid(
+                "voxel data",
+                name,
+                format!("{} values for {} voxels", data.len(), n),
+            ));
         }
         if spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err(Error::invalid("spacing", format!("{spacing:?}"), "every spacing must be finite and > 0"));
+            return Err(Error::invalid(
+                "spacing",
+                format!("{spacing:?}"),
+                "every spacing must be finite and > 0",
+            ));
         }
         let (lo, hi) = match &data {
             VoxelData::U8(v) => minmax(v.iter().map(|&x| x as f64)),
@@ -105,8 +127,21 @@ impl Volume {
             VoxelData::U16(_) => 65535.0,
             VoxelData::F32(_) => 1.0,
         };
-        let norm = if hi > lo { [(lo / full) as f32, (full / (hi - lo)) as f32] } else { [(lo / full) as f32, 0.0] };
-        Ok(Volume { name, dims, spacing, source_type, data, value_range: [lo, hi], norm, default_tf: None })
+        let norm = if hi > lo {
+            [(lo / full) as f32, (full / (hi - lo)) as f32]
+        } else {
+            [(lo / full) as f32, 0.0]
+        };
+        Ok(Volume {
+            name,
+            dims,
+            spacing,
+            source_type,
+            data,
+            value_range: [lo, hi],
+            norm,
+            default_tf: None,
+        })
     }
 
     pub fn voxel_count(&self) -> u64 {
@@ -150,5 +185,7 @@ impl Volume {
 }
 
 fn minmax(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    })
 }

@@ -11,8 +11,20 @@ pub fn load(path: &Path) -> Result<Volume> {
         return Err(Error::io(path, e));
     }
     let object = ReaderOptions::new().read_file(path).map_err(|e| match e {
-        nifti::NiftiError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => Error::io(path, io),
-        nifti::NiftiError::Io(io) => Error::format(path, format!("cannot read NIfTI data (truncated or corrupt gzip?): {io}")),
+        nifti::NiftiError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
+            Error::io(path, io)
+        }
+        nifti::NiftiError::Io(io) => Error::format(
+            path,
+            format!("cannot read NIfTI data (truncated or corrupt gzip?): {io}"),
+        ),
+        // The crate's index and value do not name the offending field reliably.
+        nifti::NiftiError::InconsistentDim(..) => {
+            Error::format(path, "NIfTI header has a zero dimension or an invalid rank")
+        }
+        nifti::NiftiError::UnsupportedDataType(t) => {
+            Error::format(path, format!("NIfTI datatype {t:?} is not supported"))
+        }
         other => Error::format(path, format!("not a readable NIfTI-1 file: {other}")),
     })?;
     let header = object.header().clone();
@@ -25,16 +37,35 @@ pub fn load(path: &Path) -> Result<Volume> {
         Ok(NiftiType::Int32) => VoxelType::I32,
         Ok(NiftiType::Float32) => VoxelType::F32,
         Ok(NiftiType::Float64) => VoxelType::F64,
-        Ok(other) => return Err(Error::format(path, format!("NIfTI datatype {other:?} ({}) is not supported", header.datatype))),
-        Err(_) => return Err(Error::format(path, format!("NIfTI datatype code {} is not supported", header.datatype))),
+        Ok(other) => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "NIfTI datatype {other:?} ({}) is not supported",
+                    header.datatype
+                ),
+            ))
+        }
+        Err(_) => {
+            return Err(Error::format(
+                path,
+                format!("NIfTI datatype code {} is not supported", header.datatype),
+            ))
+        }
     };
     let rank = header.dim[0] as usize;
     if !(1..=7).contains(&rank) {
-        return Err(Error::format(path, format!("NIfTI dim[0] = {rank} is not a valid rank")));
+        return Err(Error::format(
+            path,
+            format!("NIfTI dim[0] = {rank} is not a valid rank"),
+        ));
     }
     // Trailing singleton dimensions (a 3-D volume stored as 4-D with t = 1) are fine.
     if header.dim[4..=rank.max(3)].iter().any(|&d| d > 1) {
-        return Err(Error::format(path, format!("NIfTI volume has {rank} dimensions with more than one 3-D frame")));
+        return Err(Error::format(
+            path,
+            format!("NIfTI volume has {rank} dimensions with more than one 3-D frame"),
+        ));
     }
     let dims = [1, 2, 3].map(|i| if i <= rank { header.dim[i] as u32 } else { 1 });
     let spacing = [1, 2, 3].map(|i| {

@@ -16,7 +16,13 @@ pub struct RawLayout {
 /// Parses `WxHxD` (each > 0).
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
     let parts: Vec<&str> = s.split('x').collect();
-    let bad = || Error::invalid("dimensions", s, "expected WxHxD with three positive integers");
+    let bad = || {
+        Error::invalid(
+            "dimensions",
+            s,
+            "expected WxHxD with three positive integers",
+        )
+    };
     if parts.len() != 3 {
         return Err(bad());
     }
@@ -29,19 +35,36 @@ pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
 }
 
 pub fn parse_type(s: &str) -> Result<VoxelType> {
-    VoxelType::from_name(s)
-        .ok_or_else(|| Error::invalid("voxel type", s, "expected uint8, uint16, int16, float32 or float64 (also int8, uint32, int32)"))
+    VoxelType::from_name(s).ok_or_else(|| {
+        Error::invalid(
+            "voxel type",
+            s,
+            "expected uint8, uint16, int16, float32 or float64 (also int8, uint32, int32)",
+        )
+    })
 }
 
 /// The layout encoded in an Open SciVis file name, e.g. `skull_256x256x256_uint8.raw`.
 pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
-    let stem = path.file_name().and_then(|n| n.to_str()).unwrap_or("").trim_end_matches(".raw");
+    let stem = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("")
+        .trim_end_matches(".raw");
     let mut parts = stem.rsplitn(3, '_');
     let (ty, dims) = (parts.next(), parts.next());
     let (Some(ty), Some(dims)) = (ty, dims) else {
-        return Err(Error::format(path, "raw file name is not name_WxHxD_type.raw; give --dims WxHxD and --type"));
+        return Err(Error::format(
+            path,
+            "raw file name is not name_WxHxD_type.raw; give --dims WxHxD and --type",
+        ));
     };
-    let dims = parse_dims(dims).map_err(|_| Error::format(path, format!("raw file name has no WxHxD dimensions ('{dims}'); give --dims and --type")))?;
+    let dims = parse_dims(dims).map_err(|_| {
+        Error::format(
+            path,
+            format!("raw file name has no WxHxD dimensions ('{dims}'); give --dims and --type"),
+        )
+    })?;
     let ty = VoxelType::from_name(ty).ok_or_else(|| {
         Error::format(path, format!("unknown voxel type '{ty}' in file name (expected uint8, uint16, int16, float32 or float64)"))
     })?;
@@ -54,5 +77,12 @@ pub fn load(path: &Path, layout: Option<RawLayout>, spacing: Option<[f32; 3]>) -
         None => layout_from_name(path)?,
     };
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    decode(path, &bytes, layout.ty, true, layout.dims, spacing.unwrap_or([1.0; 3]))
+    decode(
+        path,
+        &bytes,
+        layout.ty,
+        true,
+        layout.dims,
+        spacing.unwrap_or([1.0; 3]),
+    )
 }

@@ -16,7 +16,11 @@ pub struct LoadOptions {
 #[derive(Clone, Debug, PartialEq)]
 pub enum VolumeSpec {
     File(PathBuf),
-    Procedural { generator: Generator, dims: [u32; 3], param: Option<f64> },
+    Procedural {
+        generator: Generator,
+        dims: [u32; 3],
+        param: Option<f64>,
+    },
 }
 
 impl VolumeSpec {
@@ -32,46 +36,70 @@ impl VolumeSpec {
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }
         let generator = Generator::from_name(name).ok_or_else(|| {
-            Error::invalid("volume", spec, format!("no such file, and '{name}' is not a generator ({})", Generator::names().join(", ")))
+            Error::invalid(
+                "volume",
+                spec,
+                format!(
+                    "no such file, and '{name}' is not a generator ({})",
+                    Generator::names().join(", ")
+                ),
+            )
         })?;
         let size = parts.next().unwrap_or("");
         let dims = if size.contains('x') {
             super::raw::parse_dims(size)?
         } else {
-            let n: u32 = size
-                .parse()
-                .map_err(|_| Error::invalid("volume", spec, "expected NAME:SIZE[:PARAM] with SIZE an integer or WxHxD"))?;
+            let n: u32 = size.parse().map_err(|_| {
+                Error::invalid(
+                    "volume",
+                    spec,
+                    "expected NAME:SIZE[:PARAM] with SIZE an integer or WxHxD",
+                )
+            })?;
             [n; 3]
         };
         super::check_dims(dims, spec)?;
-        let param = match parts.next() {
-            None => None,
-            Some(p) => Some(
-                p.parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| Error::invalid("volume", spec, format!("parameter '{p}' is not a number")))?,
-            ),
-        };
+        let param =
+            match parts.next() {
+                None => None,
+                Some(p) => Some(p.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(
+                    || Error::invalid("volume", spec, format!("parameter '{p}' is not a number")),
+                )?),
+            };
         if parts.next().is_some() {
             return Err(Error::invalid("volume", spec, "expected NAME:SIZE[:PARAM]"));
         }
-        Ok(VolumeSpec::Procedural { generator, dims, param })
+        Ok(VolumeSpec::Procedural {
+            generator,
+            dims,
+            param,
+        })
     }
 
     pub fn load(&self, options: &LoadOptions) -> Result<Volume> {
         match self {
-            VolumeSpec::Procedural { generator, dims, param } => generator.generate(*dims, *param),
+            VolumeSpec::Procedural {
+                generator,
+                dims,
+                param,
+            } => generator.generate(*dims, *param),
             VolumeSpec::File(path) => load_file(path, options),
         }
     }
 }
 
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("")
+        .to_lowercase();
     if options.raw.is_some() || name.ends_with(".raw") {
         if !path.exists() {
-            return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory")));
+            return Err(Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
+            ));
         }
         return super::raw::load(path, options.raw, None);
     }
@@ -82,7 +110,10 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
         return super::nifti::load(path);
     }
     if !path.exists() {
-        return Err(Error::io(path, std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory")));
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
+        ));
     }
     Err(Error::format(path, "unknown volume format (expected .raw, .nrrd, .nhdr, .nii, .nii.gz, or NAME:SIZE for a generator)"))
 }

@@ -6,7 +6,7 @@ pub fn generate(dims: [u32; 3], level: u32) -> Vec<u8> {
     let scale = 3u64.pow(level);
     super::fill(dims, |x, y, z| {
         // The cell of the level-`level` grid that holds this voxel's centre.
-        let cell = |i: u32, n: u32| ((2 * i as u64 + 1) * scale / (2 * n as u64)) as u64;
+        let cell = |i: u32, n: u32| (2 * i as u64 + 1) * scale / (2 * n as u64);
         let (mut cx, mut cy, mut cz) = (cell(x, dims[0]), cell(y, dims[1]), cell(z, dims[2]));
         for _ in 0..level {
             let ones = (cx % 3 == 1) as u32 + (cy % 3 == 1) as u32 + (cz % 3 == 1) as u32;
@@ -17,7 +17,8 @@ pub fn generate(dims: [u32; 3], level: u32) -> Vec<u8> {
             cy /= 3;
             cz /= 3;
         }
-        let t = (x as f32 / dims[0] as f32 + y as f32 / dims[1] as f32 + z as f32 / dims[2] as f32) / 3.0;
+        let t = (x as f32 / dims[0] as f32 + y as f32 / dims[1] as f32 + z as f32 / dims[2] as f32)
+            / 3.0;
         (128.0 + 127.0 * t).round() as u8
     })
 }

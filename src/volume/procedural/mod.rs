@@ -27,7 +27,13 @@ pub enum Generator {
 }
 
 impl Generator {
-    pub const ALL: [Generator; 5] = [Generator::Menger, Generator::Nbody, Generator::Vessels, Generator::Turbulence, Generator::Shells];
+    pub const ALL: [Generator; 5] = [
+        Generator::Menger,
+        Generator::Nbody,
+        Generator::Vessels,
+        Generator::Turbulence,
+        Generator::Shells,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -60,7 +66,13 @@ impl Generator {
 
     pub fn generate(self, dims: [u32; 3], param: Option<f64>) -> Result<Volume> {
         super::check_dims(dims, self.name())?;
-        let bad = |why: &str| Error::invalid("generator parameter", format!("{}:{}", self.name(), param.unwrap_or(0.0)), why.to_string());
+        let bad = |why: &str| {
+            Error::invalid(
+                "generator parameter",
+                format!("{}:{}", self.name(), param.unwrap_or(0.0)),
+                why.to_string(),
+            )
+        };
         let seed = |p: Option<f64>| -> Result<u64> {
             match p {
                 None => Ok(1),
@@ -71,7 +83,7 @@ impl Generator {
         let data = match self {
             Generator::Menger => {
                 let level = param.unwrap_or(3.0);
-                if !(level >= 0.0 && level <= 12.0 && level.fract() == 0.0) {
+                if !((0.0..=12.0).contains(&level) && level.fract() == 0.0) {
                     return Err(bad("the Menger level must be an integer in 0..=12"));
                 }
                 menger::generate(dims, level as u32)
@@ -81,7 +93,7 @@ impl Generator {
             Generator::Turbulence => turbulence::generate(dims, seed(param)?),
             Generator::Shells => {
                 let count = param.unwrap_or(4.0);
-                if !(count >= 1.0 && count <= 64.0 && count.fract() == 0.0) {
+                if !((1.0..=64.0).contains(&count) && count.fract() == 0.0) {
                     return Err(bad("the shell count must be an integer in 1..=64"));
                 }
                 shells::generate(dims, count as u32)

@@ -16,7 +16,9 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
     let mut density = vec![0f32; voxels as usize];
     let total = (voxels * PARTICLES_PER_VOXEL).ceil() as usize;
     // Cluster masses follow a steep power law: a few big, many small.
-    let weights: Vec<f64> = (0..CLUSTERS).map(|_| rng.uniform().powf(3.0) + 0.02).collect();
+    let weights: Vec<f64> = (0..CLUSTERS)
+        .map(|_| rng.uniform().powf(3.0) + 0.02)
+        .collect();
     let sum: f64 = weights.iter().sum();
     let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * z);
     for w in &weights {
@@ -28,7 +30,9 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
             let u = rng.uniform().clamp(1e-6, 0.99);
             let r = scale / (u.powf(-2.0 / 3.0) - 1.0).sqrt();
             let dir = [rng.normal(), rng.normal(), rng.normal()];
-            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-12);
+            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2])
+                .sqrt()
+                .max(1e-12);
             let p: [f64; 3] = [0, 1, 2].map(|a| centre[a] + r * dir[a] / len - 0.5);
             if (0..3).any(|a| p[a] < 0.0 || p[a] > n[a] - 1.0) {
                 continue;
@@ -40,7 +44,9 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
                     for dx in 0..2 {
                         let (x, y, z) = (i[0] + dx, i[1] + dy, i[2] + dz);
                         if x < dims[0] as usize && y < dims[1] as usize && z < dims[2] as usize {
-                            let wgt = (if dx == 1 { f[0] } else { 1.0 - f[0] }) * (if dy == 1 { f[1] } else { 1.0 - f[1] }) * (if dz == 1 { f[2] } else { 1.0 - f[2] });
+                            let wgt = (if dx == 1 { f[0] } else { 1.0 - f[0] })
+                                * (if dy == 1 { f[1] } else { 1.0 - f[1] })
+                                * (if dz == 1 { f[2] } else { 1.0 - f[2] });
                             density[idx(x, y, z)] += wgt as f32;
                         }
                     }
@@ -48,5 +54,8 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
             }
         }
     }
-    density.iter().map(|&d| ((1.0 + d).log2() * 48.0).round().min(255.0) as u8).collect()
+    density
+        .iter()
+        .map(|&d| ((1.0 + d).log2() * 48.0).round().min(255.0) as u8)
+        .collect()
 }

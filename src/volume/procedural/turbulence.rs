@@ -2,7 +2,10 @@
 //! about 0.5, so its default ramp starting at 0.5 shows about half the voxels.
 
 fn hash(x: i64, y: i64, z: i64, seed: u64) -> f32 {
-    let mut h = seed ^ (x as u64).wrapping_mul(0x8DA6_B343) ^ (y as u64).wrapping_mul(0xD816_3841) ^ (z as u64).wrapping_mul(0xCB1A_B31F);
+    let mut h = seed
+        ^ (x as u64).wrapping_mul(0x8DA6_B343)
+        ^ (y as u64).wrapping_mul(0xD816_3841)
+        ^ (z as u64).wrapping_mul(0xCB1A_B31F);
     h = (h ^ (h >> 33)).wrapping_mul(0xFF51_AFD7_ED55_8CCD);
     h = (h ^ (h >> 33)).wrapping_mul(0xC4CE_B9FE_1A85_EC53);
     h ^= h >> 33;
@@ -21,7 +24,9 @@ fn value_noise(p: [f32; 3], seed: u64) -> f32 {
     for dz in 0..2 {
         for dy in 0..2 {
             for dx in 0..2 {
-                let w = (if dx == 1 { f[0] } else { 1.0 - f[0] }) * (if dy == 1 { f[1] } else { 1.0 - f[1] }) * (if dz == 1 { f[2] } else { 1.0 - f[2] });
+                let w = (if dx == 1 { f[0] } else { 1.0 - f[0] })
+                    * (if dy == 1 { f[1] } else { 1.0 - f[1] })
+                    * (if dz == 1 { f[2] } else { 1.0 - f[2] });
                 acc += w * hash(ix + dx, iy + dy, iz + dz, seed);
             }
         }

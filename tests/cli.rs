@@ -1,0 +1,393 @@
+//! The `lacuna` binary end to end: render to EXR (read back with the `exr`
+//! crate, metadata checked), info, diff exit codes, devices, and every bad
+//! input as a one-line error with a non-zero exit and no output file.
+
+mod common;
+use lacuna::render::Frame;
+use std::path::Path;
+use std::process::Command;
+
+struct Run {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lacuna"));
+    cmd.args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().unwrap();
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into(),
+        stderr: String::from_utf8_lossy(&out.stderr).into(),
+    }
+}
+
+/// Renders `spec` at a small size with validation on; panics on failure.
+fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
+    let mut args = vec![
+        "render",
+        spec,
+        "--size",
+        "40x32",
+        "--validate",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let r = lacuna(&args, &[]);
+    assert_eq!(r.code, 0, "stdout: {}\nstderr: {}", r.stdout, r.stderr);
+    r
+}
+
+#[test]
+fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("frame.exr");
+    let r = render_ok("menger:24", &out, &["--camera", "-20,15", "--step", "0.75"]);
+    assert!(
+        r.stdout.contains("march") && r.stdout.contains("readback") && r.stdout.contains("total"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stderr.is_empty(), "{}", r.stderr);
+    let frame = Frame::read_exr(&out).unwrap();
+    assert_eq!((frame.width, frame.height), (40, 32));
+    assert!(frame.pixels.iter().any(|p| p[3] > 0.1));
+    for key in [
+        "volume", "tf", "accel", "camera", "step", "ert", "device", "gpu_ms",
+    ] {
+        assert!(
+            frame.metadata.contains_key(key),
+            "missing metadata {key}: {:?}",
+            frame.metadata
+        );
+    }
+    assert_eq!(frame.metadata["accel"], "naive");
+    assert_eq!(frame.metadata["step"], "0.75");
+    assert_eq!(frame.metadata["volume"], "menger:24x24x24");
+    assert!(frame.metadata["gpu_ms"].parse::<f64>().unwrap() >= 0.0);
+    // Only the frame is in the folder: no temporary left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn render_perspective_with_ert_and_a_json_tf() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("tf.json");
+    std::fs::write(
+        &json,
+        r#"[{"RGBPoints":[0,0,0,1, 1,1,0,0],"Points":[0,0,0.5,0, 0.5,0,0.5,0, 1,0.6,0.5,0]}]"#,
+    )
+    .unwrap();
+    let out = dir.path().join("p.exr");
+    render_ok(
+        "nbody:32",
+        &out,
+        &[
+            "--perspective",
+            "45",
+            "--distance",
+            "1.5",
+            "--ert",
+            "0.95",
+            "--tf",
+            json.to_str().unwrap(),
+        ],
+    );
+    let frame = Frame::read_exr(&out).unwrap();
+    assert!(frame.metadata["camera"].starts_with("persp"));
+    assert_eq!(frame.metadata["ert"], "0.95");
+}
+
+#[test]
+fn info_describes_the_volume_and_its_occupancy() {
+    let r = lacuna(&["info", "menger:27", "--tf", "band:0.5:1"], &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for needle in [
+        "dims     27x27x27",
+        "type     uint8",
+        "spacing  1 x 1 x 1",
+        "values   0 .. 250",
+        "histogram",
+        "visible",
+        "active",
+    ] {
+        assert!(
+            r.stdout.contains(needle),
+            "'{needle}' missing from:\n{}",
+            r.stdout
+        );
+    }
+    // 8000 of 19683 voxels are solid in a level-3 sponge at 27^3.
+    assert!(r.stdout.contains("visible  40.644 %"), "{}", r.stdout);
+}
+
+#[test]
+fn diff_reports_metrics_and_exit_codes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, c) = (
+        dir.path().join("a.exr"),
+        dir.path().join("b.exr"),
+        dir.path().join("c.exr"),
+    );
+    render_ok("shells:24", &a, &[]);
+    render_ok("shells:24", &b, &[]);
+    render_ok("shells:24", &c, &["--camera", "50,10"]);
+    let same = lacuna(
+        &[
+            "diff",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--max-abs",
+            "0",
+        ],
+        &[],
+    );
+    assert_eq!(same.code, 0, "{}{}", same.stdout, same.stderr);
+    assert!(
+        same.stdout.contains("max_abs 0.000000e0") && same.stdout.contains("differing 0 of 1280"),
+        "{}",
+        same.stdout
+    );
+    let heat = dir.path().join("heat.png");
+    let differ = lacuna(
+        &[
+            "diff",
+            a.to_str().unwrap(),
+            c.to_str().unwrap(),
+            "--max-abs",
+            "0",
+            "--heatmap",
+            heat.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(differ.code, 1, "{}{}", differ.stdout, differ.stderr);
+    assert!(differ.stdout.contains("rmse") && differ.stdout.contains("psnr"));
+    let png = std::fs::read(&heat).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let loose = lacuna(
+        &[
+            "diff",
+            a.to_str().unwrap(),
+            c.to_str().unwrap(),
+            "--max-abs",
+            "1",
+        ],
+        &[],
+    );
+    assert_eq!(loose.code, 0);
+    // Bad input exits 2 with one line.
+    let small = dir.path().join("small.exr");
+    let r = lacuna(
+        &[
+            "render",
+            "shells:24",
+            "--size",
+            "8x8",
+            "--validate",
+            "--out",
+            small.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for args in [
+        vec!["diff", a.to_str().unwrap(), small.to_str().unwrap()],
+        vec!["diff", a.to_str().unwrap(), "/no/such.exr"],
+        vec!["diff", a.to_str().unwrap(), heat.to_str().unwrap()],
+    ] {
+        let r = lacuna(&args, &[]);
+        assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+        assert_eq!(r.stderr.trim().lines().count(), 1, "{args:?}: {}", r.stderr);
+    }
+    let r = lacuna(&["diff", a.to_str().unwrap(), small.to_str().unwrap()], &[]);
+    assert!(r.stderr.contains("sizes differ"), "{}", r.stderr);
+}
+
+#[test]
+fn devices_lists_at_least_one() {
+    let r = lacuna(&["devices"], &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.starts_with("0: "), "{}", r.stdout);
+}
+
+/// Asserts a one-line `error:` on stderr naming `needle`, a non-zero exit,
+/// and that no output file (or temporary) was created.
+fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let mut all: Vec<&str> = args.to_vec();
+    let out_s = out.to_str().unwrap().to_string();
+    if args[0] == "render" {
+        all.extend(["--out", &out_s, "--validate"]);
+    }
+    let r = lacuna(&all, env);
+    assert_ne!(r.code, 0, "{all:?} succeeded: {}", r.stdout);
+    let lines: Vec<&str> = r.stderr.trim().lines().collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "{all:?}: expected one line, got:\n{}",
+        r.stderr
+    );
+    assert!(
+        lines[0].contains(needle),
+        "{all:?}: '{}' lacks '{needle}'",
+        lines[0]
+    );
+    assert!(!r.stderr.contains("panicked"));
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "{all:?} left a file behind"
+    );
+}
+
+#[test]
+fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    std::fs::write(p("short_4x4x4_uint8.raw"), [0u8; 60]).unwrap();
+    std::fs::write(p("bad_4x4x4_uint9.raw"), [0u8; 64]).unwrap();
+    std::fs::write(
+        p("bad.nii.gz"),
+        b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03garbage",
+    )
+    .unwrap();
+    let mut nii = vec![0u8; 352];
+    nii[0..4].copy_from_slice(&348i32.to_le_bytes());
+    for (i, d) in [3i16, 2, 2, 2, 1, 1, 1, 1].iter().enumerate() {
+        nii[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
+    }
+    nii[70..72].copy_from_slice(&32i16.to_le_bytes()); // complex64
+    nii[72..74].copy_from_slice(&64i16.to_le_bytes());
+    nii[108..112].copy_from_slice(&352f32.to_le_bytes());
+    nii[344..348].copy_from_slice(b"n+1\0");
+    nii.extend([0u8; 64]);
+    std::fs::write(p("complex.nii"), &nii).unwrap();
+    std::fs::write(p("bad.json"), "{\"RGBPoints\": [0, 1,").unwrap();
+
+    let ctx = common::gpu();
+    let too_long = format!("menger:{}x1x1", ctx.info().max_image_dimension_3d + 1);
+    drop(ctx);
+
+    fails(
+        &["render", "/no/such/volume_8x8x8_uint8.raw"],
+        &[],
+        "No such file",
+    );
+    fails(
+        &["render", &p("short_4x4x4_uint8.raw")],
+        &[],
+        "holds 60 bytes of voxel data but 4x4x4 uint8 needs 64",
+    );
+    fails(
+        &["render", &p("bad_4x4x4_uint9.raw")],
+        &[],
+        "unknown voxel type 'uint9'",
+    );
+    fails(&["render", &p("bad.nii.gz")], &[], "corrupt gzip");
+    fails(&["render", &p("complex.nii")], &[], "datatype");
+    fails(&["render", "menger:0"], &[], "zero dimension");
+    fails(&["render", "menger:4x0x4"], &[], "dimensions");
+    fails(&["render", &too_long], &[], "maxImageDimension3D");
+    fails(
+        &["render", "menger:16", "--tf", "ramp:1"],
+        &[],
+        "expected ramp:LO:HI",
+    );
+    fails(
+        &["render", "menger:16", "--tf", "spike:0.5:-1"],
+        &[],
+        "WIDTH must be > 0",
+    );
+    fails(
+        &["render", "menger:16", "--tf", &p("bad.json")],
+        &[],
+        "invalid JSON",
+    );
+    fails(
+        &["render", "menger:16", "--size", "0x0"],
+        &[],
+        "width and height must be > 0",
+    );
+    fails(
+        &["render", "menger:16", "--size", "big"],
+        &[],
+        "expected WxH",
+    );
+    fails(
+        &["render", "menger:16", "--step", "0"],
+        &[],
+        "invalid step '0'",
+    );
+    fails(
+        &["render", "menger:16", "--step", "-1"],
+        &[],
+        "invalid step '-1'",
+    );
+    fails(
+        &["render", "menger:16", "--step", "NaN"],
+        &[],
+        "invalid step 'NaN'",
+    );
+    fails(&["render", "menger:16", "--step", "x"], &[], "--step");
+    fails(&["render", "menger:16", "--ert", "1.5"], &[], "invalid ert");
+    fails(
+        &["render", "menger:16", "--accel", "magic"],
+        &[],
+        "expected one of: naive",
+    );
+    fails(
+        &["render", "menger:16", "--camera", "10"],
+        &[],
+        "AZIMUTH,ELEVATION",
+    );
+    fails(
+        &["render", "menger:16", "--perspective", "0"],
+        &[],
+        "field of view",
+    );
+    fails(&["info", "blob:16"], &[], "not a generator");
+    fails(
+        &["render", "menger:16", "--unknown-flag"],
+        &[],
+        "--unknown-flag",
+    );
+    // No Vulkan driver at all: the loader finds no ICD.
+    let none = [
+        ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+        ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+    ];
+    fails(
+        &["render", "menger:8"],
+        &none,
+        "apt install mesa-vulkan-drivers",
+    );
+    fails(&["devices"], &none, "apt install mesa-vulkan-drivers");
+}
+
+#[test]
+fn output_into_a_missing_folder_fails_cleanly() {
+    let r = lacuna(
+        &[
+            "render",
+            "menger:8",
+            "--size",
+            "8x8",
+            "--validate",
+            "--out",
+            "/no/such/dir/f.exr",
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 2);
+    assert_eq!(r.stderr.trim().lines().count(), 1, "{}", r.stderr);
+    assert!(r.stderr.contains("/no/such/dir/f.exr"), "{}", r.stderr);
+}

@@ -1,0 +1,149 @@
+//! Transfer functions: specs, ParaView JSON, the LUT lookup, and the
+//! conservative max-alpha range query classification relies on.
+
+use lacuna::tf::{TransferFunction, LUT_SIZE};
+use lacuna::Error;
+
+fn invalid(spec: &str, needle: &str) {
+    match TransferFunction::parse(spec) {
+        Err(e @ Error::Invalid { .. }) => assert!(
+            e.to_string().contains(needle),
+            "{spec}: '{e}' lacks '{needle}'"
+        ),
+        other => panic!("{spec}: expected an invalid-TF error, got {other:?}"),
+    }
+}
+
+#[test]
+fn specs_parse_into_the_documented_shapes() {
+    let ramp = TransferFunction::parse("ramp:0.2:0.6").unwrap();
+    assert_eq!(ramp.lookup(0.1)[3], 0.0);
+    assert!((ramp.lookup(0.4)[3] - 0.5).abs() < 2e-3);
+    assert_eq!(ramp.lookup(0.9)[3], 1.0);
+    let band = TransferFunction::parse("band:0.3:0.5:0.25").unwrap();
+    assert_eq!(band.lookup(0.2)[3], 0.0);
+    assert_eq!(band.lookup(0.4)[3], 0.25);
+    assert_eq!(band.lookup(0.7)[3], 0.0);
+    let spike = TransferFunction::parse("spike:0.5:0.1").unwrap();
+    assert!((spike.lookup(0.5)[3] - 1.0).abs() < 1e-2);
+    assert_eq!(spike.lookup(0.6)[3], 0.0);
+    assert_eq!(ramp.lut().len(), LUT_SIZE);
+}
+
+#[test]
+fn malformed_specs_are_one_line_errors() {
+    invalid("ramp:0.5", "expected ramp:LO:HI");
+    invalid("ramp:0.6:0.2", "LO must be below HI");
+    invalid("ramp:a:b", "'a' is not a finite number");
+    invalid("ramp:0:1:2", "ALPHA must be in [0, 1]");
+    invalid("band:0.5:0.4", "LO must not exceed HI");
+    invalid("spike:0.5:0", "WIDTH must be > 0");
+    invalid("spike:1.5:0.1", "CENTER must be in [0, 1]");
+    invalid("ramp:nan:1", "not a finite number");
+    invalid("wave:1:2", "expected ramp:LO:HI");
+    invalid("", "expected ramp:LO:HI");
+}
+
+#[test]
+fn max_alpha_is_conservative_over_every_interpolated_value() {
+    let tfs = [
+        "spike:0.5:0.0005",
+        "band:0.31:0.3105:0.7",
+        "ramp:0.9:0.95",
+        "spike:0.0:0.001",
+        "spike:1.0:0.001",
+    ];
+    let mut state = 12345u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for spec in tfs {
+        let tf = TransferFunction::parse(spec).unwrap();
+        for _ in 0..2000 {
+            let (a, b) = (next(), next());
+            let (lo, hi) = (a.min(b), a.max(b).min(a.min(b) + 0.01));
+            let bound = tf.max_alpha(lo, hi);
+            for k in 0..=200 {
+                let v = lo + (hi - lo) * k as f32 / 200.0;
+                assert!(
+                    tf.lookup(v)[3] <= bound,
+                    "{spec}: alpha {} at {v} exceeds max_alpha({lo}, {hi}) = {bound}",
+                    tf.lookup(v)[3]
+                );
+            }
+        }
+        // A range that straddles the spike without a voxel value on it.
+        assert!(tf.max_alpha(0.0, 1.0) > 0.0);
+    }
+    let clear = TransferFunction::parse("band:0.6:0.7").unwrap();
+    assert_eq!(
+        clear.max_alpha(0.0, 0.5),
+        0.0,
+        "far from the band the range is empty"
+    );
+    assert_eq!(
+        clear.max_alpha(f32::INFINITY, f32::NEG_INFINITY),
+        0.0,
+        "an empty range"
+    );
+    assert!(
+        clear.max_alpha(0.595, 0.599) > 0.0,
+        "widened by one entry at the edge"
+    );
+}
+
+#[test]
+fn paraview_json_colormaps() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("cmap.json");
+    std::fs::write(
+        &p,
+        r#"[{"ColorSpace":"RGB","Name":"test","RGBPoints":[-100,0,0,1, 0,0,1,0, 100,1,0,0],"Points":[-100,0,0.5,0, 0,0,0.5,0, 100,0.8,0.5,0]}]"#,
+    )
+    .unwrap();
+    let tf = TransferFunction::parse(p.to_str().unwrap()).unwrap();
+    // x in [-100, 100] maps onto [0, 1].
+    let mid = tf.lookup(0.5);
+    assert!(mid[1] > 0.99 && mid[3] < 1e-3, "{mid:?}");
+    let top = tf.lookup(1.0);
+    assert!(
+        (top[0] - 1.0).abs() < 1e-6 && (top[3] - 0.8).abs() < 1e-6,
+        "{top:?}"
+    );
+    assert!((tf.lookup(0.75)[3] - 0.4).abs() < 1e-3);
+    // Without opacity points: a linear ramp.
+    std::fs::write(&p, r#"{"RGBPoints":[0,0,0,0, 1,1,1,1]}"#).unwrap();
+    let tf = TransferFunction::parse(p.to_str().unwrap()).unwrap();
+    assert!((tf.lookup(0.25)[3] - 0.25).abs() < 1e-3);
+
+    for (text, needle) in [
+        ("{not json", "invalid JSON"),
+        (r#"{"Points":[0,0,0.5,0]}"#, "no 'RGBPoints'"),
+        (r#"{"RGBPoints":[0,0,0]}"#, "groups of 4"),
+        (r#"{"RGBPoints":[1,0,0,0, 0,1,1,1]}"#, "ascending"),
+        (
+            r#"{"RGBPoints":[0,0,0,0, 1,1,1,1],"Points":[0,2,0.5,0]}"#,
+            "in [0, 1]",
+        ),
+        (
+            r#"{"RGBPoints":[0,0,0,0, 1,"a",1,1]}"#,
+            "not a finite number",
+        ),
+    ] {
+        std::fs::write(&p, text).unwrap();
+        match TransferFunction::parse(p.to_str().unwrap()) {
+            Err(e @ Error::Format { .. }) => {
+                assert!(e.to_string().contains(needle), "'{e}' lacks '{needle}'")
+            }
+            other => panic!("{text}: expected a format error, got {other:?}"),
+        }
+    }
+    let missing = dir.path().join("missing.json");
+    assert!(matches!(
+        TransferFunction::parse(missing.to_str().unwrap()),
+        Err(Error::Io { .. })
+    ));
+}
