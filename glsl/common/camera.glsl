@@ -3,7 +3,7 @@
 #define LACUNA_CAMERA_GLSL
 
 Ray camera_ray(uvec2 px) {
-    vec3 p = params.base.xyz + (float(px.x) + 0.5) * params.du.xyz + (float(px.y) + 0.5) * params.dv.xyz;
+    precise vec3 p = params.base.xyz + (float(px.x) + 0.5) * params.du.xyz + (float(px.y) + 0.5) * params.dv.xyz;
     Ray r;
     if (params.eye_or_dir.w == 0.0) {
         r.org = p;

@@ -76,8 +76,9 @@ void march_span(inout March m, float t_end) {
         if (!(t < stop)) {
             break;
         }
-        float w = min(m.dt, m.t_exit - t);
-        vec4 c = tf_lookup(sample_volume(m.ray.org + t * m.ray.dir));
+        precise float w = min(m.dt, m.t_exit - t);
+        precise vec3 p = m.ray.org + t * m.ray.dir;
+        vec4 c = tf_lookup(sample_volume(p));
         composite(m, c, w);
         m.k += 1;
         if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {

@@ -19,9 +19,9 @@ vec2 intersect_box(Ray r, vec3 lo, vec3 hi) {
                 return vec2(1.0, -1.0);
             }
         } else {
-            float inv = 1.0 / r.dir[a];
-            float ta = (lo[a] - r.org[a]) * inv;
-            float tb = (hi[a] - r.org[a]) * inv;
+            precise float inv = 1.0 / r.dir[a];
+            precise float ta = (lo[a] - r.org[a]) * inv;
+            precise float tb = (hi[a] - r.org[a]) * inv;
             t0 = max(t0, min(ta, tb));
             t1 = min(t1, max(ta, tb));
         }

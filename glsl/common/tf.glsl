@@ -9,11 +9,13 @@ layout(std430, set = 0, binding = TF_BINDING) readonly buffer TransferLut {
 
 vec4 tf_lookup(float v) {
     uint n = params.dims.w;
-    float x = v * float(n - 1u);
+    precise float x = v * float(n - 1u);
     float fl = floor(x);
     uint i = min(uint(fl), n - 1u);
     uint j = min(i + 1u, n - 1u);
-    return mix(tf_lut[i], tf_lut[j], x - fl);
+    precise float f = x - fl;
+    precise vec4 c = mix(tf_lut[i], tf_lut[j], f);
+    return c;
 }
 
 #endif

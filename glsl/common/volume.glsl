@@ -13,9 +13,11 @@ float volume_texel(ivec3 i, ivec3 hi) {
 // Normalised value in [0, 1] at voxel-space point p.
 float sample_volume(vec3 p) {
     ivec3 hi = ivec3(params.dims.xyz) - 1;
-    vec3 q = p - 0.5;
+    // `precise` everywhere on the sampling path: every kernel that inlines this
+    // must round identically (no kernel-dependent FMA contraction).
+    precise vec3 q = p - 0.5;
     vec3 fl = floor(q);
-    vec3 f = q - fl;
+    precise vec3 f = q - fl;
     ivec3 i = ivec3(fl);
     float c000 = volume_texel(i, hi);
     float c100 = volume_texel(i + ivec3(1, 0, 0), hi);
@@ -25,14 +27,15 @@ float sample_volume(vec3 p) {
     float c101 = volume_texel(i + ivec3(1, 0, 1), hi);
     float c011 = volume_texel(i + ivec3(0, 1, 1), hi);
     float c111 = volume_texel(i + ivec3(1, 1, 1), hi);
-    float c00 = mix(c000, c100, f.x);
-    float c10 = mix(c010, c110, f.x);
-    float c01 = mix(c001, c101, f.x);
-    float c11 = mix(c011, c111, f.x);
-    float c0 = mix(c00, c10, f.y);
-    float c1 = mix(c01, c11, f.y);
-    float raw = mix(c0, c1, f.z);
-    return clamp((raw - params.march.z) * params.march.w, 0.0, 1.0);
+    precise float c00 = mix(c000, c100, f.x);
+    precise float c10 = mix(c010, c110, f.x);
+    precise float c01 = mix(c001, c101, f.x);
+    precise float c11 = mix(c011, c111, f.x);
+    precise float c0 = mix(c00, c10, f.y);
+    precise float c1 = mix(c01, c11, f.y);
+    precise float raw = mix(c0, c1, f.z);
+    precise float v = (raw - params.march.z) * params.march.w;
+    return clamp(v, 0.0, 1.0);
 }
 
 #endif
