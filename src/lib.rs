@@ -7,6 +7,7 @@ pub mod timings;
 
 pub use error::{Error, Result};
 pub use timings::Timings;
+pub mod prims;
 pub mod render;
 pub mod tf;
 pub mod volume;

@@ -87,4 +87,29 @@ void march_span(inout March m, float t_end) {
     }
 }
 
+// Conservative margin (voxels) by which region boxes grow before their spans
+// are marched: covers the rounding of t and of sample positions, so a sample
+// naive marching takes inside an active region is never skipped. Taking an
+// extra sample is harmless: it is naive's sample, with naive's value.
+float region_margin(March m) {
+    vec3 o = abs(m.ray.org);
+    float scale = max(max(o.x, o.y), o.z) + abs(m.t_exit) + float(max(max(params.dims.x, params.dims.y), params.dims.z));
+    return 1.0 / 4096.0 + scale * (1.0 / 262144.0);
+}
+
+// The span of box [lo, hi] (grown by eps) along the ray, clipped to the volume.
+vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
+    vec2 h = intersect_box(m.ray, lo - eps, hi + eps);
+    return vec2(max(h.x, m.t_enter), min(h.y, m.t_exit));
+}
+
+// Marches the lattice samples of a region's span. Regions must come front to
+// back; k never moves backwards, so overlapping spans take no sample twice.
+void march_region(inout March m, vec2 span) {
+    if (span.x < span.y) {
+        march_skip_to(m, span.x);
+        march_span(m, span.y);
+    }
+}
+
 #endif

@@ -1,0 +1,23 @@
+#version 460
+// Range classification: a brick is active iff the TF's max alpha over its
+// value range (apron included) is > 0. O(bricks) per TF change.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+#include "dispatch.glsl"
+layout(std430, set = 0, binding = 0) readonly buffer Ranges { vec2 ranges[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Flags { uint flags[]; };
+layout(push_constant) uniform Push { uint bricks; uint groups_x; uint lut_size; uint pad; } pc;
+
+#define TF_MAX_BINDING 1
+#define TF_SIZE pc.lut_size
+#include "tf_range.glsl"
+
+void main() {
+    uint b = linear_index(pc.groups_x);
+    if (b >= pc.bricks) {
+        return;
+    }
+    vec2 r = ranges[b];
+    flags[b] = tf_max_alpha(r.x, r.y) > 0.0 ? 1u : 0u;
+}

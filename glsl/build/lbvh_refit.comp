@@ -1,0 +1,47 @@
+#version 460
+// Bottom-up refit: one invocation per leaf writes its brick box and climbs;
+// at each internal node the first arrival stops and the second (which then
+// sees both children's boxes) writes the union and continues.
+#extension GL_GOOGLE_include_directive : require
+#include "bvh_node.glsl"
+
+layout(local_size_x = 64) in;
+#include "dispatch.glsl"
+layout(std430, set = 0, binding = 0) readonly buffer Payload { uint payload[]; };
+layout(std430, set = 0, binding = 1) coherent buffer Nodes { BvhNode nodes[]; };
+layout(std430, set = 0, binding = 2) readonly buffer Parents { int parents[]; };
+layout(std430, set = 0, binding = 3) coherent buffer Visits { uint visits[]; };
+layout(push_constant) uniform Push {
+    uvec4 dims;   // xyz: volume dims; w: brick edge
+    uvec4 counts; // xyz: bricks per axis
+    uint n;
+    uint groups_x;
+} pc;
+
+void main() {
+    uint i = linear_index(pc.groups_x);
+    if (i >= pc.n) {
+        return;
+    }
+    uint b = payload[i];
+    uvec3 c = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
+    ivec3 lo = ivec3(c * pc.dims.w);
+    ivec3 hi = min(lo + int(pc.dims.w), ivec3(pc.dims.xyz));
+    int node = int(pc.n) - 1 + int(i);
+    nodes[node].lo = ivec4(lo, -1);
+    nodes[node].hi = ivec4(hi, int(b));
+    memoryBarrierBuffer();
+    while (node != 0) {
+        int p = parents[node];
+        if (atomicAdd(visits[p], 1u) == 0u) {
+            return;
+        }
+        memoryBarrierBuffer();
+        BvhNode l = nodes[nodes[p].lo.w];
+        BvhNode r = nodes[nodes[p].hi.w];
+        nodes[p].lo.xyz = min(l.lo.xyz, r.lo.xyz);
+        nodes[p].hi.xyz = max(l.hi.xyz, r.hi.xyz);
+        memoryBarrierBuffer();
+        node = p;
+    }
+}

@@ -1,0 +1,42 @@
+#version 460
+// Min/max of normalised voxel values per brick of `brick`^3 voxels, widened by
+// an apron of `apron` voxels per side (clamped to the volume). One invocation
+// per brick; output vec2(min, max) per brick, x fastest.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+#include "dispatch.glsl"
+layout(set = 0, binding = 0) uniform sampler3D volume_tex;
+layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
+layout(push_constant) uniform Push {
+    uvec4 dims;   // xyz: volume dims; w: brick edge
+    uvec4 counts; // xyz: bricks per axis; w: total bricks
+    vec2 norm;    // texel normalisation (lo, scale)
+    uint apron;
+    uint groups_x;
+} pc;
+
+void main() {
+    uint b = linear_index(pc.groups_x);
+    if (b >= pc.counts.w) {
+        return;
+    }
+    uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
+    ivec3 lo = max(ivec3(bc * pc.dims.w) - int(pc.apron), ivec3(0));
+    ivec3 hi = min(ivec3(bc * pc.dims.w + pc.dims.w - 1u) + int(pc.apron), ivec3(pc.dims.xyz) - 1);
+    float mn = 3.4e38;
+    float mx = -3.4e38;
+    for (int z = lo.z; z <= hi.z; ++z) {
+        for (int y = lo.y; y <= hi.y; ++y) {
+            for (int x = lo.x; x <= hi.x; ++x) {
+                float t = texelFetch(volume_tex, ivec3(x, y, z), 0).r;
+                mn = min(mn, t);
+                mx = max(mx, t);
+            }
+        }
+    }
+    // Normalise the extremes exactly as sample_volume normalises a sample.
+    precise float a = (mn - pc.norm.x) * pc.norm.y;
+    precise float c = (mx - pc.norm.x) * pc.norm.y;
+    ranges[b] = vec2(clamp(a, 0.0, 1.0), clamp(c, 0.0, 1.0));
+}

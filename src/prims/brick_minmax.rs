@@ -1,0 +1,75 @@
+//! Per-brick min/max of normalised voxel values over an apron, one invocation
+//! per brick, straight from the volume image.
+
+use super::{check_range, entry_barrier};
+use crate::error::Result;
+use crate::gpu::record;
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel};
+use crate::volume::GpuVolume;
+
+pub struct BrickMinMax {
+    ctx: Context,
+    kernel: Kernel,
+}
+
+/// Bricks per axis for a volume.
+pub fn brick_counts(dims: [u32; 3], brick: u32) -> [u32; 3] {
+    dims.map(|d| d.div_ceil(brick))
+}
+
+impl BrickMinMax {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let b = [D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER];
+        Ok(BrickMinMax {
+            ctx: ctx.clone(),
+            kernel: Kernel::new(
+                ctx,
+                "prims/brick_minmax",
+                shaders::PRIMS_BRICK_MINMAX,
+                &b,
+                48,
+            )?,
+        })
+    }
+
+    /// Records `out[b] = vec2(min, max)` for every `brick`^3 brick with an
+    /// apron of `apron` voxels. Ends with compute writes.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        volume: &GpuVolume,
+        brick: u32,
+        apron: u32,
+        out: &Buffer,
+    ) -> Result<()> {
+        let counts = brick_counts(volume.dims, brick);
+        let total = counts.iter().map(|&c| c as u64).product::<u64>();
+        check_range(self.ctx.info(), "brick ranges", total * 8)?;
+        entry_barrier(self.ctx.device(), cmd);
+        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, 64)?;
+        let mut push = Vec::with_capacity(48);
+        push.extend(bytemuck::cast_slice(&[
+            volume.dims[0],
+            volume.dims[1],
+            volume.dims[2],
+            brick,
+            counts[0],
+            counts[1],
+            counts[2],
+            total as u32,
+        ]));
+        push.extend(bytemuck::cast_slice(&volume.norm));
+        push.extend(bytemuck::cast_slice(&[apron, groups[0]]));
+        self.kernel.dispatch(
+            cmd,
+            &[
+                Binding::Sampled(volume.image.view, volume.sampler),
+                Binding::Storage(out),
+            ],
+            &push,
+            groups,
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,95 @@
+//! Stream compaction by flag: the indices i with flags[i] != 0, in order, and
+//! their count.
+
+use super::scan::{Scan, ScanScratch};
+use super::{entry_barrier, words};
+use crate::error::Result;
+use crate::gpu::record::{self, Access};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+
+pub struct Compact {
+    ctx: Context,
+    kernel: Kernel,
+    scan: Scan,
+}
+
+pub struct CompactScratch {
+    capacity: u64,
+    offsets: Buffer,
+    scan: ScanScratch,
+}
+
+impl Compact {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let b = [D::STORAGE_BUFFER; 4];
+        Ok(Compact {
+            ctx: ctx.clone(),
+            kernel: Kernel::new(ctx, "prims/compact", shaders::PRIMS_COMPACT, &b, 16)?,
+            scan: Scan::new(ctx)?,
+        })
+    }
+
+    pub fn scratch(&self, capacity: u64) -> Result<CompactScratch> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        Ok(CompactScratch {
+            capacity,
+            offsets: Buffer::new(
+                &self.ctx,
+                "compact offsets",
+                capacity * 4,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?,
+            scan: self.scan.scratch(capacity)?,
+        })
+    }
+
+    /// Flags must be 0 or 1 (they are summed to place each index).
+    /// Records: `indices[0..count]` = the i < n with `flags[i] == 1`, in
+    /// increasing order; `count[0]` = how many. `flags` needs TRANSFER_SRC
+    /// usage, `count` TRANSFER_DST. Ends with compute writes.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        flags: &Buffer,
+        n: u64,
+        indices: &Buffer,
+        count: &Buffer,
+        scratch: &CompactScratch,
+    ) -> Result<()> {
+        assert!(
+            n <= scratch.capacity,
+            "compaction of {n} flags with scratch for {}",
+            scratch.capacity
+        );
+        let device = self.ctx.device();
+        entry_barrier(device, cmd);
+        unsafe { device.cmd_fill_buffer(cmd, count.raw, 0, 4, 0) };
+        if n == 0 {
+            return Ok(());
+        }
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: n * 4,
+        }];
+        unsafe { device.cmd_copy_buffer(cmd, flags.raw, scratch.offsets.raw, &region) };
+        self.scan.record(cmd, &scratch.offsets, n, &scratch.scan)?;
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+        let groups = record::groups_linear(self.ctx.info(), "compact", n, 256)?;
+        let push = words(&[n as u32, groups[0], 0, 0]);
+        self.kernel.dispatch(
+            cmd,
+            &[
+                Binding::Storage(flags),
+                Binding::Storage(&scratch.offsets),
+                Binding::Storage(indices),
+                Binding::Storage(count),
+            ],
+            &push,
+            groups,
+        );
+        Ok(())
+    }
+}

@@ -1,0 +1,179 @@
+//! LSD radix sort of u32 keys with u32 payloads, stable, 4 bits per pass;
+//! `key_bits` sets the number of passes (30-bit Morton codes need 8).
+
+use super::scan::{Scan, ScanScratch, BLOCK};
+use super::{check_range, entry_barrier, words};
+use crate::error::{Error, Result};
+use crate::gpu::record::{self, Access};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+
+pub const BITS_PER_PASS: u32 = 4;
+
+pub struct RadixSort {
+    ctx: Context,
+    hist: Kernel,
+    scatter: Kernel,
+    scan: Scan,
+}
+
+/// Ping-pong and histogram buffers for sorts of up to `capacity` elements.
+pub struct SortScratch {
+    capacity: u64,
+    keys: Buffer,
+    vals: Buffer,
+    hist: Buffer,
+    scan: ScanScratch,
+}
+
+impl RadixSort {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        Ok(RadixSort {
+            ctx: ctx.clone(),
+            hist: Kernel::new(
+                ctx,
+                "prims/radix_hist",
+                shaders::PRIMS_RADIX_HIST,
+                &[D::STORAGE_BUFFER; 2],
+                32,
+            )?,
+            scatter: Kernel::new(
+                ctx,
+                "prims/radix_scatter",
+                shaders::PRIMS_RADIX_SCATTER,
+                &[D::STORAGE_BUFFER; 5],
+                32,
+            )?,
+            scan: Scan::new(ctx)?,
+        })
+    }
+
+    pub fn scratch(&self, capacity: u64) -> Result<SortScratch> {
+        let info = self.ctx.info();
+        check_range(info, "sort keys", capacity * 4)?;
+        if capacity > u32::MAX as u64 {
+            return Err(Error::invalid(
+                "sort size",
+                capacity.to_string(),
+                "at most 2^32 - 1 elements",
+            ));
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let hist_len = 16 * capacity.div_ceil(BLOCK).max(1);
+        Ok(SortScratch {
+            capacity,
+            keys: Buffer::new(
+                &self.ctx,
+                "sort keys (ping-pong)",
+                capacity * 4,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?,
+            vals: Buffer::new(
+                &self.ctx,
+                "sort values (ping-pong)",
+                capacity * 4,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?,
+            hist: Buffer::new(
+                &self.ctx,
+                "sort histogram",
+                hist_len * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?,
+            scan: self.scan.scratch(hist_len)?,
+        })
+    }
+
+    /// Records a stable sort of `keys[0..n]` (and `vals` alongside) by their
+    /// low `key_bits` bits, in place. Both buffers need TRANSFER_SRC and
+    /// TRANSFER_DST usage. Ends with compute or transfer writes.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        keys: &Buffer,
+        vals: &Buffer,
+        n: u64,
+        key_bits: u32,
+        scratch: &SortScratch,
+    ) -> Result<()> {
+        if !(1..=32).contains(&key_bits) {
+            return Err(Error::invalid(
+                "key bits",
+                key_bits.to_string(),
+                "must be in 1..=32",
+            ));
+        }
+        assert!(
+            n <= scratch.capacity,
+            "sort of {n} elements with scratch for {}",
+            scratch.capacity
+        );
+        let device = self.ctx.device();
+        entry_barrier(device, cmd);
+        if n <= 1 {
+            return Ok(());
+        }
+        let blocks = n.div_ceil(BLOCK);
+        let groups = record::groups_linear(self.ctx.info(), "radix sort", blocks, 1)?;
+        let passes = key_bits.div_ceil(BITS_PER_PASS);
+        let bufs = [(keys, vals), (&scratch.keys, &scratch.vals)];
+        for pass in 0..passes {
+            let (src, dst) = (bufs[pass as usize % 2], bufs[(pass as usize + 1) % 2]);
+            // The last pass of a key width that is not a multiple of 4 sees only the remaining bits.
+            let shift = pass * BITS_PER_PASS;
+            let digit_mask = (1u32 << (key_bits - shift).min(BITS_PER_PASS)) - 1;
+            let push = words(&[
+                n as u32,
+                groups[0],
+                shift,
+                blocks as u32,
+                digit_mask,
+                0,
+                0,
+                0,
+            ]);
+            if pass > 0 {
+                record::compute_to_compute(device, cmd);
+            }
+            self.hist.dispatch(
+                cmd,
+                &[Binding::Storage(src.0), Binding::Storage(&scratch.hist)],
+                &push,
+                groups,
+            );
+            self.scan
+                .record(cmd, &scratch.hist, 16 * blocks, &scratch.scan)?;
+            record::compute_to_compute(device, cmd);
+            self.scatter.dispatch(
+                cmd,
+                &[
+                    Binding::Storage(src.0),
+                    Binding::Storage(src.1),
+                    Binding::Storage(dst.0),
+                    Binding::Storage(dst.1),
+                    Binding::Storage(&scratch.hist),
+                ],
+                &push,
+                groups,
+            );
+        }
+        if passes % 2 == 1 {
+            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: n * 4,
+            }];
+            unsafe {
+                device.cmd_copy_buffer(cmd, scratch.keys.raw, keys.raw, &region);
+                device.cmd_copy_buffer(cmd, scratch.vals.raw, vals.raw, &region);
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,129 @@
+//! Exclusive scan (prefix sum) of u32, in place, over any length: blocks of
+//! 1024 are scanned in shared memory, block totals are scanned recursively,
+//! then added back.
+
+use super::{check_range, entry_barrier, words};
+use crate::error::Result;
+use crate::gpu::record::{self};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+
+/// Elements per workgroup (256 threads x 4 items).
+pub const BLOCK: u64 = 1024;
+
+pub struct Scan {
+    ctx: Context,
+    blocks: Kernel,
+    add: Kernel,
+}
+
+/// Block-total buffers for every level of a scan of up to `capacity` elements.
+pub struct ScanScratch {
+    capacity: u64,
+    levels: Vec<Buffer>,
+    dummy: Buffer,
+}
+
+impl Scan {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let two = [D::STORAGE_BUFFER, D::STORAGE_BUFFER];
+        Ok(Scan {
+            ctx: ctx.clone(),
+            blocks: Kernel::new(
+                ctx,
+                "prims/scan_blocks",
+                shaders::PRIMS_SCAN_BLOCKS,
+                &two,
+                16,
+            )?,
+            add: Kernel::new(ctx, "prims/scan_add", shaders::PRIMS_SCAN_ADD, &two, 16)?,
+        })
+    }
+
+    pub fn scratch(&self, capacity: u64) -> Result<ScanScratch> {
+        check_range(self.ctx.info(), "scan input", capacity * 4)?;
+        let mut levels = Vec::new();
+        let mut n = capacity;
+        while n > BLOCK {
+            n = n.div_ceil(BLOCK);
+            levels.push(Buffer::new(
+                &self.ctx,
+                "scan block sums",
+                n * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        let dummy = Buffer::new(
+            &self.ctx,
+            "scan dummy",
+            4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(ScanScratch {
+            capacity,
+            levels,
+            dummy,
+        })
+    }
+
+    /// Records an exclusive scan of `data[0..n]` in place (see the barrier
+    /// convention in `prims`).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        data: &Buffer,
+        n: u64,
+        scratch: &ScanScratch,
+    ) -> Result<()> {
+        assert!(
+            n <= scratch.capacity,
+            "scan of {n} elements with scratch for {}",
+            scratch.capacity
+        );
+        entry_barrier(self.ctx.device(), cmd);
+        self.level(cmd, data, n, scratch, 0)
+    }
+
+    fn level(
+        &self,
+        cmd: vk::CommandBuffer,
+        data: &Buffer,
+        n: u64,
+        scratch: &ScanScratch,
+        depth: usize,
+    ) -> Result<()> {
+        if n == 0 {
+            return Ok(());
+        }
+        let info = self.ctx.info();
+        let blocks = n.div_ceil(BLOCK);
+        let groups = record::groups_linear(info, "scan", blocks, 1)?;
+        let sums = if blocks > 1 {
+            &scratch.levels[depth]
+        } else {
+            &scratch.dummy
+        };
+        let push = words(&[n as u32, groups[0], (blocks > 1) as u32, 0]);
+        self.blocks.dispatch(
+            cmd,
+            &[Binding::Storage(data), Binding::Storage(sums)],
+            &push,
+            groups,
+        );
+        if blocks > 1 {
+            record::compute_to_compute(self.ctx.device(), cmd);
+            self.level(cmd, sums, blocks, scratch, depth + 1)?;
+            record::compute_to_compute(self.ctx.device(), cmd);
+            let push = words(&[n as u32, groups[0], 0, 0]);
+            self.add.dispatch(
+                cmd,
+                &[Binding::Storage(data), Binding::Storage(sums)],
+                &push,
+                groups,
+            );
+        }
+        Ok(())
+    }
+}

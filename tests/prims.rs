@@ -1,0 +1,207 @@
+//! GPU primitives against CPU references: scan, compaction, radix sort (keys
+//! and payloads, stability) and brick min/max, at the sizes and key patterns
+//! that break naive implementations.
+
+mod common;
+use common::{assert_clean, gpu};
+use lacuna::gpu::{vk, Buffer, Context};
+use lacuna::prims::{BrickMinMax, Compact, RadixSort, Scan};
+use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions};
+use lacuna::Volume;
+
+const SIZES: [usize; 9] = [0, 1, 2, 255, 256, 257, 4097, 100_000, 1 << 20];
+
+fn rng(seed: u64) -> impl FnMut() -> u32 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 32) as u32
+    }
+}
+
+fn buffer(ctx: &Context, data: &[u32]) -> Buffer {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST;
+    if data.is_empty() {
+        return Buffer::new(ctx, "test", 4, usage, lacuna::gpu::MemoryLocation::GpuOnly).unwrap();
+    }
+    Buffer::with_data(ctx, "test", bytemuck::cast_slice(data), usage).unwrap()
+}
+
+fn read(b: &Buffer, n: usize) -> Vec<u32> {
+    if n == 0 {
+        return Vec::new();
+    }
+    bytemuck::pod_collect_to_vec(&b.download(0, n as u64 * 4).unwrap())
+}
+
+fn patterns(n: usize, seed: u64) -> Vec<(&'static str, Vec<u32>)> {
+    let mut r = rng(seed);
+    let random: Vec<u32> = (0..n).map(|_| r()).collect();
+    let mut sorted = random.clone();
+    sorted.sort();
+    let reversed: Vec<u32> = sorted.iter().rev().cloned().collect();
+    vec![
+        ("random", random.clone()),
+        ("sorted", sorted),
+        ("reversed", reversed),
+        ("all-equal", vec![0xDEAD_BEEF; n]),
+        (
+            "few-distinct",
+            random
+                .iter()
+                .map(|v| [3, 0, u32::MAX, 7][(*v % 4) as usize])
+                .collect(),
+        ),
+        ("max-value", vec![u32::MAX; n]),
+    ]
+}
+
+#[test]
+fn exclusive_scan_matches_the_cpu() {
+    let ctx = gpu();
+    let scan = Scan::new(&ctx).unwrap();
+    for n in SIZES {
+        let scratch = scan.scratch(n as u64).unwrap();
+        for (name, data) in patterns(n, n as u64) {
+            // Small values as well as wrapping ones.
+            let data: Vec<u32> = if name == "random" {
+                data.iter().map(|v| v % 1000).collect()
+            } else {
+                data
+            };
+            let buf = buffer(&ctx, &data);
+            ctx.submit_and_wait(|cmd| scan.record(cmd, &buf, n as u64, &scratch))
+                .unwrap();
+            let mut acc = 0u32;
+            let want: Vec<u32> = data
+                .iter()
+                .map(|v| {
+                    let e = acc;
+                    acc = acc.wrapping_add(*v);
+                    e
+                })
+                .collect();
+            assert_eq!(read(&buf, n), want, "scan of {n} {name}");
+        }
+    }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn compaction_keeps_flagged_indices_in_order() {
+    let ctx = gpu();
+    let compact = Compact::new(&ctx).unwrap();
+    for n in SIZES {
+        let scratch = compact.scratch(n as u64).unwrap();
+        let mut r = rng(7 + n as u64);
+        for (name, flags) in [
+            (
+                "random",
+                (0..n).map(|_| r().is_multiple_of(3) as u32).collect::<Vec<_>>(),
+            ),
+            ("none", vec![0; n]),
+            ("all", vec![1; n]),
+            ("sparse", (0..n).map(|i| (i % 977 == 5) as u32).collect()),
+        ] {
+            let f = buffer(&ctx, &flags);
+            let out = buffer(&ctx, &vec![0xFFFF_FFFF; n.max(1)]);
+            let count = buffer(&ctx, &[12345]);
+            ctx.submit_and_wait(|cmd| compact.record(cmd, &f, n as u64, &out, &count, &scratch))
+                .unwrap();
+            let want: Vec<u32> = (0..n as u32).filter(|&i| flags[i as usize] != 0).collect();
+            assert_eq!(
+                read(&count, 1)[0] as usize,
+                want.len(),
+                "count of {n} {name}"
+            );
+            assert_eq!(read(&out, want.len()), want, "indices of {n} {name}");
+        }
+    }
+    assert_clean(&ctx);
+}
+
+fn check_sort(ctx: &Context, sort: &RadixSort, keys: &[u32], bits: u32, what: &str) {
+    let n = keys.len();
+    let scratch = sort.scratch(n as u64).unwrap();
+    let vals: Vec<u32> = (0..n as u32).collect();
+    let (kb, vb) = (buffer(ctx, keys), buffer(ctx, &vals));
+    ctx.submit_and_wait(|cmd| sort.record(cmd, &kb, &vb, n as u64, bits, &scratch))
+        .unwrap();
+    let mask = if bits == 32 {
+        u32::MAX
+    } else {
+        (1u32 << bits) - 1
+    };
+    // Stable CPU sort by the low `bits` bits; payload = original index.
+    let mut want: Vec<(u32, u32)> = keys.iter().cloned().zip(vals).collect();
+    want.sort_by_key(|(k, _)| k & mask);
+    let (got_k, got_v) = (read(&kb, n), read(&vb, n));
+    assert!(
+        got_k == want.iter().map(|w| w.0).collect::<Vec<_>>(),
+        "{what}: keys differ"
+    );
+    assert!(
+        got_v == want.iter().map(|w| w.1).collect::<Vec<_>>(),
+        "{what}: payloads differ (not stable)"
+    );
+}
+
+#[test]
+fn radix_sort_is_stable_and_matches_the_cpu() {
+    let ctx = gpu();
+    let sort = RadixSort::new(&ctx).unwrap();
+    for n in SIZES {
+        for (name, keys) in patterns(n, 99 + n as u64) {
+            check_sort(&ctx, &sort, &keys, 32, &format!("{n} {name} keys, 32 bits"));
+        }
+    }
+    // Fewer key bits: 30-bit codes (even passes) and 13 bits (odd passes,
+    // high bits ignored, so equal low bits keep input order).
+    let mut r = rng(5);
+    let codes: Vec<u32> = (0..100_000).map(|_| r() & ((1 << 30) - 1)).collect();
+    check_sort(&ctx, &sort, &codes, 30, "30-bit codes");
+    let mixed: Vec<u32> = (0..4097).map(|_| r()).collect();
+    check_sort(&ctx, &sort, &mixed, 13, "13 of 32 bits");
+    assert_clean(&ctx);
+}
+
+#[test]
+fn radix_sort_rejects_bad_key_bits() {
+    let ctx = gpu();
+    let sort = RadixSort::new(&ctx).unwrap();
+    let scratch = sort.scratch(4).unwrap();
+    let b = buffer(&ctx, &[1, 2, 3, 4]);
+    let err = ctx
+        .submit_and_wait(|cmd| sort.record(cmd, &b, &b, 4, 33, &scratch))
+        .unwrap_err();
+    assert!(err.to_string().contains("key bits '33'"), "{err}");
+}
+
+#[test]
+fn brick_minmax_matches_the_cpu_brick_grid() {
+    let ctx = gpu();
+    let mm = BrickMinMax::new(&ctx).unwrap();
+    for spec in ["turbulence:37x29x41", "vessels:40", "nbody:9x20x3"] {
+        let v = Volume::load(spec, &LoadOptions::default()).unwrap();
+        let gv = GpuVolume::upload(&ctx, &v).unwrap();
+        for apron in [0, 1] {
+            let cpu = BrickGrid::new(&v, 8, apron);
+            let out = buffer(&ctx, &vec![0; cpu.len() * 2]);
+            ctx.submit_and_wait(|cmd| mm.record(cmd, &gv, 8, apron, &out))
+                .unwrap();
+            let got: Vec<f32> = bytemuck::cast_slice(&read(&out, cpu.len() * 2)).to_vec();
+            for (i, r) in cpu.ranges.iter().enumerate() {
+                assert!(
+                    (got[2 * i] - r[0]).abs() < 1e-6 && (got[2 * i + 1] - r[1]).abs() < 1e-6,
+                    "{spec} apron {apron} brick {i}: {:?} vs {r:?}",
+                    &got[2 * i..2 * i + 2]
+                );
+            }
+        }
+    }
+    assert_clean(&ctx);
+}
