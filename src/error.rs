@@ -62,11 +62,7 @@ impl Error {
         }
     }
 
-    pub fn invalid(
-        what: &'static str,
-        value: impl Into<String>,
-        message: impl Into<String>,
-    ) -> Self {
+    pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Invalid {
             what,
             value: value.into(),

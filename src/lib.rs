@@ -1,6 +1,7 @@
 //! lacuna: a Vulkan-native direct volume renderer for comparing empty space
 //! skipping structures. See `README.md` and `docs/` for the design.
 
+pub mod accel;
 pub mod error;
 pub mod gpu;
 pub mod timings;

@@ -1,10 +1,11 @@
 //! The `lacuna` command line: parses, calls the library, prints.
 
 use clap::{Args, Parser, Subcommand};
+use lacuna::accel::{Builder, Classify, Structure};
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{self, Accel, Camera, Frame, Projection, RenderSettings, Renderer};
 use lacuna::volume::{BrickGrid, LoadOptions, RawLayout, BRICK};
-use lacuna::{Error, Result, TransferFunction, Volume};
+use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -63,9 +64,15 @@ struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<String>,
-    /// Empty space skipping structure.
+    /// Empty space skipping structure: naive, lbvh.
     #[arg(long, default_value = "naive")]
     accel: String,
+    /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
+    #[arg(long, default_value = "range")]
+    classify: String,
+    /// With --classify voxel: keep the one-voxel apron (on), or drop it as the paper does (off; not conservative).
+    #[arg(long, default_value = "on")]
+    apron: String,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024")]
     size: String,
@@ -84,6 +91,12 @@ struct RenderArgs {
     /// Early ray termination at this accumulated alpha (default off).
     #[arg(long, allow_hyphen_values = true)]
     ert: Option<f32>,
+    /// Time this many builds and frames and report per-phase medians.
+    #[arg(long, default_value_t = 1)]
+    repeat: u32,
+    /// Untimed builds and frames first (lavapipe compiles shaders on first use).
+    #[arg(long, default_value_t = 0)]
+    warmup: u32,
     /// Write the frame as OpenEXR (RGBA f32, premultiplied).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -120,10 +133,7 @@ fn context(validate: bool) -> Result<Context> {
 }
 
 fn tf_for(spec: Option<&str>, volume: &Volume) -> Result<Option<TransferFunction>> {
-    match spec
-        .map(str::to_string)
-        .or_else(|| volume.default_tf.clone())
-    {
+    match spec.map(str::to_string).or_else(|| volume.default_tf.clone()) {
         Some(s) => Ok(Some(TransferFunction::parse(&s)?)),
         None => Ok(None),
     }
@@ -132,6 +142,7 @@ fn tf_for(spec: Option<&str>, volume: &Volume) -> Result<Option<TransferFunction
 fn render(args: &RenderArgs) -> Result<ExitCode> {
     // Validate every argument before any expensive work.
     let accel: Accel = args.accel.parse()?;
+    let classify = Classify::parse(&args.classify, &args.apron)?;
     let (width, height) = render::parse_size(&args.size)?;
     let (azimuth_deg, elevation_deg) = Camera::parse_orbit(&args.camera)?;
     let projection = match args.perspective {
@@ -164,7 +175,40 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let renderer = Renderer::new(&ctx)?;
     let gpu_volume = lacuna::volume::GpuVolume::upload(&ctx, &volume)?;
     let lut = tf.upload(&ctx)?;
-    let (mut frame, timings) = renderer.render(accel, &gpu_volume, &lut, &settings)?;
+    if args.repeat == 0 {
+        return Err(Error::invalid("repeat", "0", "must be at least 1"));
+    }
+    let runs = args.warmup + args.repeat;
+    let (structure, build) = match accel {
+        Accel::Naive => (Structure::Naive, None),
+        _ => {
+            let builder = Builder::new(&ctx)?;
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..runs {
+                let (bricks, mut timings) = builder.bricks(&gpu_volume)?;
+                let (structure, t) = builder.build(accel, &gpu_volume, &bricks, &lut, classify)?;
+                timings.extend(t);
+                times.push(timings);
+                last = Some(structure);
+            }
+            (
+                last.expect("at least one run"),
+                Some(Timings::median(&times[args.warmup as usize..])),
+            )
+        }
+    };
+    let mut frames = Vec::new();
+    for _ in 0..runs {
+        frames.push(renderer.render(&structure, &gpu_volume, &lut, &settings)?);
+    }
+    let timings = Timings::median(
+        &frames[args.warmup as usize..]
+            .iter()
+            .map(|f| f.1.clone())
+            .collect::<Vec<_>>(),
+    );
+    let mut frame = frames.pop().expect("at least one frame").0;
 
     let info = ctx.info();
     println!("device  {} ({})", info.name, info.driver);
@@ -178,18 +222,31 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         settings.camera.describe(),
         settings.step
     );
-    println!("GPU time per pass:\n{timings}");
+    if args.repeat > 1 || args.warmup > 0 {
+        println!(
+            "timings are medians of {} runs after {} untimed warm-up runs",
+            args.repeat, args.warmup
+        );
+    }
+    if let Some(build) = &build {
+        println!("classify {}", classify.describe());
+        println!("build GPU time per phase (ranges once per volume, the rest per TF change):\n{build}");
+    }
+    if let Some(stats) = structure.stats() {
+        println!("structure {stats}");
+    }
+    println!("render GPU time per pass:\n{timings}");
     if let Some(out) = &args.out {
         let meta = &mut frame.metadata;
         meta.insert("volume".into(), volume.name.clone());
         meta.insert("tf".into(), tf.spec.clone());
         meta.insert("accel".into(), accel.to_string());
+        if accel != Accel::Naive {
+            meta.insert("classify".into(), classify.describe().to_string());
+        }
         meta.insert("camera".into(), settings.camera.describe());
         meta.insert("step".into(), settings.step.to_string());
-        meta.insert(
-            "ert".into(),
-            settings.ert.map_or("off".into(), |e| e.to_string()),
-        );
+        meta.insert("ert".into(), settings.ert.map_or("off".into(), |e| e.to_string()));
         meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
         meta.insert(
             "gpu_ms".into(),
@@ -223,10 +280,7 @@ fn info(args: &InfoArgs) -> Result<ExitCode> {
         v.voxel_count()
     );
     println!("type     {}", v.source_type);
-    println!(
-        "spacing  {} x {} x {}",
-        v.spacing[0], v.spacing[1], v.spacing[2]
-    );
+    println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
     println!("values   {} .. {}", v.value_range[0], v.value_range[1]);
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {
@@ -258,10 +312,7 @@ fn info(args: &InfoArgs) -> Result<ExitCode> {
         let grid = BrickGrid::new(&v, BRICK, 1);
         let active = grid.active(&tf).iter().filter(|a| **a).count();
         println!("tf       {}", tf.spec);
-        println!(
-            "visible  {:.3} % of voxels (alpha > 0)",
-            100.0 * visible as f64 / total
-        );
+        println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
         println!(
             "active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)",
             100.0 * active as f64 / grid.len() as f64,
@@ -276,11 +327,7 @@ fn info(args: &InfoArgs) -> Result<ExitCode> {
 fn diff(args: &DiffArgs) -> Result<ExitCode> {
     if let Some(m) = args.max_abs {
         if m.is_nan() || m < 0.0 {
-            return Err(Error::invalid(
-                "max-abs",
-                m.to_string(),
-                "must be a number >= 0",
-            ));
+            return Err(Error::invalid("max-abs", m.to_string(), "must be a number >= 0"));
         }
     }
     let a = Frame::read_exr(&args.a)?;
@@ -303,7 +350,9 @@ fn diff(args: &DiffArgs) -> Result<ExitCode> {
 fn devices() -> Result<ExitCode> {
     let list = lacuna::gpu::list_devices()?;
     if list.is_empty() {
-        return Err(Error::NoDevice("no Vulkan device found; install a driver (Debian: apt install mesa-vulkan-drivers libvulkan1)".into()));
+        return Err(Error::NoDevice(
+            "no Vulkan device found; install a driver (Debian: apt install mesa-vulkan-drivers libvulkan1)".into(),
+        ));
     }
     for d in list {
         println!(
@@ -335,20 +384,15 @@ fn main() -> ExitCode {
                     | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
             ) {
                 let _ = e.print();
-                return ExitCode::from(
-                    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-                        2
-                    } else {
-                        0
-                    },
-                );
+                return ExitCode::from(if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                    2
+                } else {
+                    0
+                });
             }
             // One line: clap's first line names the bad argument.
             let text = e.render().to_string();
-            eprintln!(
-                "{}",
-                text.lines().next().unwrap_or("error: invalid arguments")
-            );
+            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
             return ExitCode::from(2);
         }
     };

@@ -58,9 +58,7 @@ impl TransferFunction {
                 format!("LUT has {} entries, expected {LUT_SIZE}", lut.len()),
             ));
         }
-        if lut.iter().flatten().any(|c| !c.is_finite() || *c < 0.0)
-            || lut.iter().any(|e| e[3] > 1.0)
-        {
+        if lut.iter().flatten().any(|c| !c.is_finite() || *c < 0.0) || lut.iter().any(|e| e[3] > 1.0) {
             return Err(Error::invalid(
                 "transfer function",
                 spec,
@@ -72,17 +70,11 @@ impl TransferFunction {
         while (1 << k) <= LUT_SIZE {
             let prev = &max_table[k - 1];
             let half = 1 << (k - 1);
-            let next: Vec<f32> = (0..=LUT_SIZE - (1 << k))
-                .map(|i| prev[i].max(prev[i + half]))
-                .collect();
+            let next: Vec<f32> = (0..=LUT_SIZE - (1 << k)).map(|i| prev[i].max(prev[i + half])).collect();
             max_table.push(next);
             k += 1;
         }
-        Ok(TransferFunction {
-            spec,
-            lut,
-            max_table,
-        })
+        Ok(TransferFunction { spec, lut, max_table })
     }
 
     /// Parses a spec, or reads a ParaView JSON file when `spec` names one.
@@ -172,7 +164,11 @@ impl TransferFunction {
                     })
                     .collect()
             }
-            _ => return Err(bad("expected ramp:LO:HI[:ALPHA], band:LO:HI[:ALPHA], spike:CENTER:WIDTH[:ALPHA] or a .json file")),
+            _ => {
+                return Err(bad(
+                    "expected ramp:LO:HI[:ALPHA], band:LO:HI[:ALPHA], spike:CENTER:WIDTH[:ALPHA] or a .json file",
+                ))
+            }
         };
         Self::from_lut(spec, lut)
     }
@@ -184,8 +180,8 @@ impl TransferFunction {
     /// Without `Points` opacity ramps linearly from 0 to 1 over that range.
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let json: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
+        let json: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
         let map = match &json {
             serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
             other => other.clone(),
@@ -197,16 +193,9 @@ impl TransferFunction {
             let arr = v
                 .as_array()
                 .ok_or_else(|| Error::format(path, format!("'{key}' is not an array")))?;
-            let nums: Option<Vec<f64>> = arr
-                .iter()
-                .map(|x| x.as_f64().filter(|f| f.is_finite()))
-                .collect();
-            let nums = nums.ok_or_else(|| {
-                Error::format(
-                    path,
-                    format!("'{key}' holds a value that is not a finite number"),
-                )
-            })?;
+            let nums: Option<Vec<f64>> = arr.iter().map(|x| x.as_f64().filter(|f| f.is_finite())).collect();
+            let nums =
+                nums.ok_or_else(|| Error::format(path, format!("'{key}' holds a value that is not a finite number")))?;
             if nums.is_empty() || nums.len() % stride != 0 {
                 return Err(Error::format(
                     path,
@@ -215,30 +204,20 @@ impl TransferFunction {
             }
             Ok(Some(nums))
         };
-        let rgb = numbers("RGBPoints", 4)?.ok_or_else(|| {
-            Error::format(
-                path,
-                "no 'RGBPoints' array (not a ParaView colormap export)",
-            )
-        })?;
+        let rgb = numbers("RGBPoints", 4)?
+            .ok_or_else(|| Error::format(path, "no 'RGBPoints' array (not a ParaView colormap export)"))?;
         let opacity = numbers("Points", 4)?;
         let xs: Vec<f64> = rgb.chunks(4).map(|c| c[0]).collect();
         let (x0, x1) = (xs[0], xs[xs.len() - 1]);
         if xs.windows(2).any(|w| w[1] < w[0]) {
-            return Err(Error::format(
-                path,
-                "'RGBPoints' x values must be ascending",
-            ));
+            return Err(Error::format(path, "'RGBPoints' x values must be ascending"));
         }
         if x1 <= x0 {
             return Err(Error::format(path, "'RGBPoints' spans an empty range"));
         }
         if let Some(op) = &opacity {
             if op.chunks(4).any(|c| !(0.0..=1.0).contains(&c[1])) {
-                return Err(Error::format(
-                    path,
-                    "opacity 'Points' values must be in [0, 1]",
-                ));
+                return Err(Error::format(path, "opacity 'Points' values must be in [0, 1]"));
             }
         }
         // Piecewise-linear interpolation over (x, values...) groups of `stride`.
@@ -250,11 +229,7 @@ impl TransferFunction {
             for w in groups.windows(2) {
                 if x <= w[1][0] {
                     let span = w[1][0] - w[0][0];
-                    let f = if span > 0.0 {
-                        (x - w[0][0]) / span
-                    } else {
-                        1.0
-                    };
+                    let f = if span > 0.0 { (x - w[0][0]) / span } else { 1.0 };
                     return w[0][channel] + (w[1][channel] - w[0][channel]) * f;
                 }
             }
@@ -315,15 +290,32 @@ impl TransferFunction {
         self.max_entries(i, j)
     }
 
-    /// Uploads the LUT as a storage buffer of `vec4`.
-    pub fn upload(&self, ctx: &Context) -> Result<Buffer> {
-        Buffer::with_data(
-            ctx,
-            "transfer function",
-            bytemuck::cast_slice(&self.lut),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )
+    /// The max-alpha sparse table flattened for the GPU: level k at
+    /// `k * LUT_SIZE`, zero padded (`glsl/common/tf_range.glsl`).
+    pub fn max_table_flat(&self) -> Vec<f32> {
+        let mut flat = vec![0f32; self.max_table.len() * LUT_SIZE];
+        for (k, level) in self.max_table.iter().enumerate() {
+            flat[k * LUT_SIZE..k * LUT_SIZE + level.len()].copy_from_slice(level);
+        }
+        flat
     }
+
+    /// Uploads the LUT (`vec4` per entry) and the max-alpha table.
+    pub fn upload(&self, ctx: &Context) -> Result<GpuTransferFunction> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
+        let table = self.max_table_flat();
+        let max_table = Buffer::with_data(ctx, "transfer function max table", bytemuck::cast_slice(&table), usage)?;
+        Ok(GpuTransferFunction { lut, max_table })
+    }
+}
+
+/// A transfer function on the GPU: the LUT the marchers sample and the
+/// max-alpha table classification queries. Uploads wait, so both are visible
+/// to compute reads when `upload` returns.
+pub struct GpuTransferFunction {
+    pub lut: Buffer,
+    pub max_table: Buffer,
 }
 
 impl std::str::FromStr for TransferFunction {

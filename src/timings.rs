@@ -23,10 +23,7 @@ impl Timings {
     }
 
     pub fn get(&self, name: &str) -> Option<f64> {
-        self.phases
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, ms)| *ms)
+        self.phases.iter().find(|(n, _)| n == name).map(|(_, ms)| *ms)
     }
 
     pub fn total(&self) -> f64 {
@@ -36,17 +33,29 @@ impl Timings {
     pub fn extend(&mut self, other: Timings) {
         self.phases.extend(other.phases);
     }
+
+    /// Per-phase median over several runs of the same phases (phases missing
+    /// from some runs use the runs that have them).
+    pub fn median(runs: &[Timings]) -> Timings {
+        let mut out = Timings::default();
+        let Some(first) = runs.first() else { return out };
+        for (name, _) in &first.phases {
+            let mut v: Vec<f64> = runs.iter().filter_map(|r| r.get(name)).collect();
+            v.sort_by(f64::total_cmp);
+            let m = if v.len() % 2 == 1 {
+                v[v.len() / 2]
+            } else {
+                (v[v.len() / 2 - 1] + v[v.len() / 2]) / 2.0
+            };
+            out.push(name.clone(), m);
+        }
+        out
+    }
 }
 
 impl fmt::Display for Timings {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let width = self
-            .phases
-            .iter()
-            .map(|(n, _)| n.len())
-            .max()
-            .unwrap_or(0)
-            .max(5);
+        let width = self.phases.iter().map(|(n, _)| n.len()).max().unwrap_or(0).max(5);
         for (name, ms) in &self.phases {
             writeln!(f, "  {name:<width$}  {ms:>10.3} ms")?;
         }

@@ -58,9 +58,7 @@ fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
     let frame = Frame::read_exr(&out).unwrap();
     assert_eq!((frame.width, frame.height), (40, 32));
     assert!(frame.pixels.iter().any(|p| p[3] > 0.1));
-    for key in [
-        "volume", "tf", "accel", "camera", "step", "ert", "device", "gpu_ms",
-    ] {
+    for key in ["volume", "tf", "accel", "camera", "step", "ert", "device", "gpu_ms"] {
         assert!(
             frame.metadata.contains_key(key),
             "missing metadata {key}: {:?}",
@@ -117,11 +115,7 @@ fn info_describes_the_volume_and_its_occupancy() {
         "visible",
         "active",
     ] {
-        assert!(
-            r.stdout.contains(needle),
-            "'{needle}' missing from:\n{}",
-            r.stdout
-        );
+        assert!(r.stdout.contains(needle), "'{needle}' missing from:\n{}", r.stdout);
     }
     // 8000 of 19683 voxels are solid in a level-3 sponge at 27^3.
     assert!(r.stdout.contains("visible  40.644 %"), "{}", r.stdout);
@@ -139,13 +133,7 @@ fn diff_reports_metrics_and_exit_codes() {
     render_ok("shells:24", &b, &[]);
     render_ok("shells:24", &c, &["--camera", "50,10"]);
     let same = lacuna(
-        &[
-            "diff",
-            a.to_str().unwrap(),
-            b.to_str().unwrap(),
-            "--max-abs",
-            "0",
-        ],
+        &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--max-abs", "0"],
         &[],
     );
     assert_eq!(same.code, 0, "{}{}", same.stdout, same.stderr);
@@ -172,13 +160,7 @@ fn diff_reports_metrics_and_exit_codes() {
     let png = std::fs::read(&heat).unwrap();
     assert_eq!(&png[1..4], b"PNG");
     let loose = lacuna(
-        &[
-            "diff",
-            a.to_str().unwrap(),
-            c.to_str().unwrap(),
-            "--max-abs",
-            "1",
-        ],
+        &["diff", a.to_str().unwrap(), c.to_str().unwrap(), "--max-abs", "1"],
         &[],
     );
     assert_eq!(loose.code, 0);
@@ -211,6 +193,61 @@ fn diff_reports_metrics_and_exit_codes() {
 }
 
 #[test]
+fn lbvh_from_the_cli_is_bit_identical_to_naive() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b, c) = (
+        dir.path().join("naive.exr"),
+        dir.path().join("lbvh.exr"),
+        dir.path().join("paper.exr"),
+    );
+    render_ok("vessels:40", &a, &["--camera", "15,25"]);
+    let r = render_ok(
+        "vessels:40",
+        &b,
+        &["--camera", "15,25", "--accel", "lbvh", "--repeat", "2", "--warmup", "1"],
+    );
+    for needle in [
+        "ranges",
+        "classify",
+        "compact",
+        "morton",
+        "sort",
+        "emit",
+        "refit",
+        "structure active bricks",
+        "height",
+        "medians of 2 runs",
+    ] {
+        assert!(r.stdout.contains(needle), "'{needle}' missing:\n{}", r.stdout);
+    }
+    let d = lacuna(
+        &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--max-abs", "0"],
+        &[],
+    );
+    assert_eq!(d.code, 0, "{}", d.stdout);
+    assert!(d.stdout.contains("differing 0 of"), "{}", d.stdout);
+    assert_eq!(Frame::read_exr(&b).unwrap().metadata["accel"], "lbvh");
+    render_ok(
+        "vessels:40",
+        &c,
+        &[
+            "--camera",
+            "15,25",
+            "--accel",
+            "lbvh",
+            "--classify",
+            "voxel",
+            "--apron",
+            "off",
+        ],
+    );
+    assert_eq!(
+        Frame::read_exr(&c).unwrap().metadata["classify"],
+        "voxel, apron off (paper)"
+    );
+}
+
+#[test]
 fn devices_lists_at_least_one() {
     let r = lacuna(&["devices"], &[]);
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -230,17 +267,8 @@ fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
     let r = lacuna(&all, env);
     assert_ne!(r.code, 0, "{all:?} succeeded: {}", r.stdout);
     let lines: Vec<&str> = r.stderr.trim().lines().collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "{all:?}: expected one line, got:\n{}",
-        r.stderr
-    );
-    assert!(
-        lines[0].contains(needle),
-        "{all:?}: '{}' lacks '{needle}'",
-        lines[0]
-    );
+    assert_eq!(lines.len(), 1, "{all:?}: expected one line, got:\n{}", r.stderr);
+    assert!(lines[0].contains(needle), "{all:?}: '{}' lacks '{needle}'", lines[0]);
     assert!(!r.stderr.contains("panicked"));
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
@@ -255,11 +283,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
     std::fs::write(p("short_4x4x4_uint8.raw"), [0u8; 60]).unwrap();
     std::fs::write(p("bad_4x4x4_uint9.raw"), [0u8; 64]).unwrap();
-    std::fs::write(
-        p("bad.nii.gz"),
-        b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03garbage",
-    )
-    .unwrap();
+    std::fs::write(p("bad.nii.gz"), b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03garbage").unwrap();
     let mut nii = vec![0u8; 352];
     nii[0..4].copy_from_slice(&348i32.to_le_bytes());
     for (i, d) in [3i16, 2, 2, 2, 1, 1, 1, 1].iter().enumerate() {
@@ -277,11 +301,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     let too_long = format!("menger:{}x1x1", ctx.info().max_image_dimension_3d + 1);
     drop(ctx);
 
-    fails(
-        &["render", "/no/such/volume_8x8x8_uint8.raw"],
-        &[],
-        "No such file",
-    );
+    fails(&["render", "/no/such/volume_8x8x8_uint8.raw"], &[], "No such file");
     fails(
         &["render", &p("short_4x4x4_uint8.raw")],
         &[],
@@ -297,46 +317,22 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:0"], &[], "zero dimension");
     fails(&["render", "menger:4x0x4"], &[], "dimensions");
     fails(&["render", &too_long], &[], "maxImageDimension3D");
-    fails(
-        &["render", "menger:16", "--tf", "ramp:1"],
-        &[],
-        "expected ramp:LO:HI",
-    );
+    fails(&["render", "menger:16", "--tf", "ramp:1"], &[], "expected ramp:LO:HI");
     fails(
         &["render", "menger:16", "--tf", "spike:0.5:-1"],
         &[],
         "WIDTH must be > 0",
     );
-    fails(
-        &["render", "menger:16", "--tf", &p("bad.json")],
-        &[],
-        "invalid JSON",
-    );
+    fails(&["render", "menger:16", "--tf", &p("bad.json")], &[], "invalid JSON");
     fails(
         &["render", "menger:16", "--size", "0x0"],
         &[],
         "width and height must be > 0",
     );
-    fails(
-        &["render", "menger:16", "--size", "big"],
-        &[],
-        "expected WxH",
-    );
-    fails(
-        &["render", "menger:16", "--step", "0"],
-        &[],
-        "invalid step '0'",
-    );
-    fails(
-        &["render", "menger:16", "--step", "-1"],
-        &[],
-        "invalid step '-1'",
-    );
-    fails(
-        &["render", "menger:16", "--step", "NaN"],
-        &[],
-        "invalid step 'NaN'",
-    );
+    fails(&["render", "menger:16", "--size", "big"], &[], "expected WxH");
+    fails(&["render", "menger:16", "--step", "0"], &[], "invalid step '0'");
+    fails(&["render", "menger:16", "--step", "-1"], &[], "invalid step '-1'");
+    fails(&["render", "menger:16", "--step", "NaN"], &[], "invalid step 'NaN'");
     fails(&["render", "menger:16", "--step", "x"], &[], "--step");
     fails(&["render", "menger:16", "--ert", "1.5"], &[], "invalid ert");
     fails(
@@ -344,32 +340,16 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         &[],
         "expected one of: naive",
     );
-    fails(
-        &["render", "menger:16", "--camera", "10"],
-        &[],
-        "AZIMUTH,ELEVATION",
-    );
-    fails(
-        &["render", "menger:16", "--perspective", "0"],
-        &[],
-        "field of view",
-    );
+    fails(&["render", "menger:16", "--camera", "10"], &[], "AZIMUTH,ELEVATION");
+    fails(&["render", "menger:16", "--perspective", "0"], &[], "field of view");
     fails(&["info", "blob:16"], &[], "not a generator");
-    fails(
-        &["render", "menger:16", "--unknown-flag"],
-        &[],
-        "--unknown-flag",
-    );
+    fails(&["render", "menger:16", "--unknown-flag"], &[], "--unknown-flag");
     // No Vulkan driver at all: the loader finds no ICD.
     let none = [
         ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
         ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
     ];
-    fails(
-        &["render", "menger:8"],
-        &none,
-        "apt install mesa-vulkan-drivers",
-    );
+    fails(&["render", "menger:8"], &none, "apt install mesa-vulkan-drivers");
     fails(&["devices"], &none, "apt install mesa-vulkan-drivers");
 }
 

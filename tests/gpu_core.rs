@@ -4,9 +4,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::gpu::record;
-use lacuna::gpu::{
-    shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer,
-};
+use lacuna::gpu::{shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
 use lacuna::Error;
 
 fn copy_kernel(ctx: &Context) -> Kernel {
@@ -71,8 +69,7 @@ fn validation_catches_a_missing_barrier_between_dependent_dispatches() {
     assert!(
         messages
             .iter()
-            .any(|m| m.id.contains("SYNC-HAZARD-READ-AFTER-WRITE")
-                || m.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
+            .any(|m| m.id.contains("SYNC-HAZARD-READ-AFTER-WRITE") || m.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
         "expected a read-after-write hazard, got: {messages:?}"
     );
 }
@@ -138,10 +135,7 @@ fn timer_reports_named_passes_in_order() {
     let kernel = copy_kernel(&ctx);
     let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
     let mut timer = Timer::new(&ctx, 2).unwrap();
-    assert!(
-        timer.supported(),
-        "lavapipe and every GPU we target have timestamps"
-    );
+    assert!(timer.supported(), "lavapipe and every GPU we target have timestamps");
     ctx.submit_and_wait(|cmd| {
         timer.reset(cmd);
         let p = timer.begin(cmd, "first")?;
@@ -179,16 +173,7 @@ fn timer_reports_named_passes_in_order() {
             Ok(())
         })
         .unwrap_err();
-    assert!(
-        matches!(
-            err,
-            Error::Invalid {
-                what: "timer pass",
-                ..
-            }
-        ),
-        "{err}"
-    );
+    assert!(matches!(err, Error::Invalid { what: "timer pass", .. }), "{err}");
     assert_clean(&ctx);
 }
 
@@ -217,10 +202,14 @@ fn adopted_device_is_used_but_not_destroyed() {
         .queue_priorities(&prio)];
     let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
     let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+    let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
+        .vulkan_memory_model(true)
+        .vulkan_memory_model_device_scope(true);
     let dinfo = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&dev_exts)
-        .push_next(&mut v13);
+        .push_next(&mut v13)
+        .push_next(&mut v12);
     let device = unsafe { instance.create_device(pd, &dinfo, None) }.unwrap();
     let queue = unsafe { device.get_device_queue(family, 0) };
 
@@ -242,10 +231,7 @@ fn adopted_device_is_used_but_not_destroyed() {
     unsafe {
         device.device_wait_idle().unwrap();
         let pool = device
-            .create_command_pool(
-                &vk::CommandPoolCreateInfo::default().queue_family_index(family),
-                None,
-            )
+            .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)
             .unwrap();
         device.destroy_command_pool(pool, None);
         device.destroy_device(None);
@@ -276,9 +262,7 @@ fn limits_are_checked_by_name_before_use() {
     assert!(info.subgroup_size > 0 && info.max_storage_buffer_range > 0);
     // A frame larger than maxStorageBufferRange.
     let side = ((info.max_storage_buffer_range / 16) as f64).sqrt() as u32 + 1;
-    let err = lacuna::render::RenderTarget::new(&ctx, side, side)
-        .err()
-        .unwrap();
+    let err = lacuna::render::RenderTarget::new(&ctx, side, side).err().unwrap();
     assert!(
         matches!(
             err,
@@ -291,10 +275,7 @@ fn limits_are_checked_by_name_before_use() {
     );
     // A dispatch wider than maxComputeWorkGroupCount[0].
     let err = record::groups_for(&info, "test", [u32::MAX, 1, 1], [1, 1, 1]).unwrap_err();
-    assert!(
-        err.to_string().contains("maxComputeWorkGroupCount[0]"),
-        "{err}"
-    );
+    assert!(err.to_string().contains("maxComputeWorkGroupCount[0]"), "{err}");
     // 2-D linear dispatch splits long rows.
     let g = record::groups_linear(
         &info,

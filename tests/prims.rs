@@ -14,17 +14,14 @@ const SIZES: [usize; 9] = [0, 1, 2, 255, 256, 257, 4097, 100_000, 1 << 20];
 fn rng(seed: u64) -> impl FnMut() -> u32 {
     let mut s = seed;
     move || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (s >> 32) as u32
     }
 }
 
 fn buffer(ctx: &Context, data: &[u32]) -> Buffer {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-        | vk::BufferUsageFlags::TRANSFER_SRC
-        | vk::BufferUsageFlags::TRANSFER_DST;
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
     if data.is_empty() {
         return Buffer::new(ctx, "test", 4, usage, lacuna::gpu::MemoryLocation::GpuOnly).unwrap();
     }
@@ -51,10 +48,7 @@ fn patterns(n: usize, seed: u64) -> Vec<(&'static str, Vec<u32>)> {
         ("all-equal", vec![0xDEAD_BEEF; n]),
         (
             "few-distinct",
-            random
-                .iter()
-                .map(|v| [3, 0, u32::MAX, 7][(*v % 4) as usize])
-                .collect(),
+            random.iter().map(|v| [3, 0, u32::MAX, 7][(*v % 4) as usize]).collect(),
         ),
         ("max-value", vec![u32::MAX; n]),
     ]
@@ -113,11 +107,7 @@ fn compaction_keeps_flagged_indices_in_order() {
             ctx.submit_and_wait(|cmd| compact.record(cmd, &f, n as u64, &out, &count, &scratch))
                 .unwrap();
             let want: Vec<u32> = (0..n as u32).filter(|&i| flags[i as usize] != 0).collect();
-            assert_eq!(
-                read(&count, 1)[0] as usize,
-                want.len(),
-                "count of {n} {name}"
-            );
+            assert_eq!(read(&count, 1)[0] as usize, want.len(), "count of {n} {name}");
             assert_eq!(read(&out, want.len()), want, "indices of {n} {name}");
         }
     }
@@ -131,11 +121,7 @@ fn check_sort(ctx: &Context, sort: &RadixSort, keys: &[u32], bits: u32, what: &s
     let (kb, vb) = (buffer(ctx, keys), buffer(ctx, &vals));
     ctx.submit_and_wait(|cmd| sort.record(cmd, &kb, &vb, n as u64, bits, &scratch))
         .unwrap();
-    let mask = if bits == 32 {
-        u32::MAX
-    } else {
-        (1u32 << bits) - 1
-    };
+    let mask = if bits == 32 { u32::MAX } else { (1u32 << bits) - 1 };
     // Stable CPU sort by the low `bits` bits; payload = original index.
     let mut want: Vec<(u32, u32)> = keys.iter().cloned().zip(vals).collect();
     want.sort_by_key(|(k, _)| k & mask);
@@ -191,8 +177,7 @@ fn brick_minmax_matches_the_cpu_brick_grid() {
         for apron in [0, 1] {
             let cpu = BrickGrid::new(&v, 8, apron);
             let out = buffer(&ctx, &vec![0; cpu.len() * 2]);
-            ctx.submit_and_wait(|cmd| mm.record(cmd, &gv, 8, apron, &out))
-                .unwrap();
+            ctx.submit_and_wait(|cmd| mm.record(cmd, &gv, 8, apron, &out)).unwrap();
             let got: Vec<f32> = bytemuck::cast_slice(&read(&out, cpu.len() * 2)).to_vec();
             for (i, r) in cpu.ranges.iter().enumerate() {
                 assert!(

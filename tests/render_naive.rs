@@ -41,22 +41,12 @@ fn check_against_reference(volume: &Volume, tf: &TransferFunction, s: &RenderSet
         s.camera.describe()
     );
     // The frame is not trivially empty.
-    assert!(
-        frame.pixels.iter().any(|p| p[3] > 0.01),
-        "{}: empty frame",
-        volume.name
-    );
+    assert!(frame.pixels.iter().any(|p| p[3] > 0.01), "{}: empty frame", volume.name);
 }
 
 #[test]
 fn generators_match_the_cpu_reference_orthographic_and_perspective() {
-    for spec in [
-        "menger:27",
-        "nbody:48",
-        "vessels:40",
-        "turbulence:32",
-        "shells:36",
-    ] {
+    for spec in ["menger:27", "nbody:48", "vessels:40", "turbulence:32", "shells:36"] {
         let v = Volume::load(spec, &Default::default()).unwrap();
         let tf = TransferFunction::parse(v.default_tf.as_ref().unwrap()).unwrap();
         check_against_reference(&v, &tf, &settings(64, 30.0, 20.0, Projection::Orthographic));
@@ -109,10 +99,7 @@ fn camera_inside_the_volume_and_early_termination_match_the_reference() {
             truncated += (c != f) as u32;
         }
     }
-    assert!(
-        truncated > 0,
-        "ERT at 0.9 should cut some rays of an opaque sponge"
-    );
+    assert!(truncated > 0, "ERT at 0.9 should cut some rays of an opaque sponge");
 }
 
 #[test]
@@ -120,9 +107,7 @@ fn a_spike_visible_only_through_interpolation_is_rendered() {
     // Two voxel values, 0 and 1; the spike at 0.5 is narrower than their gap,
     // so only interpolated samples between them can hit it.
     let dims = [16, 16, 16];
-    let data: Vec<u8> = (0..16 * 16 * 16)
-        .map(|i| if (i % 16) < 8 { 0 } else { 255 })
-        .collect();
+    let data: Vec<u8> = (0..16 * 16 * 16).map(|i| if (i % 16) < 8 { 0 } else { 255 }).collect();
     let v = Volume::new("halves", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
     let tf = TransferFunction::parse("spike:0.5:0.001").unwrap();
     assert_eq!(tf.lookup(0.0)[3], 0.0);
@@ -155,14 +140,7 @@ fn chord(org: [f64; 3], dir: [f64; 3], dims: [u32; 3]) -> f64 {
 fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
     let dims = [24, 20, 28];
     let n = dims.iter().product::<u32>() as usize;
-    let v = Volume::new(
-        "constant",
-        dims,
-        [1.0; 3],
-        VoxelType::U8,
-        VoxelData::U8(vec![77; n]),
-    )
-    .unwrap();
+    let v = Volume::new("constant", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(vec![77; n])).unwrap();
     let alpha = 0.05f64;
     let sigma = -(1.0 - alpha).ln();
     let tf = TransferFunction::parse(&format!("band:0:1:{alpha}")).unwrap();
@@ -172,25 +150,21 @@ fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
         s.step = step;
         let frame = render(&ctx, &v, &tf, &s, Accel::Naive);
         let p = s.params(v.dims, v.spacing, v.norm).unwrap();
-        let dir = [
-            p.eye_or_dir[0] as f64,
-            p.eye_or_dir[1] as f64,
-            p.eye_or_dir[2] as f64,
-        ];
+        let dir = [p.eye_or_dir[0] as f64, p.eye_or_dir[1] as f64, p.eye_or_dir[2] as f64];
         let len = (dir.iter().map(|c| c * c).sum::<f64>()).sqrt();
         let dir = dir.map(|c| c / len);
         let mut hits = 0;
         for y in 0..48 {
             for x in 0..48 {
-                let org = [0, 1, 2].map(|a| {
-                    p.base[a] as f64
-                        + (x as f64 + 0.5) * p.du[a] as f64
-                        + (y as f64 + 0.5) * p.dv[a] as f64
-                });
+                let org = [0, 1, 2]
+                    .map(|a| p.base[a] as f64 + (x as f64 + 0.5) * p.du[a] as f64 + (y as f64 + 0.5) * p.dv[a] as f64);
                 let l = chord(org, dir, dims);
                 let expected = 1.0 - (-sigma * l).exp();
                 let got = frame.pixel(x, y)[3] as f64;
-                assert!((got - expected).abs() <= 1e-3, "az {az} el {el} step {step} pixel ({x},{y}): alpha {got} vs 1-exp(-sigma L) {expected} (L {l})");
+                assert!(
+                    (got - expected).abs() <= 1e-3,
+                    "az {az} el {el} step {step} pixel ({x},{y}): alpha {got} vs 1-exp(-sigma L) {expected} (L {l})"
+                );
                 hits += (l > 1.0) as u32;
             }
         }

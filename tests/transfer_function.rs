@@ -6,10 +6,7 @@ use lacuna::Error;
 
 fn invalid(spec: &str, needle: &str) {
     match TransferFunction::parse(spec) {
-        Err(e @ Error::Invalid { .. }) => assert!(
-            e.to_string().contains(needle),
-            "{spec}: '{e}' lacks '{needle}'"
-        ),
+        Err(e @ Error::Invalid { .. }) => assert!(e.to_string().contains(needle), "{spec}: '{e}' lacks '{needle}'"),
         other => panic!("{spec}: expected an invalid-TF error, got {other:?}"),
     }
 }
@@ -79,20 +76,9 @@ fn max_alpha_is_conservative_over_every_interpolated_value() {
         assert!(tf.max_alpha(0.0, 1.0) > 0.0);
     }
     let clear = TransferFunction::parse("band:0.6:0.7").unwrap();
-    assert_eq!(
-        clear.max_alpha(0.0, 0.5),
-        0.0,
-        "far from the band the range is empty"
-    );
-    assert_eq!(
-        clear.max_alpha(f32::INFINITY, f32::NEG_INFINITY),
-        0.0,
-        "an empty range"
-    );
-    assert!(
-        clear.max_alpha(0.595, 0.599) > 0.0,
-        "widened by one entry at the edge"
-    );
+    assert_eq!(clear.max_alpha(0.0, 0.5), 0.0, "far from the band the range is empty");
+    assert_eq!(clear.max_alpha(f32::INFINITY, f32::NEG_INFINITY), 0.0, "an empty range");
+    assert!(clear.max_alpha(0.595, 0.599) > 0.0, "widened by one entry at the edge");
 }
 
 #[test]
@@ -109,10 +95,7 @@ fn paraview_json_colormaps() {
     let mid = tf.lookup(0.5);
     assert!(mid[1] > 0.99 && mid[3] < 1e-3, "{mid:?}");
     let top = tf.lookup(1.0);
-    assert!(
-        (top[0] - 1.0).abs() < 1e-6 && (top[3] - 0.8).abs() < 1e-6,
-        "{top:?}"
-    );
+    assert!((top[0] - 1.0).abs() < 1e-6 && (top[3] - 0.8).abs() < 1e-6, "{top:?}");
     assert!((tf.lookup(0.75)[3] - 0.4).abs() < 1e-3);
     // Without opacity points: a linear ramp.
     std::fs::write(&p, r#"{"RGBPoints":[0,0,0,0, 1,1,1,1]}"#).unwrap();
@@ -124,14 +107,8 @@ fn paraview_json_colormaps() {
         (r#"{"Points":[0,0,0.5,0]}"#, "no 'RGBPoints'"),
         (r#"{"RGBPoints":[0,0,0]}"#, "groups of 4"),
         (r#"{"RGBPoints":[1,0,0,0, 0,1,1,1]}"#, "ascending"),
-        (
-            r#"{"RGBPoints":[0,0,0,0, 1,1,1,1],"Points":[0,2,0.5,0]}"#,
-            "in [0, 1]",
-        ),
-        (
-            r#"{"RGBPoints":[0,0,0,0, 1,"a",1,1]}"#,
-            "not a finite number",
-        ),
+        (r#"{"RGBPoints":[0,0,0,0, 1,1,1,1],"Points":[0,2,0.5,0]}"#, "in [0, 1]"),
+        (r#"{"RGBPoints":[0,0,0,0, 1,"a",1,1]}"#, "not a finite number"),
     ] {
         std::fs::write(&p, text).unwrap();
         match TransferFunction::parse(p.to_str().unwrap()) {

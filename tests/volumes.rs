@@ -123,10 +123,7 @@ fn expect_format(result: lacuna::Result<Volume>, needle: &str) {
             assert!(e.to_string().contains(needle), "'{e}' lacks '{needle}'")
         }
         Err(e) => panic!("wrong error class: {e:?}"),
-        Ok(v) => panic!(
-            "loaded {} but expected an error containing '{needle}'",
-            v.name
-        ),
+        Ok(v) => panic!("loaded {} but expected an error containing '{needle}'", v.name),
     }
 }
 
@@ -135,10 +132,7 @@ fn raw_errors_name_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();
     let short = dir.path().join("short_4x4x4_uint8.raw");
     write(&short, &[0u8; 63]);
-    expect_format(
-        load(&short),
-        "holds 63 bytes of voxel data but 4x4x4 uint8 needs 64",
-    );
+    expect_format(load(&short), "holds 63 bytes of voxel data but 4x4x4 uint8 needs 64");
     let typ = dir.path().join("odd_4x4x4_uint7.raw");
     write(&typ, &[0u8; 64]);
     expect_format(load(&typ), "unknown voxel type 'uint7'");
@@ -182,8 +176,7 @@ fn nrrd_attached_detached_raw_and_gzip_with_spacing() {
     let data = encode(&pattern(dims), VoxelType::I16, true);
     // Attached, raw, spacings.
     let p = dir.path().join("a.nrrd");
-    let mut bytes =
-        nrrd_header("short", dims, "raw", "spacings: 0.5 0.75 2\nkey:=value\n\n").into_bytes();
+    let mut bytes = nrrd_header("short", dims, "raw", "spacings: 0.5 0.75 2\nkey:=value\n\n").into_bytes();
     bytes.extend(&data);
     write(&p, &bytes);
     let v = load(&p).unwrap();
@@ -202,11 +195,7 @@ fn nrrd_attached_detached_raw_and_gzip_with_spacing() {
     write(&p, &bytes);
     let v = load(&p).unwrap();
     assert_pattern(&v, dims);
-    assert!(
-        (v.spacing[0] - 0.9).abs() < 1e-6
-            && (v.spacing[1] - 1.2).abs() < 1e-6
-            && v.spacing[2] == 3.0
-    );
+    assert!((v.spacing[0] - 0.9).abs() < 1e-6 && (v.spacing[1] - 1.2).abs() < 1e-6 && v.spacing[2] == 3.0);
     // Detached header, raw and gzip data files.
     write(&dir.path().join("c.raw"), &data);
     write(
@@ -259,25 +248,10 @@ fn nrrd_errors_name_what_is_wrong() {
 }
 
 /// A NIfTI-1 single file (.nii) of `datatype`, written by hand.
-fn nifti_bytes(
-    dims: [u32; 3],
-    datatype: i16,
-    bitpix: i16,
-    pixdim: [f32; 3],
-    data: &[u8],
-) -> Vec<u8> {
+fn nifti_bytes(dims: [u32; 3], datatype: i16, bitpix: i16, pixdim: [f32; 3], data: &[u8]) -> Vec<u8> {
     let mut h = vec![0u8; 352];
     h[0..4].copy_from_slice(&348i32.to_le_bytes());
-    let dim: [i16; 8] = [
-        3,
-        dims[0] as i16,
-        dims[1] as i16,
-        dims[2] as i16,
-        1,
-        1,
-        1,
-        1,
-    ];
+    let dim: [i16; 8] = [3, dims[0] as i16, dims[1] as i16, dims[2] as i16, 1, 1, 1, 1];
     for (i, d) in dim.iter().enumerate() {
         h[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
     }
@@ -304,13 +278,7 @@ fn nifti_single_file_and_gzip_with_pixdim() {
         (VoxelType::F32, 16, 32),
         (VoxelType::U16, 512, 16),
     ] {
-        let bytes = nifti_bytes(
-            dims,
-            code,
-            bits,
-            [0.8, 1.0, 2.5],
-            &encode(&pattern(dims), ty, true),
-        );
+        let bytes = nifti_bytes(dims, code, bits, [0.8, 1.0, 2.5], &encode(&pattern(dims), ty, true));
         let p = dir.path().join(format!("v{code}.nii"));
         write(&p, &bytes);
         let v = load(&p).unwrap();
@@ -343,10 +311,7 @@ fn nifti_errors_name_what_is_wrong() {
     write(&p, &nifti_bytes([2, 0, 2], 2, 8, [1.0; 3], &[]));
     let err = load(&p).unwrap_err();
     assert!(err.to_string().contains("zero dimension"), "{err}");
-    assert!(matches!(
-        load(&dir.path().join("none.nii")),
-        Err(Error::Io { .. })
-    ));
+    assert!(matches!(load(&dir.path().join("none.nii")), Err(Error::Io { .. })));
 }
 
 const CH2: &str = "/usr/share/mricron/templates/ch2.nii.gz";
@@ -354,10 +319,7 @@ const CH2: &str = "/usr/share/mricron/templates/ch2.nii.gz";
 #[test]
 fn the_real_ch2_mri_loads_and_renders() {
     // .ci/run installs mricron-data; a missing file is a setup error, not a skip.
-    assert!(
-        Path::new(CH2).exists(),
-        "{CH2} missing: apt install mricron-data"
-    );
+    assert!(Path::new(CH2).exists(), "{CH2} missing: apt install mricron-data");
     let v = load(Path::new(CH2)).unwrap();
     assert_eq!(v.dims, [181, 217, 181]);
     assert_eq!(v.spacing, [1.0, 1.0, 1.0]);
@@ -373,8 +335,7 @@ fn the_real_ch2_mri_loads_and_renders() {
     };
     let ctx = common::gpu();
     let frame = common::render(&ctx, &v, &tf, &s, lacuna::render::Accel::Naive);
-    let cpu =
-        lacuna::render::reference::render(&v, &tf, &s.params(v.dims, v.spacing, v.norm).unwrap());
+    let cpu = lacuna::render::reference::render(&v, &tf, &s.params(v.dims, v.spacing, v.norm).unwrap());
     assert!(common::max_abs(&frame, &cpu) <= 1e-4);
     assert!(
         frame.pixels.iter().filter(|p| p[3] > 0.1).count() > 200,

@@ -19,6 +19,9 @@ layout(push_constant) uniform Push {
     uint apron;
     uint groups_x;
     uint lut_size;
+    uint pad0;
+    uint pad1;
+    uint pad2;
 } pc;
 
 #define TF_MAX_BINDING 2

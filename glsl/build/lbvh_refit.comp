@@ -2,7 +2,15 @@
 // Bottom-up refit: one invocation per leaf writes its brick box and climbs;
 // at each internal node the first arrival stops and the second (which then
 // sees both children's boxes) writes the union and continues.
+//
+// The arrival counter is an acquire-release atomic of the Vulkan memory
+// model: the first arrival's box writes are released by its increment and
+// acquired by the second's. Plain memoryBarrierBuffer() is not enough: a
+// compiler may hoist the sibling's box load above a relaxed atomic (lavapipe
+// does), which silently loses the upper levels of the tree.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_memory_scope_semantics : require
+#pragma use_vulkan_memory_model
 #include "bvh_node.glsl"
 
 layout(local_size_x = 64) in;
@@ -30,18 +38,16 @@ void main() {
     int node = int(pc.n) - 1 + int(i);
     nodes[node].lo = ivec4(lo, -1);
     nodes[node].hi = ivec4(hi, int(b));
-    memoryBarrierBuffer();
     while (node != 0) {
         int p = parents[node];
-        if (atomicAdd(visits[p], 1u) == 0u) {
+        uint arrived = atomicAdd(visits[p], 1u, gl_ScopeQueueFamily, gl_StorageSemanticsBuffer, gl_SemanticsAcquireRelease);
+        if (arrived == 0u) {
             return;
         }
-        memoryBarrierBuffer();
         BvhNode l = nodes[nodes[p].lo.w];
         BvhNode r = nodes[nodes[p].hi.w];
         nodes[p].lo.xyz = min(l.lo.xyz, r.lo.xyz);
         nodes[p].hi.xyz = max(l.hi.xyz, r.hi.xyz);
-        memoryBarrierBuffer();
         node = p;
     }
 }

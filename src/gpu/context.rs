@@ -79,13 +79,7 @@ impl DeviceInfo {
     }
 
     /// Fails with a message naming `limit` when `value > max`.
-    pub fn check(
-        &self,
-        what: impl Into<String>,
-        limit: &'static str,
-        value: u64,
-        max: u64,
-    ) -> Result<()> {
+    pub fn check(&self, what: impl Into<String>, limit: &'static str, value: u64, max: u64) -> Result<()> {
         if value > max {
             return Err(Error::DeviceLimit {
                 what: what.into(),
@@ -99,7 +93,8 @@ impl DeviceInfo {
 }
 
 /// The handles a host engine lends to lacuna. The device must have been created
-/// with Vulkan 1.3 `synchronization2` enabled and `VK_KHR_push_descriptor`;
+/// with Vulkan 1.3 `synchronization2` and Vulkan 1.2 `vulkanMemoryModel` (with device scope)
+/// enabled (both required of every 1.3 device) and `VK_KHR_push_descriptor`;
 /// `queue` must belong to `queue_family` and support compute. Drop the
 /// `Context` (and everything made with it) before destroying the device.
 pub struct AdoptInfo {
@@ -147,8 +142,7 @@ pub struct DeviceSummary {
 }
 
 fn load_entry() -> Result<ash::Entry> {
-    unsafe { ash::Entry::load() }
-        .map_err(|e| Error::NoDevice(format!("no Vulkan loader found ({e}); {INSTALL_HINT}")))
+    unsafe { ash::Entry::load() }.map_err(|e| Error::NoDevice(format!("no Vulkan loader found ({e}); {INSTALL_HINT}")))
 }
 
 fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
@@ -159,11 +153,10 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
     let mut layers = Vec::new();
     let mut extensions = Vec::new();
     let features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-    let mut validation_features =
-        vk::ValidationFeaturesEXT::default().enabled_validation_features(&features);
+    let mut validation_features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&features);
     if validation {
-        let available = unsafe { entry.enumerate_instance_layer_properties() }
-            .vk("vkEnumerateInstanceLayerProperties")?;
+        let available =
+            unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
         let found = available
             .iter()
             .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER));
@@ -220,11 +213,7 @@ fn supports_push_descriptor(instance: &ash::Instance, pd: vk::PhysicalDevice) ->
     })
 }
 
-fn device_info(
-    instance: &ash::Instance,
-    pd: vk::PhysicalDevice,
-    timestamp_valid_bits: u32,
-) -> DeviceInfo {
+fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid_bits: u32) -> DeviceInfo {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut v11 = vk::PhysicalDeviceVulkan11Properties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
@@ -312,9 +301,7 @@ pub fn list_devices() -> Result<Vec<DeviceSummary>> {
 fn select(instance: &ash::Instance, selector: Option<&str>) -> Result<vk::PhysicalDevice> {
     let all = summaries(instance)?;
     if all.is_empty() {
-        return Err(Error::NoDevice(format!(
-            "no Vulkan device found; {INSTALL_HINT}"
-        )));
+        return Err(Error::NoDevice(format!("no Vulkan device found; {INSTALL_HINT}")));
     }
     let listing = || {
         all.iter()
@@ -329,12 +316,8 @@ fn select(instance: &ash::Instance, selector: Option<&str>) -> Result<vk::Physic
                 .iter()
                 .find(|(_, s)| s.name.to_lowercase().contains(&sel.to_lowercase())),
         };
-        let (pd, s) = found.ok_or_else(|| {
-            Error::NoDevice(format!(
-                "LACUNA_DEVICE '{sel}' matches no device (have {})",
-                listing()
-            ))
-        })?;
+        let (pd, s) = found
+            .ok_or_else(|| Error::NoDevice(format!("LACUNA_DEVICE '{sel}' matches no device (have {})", listing())))?;
         if !s.usable {
             return Err(Error::NoDevice(format!(
                 "device '{}' lacks Vulkan 1.3, a compute queue or VK_KHR_push_descriptor",
@@ -373,38 +356,33 @@ impl Context {
             } else {
                 None
             };
-            let selector = options
-                .device
-                .clone()
-                .or_else(|| std::env::var("LACUNA_DEVICE").ok());
+            let selector = options.device.clone().or_else(|| std::env::var("LACUNA_DEVICE").ok());
             let pd = select(&instance, selector.as_deref())?;
-            let (family, _) =
-                compute_family(&instance, pd).expect("selected device has a compute queue");
+            let (family, _) = compute_family(&instance, pd).expect("selected device has a compute queue");
             let priorities = [1.0];
             let queues = [vk::DeviceQueueCreateInfo::default()
                 .queue_family_index(family)
                 .queue_priorities(&priorities)];
             let extensions = [ash::khr::push_descriptor::NAME.as_ptr()];
             let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+            // Required by every Vulkan 1.3 device; the LBVH refit relies on its
+            // acquire/release atomics.
+            let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
+                .vulkan_memory_model(true)
+                .vulkan_memory_model_device_scope(true);
             let info = vk::DeviceCreateInfo::default()
                 .queue_create_infos(&queues)
                 .enabled_extension_names(&extensions)
-                .push_next(&mut v13);
+                .push_next(&mut v13)
+                .push_next(&mut v12);
             let device = unsafe { instance.create_device(pd, &info, None) }.vk("vkCreateDevice")?;
             let queue = unsafe { device.get_device_queue(family, 0) };
             Ok((messenger, pd, device, queue, family))
         })();
         match built {
-            Ok((messenger, pd, device, queue, family)) => Self::assemble(
-                Some(entry),
-                instance,
-                pd,
-                device,
-                queue,
-                family,
-                messenger,
-                true,
-            ),
+            Ok((messenger, pd, device, queue, family)) => {
+                Self::assemble(Some(entry), instance, pd, device, queue, family, messenger, true)
+            }
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };
                 Err(e)
@@ -466,9 +444,7 @@ impl Context {
         owned: bool,
     ) -> Result<Self> {
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let bits = families
-            .get(family as usize)
-            .map_or(0, |f| f.timestamp_valid_bits);
+        let bits = families.get(family as usize).map_or(0, |f| f.timestamp_valid_bits);
         let info = device_info(&instance, pd, bits);
         let cleanup = |instance: &ash::Instance, device: &ash::Device| {
             if owned {
@@ -578,47 +554,33 @@ impl Context {
     }
 
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
-        self.inner
-            .allocator
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
+        self.inner.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// Records commands with `record`, submits them and waits for completion.
-    pub fn submit_and_wait<T>(
-        &self,
-        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
-    ) -> Result<T> {
+    pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
         let device = self.device();
-        let pool = self
-            .inner
-            .command_pool
-            .lock()
-            .unwrap_or_else(|p| p.into_inner());
+        let pool = self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        let cmd =
-            unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {
-            let begin = vk::CommandBufferBeginInfo::default()
-                .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
             let value = record(cmd);
             unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let value = value?;
-            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }
-                .vk("vkCreateFence")?;
+            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
             let submitted = {
                 let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
                 unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
             };
-            let waited = submitted.and_then(|_| {
-                unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")
-            });
+            let waited = submitted
+                .and_then(|_| unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
             unsafe { device.destroy_fence(fence, None) };
             waited.map(|_| value)
         })();
@@ -632,13 +594,8 @@ impl Drop for Inner {
         unsafe {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_command_pool(
-                *self
-                    .command_pool
-                    .get_mut()
-                    .unwrap_or_else(|p| p.into_inner()),
-                None,
-            );
+            self.device
+                .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);
             if self.owned {
                 self.device.destroy_device(None);
             }

@@ -56,10 +56,8 @@ impl Kernel {
             info.max_push_constants_size as u64,
         )?;
         let device = ctx.device();
-        let module = unsafe {
-            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
-        }
-        .vk("vkCreateShaderModule")?;
+        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None) }
+            .vk("vkCreateShaderModule")?;
         let mut kernel = Kernel {
             ctx: ctx.clone(),
             name,
@@ -84,8 +82,8 @@ impl Kernel {
         let set_info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&slots);
-        kernel.set_layout = unsafe { device.create_descriptor_set_layout(&set_info, None) }
-            .vk("vkCreateDescriptorSetLayout")?;
+        kernel.set_layout =
+            unsafe { device.create_descriptor_set_layout(&set_info, None) }.vk("vkCreateDescriptorSetLayout")?;
         let ranges = [vk::PushConstantRange {
             stage_flags: vk::ShaderStageFlags::COMPUTE,
             offset: 0,
@@ -96,8 +94,7 @@ impl Kernel {
         if push_size > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
-            .vk("vkCreatePipelineLayout")?;
+        kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
@@ -105,22 +102,15 @@ impl Kernel {
         let create = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(kernel.layout)];
-        kernel.pipeline =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
-                .map_err(|(_, r)| r)
-                .vk("vkCreateComputePipelines")?[0];
+        kernel.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
+            .map_err(|(_, r)| r)
+            .vk("vkCreateComputePipelines")?[0];
         Ok(kernel)
     }
 
     /// Binds the pipeline, pushes `bindings` and `push` constants, and
     /// dispatches `groups` workgroups. Records only; no barriers.
-    pub fn dispatch(
-        &self,
-        cmd: vk::CommandBuffer,
-        bindings: &[Binding],
-        push: &[u8],
-        groups: [u32; 3],
-    ) {
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) {
         assert_eq!(
             bindings.len(),
             self.bindings.len(),
@@ -162,11 +152,7 @@ impl Kernel {
             .enumerate()
             .map(|(i, b)| {
                 let ty = b.descriptor_type();
-                assert_eq!(
-                    ty, self.bindings[i],
-                    "kernel {}: binding {i} type",
-                    self.name
-                );
+                assert_eq!(ty, self.bindings[i], "kernel {}: binding {i} type", self.name);
                 let w = vk::WriteDescriptorSet::default()
                     .dst_binding(i as u32)
                     .descriptor_type(ty);

@@ -61,9 +61,7 @@ impl Buffer {
                 });
             }
         };
-        if let Err(result) =
-            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
-        {
+        if let Err(result) = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
             let _ = ctx.allocator().free(allocation);
             unsafe { device.destroy_buffer(raw, None) };
             return Err(Error::Vulkan {
@@ -81,12 +79,7 @@ impl Buffer {
     }
 
     /// A device-local storage buffer filled from `data` through staging.
-    pub fn with_data(
-        ctx: &Context,
-        name: &str,
-        data: &[u8],
-        usage: vk::BufferUsageFlags,
-    ) -> Result<Self> {
+    pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Self> {
         let buffer = Buffer::new(
             ctx,
             name,
@@ -135,11 +128,7 @@ impl Buffer {
                     dst_offset: offset + done,
                     size: n,
                 }];
-                unsafe {
-                    self.ctx
-                        .device()
-                        .cmd_copy_buffer(cmd, staging.raw, self.raw, &region)
-                };
+                unsafe { self.ctx.device().cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
                 Ok(())
             })?;
             done += n;
@@ -173,9 +162,7 @@ impl Buffer {
                 record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
-            out.extend_from_slice(
-                &staging.mapped().expect("readback is host visible")[..n as usize],
-            );
+            out.extend_from_slice(&staging.mapped().expect("readback is host visible")[..n as usize]);
         }
         Ok(out)
     }
@@ -293,8 +280,7 @@ impl Image3d {
             .view_type(vk::ImageViewType::TYPE_3D)
             .format(format)
             .subresource_range(record::COLOR_RANGE);
-        image.view =
-            unsafe { device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+        image.view = unsafe { device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
         image.upload(texel_bytes, data)?;
         Ok(image)
     }
@@ -316,18 +302,14 @@ impl Image3d {
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
-            staging.mapped_mut().expect("staging is host visible")[..len]
-                .copy_from_slice(&data[start..start + len]);
+            staging.mapped_mut().expect("staging is host visible")[..len].copy_from_slice(&data[start..start + len]);
             let first = z == 0;
             let last = z + n == d;
             self.ctx.submit_and_wait(|cmd| {
                 let (old, src) = if first {
                     (vk::ImageLayout::UNDEFINED, Access::NONE)
                 } else {
-                    (
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        Access::TRANSFER_WRITE,
-                    )
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE)
                 };
                 record::image_barrier(
                     device,

@@ -78,12 +78,7 @@ pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Access, dst: A
 
 /// The barrier between two dependent compute dispatches.
 pub fn compute_to_compute(device: &ash::Device, cmd: vk::CommandBuffer) {
-    barrier(
-        device,
-        cmd,
-        Access::COMPUTE_WRITE,
-        Access::COMPUTE_READ_WRITE,
-    );
+    barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ_WRITE);
 }
 
 /// An image layout transition with its memory dependency.
@@ -113,12 +108,7 @@ pub fn image_barrier(
 
 /// Workgroup counts covering `threads` invocations with `local` threads per
 /// group along each axis, checked against `maxComputeWorkGroupCount`.
-pub fn groups_for(
-    info: &DeviceInfo,
-    what: &str,
-    threads: [u32; 3],
-    local: [u32; 3],
-) -> Result<[u32; 3]> {
+pub fn groups_for(info: &DeviceInfo, what: &str, threads: [u32; 3], local: [u32; 3]) -> Result<[u32; 3]> {
     let mut groups = [0; 3];
     for a in 0..3 {
         groups[a] = threads[a].div_ceil(local[a]);

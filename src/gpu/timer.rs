@@ -25,8 +25,7 @@ impl Timer {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(capacity);
-        let pool =
-            unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        let pool = unsafe { ctx.device().create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         Ok(Timer {
             ctx: ctx.clone(),
             pool,
@@ -45,32 +44,22 @@ impl Timer {
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.passes.clear();
         self.open = None;
-        unsafe {
-            self.ctx
-                .device()
-                .cmd_reset_query_pool(cmd, self.pool, 0, self.capacity)
-        };
+        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
     }
 
     fn write(&self, cmd: vk::CommandBuffer, query: u32) {
         // ALL_COMMANDS: the timestamp waits for all earlier work, so a pass
         // measures its own commands, not the tail of the one before.
         unsafe {
-            self.ctx.device().cmd_write_timestamp2(
-                cmd,
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-                self.pool,
-                query,
-            )
+            self.ctx
+                .device()
+                .cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, query)
         };
     }
 
     /// Opens pass `name`; passes do not nest.
     pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Pass> {
-        assert!(
-            self.open.is_none(),
-            "timer pass opened while another is open"
-        );
+        assert!(self.open.is_none(), "timer pass opened while another is open");
         let first = self.passes.len() as u32 * 2;
         if first + 2 > self.capacity {
             return Err(Error::invalid(
@@ -120,10 +109,7 @@ impl Timer {
             let end = ticks[*first as usize + 1] & mask;
             // Wraps around once at most within a pass.
             let delta = end.wrapping_sub(start) & mask;
-            timings.push(
-                name.clone(),
-                delta as f64 * info.timestamp_period as f64 / 1e6,
-            );
+            timings.push(name.clone(), delta as f64 * info.timestamp_period as f64 / 1e6);
         }
         Ok(timings)
     }

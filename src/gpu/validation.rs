@@ -20,10 +20,7 @@ pub struct ValidationMessage {
 
 impl fmt::Display for ValidationMessage {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let sev = if self
-            .severity
-            .contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
-        {
+        let sev = if self.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
             "error"
         } else {
             "warning"
@@ -76,8 +73,7 @@ impl Messenger {
         let user = Box::new(store.clone());
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
             )
             .message_type(
                 vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -86,8 +82,8 @@ impl Messenger {
             )
             .pfn_user_callback(Some(on_message))
             .user_data(&*user as *const MessageStore as *mut c_void);
-        let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }
-            .vk("vkCreateDebugUtilsMessengerEXT")?;
+        let handle =
+            unsafe { loader.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
         Ok(Messenger {
             loader,
             handle,

@@ -23,13 +23,7 @@ impl BrickMinMax {
         let b = [D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER];
         Ok(BrickMinMax {
             ctx: ctx.clone(),
-            kernel: Kernel::new(
-                ctx,
-                "prims/brick_minmax",
-                shaders::PRIMS_BRICK_MINMAX,
-                &b,
-                48,
-            )?,
+            kernel: Kernel::new(ctx, "prims/brick_minmax", shaders::PRIMS_BRICK_MINMAX, &b, 48)?,
         })
     }
 

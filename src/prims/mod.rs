@@ -25,12 +25,12 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::vk;
 
 /// Push-constant bytes from u32 words.
-pub(crate) fn words(w: &[u32]) -> Vec<u8> {
+pub fn words(w: &[u32]) -> Vec<u8> {
     bytemuck::cast_slice(w).to_vec()
 }
 
 /// Earlier compute and transfer writes become visible to compute and transfer reads.
-pub(crate) fn entry_barrier(device: &ash::Device, cmd: vk::CommandBuffer) {
+pub fn entry_barrier(device: &ash::Device, cmd: vk::CommandBuffer) {
     let src = Access {
         stage: vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
         access: vk::AccessFlags2::SHADER_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
@@ -46,11 +46,7 @@ pub(crate) fn entry_barrier(device: &ash::Device, cmd: vk::CommandBuffer) {
 }
 
 /// Checks that `bytes` of one storage binding fit `maxStorageBufferRange`.
-pub(crate) fn check_range(
-    info: &crate::gpu::DeviceInfo,
-    what: &str,
-    bytes: u64,
-) -> crate::Result<()> {
+pub fn check_range(info: &crate::gpu::DeviceInfo, what: &str, bytes: u64) -> crate::Result<()> {
     info.check(
         format!("{what} ({bytes} bytes)"),
         "maxStorageBufferRange",

@@ -102,11 +102,7 @@ impl RadixSort {
         scratch: &SortScratch,
     ) -> Result<()> {
         if !(1..=32).contains(&key_bits) {
-            return Err(Error::invalid(
-                "key bits",
-                key_bits.to_string(),
-                "must be in 1..=32",
-            ));
+            return Err(Error::invalid("key bits", key_bits.to_string(), "must be in 1..=32"));
         }
         assert!(
             n <= scratch.capacity,
@@ -127,16 +123,7 @@ impl RadixSort {
             // The last pass of a key width that is not a multiple of 4 sees only the remaining bits.
             let shift = pass * BITS_PER_PASS;
             let digit_mask = (1u32 << (key_bits - shift).min(BITS_PER_PASS)) - 1;
-            let push = words(&[
-                n as u32,
-                groups[0],
-                shift,
-                blocks as u32,
-                digit_mask,
-                0,
-                0,
-                0,
-            ]);
+            let push = words(&[n as u32, groups[0], shift, blocks as u32, digit_mask, 0, 0, 0]);
             if pass > 0 {
                 record::compute_to_compute(device, cmd);
             }
@@ -146,8 +133,7 @@ impl RadixSort {
                 &push,
                 groups,
             );
-            self.scan
-                .record(cmd, &scratch.hist, 16 * blocks, &scratch.scan)?;
+            self.scan.record(cmd, &scratch.hist, 16 * blocks, &scratch.scan)?;
             record::compute_to_compute(device, cmd);
             self.scatter.dispatch(
                 cmd,

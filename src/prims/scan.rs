@@ -29,13 +29,7 @@ impl Scan {
         let two = [D::STORAGE_BUFFER, D::STORAGE_BUFFER];
         Ok(Scan {
             ctx: ctx.clone(),
-            blocks: Kernel::new(
-                ctx,
-                "prims/scan_blocks",
-                shaders::PRIMS_SCAN_BLOCKS,
-                &two,
-                16,
-            )?,
+            blocks: Kernel::new(ctx, "prims/scan_blocks", shaders::PRIMS_SCAN_BLOCKS, &two, 16)?,
             add: Kernel::new(ctx, "prims/scan_add", shaders::PRIMS_SCAN_ADD, &two, 16)?,
         })
     }
@@ -70,13 +64,7 @@ impl Scan {
 
     /// Records an exclusive scan of `data[0..n]` in place (see the barrier
     /// convention in `prims`).
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        data: &Buffer,
-        n: u64,
-        scratch: &ScanScratch,
-    ) -> Result<()> {
+    pub fn record(&self, cmd: vk::CommandBuffer, data: &Buffer, n: u64, scratch: &ScanScratch) -> Result<()> {
         assert!(
             n <= scratch.capacity,
             "scan of {n} elements with scratch for {}",
@@ -86,14 +74,7 @@ impl Scan {
         self.level(cmd, data, n, scratch, 0)
     }
 
-    fn level(
-        &self,
-        cmd: vk::CommandBuffer,
-        data: &Buffer,
-        n: u64,
-        scratch: &ScanScratch,
-        depth: usize,
-    ) -> Result<()> {
+    fn level(&self, cmd: vk::CommandBuffer, data: &Buffer, n: u64, scratch: &ScanScratch, depth: usize) -> Result<()> {
         if n == 0 {
             return Ok(());
         }
@@ -106,23 +87,15 @@ impl Scan {
             &scratch.dummy
         };
         let push = words(&[n as u32, groups[0], (blocks > 1) as u32, 0]);
-        self.blocks.dispatch(
-            cmd,
-            &[Binding::Storage(data), Binding::Storage(sums)],
-            &push,
-            groups,
-        );
+        self.blocks
+            .dispatch(cmd, &[Binding::Storage(data), Binding::Storage(sums)], &push, groups);
         if blocks > 1 {
             record::compute_to_compute(self.ctx.device(), cmd);
             self.level(cmd, sums, blocks, scratch, depth + 1)?;
             record::compute_to_compute(self.ctx.device(), cmd);
             let push = words(&[n as u32, groups[0], 0, 0]);
-            self.add.dispatch(
-                cmd,
-                &[Binding::Storage(data), Binding::Storage(sums)],
-                &push,
-                groups,
-            );
+            self.add
+                .dispatch(cmd, &[Binding::Storage(data), Binding::Storage(sums)], &push, groups);
         }
         Ok(())
     }

@@ -95,13 +95,7 @@ impl Camera {
 
     /// The camera part of `RenderParams` for a volume of `dims` voxels with
     /// `spacing`, rendered at `width` x `height`.
-    pub fn params(
-        &self,
-        dims: [u32; 3],
-        spacing: [f32; 3],
-        width: u32,
-        height: u32,
-    ) -> Result<RenderParams> {
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
         if let Projection::Perspective { fov_deg, distance } = self.projection {
             if !(fov_deg > 0.0 && fov_deg < 180.0) {
                 return Err(Error::invalid(
@@ -135,25 +129,14 @@ impl Camera {
             Projection::Orthographic => {
                 let mut half = [0.0f64; 2];
                 for i in 0..8 {
-                    let corner = [0, 1, 2].map(|a| {
-                        if i >> a & 1 == 1 {
-                            centre[a]
-                        } else {
-                            -centre[a]
-                        }
-                    });
+                    let corner = [0, 1, 2].map(|a| if i >> a & 1 == 1 { centre[a] } else { -centre[a] });
                     half[0] = half[0].max(dot(corner, right).abs());
                     half[1] = half[1].max(dot(corner, up).abs());
                 }
-                let pixel = (2.0 * half[0] / w)
-                    .max(2.0 * half[1] / h)
-                    .max(f64::MIN_POSITIVE);
+                let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
                 // Ray origins on a plane in front of the whole volume.
                 let plane = add(centre, scale(to_eye, radius + 1.0));
-                let base = add(
-                    add(plane, scale(right, -pixel * w / 2.0)),
-                    scale(up, pixel * h / 2.0),
-                );
+                let base = add(add(plane, scale(right, -pixel * w / 2.0)), scale(up, pixel * h / 2.0));
                 params.base = v4(to_voxel(base), 0.0);
                 params.du = v4(to_voxel(scale(right, pixel)), 0.0);
                 params.dv = v4(to_voxel(scale(up, -pixel)), 0.0);

@@ -95,13 +95,7 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         .zip(&b.pixels)
         .map(|(pa, pb)| pixel_diff(*pa, *pb))
         .collect();
-    let top = scale.unwrap_or_else(|| {
-        diffs
-            .iter()
-            .cloned()
-            .filter(|d| d.is_finite())
-            .fold(0.0, f64::max)
-    });
+    let top = scale.unwrap_or_else(|| diffs.iter().cloned().filter(|d| d.is_finite()).fold(0.0, f64::max));
     let mut rgb = Vec::with_capacity(diffs.len() * 3);
     for d in diffs {
         let px = if d == 0.0 {
@@ -109,18 +103,10 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         } else if !d.is_finite() {
             [255, 255, 255]
         } else {
-            let t = if top > 0.0 {
-                (d / top).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
+            let t = if top > 0.0 { (d / top).clamp(0.0, 1.0) } else { 1.0 };
             // Non-zero differences are never black, however small.
             let t = 0.15 + 0.85 * t;
-            [
-                (255.0 * t) as u8,
-                (64.0 * (1.0 - t)) as u8,
-                (255.0 * (1.0 - t)) as u8,
-            ]
+            [(255.0 * t) as u8, (64.0 * (1.0 - t)) as u8, (255.0 * (1.0 - t)) as u8]
         };
         rgb.extend_from_slice(&px);
     }
@@ -129,14 +115,10 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), a.width, a.height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder
-            .write_header()
-            .map_err(|e| Error::format(path, e.to_string()))?;
+        let mut writer = encoder.write_header().map_err(|e| Error::format(path, e.to_string()))?;
         writer
             .write_image_data(&rgb)
             .map_err(|e| Error::format(path, e.to_string()))?;
-        writer
-            .finish()
-            .map_err(|e| Error::format(path, e.to_string()))
+        writer.finish().map_err(|e| Error::format(path, e.to_string()))
     })
 }

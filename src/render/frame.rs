@@ -19,16 +19,12 @@ const PREFIX: &str = "lacuna.";
 
 /// Writes to `path` through a sibling temporary file and a rename.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let name = path.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
-        Error::invalid(
-            "output path",
-            path.display().to_string(),
-            "has no file name",
-        )
-    })?;
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| Error::invalid("output path", path.display().to_string(), "has no file name"))?;
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = write(&tmp)
-        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
+    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -87,16 +83,12 @@ impl Frame {
         let image = read_first_rgba_layer_from_file(
             path,
             |res: Vec2<usize>, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-            |(w, px): &mut (usize, Vec<[f32; 4]>),
-             p: Vec2<usize>,
-             (r, g, b, a): (f32, f32, f32, f32)| {
+            |(w, px): &mut (usize, Vec<[f32; 4]>), p: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
                 px[p.y() * *w + p.x()] = [r, g, b, a];
             },
         )
         .map_err(|e| match e {
-            exr::error::Error::Io(io) => {
-                crate::Error::format(path, format!("cannot read EXR: {io}"))
-            }
+            exr::error::Error::Io(io) => crate::Error::format(path, format!("cannot read EXR: {io}")),
             other => crate::Error::format(path, format!("not a readable RGBA EXR: {other}")),
         })?;
         let size = image.layer_data.size;

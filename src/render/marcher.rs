@@ -4,53 +4,13 @@
 use super::frame::Frame;
 use super::params::RenderParams;
 use super::settings::RenderSettings;
+use crate::accel::Structure;
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
-
-/// The empty-space-skipping structure a frame is marched with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Accel {
-    /// Every lattice sample from entry to exit.
-    Naive,
-}
-
-impl Accel {
-    pub const ALL: [Accel; 1] = [Accel::Naive];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Accel::Naive => "naive",
-        }
-    }
-}
-
-impl std::str::FromStr for Accel {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        Accel::ALL
-            .into_iter()
-            .find(|a| a.name() == s)
-            .ok_or_else(|| {
-                Error::invalid(
-                    "accel",
-                    s,
-                    format!(
-                        "expected one of: {}",
-                        Accel::ALL.map(|a| a.name()).join(", ")
-                    ),
-                )
-            })
-    }
-}
-
-impl std::fmt::Display for Accel {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
 
 const LOCAL: [u32; 3] = [8, 8, 1];
 
@@ -116,10 +76,7 @@ impl RenderTarget {
     /// Reads the frame recorded by `Renderer::record_readback`, after the
     /// submission completed.
     pub fn read(&self) -> Frame {
-        let bytes = self
-            .readback
-            .mapped()
-            .expect("readback buffer is host visible");
+        let bytes = self.readback.mapped().expect("readback buffer is host visible");
         let n = self.width as usize * self.height as usize;
         let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
         Frame::new(self.width, self.height, pixels)
@@ -130,29 +87,35 @@ impl RenderTarget {
 pub struct Renderer {
     ctx: Context,
     naive: Kernel,
+    bvh: Kernel,
 }
 
 impl Renderer {
     pub fn new(ctx: &Context) -> Result<Self> {
         use vk::DescriptorType as D;
-        let bindings = [
+        let common = [
             D::UNIFORM_BUFFER,
             D::COMBINED_IMAGE_SAMPLER,
             D::STORAGE_BUFFER,
             D::STORAGE_BUFFER,
         ];
+        let tree = [common.as_slice(), &[D::STORAGE_BUFFER, D::STORAGE_BUFFER]].concat();
         Ok(Renderer {
             ctx: ctx.clone(),
-            naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &bindings, 0)?,
+            naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &common, 0)?,
+            bvh: Kernel::new(ctx, "march/bvh", shaders::MARCH_BVH, &tree, 0)?,
         })
     }
 
-    /// Records one frame into `cmd`: parameter update, then the march pass
-    /// (timed as "march" when `timer` is given).
+    /// Records one frame into `cmd`: parameter update, then the march pass of
+    /// `structure`'s kernel (timed as "march" when `timer` is given).
     ///
     /// Barriers. Before: the volume image is in SHADER_READ_ONLY_OPTIMAL and
     /// its upload and the TF buffer's are visible to compute reads (true after
-    /// `GpuVolume::upload` / `TransferFunction::upload`, which wait). Recorded
+    /// `GpuVolume::upload` / `TransferFunction::upload`, which wait), and the
+    /// structure's buffers are visible to compute reads (true after
+    /// `Builder::build`; after `record_*` builds, a barrier from
+    /// `Access::COMPUTE_WRITE` to `Access::COMPUTE_READ`). Recorded
     /// here: earlier uses of `target` in the same command buffer (compute
     /// reads of the parameters, transfer reads of the frame) are ordered
     /// before this frame's writes. After: the frame buffer is written in the
@@ -163,10 +126,10 @@ impl Renderer {
         &self,
         cmd: vk::CommandBuffer,
         timer: Option<&mut Timer>,
-        accel: Accel,
+        structure: &Structure,
         target: &RenderTarget,
         volume: &GpuVolume,
-        tf: &Buffer,
+        tf: &GpuTransferFunction,
         settings: &RenderSettings,
     ) -> Result<()> {
         if (settings.width, settings.height) != (target.width, target.height) {
@@ -177,33 +140,65 @@ impl Renderer {
             ));
         }
         let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
-        let groups = record::groups_for(
-            self.ctx.info(),
-            "frame",
-            [target.width, target.height, 1],
-            LOCAL,
-        )?;
+        self.record_params(cmd, timer, structure, target, volume, tf, &params)
+    }
+
+    /// As `record`, with explicit shader parameters: a camera of your own
+    /// (any ray origins and directions in voxel space). `params.image` must
+    /// match the target and `params.dims` the volume.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_params(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        structure: &Structure,
+        target: &RenderTarget,
+        volume: &GpuVolume,
+        tf: &GpuTransferFunction,
+        params: &RenderParams,
+    ) -> Result<()> {
+        if [params.image[0], params.image[1]] != [target.width, target.height] {
+            return Err(Error::invalid(
+                "render params",
+                format!("{}x{}", params.image[0], params.image[1]),
+                format!("render target is {}x{}", target.width, target.height),
+            ));
+        }
+        if params.dims[..3] != volume.dims || params.dims[3] != crate::tf::LUT_SIZE as u32 {
+            return Err(Error::invalid(
+                "render params",
+                format!("{:?}", params.dims),
+                "dims do not match the volume and LUT",
+            ));
+        }
+        if !(params.march[0].is_finite() && params.march[0] > 0.0) {
+            return Err(Error::invalid(
+                "step",
+                params.march[0].to_string(),
+                "must be a finite number > 0 (voxels)",
+            ));
+        }
+        let groups = record::groups_for(self.ctx.info(), "frame", [target.width, target.height, 1], LOCAL)?;
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
         record::barrier(device, cmd, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
-        unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
-        record::barrier(
-            device,
-            cmd,
-            Access::TRANSFER_WRITE,
-            Access::COMPUTE_UNIFORM_READ,
-        );
-        let kernel = match accel {
-            Accel::Naive => &self.naive,
-        };
-        let bindings = [
+        unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(params)) };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_UNIFORM_READ);
+        let mut bindings = vec![
             Binding::Uniform(&target.params),
             Binding::Sampled(volume.image.view, volume.sampler),
-            Binding::Storage(tf),
+            Binding::Storage(&tf.lut),
             Binding::Storage(&target.frame),
         ];
+        let kernel = match structure {
+            Structure::Naive => &self.naive,
+            Structure::Lbvh(l) => {
+                bindings.extend([Binding::Storage(&l.nodes), Binding::Storage(&l.count)]);
+                &self.bvh
+            }
+        };
         match timer {
             Some(timer) => {
                 let pass = timer.begin(cmd, "march")?;
@@ -234,17 +229,28 @@ impl Renderer {
     /// frame and the GPU time of each pass ("march", "readback").
     pub fn render(
         &self,
-        accel: Accel,
+        structure: &Structure,
         volume: &GpuVolume,
-        tf: &Buffer,
+        tf: &GpuTransferFunction,
         settings: &RenderSettings,
     ) -> Result<(Frame, Timings)> {
-        settings.validate()?;
-        let target = RenderTarget::new(&self.ctx, settings.width, settings.height)?;
+        let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
+        self.render_params(structure, volume, tf, &params)
+    }
+
+    /// As `render`, with explicit shader parameters (see `record_params`).
+    pub fn render_params(
+        &self,
+        structure: &Structure,
+        volume: &GpuVolume,
+        tf: &GpuTransferFunction,
+        params: &RenderParams,
+    ) -> Result<(Frame, Timings)> {
+        let target = RenderTarget::new(&self.ctx, params.image[0], params.image[1])?;
         let mut timer = Timer::new(&self.ctx, 4)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record(cmd, Some(&mut timer), accel, &target, volume, tf, settings)?;
+            self.record_params(cmd, Some(&mut timer), structure, &target, volume, tf, params)?;
             let pass = timer.begin(cmd, "readback")?;
             self.record_readback(cmd, &target);
             timer.end(cmd, pass);

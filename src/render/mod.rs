@@ -9,9 +9,10 @@ mod params;
 pub mod reference;
 mod settings;
 
+pub use crate::accel::Accel;
 pub use camera::{Camera, Projection};
 pub use diff::{diff, DiffStats};
 pub use frame::{write_atomically, Frame};
-pub use marcher::{Accel, RenderTarget, Renderer};
+pub use marcher::{RenderTarget, Renderer};
 pub use params::{RenderParams, ERT_OFF};
 pub use settings::{parse_size, RenderSettings};

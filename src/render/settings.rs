@@ -31,14 +31,8 @@ impl Default for RenderSettings {
 pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     let bad = |why: &str| Error::invalid("size", s, why.to_string());
     let (w, h) = s.split_once('x').ok_or_else(|| bad("expected WxH"))?;
-    let w: u32 = w
-        .trim()
-        .parse()
-        .map_err(|_| bad("expected WxH with integers"))?;
-    let h: u32 = h
-        .trim()
-        .parse()
-        .map_err(|_| bad("expected WxH with integers"))?;
+    let w: u32 = w.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    let h: u32 = h.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
     if w == 0 || h == 0 {
         return Err(bad("width and height must be > 0"));
     }
@@ -70,12 +64,7 @@ impl RenderSettings {
     }
 
     /// Full shader parameters for a volume.
-    pub fn params(
-        &self,
-        dims: [u32; 3],
-        spacing: [f32; 3],
-        norm: [f32; 2],
-    ) -> Result<RenderParams> {
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
         self.validate()?;
         let mut p = self.camera.params(dims, spacing, self.width, self.height)?;
         p.march = [self.step, self.ert.unwrap_or(ERT_OFF), norm[0], norm[1]];

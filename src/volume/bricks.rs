@@ -33,8 +33,7 @@ impl BrickGrid {
                     i as u32 / (counts[0] * counts[1]),
                 ];
                 let lo = [0, 1, 2].map(|a| (b[a] * brick).saturating_sub(apron));
-                let hi =
-                    [0, 1, 2].map(|a| (b[a] * brick + brick - 1 + apron).min(volume.dims[a] - 1));
+                let hi = [0, 1, 2].map(|a| (b[a] * brick + brick - 1 + apron).min(volume.dims[a] - 1));
                 let mut r = [f32::INFINITY, f32::NEG_INFINITY];
                 for z in lo[2]..=hi[2] {
                     for y in lo[1]..=hi[1] {
@@ -48,11 +47,7 @@ impl BrickGrid {
                 r
             })
             .collect();
-        BrickGrid {
-            brick,
-            counts,
-            ranges,
-        }
+        BrickGrid { brick, counts, ranges }
     }
 
     pub fn len(&self) -> usize {
@@ -65,9 +60,6 @@ impl BrickGrid {
 
     /// Active flags under `tf`: max alpha over the brick's range > 0.
     pub fn active(&self, tf: &TransferFunction) -> Vec<bool> {
-        self.ranges
-            .iter()
-            .map(|r| tf.max_alpha(r[0], r[1]) > 0.0)
-            .collect()
+        self.ranges.iter().map(|r| tf.max_alpha(r[0], r[1]) > 0.0).collect()
     }
 }

@@ -76,19 +76,13 @@ fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8
 /// f32 values normalised over their finite range; non-finite values are an error.
 fn normalized_f32(values: Vec<f64>, path: &Path) -> Result<VoxelData> {
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(Error::format(
-            path,
-            format!("voxel {i} is not a finite number"),
-        ));
+        return Err(Error::format(path, format!("voxel {i} is not a finite number")));
     }
     let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
     let hi = values.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
     Ok(VoxelData::F32(
-        values
-            .into_iter()
-            .map(|v| ((v - lo) * scale) as f32)
-            .collect(),
+        values.into_iter().map(|v| ((v - lo) * scale) as f32).collect(),
     ))
 }
 
@@ -121,12 +115,7 @@ pub fn decode(
         VoxelType::U8 => (VoxelData::U8(bytes.to_vec()), None),
         // Signed integers shift into the unsigned range so they stay native.
         VoxelType::I8 => (
-            VoxelData::U8(
-                bytes
-                    .iter()
-                    .map(|&b| (b as i8 as i16 + 128) as u8)
-                    .collect(),
-            ),
+            VoxelData::U8(bytes.iter().map(|&b| (b as i8 as i16 + 128) as u8).collect()),
             Some(-128.0),
         ),
         VoxelType::U16 => (
@@ -169,20 +158,14 @@ pub fn decode(
             None,
         ),
         VoxelType::F64 => (
-            normalized_f32(
-                words::<8>(bytes, little).map(f64::from_le_bytes).collect(),
-                path,
-            )?,
+            normalized_f32(words::<8>(bytes, little).map(f64::from_le_bytes).collect(), path)?,
             None,
         ),
     };
     let mut volume = Volume::new(path.display().to_string(), dims, spacing, ty, data)?;
     // Report the range in source units.
     volume.value_range = match (ty, range) {
-        (_, Some(offset)) => [
-            volume.value_range[0] + offset,
-            volume.value_range[1] + offset,
-        ],
+        (_, Some(offset)) => [volume.value_range[0] + offset, volume.value_range[1] + offset],
         (VoxelType::U8 | VoxelType::U16, None) => volume.value_range,
         _ => source_range(bytes, ty, little),
     };

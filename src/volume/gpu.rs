@@ -23,14 +23,7 @@ impl GpuVolume {
             VoxelData::U16(v) => (vk::Format::R16_UNORM, bytemuck::cast_slice(v)),
             VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
         };
-        let image = Image3d::with_data(
-            ctx,
-            &volume.name,
-            format,
-            volume.dims,
-            volume.texel_bytes(),
-            bytes,
-        )?;
+        let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::NEAREST)
             .min_filter(vk::Filter::NEAREST)

@@ -11,9 +11,7 @@ pub fn load(path: &Path) -> Result<Volume> {
         return Err(Error::io(path, e));
     }
     let object = ReaderOptions::new().read_file(path).map_err(|e| match e {
-        nifti::NiftiError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => {
-            Error::io(path, io)
-        }
+        nifti::NiftiError::Io(io) if io.kind() == std::io::ErrorKind::NotFound => Error::io(path, io),
         nifti::NiftiError::Io(io) => Error::format(
             path,
             format!("cannot read NIfTI data (truncated or corrupt gzip?): {io}"),
@@ -40,10 +38,7 @@ pub fn load(path: &Path) -> Result<Volume> {
         Ok(other) => {
             return Err(Error::format(
                 path,
-                format!(
-                    "NIfTI datatype {other:?} ({}) is not supported",
-                    header.datatype
-                ),
+                format!("NIfTI datatype {other:?} ({}) is not supported", header.datatype),
             ))
         }
         Err(_) => {

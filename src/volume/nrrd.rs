@@ -12,12 +12,8 @@ fn nrrd_type(s: &str) -> Option<VoxelType> {
     Some(match s {
         "uchar" | "unsigned char" | "uint8" | "uint8_t" => VoxelType::U8,
         "signed char" | "int8" | "int8_t" => VoxelType::I8,
-        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => {
-            VoxelType::U16
-        }
-        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
-            VoxelType::I16
-        }
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => VoxelType::U16,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => VoxelType::I16,
         "uint" | "unsigned int" | "uint32" | "uint32_t" => VoxelType::U32,
         "int" | "signed int" | "int32" | "int32_t" => VoxelType::I32,
         "float" => VoxelType::F32,
@@ -30,9 +26,8 @@ fn numbers(path: &Path, field: &str, value: &str) -> Result<Vec<f64>> {
     value
         .split_whitespace()
         .map(|t| {
-            t.parse::<f64>().map_err(|_| {
-                Error::format(path, format!("NRRD field '{field}': '{t}' is not a number"))
-            })
+            t.parse::<f64>()
+                .map_err(|_| Error::format(path, format!("NRRD field '{field}': '{t}' is not a number")))
         })
         .collect()
 }
@@ -51,12 +46,9 @@ fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
         let comps: Result<Vec<f64>> = inner
             .split(',')
             .map(|t| {
-                t.trim().parse::<f64>().map_err(|_| {
-                    Error::format(
-                        path,
-                        format!("NRRD space directions: bad vector '({inner})'"),
-                    )
-                })
+                t.trim()
+                    .parse::<f64>()
+                    .map_err(|_| Error::format(path, format!("NRRD space directions: bad vector '({inner})'")))
             })
             .collect();
         out.push(comps?.iter().map(|c| c * c).sum::<f64>().sqrt());
@@ -95,21 +87,16 @@ pub fn load(path: &Path) -> Result<Volume> {
             continue;
         }
         let Some((k, v)) = line.split_once(':') else {
-            return Err(Error::format(
-                path,
-                format!("NRRD header line without ':': '{line}'"),
-            ));
+            return Err(Error::format(path, format!("NRRD header line without ':': '{line}'")));
         };
         fields.insert(k.trim().to_lowercase(), v.trim().to_string());
     }
     let get = |k: &str| fields.get(k).map(String::as_str);
-    let require = |k: &str| {
-        get(k).ok_or_else(|| Error::format(path, format!("NRRD header has no '{k}' field")))
-    };
+    let require = |k: &str| get(k).ok_or_else(|| Error::format(path, format!("NRRD header has no '{k}' field")));
 
     let ty_name = require("type")?;
-    let ty = nrrd_type(ty_name)
-        .ok_or_else(|| Error::format(path, format!("NRRD type '{ty_name}' is not supported")))?;
+    let ty =
+        nrrd_type(ty_name).ok_or_else(|| Error::format(path, format!("NRRD type '{ty_name}' is not supported")))?;
     let dimension: usize = require("dimension")?
         .parse()
         .map_err(|_| Error::format(path, "NRRD 'dimension' is not an integer"))?;
@@ -124,12 +111,7 @@ pub fn load(path: &Path) -> Result<Volume> {
     let little = match get("endian") {
         None | Some("little") => true,
         Some("big") => false,
-        Some(e) => {
-            return Err(Error::format(
-                path,
-                format!("NRRD endian '{e}' is not little or big"),
-            ))
-        }
+        Some(e) => return Err(Error::format(path, format!("NRRD endian '{e}' is not little or big"))),
     };
     let spacing = if let Some(s) = get("spacings") {
         numbers(path, "spacings", s)?
@@ -139,15 +121,8 @@ pub fn load(path: &Path) -> Result<Volume> {
         vec![1.0; 3]
     };
     let spacing = match spacing.as_slice() {
-        [x, y, z] if [x, y, z].iter().all(|v| v.is_finite() && **v > 0.0) => {
-            [*x as f32, *y as f32, *z as f32]
-        }
-        _ => {
-            return Err(Error::format(
-                path,
-                "NRRD spacings must be three positive numbers",
-            ))
-        }
+        [x, y, z] if [x, y, z].iter().all(|v| v.is_finite() && **v > 0.0) => [*x as f32, *y as f32, *z as f32],
+        _ => return Err(Error::format(path, "NRRD spacings must be three positive numbers")),
     };
 
     let datafile = get("data file").or_else(|| get("datafile"));
@@ -165,10 +140,7 @@ pub fn load(path: &Path) -> Result<Volume> {
         }
         None => {
             if !ended {
-                return Err(Error::format(
-                    path,
-                    "NRRD header has no blank line before the data",
-                ));
+                return Err(Error::format(path, "NRRD header has no blank line before the data"));
             }
             (path.to_path_buf(), bytes[pos.min(bytes.len())..].to_vec())
         }

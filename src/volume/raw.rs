@@ -16,13 +16,7 @@ pub struct RawLayout {
 /// Parses `WxHxD` (each > 0).
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
     let parts: Vec<&str> = s.split('x').collect();
-    let bad = || {
-        Error::invalid(
-            "dimensions",
-            s,
-            "expected WxHxD with three positive integers",
-        )
-    };
+    let bad = || Error::invalid("dimensions", s, "expected WxHxD with three positive integers");
     if parts.len() != 3 {
         return Err(bad());
     }
@@ -66,7 +60,10 @@ pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
         )
     })?;
     let ty = VoxelType::from_name(ty).ok_or_else(|| {
-        Error::format(path, format!("unknown voxel type '{ty}' in file name (expected uint8, uint16, int16, float32 or float64)"))
+        Error::format(
+            path,
+            format!("unknown voxel type '{ty}' in file name (expected uint8, uint16, int16, float32 or float64)"),
+        )
     })?;
     Ok(RawLayout { dims, ty })
 }
@@ -77,12 +74,5 @@ pub fn load(path: &Path, layout: Option<RawLayout>, spacing: Option<[f32; 3]>) -
         None => layout_from_name(path)?,
     };
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    decode(
-        path,
-        &bytes,
-        layout.ty,
-        true,
-        layout.dims,
-        spacing.unwrap_or([1.0; 3]),
-    )
+    decode(path, &bytes, layout.ty, true, layout.dims, spacing.unwrap_or([1.0; 3]))
 }

@@ -59,41 +59,31 @@ impl VolumeSpec {
             [n; 3]
         };
         super::check_dims(dims, spec)?;
-        let param =
-            match parts.next() {
-                None => None,
-                Some(p) => Some(p.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(
-                    || Error::invalid("volume", spec, format!("parameter '{p}' is not a number")),
-                )?),
-            };
+        let param = match parts.next() {
+            None => None,
+            Some(p) => Some(
+                p.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| Error::invalid("volume", spec, format!("parameter '{p}' is not a number")))?,
+            ),
+        };
         if parts.next().is_some() {
             return Err(Error::invalid("volume", spec, "expected NAME:SIZE[:PARAM]"));
         }
-        Ok(VolumeSpec::Procedural {
-            generator,
-            dims,
-            param,
-        })
+        Ok(VolumeSpec::Procedural { generator, dims, param })
     }
 
     pub fn load(&self, options: &LoadOptions) -> Result<Volume> {
         match self {
-            VolumeSpec::Procedural {
-                generator,
-                dims,
-                param,
-            } => generator.generate(*dims, *param),
+            VolumeSpec::Procedural { generator, dims, param } => generator.generate(*dims, *param),
             VolumeSpec::File(path) => load_file(path, options),
         }
     }
 }
 
 fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or("")
-        .to_lowercase();
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
     if options.raw.is_some() || name.ends_with(".raw") {
         if !path.exists() {
             return Err(Error::io(
@@ -115,5 +105,8 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
             std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
         ));
     }
-    Err(Error::format(path, "unknown volume format (expected .raw, .nrrd, .nhdr, .nii, .nii.gz, or NAME:SIZE for a generator)"))
+    Err(Error::format(
+        path,
+        "unknown volume format (expected .raw, .nrrd, .nhdr, .nii, .nii.gz, or NAME:SIZE for a generator)",
+    ))
 }

@@ -2,6 +2,7 @@
 //! synchronization validation, and tests fail on any message.
 #![allow(dead_code)]
 
+use lacuna::accel::{Builder, Classify};
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{Accel, Frame, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
@@ -23,26 +24,31 @@ pub fn assert_clean(ctx: &Context) {
         messages.is_empty(),
         "{} validation message(s):\n{}",
         messages.len(),
-        messages
-            .iter()
-            .map(|m| m.to_string())
-            .collect::<Vec<_>>()
-            .join("\n")
+        messages.iter().map(|m| m.to_string()).collect::<Vec<_>>().join("\n")
     );
 }
 
 /// Renders on the GPU with validation, asserting no validation message.
-pub fn render(
+pub fn render(ctx: &Context, volume: &Volume, tf: &TransferFunction, settings: &RenderSettings, accel: Accel) -> Frame {
+    render_with(ctx, volume, tf, settings, accel, Classify::Range)
+}
+
+/// As `render`, choosing the brick classification of skipping structures.
+pub fn render_with(
     ctx: &Context,
     volume: &Volume,
     tf: &TransferFunction,
     settings: &RenderSettings,
     accel: Accel,
+    classify: Classify,
 ) -> Frame {
     let renderer = Renderer::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, volume).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let (frame, _) = renderer.render(accel, &gv, &lut, settings).unwrap();
+    let builder = Builder::new(ctx).unwrap();
+    let (bricks, _) = builder.bricks(&gv).unwrap();
+    let (structure, _) = builder.build(accel, &gv, &bricks, &lut, classify).unwrap();
+    let (frame, _) = renderer.render(&structure, &gv, &lut, settings).unwrap();
     assert_clean(ctx);
     frame
 }

@@ -17,8 +17,7 @@ pub fn generate(dims: [u32; 3], level: u32) -> Vec<u8> {
             cy /= 3;
             cz /= 3;
         }
-        let t = (x as f32 / dims[0] as f32 + y as f32 / dims[1] as f32 + z as f32 / dims[2] as f32)
-            / 3.0;
+        let t = (x as f32 / dims[0] as f32 + y as f32 / dims[1] as f32 + z as f32 / dims[2] as f32) / 3.0;
         (128.0 + 127.0 * t).round() as u8
     })
 }

@@ -16,9 +16,7 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
     let mut density = vec![0f32; voxels as usize];
     let total = (voxels * PARTICLES_PER_VOXEL).ceil() as usize;
     // Cluster masses follow a steep power law: a few big, many small.
-    let weights: Vec<f64> = (0..CLUSTERS)
-        .map(|_| rng.uniform().powf(3.0) + 0.02)
-        .collect();
+    let weights: Vec<f64> = (0..CLUSTERS).map(|_| rng.uniform().powf(3.0) + 0.02).collect();
     let sum: f64 = weights.iter().sum();
     let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * z);
     for w in &weights {
@@ -30,9 +28,7 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
             let u = rng.uniform().clamp(1e-6, 0.99);
             let r = scale / (u.powf(-2.0 / 3.0) - 1.0).sqrt();
             let dir = [rng.normal(), rng.normal(), rng.normal()];
-            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2])
-                .sqrt()
-                .max(1e-12);
+            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-12);
             let p: [f64; 3] = [0, 1, 2].map(|a| centre[a] + r * dir[a] / len - 0.5);
             if (0..3).any(|a| p[a] < 0.0 || p[a] > n[a] - 1.0) {
                 continue;

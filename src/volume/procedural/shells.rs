@@ -7,10 +7,7 @@ pub fn generate(dims: [u32; 3], count: u32) -> Vec<u8> {
     let half_thickness = (radius * 0.01).max(1.0);
     super::fill(dims, |x, y, z| {
         let p = [x, y, z].map(|c| c as f32 + 0.5);
-        let r = (0..3)
-            .map(|a| (p[a] - centre[a]).powi(2))
-            .sum::<f32>()
-            .sqrt();
+        let r = (0..3).map(|a| (p[a] - centre[a]).powi(2)).sum::<f32>().sqrt();
         let mut best = 0.0f32;
         for i in 0..count {
             let ri = radius * (i + 1) as f32 / count as f32;

@@ -9,14 +9,7 @@ struct Segment {
     radius: f32,
 }
 
-fn grow(
-    rng: &mut Rng,
-    out: &mut Vec<Segment>,
-    start: [f32; 3],
-    dir: [f32; 3],
-    radius: f32,
-    depth: u32,
-) {
+fn grow(rng: &mut Rng, out: &mut Vec<Segment>, start: [f32; 3], dir: [f32; 3], radius: f32, depth: u32) {
     let mut p = start;
     let mut d = dir;
     let steps = 6 + (rng.uniform() * 6.0) as u32;
@@ -24,9 +17,7 @@ fn grow(
         let len = 0.035 + 0.02 * rng.uniform() as f32;
         let jitter = [rng.normal(), rng.normal(), rng.normal()].map(|v| v as f32 * 0.25);
         let mut nd = [0, 1, 2].map(|a| d[a] + jitter[a]);
-        let l = (nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2])
-            .sqrt()
-            .max(1e-6);
+        let l = (nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]).sqrt().max(1e-6);
         nd = nd.map(|c| c / l);
         let q = [0, 1, 2].map(|a| p[a] + nd[a] * len);
         if q.iter().any(|&c| !(0.03..=0.97).contains(&c)) {
@@ -61,11 +52,7 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
             let a = [0, 1, 2].map(|i| s.a[i] * scale[i]);
             let b = [0, 1, 2].map(|i| s.b[i] * scale[i]);
             // At least a voxel thick at any size.
-            (
-                a,
-                b,
-                (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0),
-            )
+            (a, b, (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0))
         })
         .collect();
     let [w, h, _] = dims;

@@ -1,0 +1,410 @@
+//! Linear BVH over the active 8^3 bricks, built entirely on the GPU:
+//! classification, compaction of active bricks, 30-bit Morton codes of brick
+//! coordinates, radix sort, Karras 2012 hierarchy emit (one invocation per
+//! internal node, ties broken by index), and a bottom-up refit (one
+//! invocation per leaf; the second to reach a node continues).
+//!
+//! Node format (32 bytes; `glsl/common/bvh_node.glsl`): `lo: [i32; 4]`,
+//! `hi: [i32; 4]`. `lo[0..3]`/`hi[0..3]` are the node's box in voxel units
+//! (leaves: the brick's footprint clipped to the volume). `lo[3]` is the left
+//! child, or -1 for a leaf; `hi[3]` is the right child, or a leaf's brick
+//! index. With n leaves, internal nodes are 0 ..= n-2 (root 0) and leaves
+//! n-1 ..= 2n-2; a single leaf is node 0. Siblings' boxes lie on opposite
+//! sides of their Morton split plane, which is what makes the stack traversal
+//! visit leaves in ray order.
+
+pub mod cpu;
+
+use super::bricks::GpuBricks;
+use super::classify::{Classifier, Classify};
+use super::morton::MAX_BRICKS_PER_AXIS;
+use super::stats::Stats;
+use crate::error::{Error, Result};
+use crate::gpu::record::{self, Access};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::prims::{entry_barrier, words, Compact, CompactScratch, RadixSort, SortScratch};
+use crate::tf::GpuTransferFunction;
+use crate::timings::Timings;
+use crate::volume::GpuVolume;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Node {
+    pub lo: [i32; 4],
+    pub hi: [i32; 4],
+}
+
+impl Node {
+    pub fn is_leaf(&self) -> bool {
+        self.lo[3] < 0
+    }
+}
+
+/// Height (nodes on the longest root-to-leaf path) of a node array.
+pub fn height(nodes: &[Node]) -> u32 {
+    if nodes.is_empty() {
+        return 0;
+    }
+    let mut best = 0;
+    let mut stack = vec![(0usize, 1u32)];
+    while let Some((i, depth)) = stack.pop() {
+        best = best.max(depth);
+        let n = nodes[i];
+        if !n.is_leaf() {
+            stack.push((n.lo[3] as usize, depth + 1));
+            stack.push((n.hi[3] as usize, depth + 1));
+        }
+    }
+    best
+}
+
+/// A built LBVH: what `glsl/march/bvh.comp` reads.
+pub struct Lbvh {
+    pub nodes: Buffer,
+    /// u32 leaf count on the GPU (0: empty structure, nothing is marched).
+    pub count: Buffer,
+    pub leaves: u32,
+    pub stats: Stats,
+}
+
+impl Lbvh {
+    /// Reads the node array back (for tests and inspection).
+    pub fn read_nodes(&self) -> Result<Vec<Node>> {
+        let n = if self.leaves == 0 {
+            0
+        } else {
+            2 * self.leaves as u64 - 1
+        };
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        Ok(bytemuck::pod_collect_to_vec(&self.nodes.download(0, n * 32)?))
+    }
+}
+
+/// Per-volume buffers of the selection phase (classify + compact).
+pub struct SelectScratch {
+    pub flags: Buffer,
+    pub active: Buffer,
+    pub count: Buffer,
+    count_readback: Buffer,
+    compact: CompactScratch,
+}
+
+/// Per-build buffers of the hierarchy phase for n active bricks.
+pub struct HierarchyScratch {
+    n: u64,
+    codes: Buffer,
+    payload: Buffer,
+    parents: Buffer,
+    visits: Buffer,
+    sort: SortScratch,
+}
+
+pub struct LbvhBuilder {
+    ctx: Context,
+    compact: Compact,
+    sort: RadixSort,
+    morton: Kernel,
+    emit: Kernel,
+    refit: Kernel,
+}
+
+const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_SRC.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
+);
+
+impl LbvhBuilder {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        Ok(LbvhBuilder {
+            ctx: ctx.clone(),
+            compact: Compact::new(ctx)?,
+            sort: RadixSort::new(ctx)?,
+            morton: Kernel::new(ctx, "build/morton", shaders::BUILD_MORTON, &[D::STORAGE_BUFFER; 3], 32)?,
+            emit: Kernel::new(
+                ctx,
+                "build/lbvh_emit",
+                shaders::BUILD_LBVH_EMIT,
+                &[D::STORAGE_BUFFER; 3],
+                16,
+            )?,
+            refit: Kernel::new(
+                ctx,
+                "build/lbvh_refit",
+                shaders::BUILD_LBVH_REFIT,
+                &[D::STORAGE_BUFFER; 4],
+                48,
+            )?,
+        })
+    }
+
+    pub fn select_scratch(&self, bricks: &GpuBricks) -> Result<SelectScratch> {
+        if bricks.counts.iter().any(|&c| c > MAX_BRICKS_PER_AXIS) {
+            return Err(Error::invalid(
+                "volume",
+                format!("{:?} bricks", bricks.counts),
+                format!("30-bit Morton codes address at most {MAX_BRICKS_PER_AXIS} bricks per axis"),
+            ));
+        }
+        let c = &self.ctx;
+        Ok(SelectScratch {
+            flags: Buffer::new(
+                c,
+                "brick flags",
+                bricks.total * 4,
+                STORAGE_XFER,
+                MemoryLocation::GpuOnly,
+            )?,
+            active: Buffer::new(
+                c,
+                "active bricks",
+                bricks.total * 4,
+                STORAGE_XFER,
+                MemoryLocation::GpuOnly,
+            )?,
+            count: Buffer::new(c, "active count", 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            count_readback: Buffer::new(
+                c,
+                "active count readback",
+                4,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?,
+            compact: self.compact.scratch(bricks.total)?,
+        })
+    }
+
+    /// Records classification and compaction ("classify", "compact") and a
+    /// copy of the active count to host memory: after the submission,
+    /// `active_count(scratch)` is n and `scratch.active[0..n]` the active
+    /// brick indices in ascending order.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_select(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: &mut Timer,
+        classifier: &Classifier,
+        mode: Classify,
+        volume: &GpuVolume,
+        bricks: &GpuBricks,
+        tf: &GpuTransferFunction,
+        s: &SelectScratch,
+    ) -> Result<()> {
+        let pass = timer.begin(cmd, "classify")?;
+        classifier.record(cmd, mode, volume, bricks, tf, &s.flags)?;
+        timer.end(cmd, pass);
+        let pass = timer.begin(cmd, "compact")?;
+        self.compact
+            .record(cmd, &s.flags, bricks.total, &s.active, &s.count, &s.compact)?;
+        timer.end(cmd, pass);
+        let device = self.ctx.device();
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        unsafe {
+            device.cmd_copy_buffer(
+                cmd,
+                s.count.raw,
+                s.count_readback.raw,
+                &[vk::BufferCopy {
+                    src_offset: 0,
+                    dst_offset: 0,
+                    size: 4,
+                }],
+            )
+        };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        Ok(())
+    }
+
+    /// The active count copied by `record_select` (after its submission).
+    pub fn active_count(&self, s: &SelectScratch) -> u32 {
+        bytemuck::pod_read_unaligned(&s.count_readback.mapped().expect("host visible")[..4])
+    }
+
+    pub fn hierarchy_scratch(&self, n: u64) -> Result<HierarchyScratch> {
+        let c = &self.ctx;
+        let nodes = (2 * n).max(1);
+        Ok(HierarchyScratch {
+            n,
+            codes: Buffer::new(c, "morton codes", n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            payload: Buffer::new(c, "sorted bricks", n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            parents: Buffer::new(c, "lbvh parents", nodes * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            visits: Buffer::new(c, "lbvh visits", n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            sort: self.sort.scratch(n)?,
+        })
+    }
+
+    /// Allocates the node array for n leaves (checked against
+    /// `maxStorageBufferRange`).
+    pub fn nodes_buffer(&self, n: u64) -> Result<Buffer> {
+        let bytes = (2 * n).max(1) * 32;
+        crate::prims::check_range(self.ctx.info(), "LBVH nodes", bytes)?;
+        Buffer::new(&self.ctx, "lbvh nodes", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)
+    }
+
+    /// Records Morton codes, the sort, the emit and the refit ("morton",
+    /// "sort", "emit", "refit") for `h.n` active bricks listed in `active`.
+    /// Ends with compute writes of `nodes`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_hierarchy(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: &mut Timer,
+        volume: &GpuVolume,
+        bricks: &GpuBricks,
+        active: &Buffer,
+        h: &HierarchyScratch,
+        nodes: &Buffer,
+    ) -> Result<()> {
+        let n = h.n;
+        if n == 0 {
+            return Ok(());
+        }
+        let device = self.ctx.device();
+        let info = self.ctx.info();
+        let c = bricks.counts;
+        entry_barrier(device, cmd);
+        let pass = timer.begin(cmd, "morton")?;
+        let groups = record::groups_linear(info, "morton", n, 64)?;
+        self.morton.dispatch(
+            cmd,
+            &[
+                Binding::Storage(active),
+                Binding::Storage(&h.codes),
+                Binding::Storage(&h.payload),
+            ],
+            &words(&[c[0], c[1], c[2], 0, n as u32, groups[0], 0, 0]),
+            groups,
+        );
+        timer.end(cmd, pass);
+        let pass = timer.begin(cmd, "sort")?;
+        self.sort.record(cmd, &h.codes, &h.payload, n, 30, &h.sort)?;
+        timer.end(cmd, pass);
+        let pass = timer.begin(cmd, "emit")?;
+        entry_barrier(device, cmd);
+        unsafe {
+            device.cmd_fill_buffer(cmd, h.visits.raw, 0, vk::WHOLE_SIZE, 0);
+            device.cmd_fill_buffer(cmd, h.parents.raw, 0, 4, u32::MAX);
+        }
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        self.record_emit(cmd, &h.codes, n, nodes, &h.parents)?;
+        timer.end(cmd, pass);
+        let pass = timer.begin(cmd, "refit")?;
+        record::compute_to_compute(device, cmd);
+        let groups = record::groups_linear(info, "refit", n, 64)?;
+        let d = volume.dims;
+        self.refit.dispatch(
+            cmd,
+            &[
+                Binding::Storage(&h.payload),
+                Binding::Storage(nodes),
+                Binding::Storage(&h.parents),
+                Binding::Storage(&h.visits),
+            ],
+            &words(&[
+                d[0],
+                d[1],
+                d[2],
+                bricks.brick,
+                c[0],
+                c[1],
+                c[2],
+                0,
+                n as u32,
+                groups[0],
+                0,
+                0,
+            ]),
+            groups,
+        );
+        timer.end(cmd, pass);
+        Ok(())
+    }
+
+    fn record_emit(
+        &self,
+        cmd: vk::CommandBuffer,
+        codes: &Buffer,
+        n: u64,
+        nodes: &Buffer,
+        parents: &Buffer,
+    ) -> Result<()> {
+        if n < 2 {
+            return Ok(());
+        }
+        let groups = record::groups_linear(self.ctx.info(), "emit", n - 1, 64)?;
+        self.emit.dispatch(
+            cmd,
+            &[
+                Binding::Storage(codes),
+                Binding::Storage(nodes),
+                Binding::Storage(parents),
+            ],
+            &words(&[n as u32, groups[0], 0, 0]),
+            groups,
+        );
+        Ok(())
+    }
+
+    /// Runs the hierarchy emit alone on sorted `codes` (duplicates allowed)
+    /// and returns the nodes' child links, for testing the emit in isolation.
+    pub fn emit_links(&self, codes: &[u32]) -> Result<Vec<[i32; 2]>> {
+        let n = codes.len() as u64;
+        if n < 2 {
+            return Ok(Vec::new());
+        }
+        let c = Buffer::with_data(&self.ctx, "codes", bytemuck::cast_slice(codes), STORAGE_XFER)?;
+        let nodes = self.nodes_buffer(n)?;
+        let parents = Buffer::new(&self.ctx, "parents", 2 * n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?;
+        self.ctx
+            .submit_and_wait(|cmd| self.record_emit(cmd, &c, n, &nodes, &parents))?;
+        let nodes: Vec<Node> = bytemuck::pod_collect_to_vec(&nodes.download(0, (n - 1) * 32)?);
+        Ok(nodes.iter().map(|n| [n.lo[3], n.hi[3]]).collect())
+    }
+
+    /// Builds the LBVH for a transfer function: two submissions (selection,
+    /// then the hierarchy sized to the active count). Returns the structure
+    /// and the GPU time of each phase.
+    pub fn build(
+        &self,
+        classifier: &Classifier,
+        mode: Classify,
+        volume: &GpuVolume,
+        bricks: &GpuBricks,
+        tf: &GpuTransferFunction,
+    ) -> Result<(Lbvh, Timings)> {
+        let select = self.select_scratch(bricks)?;
+        let mut timer = Timer::new(&self.ctx, 8)?;
+        self.ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record_select(cmd, &mut timer, classifier, mode, volume, bricks, tf, &select)
+        })?;
+        let mut timings = timer.results()?;
+        let n = self.active_count(&select) as u64;
+        let h = self.hierarchy_scratch(n)?;
+        let nodes = self.nodes_buffer(n)?;
+        self.ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record_hierarchy(cmd, &mut timer, volume, bricks, &select.active, &h, &nodes)
+        })?;
+        timings.extend(timer.results()?);
+        let node_count = if n == 0 { 0 } else { 2 * n - 1 };
+        let mut lbvh = Lbvh {
+            nodes,
+            count: select.count,
+            leaves: n as u32,
+            stats: Stats {
+                total_bricks: bricks.total,
+                active_bricks: n,
+                nodes: node_count,
+                leaves: n,
+                height: 0,
+                bytes: node_count * 32,
+            },
+        };
+        lbvh.stats.height = height(&lbvh.read_nodes()?);
+        Ok((lbvh, timings))
+    }
+}

@@ -1,0 +1,35 @@
+//! Structure statistics in the form of the paper's Table 1.
+
+use std::fmt;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Stats {
+    pub total_bricks: u64,
+    pub active_bricks: u64,
+    pub nodes: u64,
+    pub leaves: u64,
+    /// Nodes on the longest root-to-leaf path (a lone leaf has height 1).
+    pub height: u32,
+    /// GPU bytes of the structure the march kernel reads.
+    pub bytes: u64,
+}
+
+impl fmt::Display for Stats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "active bricks {} of {} ({:.2} %), nodes {}, leaves {}, height {}, {} bytes",
+            self.active_bricks,
+            self.total_bricks,
+            if self.total_bricks > 0 {
+                100.0 * self.active_bricks as f64 / self.total_bricks as f64
+            } else {
+                0.0
+            },
+            self.nodes,
+            self.leaves,
+            self.height,
+            self.bytes
+        )
+    }
+}

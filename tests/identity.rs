@@ -1,0 +1,478 @@
+//! Every skipping structure renders exactly the naive image (DESIGN invariant
+//! 3): bit for bit, over generators, the ch2 MRI, every TF kind, orthographic
+//! and perspective cameras, and the DESIGN hard cases.
+
+mod common;
+use common::assert_clean;
+use lacuna::accel::{Accel, Builder, Classify, Structure};
+use lacuna::gpu::Context;
+use lacuna::render::{diff, Camera, Frame, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
+use lacuna::tf::LUT_SIZE;
+use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+/// The skipping structures under test (every registry entry but naive).
+const SKIPPING: [Accel; 1] = [Accel::Lbvh];
+
+struct Fixture {
+    ctx: Context,
+    renderer: Renderer,
+    builder: Builder,
+}
+
+enum View {
+    Camera(RenderSettings),
+    Params(RenderParams),
+}
+
+impl Fixture {
+    fn new() -> Self {
+        let ctx = common::gpu();
+        Fixture {
+            renderer: Renderer::new(&ctx).unwrap(),
+            builder: Builder::new(&ctx).unwrap(),
+            ctx,
+        }
+    }
+
+    fn frame(&self, s: &Structure, gv: &GpuVolume, lut: &lacuna::tf::GpuTransferFunction, view: &View) -> Frame {
+        match view {
+            View::Camera(settings) => self.renderer.render(s, gv, lut, settings).unwrap().0,
+            View::Params(p) => self.renderer.render_params(s, gv, lut, p).unwrap().0,
+        }
+    }
+
+    /// Renders every view with naive and every skipping structure; asserts
+    /// bit-identical frames. Returns the naive frames.
+    fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[View]) -> Vec<Frame> {
+        let gv = GpuVolume::upload(&self.ctx, v).unwrap();
+        let lut = tf.upload(&self.ctx).unwrap();
+        let (bricks, _) = self.builder.bricks(&gv).unwrap();
+        let naive: Vec<Frame> = views
+            .iter()
+            .map(|view| self.frame(&Structure::Naive, &gv, &lut, view))
+            .collect();
+        for accel in SKIPPING {
+            let (s, _) = self.builder.build(accel, &gv, &bricks, &lut, Classify::Range).unwrap();
+            for (i, view) in views.iter().enumerate() {
+                let f = self.frame(&s, &gv, &lut, view);
+                let d = diff(&naive[i], &f).unwrap();
+                assert!(d.differing == 0, "{what}, view {i}, {accel}: {d}");
+                assert!(
+                    f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
+                    "{what}: non-finite pixel"
+                );
+            }
+        }
+        assert_clean(&self.ctx);
+        naive
+    }
+}
+
+fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32) -> View {
+    View::Camera(RenderSettings {
+        width: size,
+        height: size,
+        camera: Camera {
+            azimuth_deg: az,
+            elevation_deg: el,
+            projection,
+        },
+        step,
+        ert: None,
+    })
+}
+
+fn standard_views() -> Vec<View> {
+    let persp = Projection::Perspective {
+        fov_deg: 50.0,
+        distance: None,
+    };
+    vec![
+        cam(48, 30.0, 20.0, Projection::Orthographic, 0.5),
+        cam(40, 0.0, 0.0, Projection::Orthographic, 0.5),
+        cam(40, 90.0, 0.0, Projection::Orthographic, 1.0),
+        cam(40, 0.0, 90.0, Projection::Orthographic, 0.5),
+        cam(40, 45.0, 35.264389682754654, Projection::Orthographic, 0.37),
+        cam(40, -140.0, -25.0, persp, 0.5),
+        cam(
+            40,
+            200.0,
+            10.0,
+            Projection::Perspective {
+                fov_deg: 80.0,
+                distance: Some(0.3),
+            },
+            0.5,
+        ),
+    ]
+}
+
+fn load(spec: &str) -> Volume {
+    Volume::load(spec, &LoadOptions::default()).unwrap()
+}
+
+fn tf(spec: &str) -> TransferFunction {
+    TransferFunction::parse(spec).unwrap()
+}
+
+#[test]
+fn generators_with_their_default_tfs() {
+    let fx = Fixture::new();
+    for spec in ["menger:27", "nbody:48", "vessels:44", "turbulence:32", "shells:40"] {
+        let v = load(spec);
+        let t = tf(v.default_tf.as_ref().unwrap());
+        let frames = fx.check(spec, &v, &t, &standard_views());
+        assert!(
+            frames[0].pixels.iter().any(|p| p[3] > 0.01),
+            "{spec}: empty image proves nothing"
+        );
+    }
+}
+
+#[test]
+fn every_tf_kind_including_a_spike_seen_only_through_interpolation() {
+    let fx = Fixture::new();
+    let v = load("turbulence:37x29x41");
+    for spec in [
+        "ramp:0.6:0.9:0.5",
+        "band:0.45:0.5:0.8",
+        "spike:0.7:0.002",
+        "band:0.3105:0.3107",
+    ] {
+        fx.check(spec, &v, &tf(spec), &standard_views()[..4]);
+    }
+    // Two voxel values (0 and 1); the spike at 0.5 lies between them.
+    let data: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 12 { 0 } else { 255 }).collect();
+    let halves = Volume::new("halves", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let frames = fx.check(
+        "spike between values",
+        &halves,
+        &tf("spike:0.5:0.0005"),
+        &[
+            cam(24, 90.0, 0.0, Projection::Orthographic, 0.5),
+            cam(24, 80.0, 10.0, Projection::Orthographic, 0.25),
+        ],
+    );
+    assert!(
+        frames[0].pixels.iter().all(|p| p[3] > 0.0),
+        "every ray crosses x = 12 exactly and sees the spike"
+    );
+    // A ParaView JSON colormap.
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("tf.json");
+    std::fs::write(
+        &json,
+        r#"[{"RGBPoints":[0,0,0,1, 1,1,1,0],"Points":[0,0,0.5,0, 0.55,0,0.5,0, 1,0.9,0.5,0]}]"#,
+    )
+    .unwrap();
+    fx.check("json", &v, &tf(json.to_str().unwrap()), &standard_views()[..2]);
+}
+
+#[test]
+fn the_ch2_mri() {
+    let fx = Fixture::new();
+    let v = Volume::load("/usr/share/mricron/templates/ch2.nii.gz", &LoadOptions::default())
+        .expect("apt install mricron-data");
+    let views = [
+        cam(64, 30.0, 20.0, Projection::Orthographic, 1.0),
+        cam(
+            48,
+            120.0,
+            -10.0,
+            Projection::Perspective {
+                fov_deg: 40.0,
+                distance: None,
+            },
+            1.5,
+        ),
+    ];
+    fx.check("ch2", &v, &tf("ramp:0.3:0.8:0.15"), &views);
+}
+
+#[test]
+fn transparent_opaque_and_single_voxel_cases() {
+    let fx = Fixture::new();
+    let v = load("vessels:40");
+    // Zero active bricks: an empty structure and a transparent image.
+    let frames = fx.check("transparent", &v, &tf("band:0:1:0"), &standard_views()[..2]);
+    assert!(frames.iter().all(|f| f.pixels.iter().all(|p| *p == [0.0; 4])));
+    let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
+    let (bricks, _) = fx.builder.bricks(&gv).unwrap();
+    let (s, _) = fx
+        .builder
+        .build(
+            Accel::Lbvh,
+            &gv,
+            &bricks,
+            &tf("band:0:1:0").upload(&fx.ctx).unwrap(),
+            Classify::Range,
+        )
+        .unwrap();
+    assert_eq!(s.stats().unwrap().leaves, 0);
+    // All active.
+    let (s, _) = fx
+        .builder
+        .build(
+            Accel::Lbvh,
+            &gv,
+            &bricks,
+            &tf("band:0:1:0.05").upload(&fx.ctx).unwrap(),
+            Classify::Range,
+        )
+        .unwrap();
+    assert_eq!(s.stats().unwrap().active_bricks, 125);
+    fx.check("opaque", &v, &tf("band:0:1:0.05"), &standard_views());
+    fx.check(
+        "opaque with ERT",
+        &v,
+        &tf("band:0:1:1"),
+        &[View::Camera(RenderSettings {
+            ert: Some(0.95),
+            width: 32,
+            height: 32,
+            ..Default::default()
+        })],
+    );
+    // One bright voxel inside a brick corner region.
+    let mut data = vec![0u8; 40 * 40 * 40];
+    data[16 + 40 * (16 + 40 * 16)] = 255;
+    let dot = Volume::new("dot", [40; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let frames = fx.check("single voxel", &dot, &tf("band:0.02:1:1"), &standard_views());
+    assert!(frames[1].pixels.iter().any(|p| p[3] > 0.0));
+    let (s, _) = fx
+        .builder
+        .build(
+            Accel::Lbvh,
+            &GpuVolume::upload(&fx.ctx, &dot).unwrap(),
+            &fx.builder.bricks(&GpuVolume::upload(&fx.ctx, &dot).unwrap()).unwrap().0,
+            &tf("band:0.02:1:1").upload(&fx.ctx).unwrap(),
+            Classify::Range,
+        )
+        .unwrap();
+    assert_eq!(
+        s.stats().unwrap().leaves,
+        8,
+        "voxel 16 sits on the corner of 8 bricks' aprons"
+    );
+}
+
+#[test]
+fn odd_and_degenerate_dimensions() {
+    let fx = Fixture::new();
+    for spec in [
+        "nbody:13x37x21",
+        "shells:1x1x40",
+        "turbulence:1x9x1",
+        "menger:9x9x1",
+        "vessels:3x50x7",
+    ] {
+        let v = load(spec);
+        fx.check(spec, &v, &tf("ramp:0.2:1:0.6"), &standard_views());
+    }
+}
+
+/// Orthographic rays laid out by hand on the integer lattice: pixel (i, j)
+/// starts at (i + x0, j + y0, z0) and travels along `dir`.
+fn lattice_rays(
+    dims: [u32; 3],
+    size: u32,
+    start: [f32; 3],
+    du: [f32; 3],
+    dv: [f32; 3],
+    dir: [f32; 3],
+    step: f32,
+) -> View {
+    let mut p = RenderParams::default();
+    p.base = [
+        start[0] - 0.5 * (du[0] + dv[0]),
+        start[1] - 0.5 * (du[1] + dv[1]),
+        start[2] - 0.5 * (du[2] + dv[2]),
+        0.0,
+    ];
+    p.du = [du[0], du[1], du[2], 0.0];
+    p.dv = [dv[0], dv[1], dv[2], 0.0];
+    p.eye_or_dir = [dir[0], dir[1], dir[2], 0.0];
+    p.dims = [dims[0], dims[1], dims[2], LUT_SIZE as u32];
+    p.image = [size, size, 0, 0];
+    p.march = [step, ERT_OFF, 0.0, 0.0];
+    View::Params(p)
+}
+
+#[test]
+fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
+    let fx = Fixture::new();
+    let mut v = load("turbulence:32");
+    // Normalisation goes into the params by hand below.
+    let norm = v.norm;
+    let with_norm = |mut view: View| {
+        if let View::Params(p) = &mut view {
+            p.march[2] = norm[0];
+            p.march[3] = norm[1];
+        }
+        view
+    };
+    let views = vec![
+        // Along z through x, y = 0 .. 32: faces at multiples of 8, edges where both are.
+        with_norm(lattice_rays(
+            [32; 3],
+            33,
+            [0.0, 0.0, -5.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            0.5,
+        )),
+        // Along -x, grazing the y = 0 and y = 32 faces.
+        with_norm(lattice_rays(
+            [32; 3],
+            33,
+            [40.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [-1.0, 0.0, 0.0],
+            1.0,
+        )),
+        // Diagonals through brick corners (8k, 8k, 8k).
+        with_norm(lattice_rays(
+            [32; 3],
+            17,
+            [-4.0, -4.0, -4.0],
+            [2.0, -2.0, 0.0],
+            [1.0, 1.0, -2.0],
+            [1.0, 1.0, 1.0],
+            0.5,
+        )),
+        // In the plane x = 8 (a brick face), diagonal in y-z.
+        with_norm(lattice_rays(
+            [32; 3],
+            33,
+            [8.0, -3.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 1.0],
+            0.5,
+        )),
+    ];
+    v.default_tf = None;
+    fx.check("lattice rays", &v, &tf("ramp:0.55:1:0.5"), &views);
+    fx.check("lattice rays, sparse", &v, &tf("band:0.8:1"), &views);
+}
+
+#[test]
+fn camera_inside_the_volume_and_inside_an_empty_region() {
+    let fx = Fixture::new();
+    // The centre of concentric shells is empty.
+    let v = load("shells:48");
+    let inside = Projection::Perspective {
+        fov_deg: 90.0,
+        distance: Some(0.0),
+    };
+    let near = Projection::Perspective {
+        fov_deg: 60.0,
+        distance: Some(0.5),
+    };
+    let views = vec![
+        cam(40, 0.0, 0.0, inside, 0.5),
+        cam(40, 33.0, 12.0, inside, 0.3),
+        cam(40, 90.0, 45.0, near, 0.5),
+    ];
+    let frames = fx.check("inside shells", &v, &tf(v.default_tf.as_ref().unwrap()), &views);
+    assert!(
+        frames[0].pixels.iter().all(|p| p[3] > 0.0),
+        "every ray from the centre meets the shells"
+    );
+}
+
+#[test]
+fn steps_that_do_not_divide_the_box_and_a_long_volume_with_large_t() {
+    let fx = Fixture::new();
+    let v = load("nbody:40");
+    let t = tf("ramp:0.3:1");
+    let views: Vec<View> = [0.3f32, 0.77, 1.9, 3.3]
+        .iter()
+        .map(|&s| cam(40, 17.0, 23.0, Projection::Orthographic, s))
+        .collect();
+    fx.check("odd steps", &v, &t, &views);
+    // 4 x 4 x 3000: t runs to thousands of voxels, where float spacing of t
+    // is coarse; the lattice and the margins must still agree with naive.
+    let n = 4 * 4 * 3000;
+    let data: Vec<u8> = (0..n).map(|i| if (i / 16) % 97 < 3 { 255 } else { 0 }).collect();
+    let long = Volume::new("long", [4, 4, 3000], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let views = vec![
+        cam(16, 0.0, 0.0, Projection::Orthographic, 0.5),
+        cam(16, 0.3, 0.2, Projection::Orthographic, 0.7),
+        cam(
+            16,
+            180.0,
+            0.0,
+            Projection::Perspective {
+                fov_deg: 1.0,
+                distance: Some(1.2),
+            },
+            0.5,
+        ),
+    ];
+    fx.check("long volume", &long, &tf("band:0.5:1:0.01"), &views);
+}
+
+#[test]
+fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
+    let fx = Fixture::new();
+    let renderer = &fx.renderer;
+    for spec in ["vessels:40", "nbody:48", "turbulence:37x29x41"] {
+        let v = load(spec);
+        let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
+        let t = tf(v.default_tf.as_ref().unwrap()).upload(&fx.ctx).unwrap();
+        let (bricks, _) = fx.builder.bricks(&gv).unwrap();
+        let build = |c: Classify| match fx.builder.build(Accel::Lbvh, &gv, &bricks, &t, c).unwrap().0 {
+            Structure::Lbvh(l) => l.read_nodes().unwrap(),
+            _ => unreachable!(),
+        };
+        assert_eq!(
+            build(Classify::Range),
+            build(Classify::Voxel { apron: true }),
+            "{spec}: same active bricks, same tree"
+        );
+    }
+    // The paper's per-voxel voting drops a brick whose own voxels are clear
+    // but whose samples interpolate a neighbour's: the halves at the spike.
+    let data: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 8 { 255 } else { 0 }).collect();
+    let v = Volume::new("edge", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
+    let t = tf("spike:0.5:0.01").upload(&fx.ctx).unwrap();
+    let (bricks, _) = fx.builder.bricks(&gv).unwrap();
+    let s = RenderSettings {
+        width: 24,
+        height: 24,
+        camera: Camera {
+            azimuth_deg: 90.0,
+            elevation_deg: 0.0,
+            projection: Projection::Orthographic,
+        },
+        step: 0.5,
+        ert: None,
+    };
+    let naive = renderer.render(&Structure::Naive, &gv, &t, &s).unwrap().0;
+    let (paper, _) = fx
+        .builder
+        .build(Accel::Lbvh, &gv, &bricks, &t, Classify::Voxel { apron: false })
+        .unwrap();
+    let lossy = renderer.render(&paper, &gv, &t, &s).unwrap().0;
+    let d = diff(&naive, &lossy).unwrap();
+    assert!(
+        d.max_abs > 0.0,
+        "the paper's classification should lose the interpolated spike here"
+    );
+    let (exact, _) = fx
+        .builder
+        .build(Accel::Lbvh, &gv, &bricks, &t, Classify::Voxel { apron: true })
+        .unwrap();
+    assert_eq!(
+        diff(&naive, &renderer.render(&exact, &gv, &t, &s).unwrap().0)
+            .unwrap()
+            .differing,
+        0
+    );
+    assert_clean(&fx.ctx);
+}

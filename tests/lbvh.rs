@@ -1,0 +1,138 @@
+//! The GPU LBVH against the CPU reference (same topology and boxes), the
+//! Karras emit with duplicate codes, classification modes, and empty/one/all
+//! brick structures.
+
+mod common;
+use common::{assert_clean, gpu};
+use lacuna::accel::lbvh::{cpu, Node};
+use lacuna::accel::{Builder, Classify, Structure};
+use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
+use lacuna::{TransferFunction, Volume};
+
+fn rng(seed: u64) -> impl FnMut() -> u32 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 33) as u32
+    }
+}
+
+/// A volume whose bricks are bright or dark at random (probability p in 1/100).
+fn random_bricks(dims: [u32; 3], p: u32, seed: u64) -> Volume {
+    let mut r = rng(seed);
+    let counts = dims.map(|d| d.div_ceil(BRICK));
+    let lit: Vec<bool> = (0..counts.iter().product::<u32>()).map(|_| r() % 100 < p).collect();
+    let mut data = vec![0u8; dims.iter().product::<u32>() as usize];
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let b = (x / BRICK) + counts[0] * ((y / BRICK) + counts[1] * (z / BRICK));
+                if lit[b as usize] && (x + y + z) % 3 == 0 {
+                    data[(x + dims[0] * (y + dims[1] * z)) as usize] = 200;
+                }
+            }
+        }
+    }
+    Volume::new("random bricks", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap()
+}
+
+fn gpu_lbvh(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction, classify: Classify) -> (Vec<Node>, u32) {
+    let builder = Builder::new(ctx).unwrap();
+    let gv = GpuVolume::upload(ctx, v).unwrap();
+    let lut = tf.upload(ctx).unwrap();
+    let (bricks, _) = builder.bricks(&gv).unwrap();
+    let (s, t) = builder
+        .build(lacuna::accel::Accel::Lbvh, &gv, &bricks, &lut, classify)
+        .unwrap();
+    for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
+        assert!(
+            t.get(phase).is_some() || matches!(&s, Structure::Lbvh(l) if l.leaves == 0),
+            "missing phase {phase}"
+        );
+    }
+    let Structure::Lbvh(l) = s else { panic!() };
+    (l.read_nodes().unwrap(), l.leaves)
+}
+
+#[test]
+fn gpu_lbvh_matches_the_cpu_reference_on_random_occupancy() {
+    let ctx = gpu();
+    let tf = TransferFunction::parse("band:0.5:1").unwrap();
+    for (dims, p, seed) in [
+        ([64, 64, 64], 30, 1),
+        ([61, 35, 47], 10, 2),
+        ([64, 64, 64], 100, 3),
+        ([40, 8, 24], 3, 4),
+        ([64, 64, 64], 1, 5),
+    ] {
+        let v = random_bricks(dims, p, seed);
+        let grid = BrickGrid::new(&v, BRICK, 1);
+        let active: Vec<u32> = grid
+            .active(&tf)
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| **a)
+            .map(|(i, _)| i as u32)
+            .collect();
+        let want = cpu::build(&active, grid.counts, dims, BRICK);
+        let (got, leaves) = gpu_lbvh(&ctx, &v, &tf, Classify::Range);
+        assert_eq!(leaves as usize, active.len(), "{dims:?} p={p}: active bricks");
+        let first = got.iter().zip(&want).position(|(a, b)| a != b);
+        assert!(
+            first.is_none() && got.len() == want.len(),
+            "{dims:?} p={p}: node {first:?} differs: {:?} vs {:?}",
+            first.map(|i| got[i]),
+            first.map(|i| want[i])
+        );
+    }
+    assert_clean(&ctx);
+}
+
+/// Every node reached exactly once from the root, each internal node with two children.
+fn assert_valid_tree(links: &[[i32; 2]], n: usize) {
+    let mut seen = vec![0u32; 2 * n - 1];
+    let mut stack = vec![0usize];
+    while let Some(i) = stack.pop() {
+        seen[i] += 1;
+        if i < n - 1 {
+            for c in links[i] {
+                assert!(c > 0 && (c as usize) < 2 * n - 1, "node {i}: child {c} out of range");
+                stack.push(c as usize);
+            }
+        }
+    }
+    assert!(
+        seen.iter().all(|&s| s == 1),
+        "some node is unreachable or reached twice"
+    );
+}
+
+#[test]
+fn karras_emit_matches_the_cpu_with_duplicate_codes() {
+    let ctx = gpu();
+    let builder = Builder::new(&ctx).unwrap();
+    let mut r = rng(11);
+    let mut cases: Vec<Vec<u32>> = vec![
+        vec![5, 5],
+        vec![7; 17],
+        vec![0, 0, 1, 1, 1, 2, 9, 9, 9, 9, 1000, 1000],
+        (0..1000).map(|_| r() % 50).collect(),
+        (0..4097).map(|_| r() & 0x3FFF_FFFF).collect(),
+        (0..300).collect(),
+    ];
+    for c in &mut cases {
+        c.sort();
+    }
+    for codes in &cases {
+        let n = codes.len();
+        let got = builder.lbvh().emit_links(codes).unwrap();
+        let want: Vec<[i32; 2]> = cpu::emit(codes)[..n - 1]
+            .iter()
+            .map(|nd| [nd.lo[3], nd.hi[3]])
+            .collect();
+        assert_valid_tree(&want, n);
+        let first_diff = got.iter().zip(&want).position(|(a, b)| a != b);
+        assert!(first_diff.is_none(), "n={n}: internal node {first_diff:?} differs");
+    }
+    assert_clean(&ctx);
+}
