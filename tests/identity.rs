@@ -283,19 +283,15 @@ fn lattice_rays(
     dir: [f32; 3],
     step: f32,
 ) -> View {
-    let mut p = RenderParams::default();
-    p.base = [
-        start[0] - 0.5 * (du[0] + dv[0]),
-        start[1] - 0.5 * (du[1] + dv[1]),
-        start[2] - 0.5 * (du[2] + dv[2]),
-        0.0,
-    ];
-    p.du = [du[0], du[1], du[2], 0.0];
-    p.dv = [dv[0], dv[1], dv[2], 0.0];
-    p.eye_or_dir = [dir[0], dir[1], dir[2], 0.0];
-    p.dims = [dims[0], dims[1], dims[2], LUT_SIZE as u32];
-    p.image = [size, size, 0, 0];
-    p.march = [step, ERT_OFF, 0.0, 0.0];
+    let p = RenderParams {
+        base: [0, 1, 2, 3].map(|a| if a < 3 { start[a] - 0.5 * (du[a] + dv[a]) } else { 0.0 }),
+        du: [du[0], du[1], du[2], 0.0],
+        dv: [dv[0], dv[1], dv[2], 0.0],
+        eye_or_dir: [dir[0], dir[1], dir[2], 0.0],
+        dims: [dims[0], dims[1], dims[2], LUT_SIZE as u32],
+        image: [size, size, 0, 0],
+        march: [step, ERT_OFF, 0.0, 0.0],
+    };
     View::Params(p)
 }
 
