@@ -1,5 +1,6 @@
 //! lacuna: a Vulkan-native direct volume renderer for comparing empty space
-//! skipping structures. See `README.md` and `docs/` for the design.
+//! skipping structures. The README follows (its example is compiled as a doc test).
+#![doc = include_str!("../README.md")]
 
 pub mod accel;
 pub mod error;
