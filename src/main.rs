@@ -1,7 +1,8 @@
 //! The `lacuna` command line: parses, calls the library, prints.
 
 use clap::{Args, Parser, Subcommand};
-use lacuna::accel::{Builder, Classify, Structure};
+use lacuna::accel::kd::KdParams;
+use lacuna::accel::{BuildOptions, Builder, Classify, Scene, Structure};
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{self, Accel, Camera, Frame, Projection, RenderSettings, Renderer};
 use lacuna::volume::{BrickGrid, LoadOptions, RawLayout, BRICK};
@@ -23,7 +24,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render one frame and print GPU time per pass.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Describe a volume: dims, type, spacing, values; occupancy under a TF.
     Info(InfoArgs),
     /// Compare two EXR frames (exit 1 if --max-abs is exceeded, 2 on bad input).
@@ -64,7 +65,7 @@ struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<String>,
-    /// Empty space skipping structure: naive, lbvh.
+    /// Empty space skipping structure: naive, lbvh, grid, kd-cpu, kd-gpu, hybrid.
     #[arg(long, default_value = "naive")]
     accel: String,
     /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
@@ -73,6 +74,18 @@ struct RenderArgs {
     /// With --classify voxel: keep the one-voxel apron (on), or drop it as the paper does (off; not conservative).
     #[arg(long, default_value = "on")]
     apron: String,
+    /// k-d trees: shallow (leaf below 10 % of the root volume) or deep (leaf at 8^3).
+    #[arg(long, default_value = "deep")]
+    kd: String,
+    /// Deep k-d trees: split leaves longer than this many voxels in the middle.
+    #[arg(long, default_value_t = 32)]
+    max_leaf: u32,
+    /// GPU k-d tree: candidate bins per node.
+    #[arg(long, default_value_t = 4)]
+    bins: u32,
+    /// Macro-cell edge of the grid and the hybrid (a power of two).
+    #[arg(long, default_value_t = 16)]
+    cell: u32,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024")]
     size: String,
@@ -143,6 +156,12 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     // Validate every argument before any expensive work.
     let accel: Accel = args.accel.parse()?;
     let classify = Classify::parse(&args.classify, &args.apron)?;
+    lacuna::accel::grid::check_cell(args.cell)?;
+    let options = BuildOptions {
+        classify,
+        kd: KdParams::parse(&args.kd, args.max_leaf, args.bins)?,
+        cell: args.cell,
+    };
     let (width, height) = render::parse_size(&args.size)?;
     let (azimuth_deg, elevation_deg) = Camera::parse_orbit(&args.camera)?;
     let projection = match args.perspective {
@@ -179,6 +198,12 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         return Err(Error::invalid("repeat", "0", "must be at least 1"));
     }
     let runs = args.warmup + args.repeat;
+    let scene = Scene {
+        volume: &volume,
+        gpu_volume: &gpu_volume,
+        tf: &tf,
+        gpu_tf: &lut,
+    };
     let (structure, build) = match accel {
         Accel::Naive => (Structure::Naive, None),
         _ => {
@@ -186,8 +211,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..runs {
-                let (bricks, mut timings) = builder.bricks(&gpu_volume)?;
-                let (structure, t) = builder.build(accel, &gpu_volume, &bricks, &lut, classify)?;
+                // Ranges are per volume; timed with every run so warm-up covers them.
+                let (ranges, mut timings) = builder.ranges(&gpu_volume, options.cell)?;
+                let (structure, t) = builder.build(accel, &scene, &ranges, &options)?;
                 timings.extend(t);
                 times.push(timings);
                 last = Some(structure);
@@ -229,8 +255,14 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         );
     }
     if let Some(build) = &build {
-        println!("classify {}", classify.describe());
-        println!("build GPU time per phase (ranges once per volume, the rest per TF change):\n{build}");
+        match accel {
+            Accel::Lbvh => println!("classify {}", classify.describe()),
+            Accel::KdCpu | Accel::KdGpu => println!("k-d tree {}", options.kd.describe()),
+            Accel::Grid => println!("cells {}^3", options.cell),
+            Accel::Hybrid => println!("shallow k-d tree over {}^3 cells", options.cell),
+            Accel::Naive => {}
+        }
+        println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
     }
     if let Some(stats) = structure.stats() {
         println!("structure {stats}");
@@ -241,8 +273,17 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         meta.insert("volume".into(), volume.name.clone());
         meta.insert("tf".into(), tf.spec.clone());
         meta.insert("accel".into(), accel.to_string());
-        if accel != Accel::Naive {
-            meta.insert("classify".into(), classify.describe().to_string());
+        match accel {
+            Accel::Naive => {}
+            Accel::KdCpu | Accel::KdGpu => {
+                meta.insert("kd".into(), options.kd.describe());
+            }
+            Accel::Grid | Accel::Hybrid => {
+                meta.insert("cell".into(), options.cell.to_string());
+            }
+            Accel::Lbvh => {
+                meta.insert("classify".into(), classify.describe().to_string());
+            }
         }
         meta.insert("camera".into(), settings.camera.describe());
         meta.insert("step".into(), settings.step.to_string());

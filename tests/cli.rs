@@ -214,7 +214,8 @@ fn lbvh_from_the_cli_is_bit_identical_to_naive() {
         "sort",
         "emit",
         "refit",
-        "structure active bricks",
+        "structure active",
+        "8^3 bricks",
         "height",
         "medians of 2 runs",
     ] {
@@ -245,6 +246,49 @@ fn lbvh_from_the_cli_is_bit_identical_to_naive() {
         Frame::read_exr(&c).unwrap().metadata["classify"],
         "voxel, apron off (paper)"
     );
+}
+
+#[test]
+fn every_structure_from_the_cli_is_bit_identical_to_naive() {
+    let dir = tempfile::tempdir().unwrap();
+    let naive = dir.path().join("naive.exr");
+    render_ok("nbody:40", &naive, &["--camera", "-35,15"]);
+    for (accel, extra, needles) in [
+        (
+            "grid",
+            vec!["--cell", "8"],
+            vec!["cells 8^3", "cell ranges", "classify"],
+        ),
+        (
+            "kd-cpu",
+            vec!["--kd", "shallow"],
+            vec!["k-d tree shallow", "svt", "tree", "upload"],
+        ),
+        (
+            "kd-gpu",
+            vec!["--max-leaf", "128", "--bins", "6"],
+            vec!["k-d tree deep, max leaf 128", "bricks", "queries", "host"],
+        ),
+        (
+            "hybrid",
+            vec![],
+            vec!["shallow k-d tree over 16^3 cells", "svt", "classify"],
+        ),
+    ] {
+        let out = dir.path().join(format!("{accel}.exr"));
+        let mut args = vec!["--camera", "-35,15", "--accel", accel];
+        args.extend(extra);
+        let r = render_ok("nbody:40", &out, &args);
+        for n in needles.iter().chain(&["structure active", "height"]) {
+            assert!(r.stdout.contains(n), "{accel}: '{n}' missing:\n{}", r.stdout);
+        }
+        let d = lacuna(
+            &["diff", naive.to_str().unwrap(), out.to_str().unwrap(), "--max-abs", "0"],
+            &[],
+        );
+        assert_eq!(d.code, 0, "{accel}: {}", d.stdout);
+        assert_eq!(Frame::read_exr(&out).unwrap().metadata["accel"], accel);
+    }
 }
 
 #[test]

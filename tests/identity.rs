@@ -4,15 +4,17 @@
 
 mod common;
 use common::assert_clean;
-use lacuna::accel::{Accel, Builder, Classify, Structure};
+use lacuna::accel::kd::{Depth, KdParams};
+use lacuna::accel::{Accel, BuildOptions, Builder, Classify, Ranges, Scene, Structure};
 use lacuna::gpu::Context;
 use lacuna::render::{diff, Camera, Frame, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
-use lacuna::tf::LUT_SIZE;
+use lacuna::tf::{GpuTransferFunction, LUT_SIZE};
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
-/// The skipping structures under test (every registry entry but naive).
-const SKIPPING: [Accel; 1] = [Accel::Lbvh];
+/// The skipping structures under test: every registry entry but naive,
+/// deep k-d trees with the default max leaf.
+const SKIPPING: [Accel; 5] = [Accel::Lbvh, Accel::Grid, Accel::KdCpu, Accel::KdGpu, Accel::Hybrid];
 
 struct Fixture {
     ctx: Context,
@@ -25,6 +27,15 @@ enum View {
     Params(RenderParams),
 }
 
+/// A volume and TF uploaded, with the volume's ranges.
+struct Prepared<'a> {
+    volume: &'a Volume,
+    tf: &'a TransferFunction,
+    gv: GpuVolume,
+    lut: GpuTransferFunction,
+    ranges: Ranges,
+}
+
 impl Fixture {
     fn new() -> Self {
         let ctx = common::gpu();
@@ -35,37 +46,71 @@ impl Fixture {
         }
     }
 
-    fn frame(&self, s: &Structure, gv: &GpuVolume, lut: &lacuna::tf::GpuTransferFunction, view: &View) -> Frame {
-        match view {
-            View::Camera(settings) => self.renderer.render(s, gv, lut, settings).unwrap().0,
-            View::Params(p) => self.renderer.render_params(s, gv, lut, p).unwrap().0,
+    fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, cell: u32) -> Prepared<'a> {
+        let gv = GpuVolume::upload(&self.ctx, volume).unwrap();
+        let lut = tf.upload(&self.ctx).unwrap();
+        let (ranges, _) = self.builder.ranges(&gv, cell).unwrap();
+        Prepared {
+            volume,
+            tf,
+            gv,
+            lut,
+            ranges,
         }
     }
 
-    /// Renders every view with naive and every skipping structure; asserts
-    /// bit-identical frames. Returns the naive frames.
-    fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[View]) -> Vec<Frame> {
-        let gv = GpuVolume::upload(&self.ctx, v).unwrap();
-        let lut = tf.upload(&self.ctx).unwrap();
-        let (bricks, _) = self.builder.bricks(&gv).unwrap();
+    fn build(&self, p: &Prepared, accel: Accel, options: &BuildOptions) -> Structure {
+        let scene = Scene {
+            volume: p.volume,
+            gpu_volume: &p.gv,
+            tf: p.tf,
+            gpu_tf: &p.lut,
+        };
+        self.builder.build(accel, &scene, &p.ranges, options).unwrap().0
+    }
+
+    fn frame(&self, s: &Structure, p: &Prepared, view: &View) -> Frame {
+        match view {
+            View::Camera(settings) => self.renderer.render(s, &p.gv, &p.lut, settings).unwrap().0,
+            View::Params(params) => self.renderer.render_params(s, &p.gv, &p.lut, params).unwrap().0,
+        }
+    }
+
+    /// Renders every view with naive and with every skipping structure under
+    /// each option set; asserts bit-identical frames. Returns the naive frames.
+    fn check_with(
+        &self,
+        what: &str,
+        v: &Volume,
+        tf: &TransferFunction,
+        views: &[View],
+        options: &[BuildOptions],
+    ) -> Vec<Frame> {
+        let p = self.prepare(v, tf, options[0].cell);
         let naive: Vec<Frame> = views
             .iter()
-            .map(|view| self.frame(&Structure::Naive, &gv, &lut, view))
+            .map(|view| self.frame(&Structure::Naive, &p, view))
             .collect();
-        for accel in SKIPPING {
-            let (s, _) = self.builder.build(accel, &gv, &bricks, &lut, Classify::Range).unwrap();
-            for (i, view) in views.iter().enumerate() {
-                let f = self.frame(&s, &gv, &lut, view);
-                let d = diff(&naive[i], &f).unwrap();
-                assert!(d.differing == 0, "{what}, view {i}, {accel}: {d}");
-                assert!(
-                    f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
-                    "{what}: non-finite pixel"
-                );
+        for o in options {
+            for accel in SKIPPING {
+                let s = self.build(&p, accel, o);
+                for (i, view) in views.iter().enumerate() {
+                    let f = self.frame(&s, &p, view);
+                    let d = diff(&naive[i], &f).unwrap();
+                    assert!(d.differing == 0, "{what}, view {i}, {accel} ({o:?}): {d}");
+                    assert!(
+                        f.pixels.iter().all(|px| px.iter().all(|c| c.is_finite())),
+                        "{what}: non-finite pixel"
+                    );
+                }
             }
         }
         assert_clean(&self.ctx);
         naive
+    }
+
+    fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[View]) -> Vec<Frame> {
+        self.check_with(what, v, tf, views, &[BuildOptions::default()])
     }
 }
 
@@ -194,67 +239,52 @@ fn the_ch2_mri() {
 fn transparent_opaque_and_single_voxel_cases() {
     let fx = Fixture::new();
     let v = load("vessels:40");
-    // Zero active bricks: an empty structure and a transparent image.
+    let o = BuildOptions::default();
+    // Zero active bricks: empty structures and a transparent image.
     let frames = fx.check("transparent", &v, &tf("band:0:1:0"), &standard_views()[..2]);
     assert!(frames.iter().all(|f| f.pixels.iter().all(|p| *p == [0.0; 4])));
-    let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
-    let (bricks, _) = fx.builder.bricks(&gv).unwrap();
-    let (s, _) = fx
-        .builder
-        .build(
-            Accel::Lbvh,
-            &gv,
-            &bricks,
-            &tf("band:0:1:0").upload(&fx.ctx).unwrap(),
-            Classify::Range,
-        )
-        .unwrap();
-    assert_eq!(s.stats().unwrap().leaves, 0);
+    let clear = tf("band:0:1:0");
+    let p = fx.prepare(&v, &clear, 16);
+    for accel in [Accel::Lbvh, Accel::KdCpu, Accel::KdGpu, Accel::Hybrid] {
+        assert_eq!(fx.build(&p, accel, &o).stats().unwrap().leaves, 0, "{accel}");
+    }
+    assert_eq!(fx.build(&p, Accel::Grid, &o).stats().unwrap().active_bricks, 0);
     // All active.
-    let (s, _) = fx
-        .builder
-        .build(
-            Accel::Lbvh,
-            &gv,
-            &bricks,
-            &tf("band:0:1:0.05").upload(&fx.ctx).unwrap(),
-            Classify::Range,
-        )
-        .unwrap();
-    assert_eq!(s.stats().unwrap().active_bricks, 125);
-    fx.check("opaque", &v, &tf("band:0:1:0.05"), &standard_views());
-    fx.check(
-        "opaque with ERT",
-        &v,
-        &tf("band:0:1:1"),
-        &[View::Camera(RenderSettings {
-            ert: Some(0.95),
-            width: 32,
-            height: 32,
-            ..Default::default()
-        })],
+    let opaque = tf("band:0:1:0.05");
+    let p = fx.prepare(&v, &opaque, 16);
+    assert_eq!(fx.build(&p, Accel::Lbvh, &o).stats().unwrap().active_bricks, 125);
+    assert_eq!(
+        fx.build(&p, Accel::KdCpu, &o).stats().unwrap().active_bricks,
+        40 * 40 * 40
     );
-    // One bright voxel inside a brick corner region.
+    fx.check("opaque", &v, &opaque, &standard_views());
+    let ert = View::Camera(RenderSettings {
+        ert: Some(0.95),
+        width: 32,
+        height: 32,
+        ..Default::default()
+    });
+    fx.check("opaque with ERT", &v, &tf("band:0:1:1"), &[ert]);
+    // One bright voxel: its neighbours' footprints read it too.
     let mut data = vec![0u8; 40 * 40 * 40];
     data[16 + 40 * (16 + 40 * 16)] = 255;
     let dot = Volume::new("dot", [40; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
-    let frames = fx.check("single voxel", &dot, &tf("band:0.02:1:1"), &standard_views());
+    let dot_tf = tf("band:0.02:1:1");
+    let frames = fx.check("single voxel", &dot, &dot_tf, &standard_views());
     assert!(frames[1].pixels.iter().any(|p| p[3] > 0.0));
-    let (s, _) = fx
-        .builder
-        .build(
-            Accel::Lbvh,
-            &GpuVolume::upload(&fx.ctx, &dot).unwrap(),
-            &fx.builder.bricks(&GpuVolume::upload(&fx.ctx, &dot).unwrap()).unwrap().0,
-            &tf("band:0.02:1:1").upload(&fx.ctx).unwrap(),
-            Classify::Range,
-        )
-        .unwrap();
+    let p = fx.prepare(&dot, &dot_tf, 16);
     assert_eq!(
-        s.stats().unwrap().leaves,
+        fx.build(&p, Accel::Lbvh, &o).stats().unwrap().leaves,
         8,
         "voxel 16 sits on the corner of 8 bricks' aprons"
     );
+    let kd = fx.build(&p, Accel::KdCpu, &o);
+    assert_eq!(
+        kd.stats().unwrap().active_bricks,
+        27,
+        "the 3^3 footprints around the voxel"
+    );
+    assert_eq!(kd.stats().unwrap().leaves, 1);
 }
 
 #[test]
@@ -415,60 +445,80 @@ fn steps_that_do_not_divide_the_box_and_a_long_volume_with_large_t() {
 #[test]
 fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     let fx = Fixture::new();
-    let renderer = &fx.renderer;
     for spec in ["vessels:40", "nbody:48", "turbulence:37x29x41"] {
         let v = load(spec);
-        let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
-        let t = tf(v.default_tf.as_ref().unwrap()).upload(&fx.ctx).unwrap();
-        let (bricks, _) = fx.builder.bricks(&gv).unwrap();
-        let build = |c: Classify| match fx.builder.build(Accel::Lbvh, &gv, &bricks, &t, c).unwrap().0 {
-            Structure::Lbvh(l) => l.read_nodes().unwrap(),
-            _ => unreachable!(),
+        let t = tf(v.default_tf.as_ref().unwrap());
+        let p = fx.prepare(&v, &t, 16);
+        let nodes = |classify| {
+            let s = fx.build(
+                &p,
+                Accel::Lbvh,
+                &BuildOptions {
+                    classify,
+                    ..Default::default()
+                },
+            );
+            s.tree().unwrap().read_nodes().unwrap()
         };
         assert_eq!(
-            build(Classify::Range),
-            build(Classify::Voxel { apron: true }),
+            nodes(Classify::Range),
+            nodes(Classify::Voxel { apron: true }),
             "{spec}: same active bricks, same tree"
         );
     }
     // The paper's per-voxel voting drops a brick whose own voxels are clear
-    // but whose samples interpolate a neighbour's: the halves at the spike.
+    // but whose samples interpolate a neighbour's.
     let data: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 8 { 255 } else { 0 }).collect();
     let v = Volume::new("edge", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
-    let gv = GpuVolume::upload(&fx.ctx, &v).unwrap();
-    let t = tf("spike:0.5:0.01").upload(&fx.ctx).unwrap();
-    let (bricks, _) = fx.builder.bricks(&gv).unwrap();
-    let s = RenderSettings {
-        width: 24,
-        height: 24,
-        camera: Camera {
-            azimuth_deg: 90.0,
-            elevation_deg: 0.0,
-            projection: Projection::Orthographic,
+    let t = tf("spike:0.5:0.01");
+    let p = fx.prepare(&v, &t, 16);
+    let view = cam(24, 90.0, 0.0, Projection::Orthographic, 0.5);
+    let naive = fx.frame(&Structure::Naive, &p, &view);
+    let paper = fx.build(
+        &p,
+        Accel::Lbvh,
+        &BuildOptions {
+            classify: Classify::Voxel { apron: false },
+            ..Default::default()
         },
-        step: 0.5,
-        ert: None,
-    };
-    let naive = renderer.render(&Structure::Naive, &gv, &t, &s).unwrap().0;
-    let (paper, _) = fx
-        .builder
-        .build(Accel::Lbvh, &gv, &bricks, &t, Classify::Voxel { apron: false })
-        .unwrap();
-    let lossy = renderer.render(&paper, &gv, &t, &s).unwrap().0;
-    let d = diff(&naive, &lossy).unwrap();
+    );
     assert!(
-        d.max_abs > 0.0,
+        diff(&naive, &fx.frame(&paper, &p, &view)).unwrap().max_abs > 0.0,
         "the paper's classification should lose the interpolated spike here"
     );
-    let (exact, _) = fx
-        .builder
-        .build(Accel::Lbvh, &gv, &bricks, &t, Classify::Voxel { apron: true })
-        .unwrap();
-    assert_eq!(
-        diff(&naive, &renderer.render(&exact, &gv, &t, &s).unwrap().0)
-            .unwrap()
-            .differing,
-        0
+    let exact = fx.build(
+        &p,
+        Accel::Lbvh,
+        &BuildOptions {
+            classify: Classify::Voxel { apron: true },
+            ..Default::default()
+        },
     );
+    assert_eq!(diff(&naive, &fx.frame(&exact, &p, &view)).unwrap().differing, 0);
     assert_clean(&fx.ctx);
+}
+
+#[test]
+fn every_structure_parameter_set_the_paper_compares() {
+    let fx = Fixture::new();
+    let kd = |depth, max_leaf, bins| KdParams { depth, max_leaf, bins };
+    let options: Vec<BuildOptions> = [
+        (kd(Depth::Shallow, 32, 4), 16),
+        (kd(Depth::Deep, 128, 4), 8),
+        (kd(Depth::Deep, 32, 2), 32),
+        (kd(Depth::Deep, 8, 7), 4),
+    ]
+    .into_iter()
+    .map(|(kd, cell)| BuildOptions {
+        kd,
+        cell,
+        ..Default::default()
+    })
+    .collect();
+    for (spec, t) in [("vessels:44", "ramp:0.3:1"), ("menger:27", "ramp:0.3:1:0.2")] {
+        let v = load(spec);
+        for o in &options {
+            fx.check_with(spec, &v, &tf(t), &standard_views()[..3], std::slice::from_ref(o));
+        }
+    }
 }

@@ -5,7 +5,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::lbvh::{cpu, Node};
-use lacuna::accel::{Builder, Classify, Structure};
+use lacuna::accel::{BuildOptions, Builder, Classify, Scene};
 use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
 use lacuna::{TransferFunction, Volume};
 
@@ -40,17 +40,24 @@ fn gpu_lbvh(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction, class
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let (bricks, _) = builder.bricks(&gv).unwrap();
+    let (ranges, _) = builder.ranges(&gv, 16).unwrap();
+    let scene = Scene {
+        volume: v,
+        gpu_volume: &gv,
+        tf,
+        gpu_tf: &lut,
+    };
+    let options = BuildOptions {
+        classify,
+        ..Default::default()
+    };
     let (s, t) = builder
-        .build(lacuna::accel::Accel::Lbvh, &gv, &bricks, &lut, classify)
+        .build(lacuna::accel::Accel::Lbvh, &scene, &ranges, &options)
         .unwrap();
+    let l = s.tree().unwrap();
     for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
-        assert!(
-            t.get(phase).is_some() || matches!(&s, Structure::Lbvh(l) if l.leaves == 0),
-            "missing phase {phase}"
-        );
+        assert!(t.get(phase).is_some() || l.leaves == 0, "missing phase {phase}");
     }
-    let Structure::Lbvh(l) = s else { panic!() };
     (l.read_nodes().unwrap(), l.leaves)
 }
 

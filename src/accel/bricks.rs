@@ -20,9 +20,16 @@ pub struct GpuBricks {
 }
 
 impl GpuBricks {
-    /// Computes the ranges of `volume`'s bricks (timed as "ranges").
-    pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume) -> Result<(Self, Timings)> {
-        let counts = brick_counts(volume.dims, BRICK);
+    /// Computes the ranges of `volume`'s `brick`^3 bricks (timed as "ranges").
+    pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume, brick: u32) -> Result<(Self, Timings)> {
+        if !brick.is_power_of_two() {
+            return Err(Error::invalid(
+                "brick size",
+                brick.to_string(),
+                "must be a power of two",
+            ));
+        }
+        let counts = brick_counts(volume.dims, brick);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         if total > u32::MAX as u64 {
             return Err(Error::invalid(
@@ -42,13 +49,13 @@ impl GpuBricks {
         ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
             let pass = timer.begin(cmd, "ranges")?;
-            minmax.record(cmd, volume, BRICK, 1, &ranges)?;
+            minmax.record(cmd, volume, brick, 1, &ranges)?;
             timer.end(cmd, pass);
             Ok(())
         })?;
         Ok((
             GpuBricks {
-                brick: BRICK,
+                brick,
                 counts,
                 total,
                 ranges,

@@ -6,9 +6,13 @@
 
 pub mod bricks;
 pub mod classify;
+pub mod grid;
+pub mod hybrid;
+pub mod kd;
 pub mod lbvh;
 pub mod morton;
 mod stats;
+pub mod tree;
 
 pub use bricks::GpuBricks;
 pub use classify::{Classifier, Classify};
@@ -17,9 +21,9 @@ pub use stats::Stats;
 use crate::error::{Error, Result};
 use crate::gpu::Context;
 use crate::prims::BrickMinMax;
-use crate::tf::GpuTransferFunction;
+use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::timings::Timings;
-use crate::volume::GpuVolume;
+use crate::volume::{GpuVolume, Volume};
 
 /// The registry of structures, by CLI name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -28,15 +32,34 @@ pub enum Accel {
     Naive,
     /// Linear BVH over active 8^3 bricks (Karras 2012), built on the GPU.
     Lbvh,
+    /// Macro-cell grid (`--cell`), 3D-DDA traversal.
+    Grid,
+    /// k-d tree built on the multi-core CPU from summed volume tables.
+    KdCpu,
+    /// k-d tree built with GPU reductions over Morton-ordered bricks.
+    KdGpu,
+    /// Shallow CPU k-d tree over the macro-cell grid.
+    Hybrid,
 }
 
 impl Accel {
-    pub const ALL: [Accel; 2] = [Accel::Naive, Accel::Lbvh];
+    pub const ALL: [Accel; 6] = [
+        Accel::Naive,
+        Accel::Lbvh,
+        Accel::Grid,
+        Accel::KdCpu,
+        Accel::KdGpu,
+        Accel::Hybrid,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Accel::Naive => "naive",
             Accel::Lbvh => "lbvh",
+            Accel::Grid => "grid",
+            Accel::KdCpu => "kd-cpu",
+            Accel::KdGpu => "kd-gpu",
+            Accel::Hybrid => "hybrid",
         }
     }
 }
@@ -63,23 +86,73 @@ impl std::fmt::Display for Accel {
 /// A built structure, ready for its march kernel.
 pub enum Structure {
     Naive,
-    Lbvh(Box<lbvh::Lbvh>),
+    /// LBVH and k-d trees share the node format and the march kernel.
+    Tree(Accel, Box<tree::GpuTree>),
+    Grid(Box<grid::Grid>),
+    Hybrid(Box<hybrid::Hybrid>),
 }
 
 impl Structure {
     pub fn accel(&self) -> Accel {
         match self {
             Structure::Naive => Accel::Naive,
-            Structure::Lbvh(_) => Accel::Lbvh,
+            Structure::Tree(a, _) => *a,
+            Structure::Grid(_) => Accel::Grid,
+            Structure::Hybrid(_) => Accel::Hybrid,
         }
     }
 
     pub fn stats(&self) -> Option<Stats> {
         match self {
             Structure::Naive => None,
-            Structure::Lbvh(l) => Some(l.stats),
+            Structure::Tree(_, t) => Some(t.stats),
+            Structure::Grid(g) => Some(g.stats),
+            Structure::Hybrid(h) => Some(h.tree.stats),
         }
     }
+
+    /// The tree, for structures that have one.
+    pub fn tree(&self) -> Option<&tree::GpuTree> {
+        match self {
+            Structure::Tree(_, t) => Some(t),
+            Structure::Hybrid(h) => Some(&h.tree),
+            _ => None,
+        }
+    }
+}
+
+/// What a build reads: the volume and transfer function on the host (the CPU
+/// k-d tree) and on the GPU (everything else).
+pub struct Scene<'a> {
+    pub volume: &'a Volume,
+    pub gpu_volume: &'a GpuVolume,
+    pub tf: &'a TransferFunction,
+    pub gpu_tf: &'a GpuTransferFunction,
+}
+
+/// Parameters of every structure (the paper's columns).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub struct BuildOptions {
+    pub classify: Classify,
+    pub kd: kd::KdParams,
+    /// Macro-cell edge of the grid and the hybrid (a power of two).
+    pub cell: u32,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            classify: Classify::Range,
+            kd: kd::KdParams::default(),
+            cell: grid::CELL,
+        }
+    }
+}
+
+/// Per-volume value ranges: 8^3 bricks (LBVH) and macro cells (grid, hybrid).
+pub struct Ranges {
+    pub bricks: GpuBricks,
+    pub cells: GpuBricks,
 }
 
 /// Builds every structure; kernels are created once per context.
@@ -88,6 +161,7 @@ pub struct Builder {
     minmax: BrickMinMax,
     classifier: Classifier,
     lbvh: lbvh::LbvhBuilder,
+    kd_gpu: kd::gpu::KdGpuBuilder,
 }
 
 impl Builder {
@@ -97,12 +171,18 @@ impl Builder {
             minmax: BrickMinMax::new(ctx)?,
             classifier: Classifier::new(ctx)?,
             lbvh: lbvh::LbvhBuilder::new(ctx)?,
+            kd_gpu: kd::gpu::KdGpuBuilder::new(ctx)?,
         })
     }
 
-    /// Per-brick value ranges: once per volume upload ("ranges").
-    pub fn bricks(&self, volume: &GpuVolume) -> Result<(GpuBricks, Timings)> {
-        GpuBricks::compute(&self.ctx, &self.minmax, volume)
+    /// Per-brick and per-cell value ranges: once per volume upload
+    /// ("ranges", "cell ranges").
+    pub fn ranges(&self, volume: &GpuVolume, cell: u32) -> Result<(Ranges, Timings)> {
+        grid::check_cell(cell)?;
+        let (bricks, mut t) = GpuBricks::compute(&self.ctx, &self.minmax, volume, bricks::BRICK)?;
+        let (cells, tc) = GpuBricks::compute(&self.ctx, &self.minmax, volume, cell)?;
+        t.push("cell ranges", tc.get("ranges").unwrap_or(0.0));
+        Ok((Ranges { bricks, cells }, t))
     }
 
     pub fn classifier(&self) -> &Classifier {
@@ -113,20 +193,58 @@ impl Builder {
         &self.lbvh
     }
 
-    /// Builds `accel` for a transfer function: the path a TF change takes.
+    /// Builds `accel` for the scene's transfer function: the path a TF change
+    /// takes. Returns the structure and its timings per phase.
     pub fn build(
         &self,
         accel: Accel,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        tf: &GpuTransferFunction,
-        classify: Classify,
+        scene: &Scene,
+        ranges: &Ranges,
+        options: &BuildOptions,
     ) -> Result<(Structure, Timings)> {
+        if options.cell != ranges.cells.brick {
+            return Err(Error::invalid(
+                "cell",
+                options.cell.to_string(),
+                format!("ranges were computed for cells of {}", ranges.cells.brick),
+            ));
+        }
+        let (v, tf) = (scene.gpu_volume, scene.gpu_tf);
         match accel {
             Accel::Naive => Ok((Structure::Naive, Timings::default())),
             Accel::Lbvh => {
-                let (l, t) = self.lbvh.build(&self.classifier, classify, volume, bricks, tf)?;
-                Ok((Structure::Lbvh(Box::new(l)), t))
+                let (l, t) = self
+                    .lbvh
+                    .build(&self.classifier, options.classify, v, &ranges.bricks, tf)?;
+                Ok((Structure::Tree(Accel::Lbvh, Box::new(l)), t))
+            }
+            Accel::Grid => {
+                let (g, t) = grid::build(&self.ctx, &self.classifier, v, &ranges.cells, tf)?;
+                Ok((Structure::Grid(Box::new(g)), t))
+            }
+            Accel::KdCpu => {
+                let (tree, t) = kd::cpu::build(&self.ctx, scene.volume, scene.tf, &options.kd)?;
+                Ok((Structure::Tree(Accel::KdCpu, Box::new(tree)), t))
+            }
+            Accel::KdGpu => {
+                let (tree, t) = self.kd_gpu.build(v, tf, &options.kd)?;
+                Ok((Structure::Tree(Accel::KdGpu, Box::new(tree)), t))
+            }
+            Accel::Hybrid => {
+                let shallow = kd::KdParams {
+                    depth: kd::Depth::Shallow,
+                    ..options.kd
+                };
+                let (tree, mut t) = kd::cpu::build(&self.ctx, scene.volume, scene.tf, &shallow)?;
+                let (g, tg) = grid::build(&self.ctx, &self.classifier, v, &ranges.cells, tf)?;
+                t.extend(tg);
+                Ok((
+                    Structure::Hybrid(Box::new(hybrid::Hybrid {
+                        tree,
+                        grid: *Box::new(g),
+                    })),
+                    t,
+                ))
             }
         }
     }

@@ -2,8 +2,10 @@
 
 use std::fmt;
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Stats {
+    /// What is classified: "8^3 bricks", "voxel footprints", "16^3 cells".
+    pub unit: &'static str,
     pub total_bricks: u64,
     pub active_bricks: u64,
     pub nodes: u64,
@@ -18,9 +20,10 @@ impl fmt::Display for Stats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "active bricks {} of {} ({:.2} %), nodes {}, leaves {}, height {}, {} bytes",
+            "active {} of {} {} ({:.2} %), nodes {}, leaves {}, height {}, {} bytes",
             self.active_bricks,
             self.total_bricks,
+            self.unit,
             if self.total_bricks > 0 {
                 100.0 * self.active_bricks as f64 / self.total_bricks as f64
             } else {

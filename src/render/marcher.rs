@@ -87,7 +87,9 @@ impl RenderTarget {
 pub struct Renderer {
     ctx: Context,
     naive: Kernel,
-    bvh: Kernel,
+    tree: Kernel,
+    grid: Kernel,
+    hybrid: Kernel,
 }
 
 impl Renderer {
@@ -100,10 +102,14 @@ impl Renderer {
             D::STORAGE_BUFFER,
         ];
         let tree = [common.as_slice(), &[D::STORAGE_BUFFER, D::STORAGE_BUFFER]].concat();
+        let grid = [common.as_slice(), &[D::STORAGE_BUFFER]].concat();
+        let hybrid = [common.as_slice(), &[D::STORAGE_BUFFER; 3]].concat();
         Ok(Renderer {
             ctx: ctx.clone(),
             naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &common, 0)?,
-            bvh: Kernel::new(ctx, "march/bvh", shaders::MARCH_BVH, &tree, 0)?,
+            tree: Kernel::new(ctx, "march/bvh", shaders::MARCH_BVH, &tree, 0)?,
+            grid: Kernel::new(ctx, "march/grid", shaders::MARCH_GRID, &grid, 16)?,
+            hybrid: Kernel::new(ctx, "march/hybrid", shaders::MARCH_HYBRID, &hybrid, 16)?,
         })
     }
 
@@ -192,17 +198,32 @@ impl Renderer {
             Binding::Storage(&tf.lut),
             Binding::Storage(&target.frame),
         ];
+        let mut push = Vec::new();
         let kernel = match structure {
             Structure::Naive => &self.naive,
-            Structure::Lbvh(l) => {
-                bindings.extend([Binding::Storage(&l.nodes), Binding::Storage(&l.count)]);
-                &self.bvh
+            Structure::Tree(_, t) => {
+                bindings.extend([Binding::Storage(&t.nodes), Binding::Storage(&t.count)]);
+                &self.tree
+            }
+            Structure::Grid(g) => {
+                bindings.push(Binding::Storage(&g.flags));
+                push = bytemuck::cast_slice(&g.push()).to_vec();
+                &self.grid
+            }
+            Structure::Hybrid(h) => {
+                bindings.extend([
+                    Binding::Storage(&h.tree.nodes),
+                    Binding::Storage(&h.tree.count),
+                    Binding::Storage(&h.grid.flags),
+                ]);
+                push = bytemuck::cast_slice(&h.grid.push()).to_vec();
+                &self.hybrid
             }
         };
         match timer {
             Some(timer) => {
                 let pass = timer.begin(cmd, "march")?;
-                kernel.dispatch(cmd, &bindings, &[], groups);
+                kernel.dispatch(cmd, &bindings, &push, groups);
                 timer.end(cmd, pass);
             }
             None => kernel.dispatch(cmd, &bindings, &[], groups),

@@ -2,7 +2,7 @@
 //! synchronization validation, and tests fail on any message.
 #![allow(dead_code)]
 
-use lacuna::accel::{Builder, Classify};
+use lacuna::accel::{BuildOptions, Builder, Scene};
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{Accel, Frame, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
@@ -30,24 +30,30 @@ pub fn assert_clean(ctx: &Context) {
 
 /// Renders on the GPU with validation, asserting no validation message.
 pub fn render(ctx: &Context, volume: &Volume, tf: &TransferFunction, settings: &RenderSettings, accel: Accel) -> Frame {
-    render_with(ctx, volume, tf, settings, accel, Classify::Range)
+    render_with(ctx, volume, tf, settings, accel, &BuildOptions::default())
 }
 
-/// As `render`, choosing the brick classification of skipping structures.
+/// As `render`, with the build options of skipping structures.
 pub fn render_with(
     ctx: &Context,
     volume: &Volume,
     tf: &TransferFunction,
     settings: &RenderSettings,
     accel: Accel,
-    classify: Classify,
+    options: &BuildOptions,
 ) -> Frame {
     let renderer = Renderer::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, volume).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let builder = Builder::new(ctx).unwrap();
-    let (bricks, _) = builder.bricks(&gv).unwrap();
-    let (structure, _) = builder.build(accel, &gv, &bricks, &lut, classify).unwrap();
+    let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+    let scene = Scene {
+        volume,
+        gpu_volume: &gv,
+        tf,
+        gpu_tf: &lut,
+    };
+    let (structure, _) = builder.build(accel, &scene, &ranges, options).unwrap();
     let (frame, _) = renderer.render(&structure, &gv, &lut, settings).unwrap();
     assert_clean(ctx);
     frame

@@ -19,6 +19,8 @@ use super::bricks::GpuBricks;
 use super::classify::{Classifier, Classify};
 use super::morton::MAX_BRICKS_PER_AXIS;
 use super::stats::Stats;
+use super::tree::STORAGE_XFER;
+pub use super::tree::{height, GpuTree, Node};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
@@ -27,60 +29,8 @@ use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Node {
-    pub lo: [i32; 4],
-    pub hi: [i32; 4],
-}
-
-impl Node {
-    pub fn is_leaf(&self) -> bool {
-        self.lo[3] < 0
-    }
-}
-
-/// Height (nodes on the longest root-to-leaf path) of a node array.
-pub fn height(nodes: &[Node]) -> u32 {
-    if nodes.is_empty() {
-        return 0;
-    }
-    let mut best = 0;
-    let mut stack = vec![(0usize, 1u32)];
-    while let Some((i, depth)) = stack.pop() {
-        best = best.max(depth);
-        let n = nodes[i];
-        if !n.is_leaf() {
-            stack.push((n.lo[3] as usize, depth + 1));
-            stack.push((n.hi[3] as usize, depth + 1));
-        }
-    }
-    best
-}
-
-/// A built LBVH: what `glsl/march/bvh.comp` reads.
-pub struct Lbvh {
-    pub nodes: Buffer,
-    /// u32 leaf count on the GPU (0: empty structure, nothing is marched).
-    pub count: Buffer,
-    pub leaves: u32,
-    pub stats: Stats,
-}
-
-impl Lbvh {
-    /// Reads the node array back (for tests and inspection).
-    pub fn read_nodes(&self) -> Result<Vec<Node>> {
-        let n = if self.leaves == 0 {
-            0
-        } else {
-            2 * self.leaves as u64 - 1
-        };
-        if n == 0 {
-            return Ok(Vec::new());
-        }
-        Ok(bytemuck::pod_collect_to_vec(&self.nodes.download(0, n * 32)?))
-    }
-}
+/// A built LBVH is a tree in the shared node format.
+pub type Lbvh = GpuTree;
 
 /// Per-volume buffers of the selection phase (classify + compact).
 pub struct SelectScratch {
@@ -109,12 +59,6 @@ pub struct LbvhBuilder {
     emit: Kernel,
     refit: Kernel,
 }
-
-const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
-    vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
-        | vk::BufferUsageFlags::TRANSFER_SRC.as_raw()
-        | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
-);
 
 impl LbvhBuilder {
     pub fn new(ctx: &Context) -> Result<Self> {
@@ -395,7 +339,9 @@ impl LbvhBuilder {
             nodes,
             count: select.count,
             leaves: n as u32,
+            node_count: node_count as u32,
             stats: Stats {
+                unit: "8^3 bricks",
                 total_bricks: bricks.total,
                 active_bricks: n,
                 nodes: node_count,

@@ -1,0 +1,73 @@
+//! The k-d tree built on the multi-core CPU (rayon): occupancy and summed
+//! volume tables per TF change, then a top-down build evaluating every
+//! raster plane of the longest axis, children built in parallel.
+
+use super::occupancy::Occupancy;
+use super::{
+    choose, flatten, forced_plane, halves, longest_axis, raster_planes, volume, Candidate, IBox, KdNode, KdParams,
+};
+use crate::accel::stats::Stats;
+use crate::accel::tree::{GpuTree, Node};
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::tf::TransferFunction;
+use crate::timings::Timings;
+use crate::volume::Volume;
+use rayon::prelude::*;
+
+/// Splits `b` (a tight box) recursively.
+pub fn split(occ: &Occupancy, b: IBox, root_vol: i64, params: &KdParams) -> KdNode {
+    if params.halts(volume(&b), root_vol) {
+        return KdNode::Leaf(b);
+    }
+    let axis = longest_axis(&b);
+    let planes = raster_planes(&b, axis);
+    let candidates: Vec<Candidate> = planes
+        .par_iter()
+        .map(|&p| {
+            let (l, r) = halves(&b, axis, p);
+            (p, occ.tight(&l), occ.tight(&r))
+        })
+        .collect();
+    let chosen = match choose(&b, &candidates) {
+        Some(i) => Some(candidates[i]),
+        None => forced_plane(&b, params).map(|(axis, p)| {
+            let (l, r) = halves(&b, axis, p);
+            (p, occ.tight(&l), occ.tight(&r))
+        }),
+    };
+    match chosen {
+        Some((_, Some(l), Some(r))) => {
+            let (left, right) = rayon::join(|| split(occ, l, root_vol, params), || split(occ, r, root_vol, params));
+            KdNode::Inner(b, Box::new(left), Box::new(right))
+        }
+        // A forced split with one empty side just tightens the box.
+        Some((_, Some(only), None)) | Some((_, None, Some(only))) if only != b => split(occ, only, root_vol, params),
+        _ => KdNode::Leaf(b),
+    }
+}
+
+/// Builds the tree over `occ`'s active footprints.
+pub fn build_nodes(occ: &Occupancy, params: &KdParams) -> Vec<Node> {
+    let all: IBox = [[0; 3], occ.dims];
+    let root = occ.tight(&all).map(|b| split(occ, b, volume(&b), params));
+    flatten(root.as_ref())
+}
+
+/// Occupancy ("svt"), the tree ("tree") and its upload ("upload"), all wall
+/// time on the host.
+pub fn build(ctx: &Context, volume: &Volume, tf: &TransferFunction, params: &KdParams) -> Result<(GpuTree, Timings)> {
+    let mut t = Timings::default();
+    let occ = t.cpu("svt", || Occupancy::new(volume, tf));
+    let nodes = t.cpu("tree", || build_nodes(&occ, params));
+    let stats = Stats {
+        unit: "voxel footprints",
+        total_bricks: volume.voxel_count(),
+        active_bricks: occ.active,
+        ..Default::default()
+    };
+    let start = std::time::Instant::now();
+    let tree = GpuTree::upload(ctx, &nodes, stats)?;
+    t.push("upload", start.elapsed().as_secs_f64() * 1e3);
+    Ok((tree, t))
+}
