@@ -3,6 +3,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod accel;
+pub mod bench;
 pub mod error;
 pub mod gpu;
 pub mod timings;

@@ -6,9 +6,10 @@ mod common;
 use common::assert_clean;
 use lacuna::accel::kd::{Depth, KdParams};
 use lacuna::accel::{Accel, BuildOptions, Builder, Classify, Ranges, Scene, Structure};
+use lacuna::bench::hard::{lattice, View};
 use lacuna::gpu::Context;
-use lacuna::render::{diff, Camera, Frame, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
-use lacuna::tf::{GpuTransferFunction, LUT_SIZE};
+use lacuna::render::{diff, Camera, Frame, Projection, RenderSettings, Renderer};
+use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -20,11 +21,6 @@ struct Fixture {
     ctx: Context,
     renderer: Renderer,
     builder: Builder,
-}
-
-enum View {
-    Camera(RenderSettings),
-    Params(RenderParams),
 }
 
 /// A volume and TF uploaded, with the volume's ranges.
@@ -302,29 +298,6 @@ fn odd_and_degenerate_dimensions() {
     }
 }
 
-/// Orthographic rays laid out by hand on the integer lattice: pixel (i, j)
-/// starts at (i + x0, j + y0, z0) and travels along `dir`.
-fn lattice_rays(
-    dims: [u32; 3],
-    size: u32,
-    start: [f32; 3],
-    du: [f32; 3],
-    dv: [f32; 3],
-    dir: [f32; 3],
-    step: f32,
-) -> View {
-    let p = RenderParams {
-        base: [0, 1, 2, 3].map(|a| if a < 3 { start[a] - 0.5 * (du[a] + dv[a]) } else { 0.0 }),
-        du: [du[0], du[1], du[2], 0.0],
-        dv: [dv[0], dv[1], dv[2], 0.0],
-        eye_or_dir: [dir[0], dir[1], dir[2], 0.0],
-        dims: [dims[0], dims[1], dims[2], LUT_SIZE as u32],
-        image: [size, size, 0, 0],
-        march: [step, ERT_OFF, 0.0, 0.0],
-    };
-    View::Params(p)
-}
-
 #[test]
 fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
     let fx = Fixture::new();
@@ -340,7 +313,7 @@ fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
     };
     let views = vec![
         // Along z through x, y = 0 .. 32: faces at multiples of 8, edges where both are.
-        with_norm(lattice_rays(
+        with_norm(lattice(
             [32; 3],
             33,
             [0.0, 0.0, -5.0],
@@ -350,7 +323,7 @@ fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
             0.5,
         )),
         // Along -x, grazing the y = 0 and y = 32 faces.
-        with_norm(lattice_rays(
+        with_norm(lattice(
             [32; 3],
             33,
             [40.0, 0.0, 0.0],
@@ -360,7 +333,7 @@ fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
             1.0,
         )),
         // Diagonals through brick corners (8k, 8k, 8k).
-        with_norm(lattice_rays(
+        with_norm(lattice(
             [32; 3],
             17,
             [-4.0, -4.0, -4.0],
@@ -370,7 +343,7 @@ fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
             0.5,
         )),
         // In the plane x = 8 (a brick face), diagonal in y-z.
-        with_norm(lattice_rays(
+        with_norm(lattice(
             [32; 3],
             33,
             [8.0, -3.0, 0.0],

@@ -1,0 +1,168 @@
+//! Benchmark configurations (TOML): the protocol, the data sets, the
+//! structures with their parameters (the paper's columns) and the
+//! speed-against-error sweep. `bench/quick.toml` and `bench/paper.toml` are
+//! embedded in the binary, so `lacuna bench --quick` needs no files.
+
+use crate::accel::kd::KdParams;
+use crate::accel::{Accel, BuildOptions, Classify};
+use crate::error::{Error, Result};
+use serde::Deserialize;
+use std::path::Path;
+
+pub const QUICK: &str = include_str!("../../bench/quick.toml");
+pub const PAPER: &str = include_str!("../../bench/paper.toml");
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BenchConfig {
+    pub name: String,
+    /// Frame size [width, height] (the paper: 1024 x 1024).
+    pub size: [u32; 2],
+    /// Views of the rotating orthographic camera (the paper: 36).
+    pub frames: u32,
+    /// Untimed frames (and builds) before timing: lavapipe compiles on first use.
+    pub warmup: u32,
+    /// Timed builds per structure (the TF-change path); the median is reported.
+    pub builds: u32,
+    /// Sample step in voxels.
+    pub step: f32,
+    /// Camera elevation in degrees; the azimuth turns through 360 over the frames.
+    pub elevation: f64,
+    #[serde(rename = "dataset")]
+    pub datasets: Vec<DatasetConfig>,
+    #[serde(rename = "structure")]
+    pub structures: Vec<StructureConfig>,
+    pub error: Option<ErrorConfig>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetConfig {
+    /// A volume spec (file or NAME:SIZE[:PARAM]).
+    pub volume: String,
+    /// Transfer function spec (default: the generator's).
+    pub tf: Option<String>,
+    /// Skip (with a note) instead of failing when the file is missing.
+    #[serde(default)]
+    pub optional: bool,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureConfig {
+    pub label: String,
+    pub accel: String,
+    pub classify: Option<String>,
+    pub apron: Option<String>,
+    pub kd: Option<String>,
+    pub max_leaf: Option<u32>,
+    pub bins: Option<u32>,
+    pub cell: Option<u32>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorConfig {
+    /// Data sets (by volume spec) to sweep; default: all.
+    pub datasets: Option<Vec<String>>,
+    pub steps: Vec<f32>,
+    /// Early-termination thresholds; 0 means off.
+    pub ert: Vec<f32>,
+    pub reference_step: f32,
+    /// Views per point (orbit as above).
+    pub frames: u32,
+    /// Structure the sweep is timed with (images are identical for all).
+    pub accel: String,
+}
+
+/// A structure resolved from its config.
+#[derive(Clone, Debug)]
+pub struct StructureSpec {
+    pub label: String,
+    pub accel: Accel,
+    pub options: BuildOptions,
+}
+
+impl StructureConfig {
+    pub fn resolve(&self) -> Result<StructureSpec> {
+        let accel: Accel = self.accel.parse()?;
+        let classify = Classify::parse(
+            self.classify.as_deref().unwrap_or("range"),
+            self.apron.as_deref().unwrap_or("on"),
+        )?;
+        let d = KdParams::default();
+        let kd = KdParams::parse(
+            self.kd.as_deref().unwrap_or("deep"),
+            self.max_leaf.unwrap_or(d.max_leaf),
+            self.bins.unwrap_or(d.bins),
+        )?;
+        let cell = self.cell.unwrap_or(crate::accel::grid::CELL);
+        crate::accel::grid::check_cell(cell)?;
+        Ok(StructureSpec {
+            label: self.label.clone(),
+            accel,
+            options: BuildOptions { classify, kd, cell },
+        })
+    }
+}
+
+impl BenchConfig {
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let c: BenchConfig = toml::from_str(text).map_err(|e| {
+            Error::format(
+                origin,
+                format!(
+                    "invalid bench config: {}",
+                    e.to_string().lines().collect::<Vec<_>>().join(" ")
+                ),
+            )
+        })?;
+        c.validate(origin)?;
+        Ok(c)
+    }
+
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    fn validate(&self, origin: &str) -> Result<()> {
+        let bad = |m: &str| Err(Error::format(origin, m.to_string()));
+        if self.size.contains(&0) {
+            return bad("size must be positive");
+        }
+        if self.frames == 0 || self.builds == 0 {
+            return bad("frames and builds must be at least 1");
+        }
+        if !(self.step.is_finite() && self.step > 0.0) {
+            return bad("step must be > 0");
+        }
+        if self.datasets.is_empty() || self.structures.is_empty() {
+            return bad("needs at least one [[dataset]] and one [[structure]]");
+        }
+        let mut labels = std::collections::HashSet::new();
+        for s in &self.structures {
+            s.resolve()
+                .map_err(|e| Error::format(origin, format!("structure '{}': {e}", s.label)))?;
+            if !labels.insert(&s.label) {
+                return bad(&format!("structure label '{}' appears twice", s.label));
+            }
+        }
+        if let Some(e) = &self.error {
+            if e.steps
+                .iter()
+                .chain([&e.reference_step])
+                .any(|s| !(s.is_finite() && *s > 0.0))
+            {
+                return bad("error sweep steps must be > 0");
+            }
+            if e.ert.iter().any(|t| !(0.0..=1.0).contains(t)) {
+                return bad("error sweep ert thresholds must be in [0, 1] (0 = off)");
+            }
+            e.accel
+                .parse::<Accel>()
+                .map_err(|err| Error::format(origin, err.to_string()))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,360 @@
+//! The DESIGN hard cases as a suite: every skipping structure must render
+//! each case exactly as naive marching does (bit for bit), with no
+//! validation message and no NaN or infinity in the frame.
+
+use crate::accel::kd::{Depth, KdParams};
+use crate::accel::{Accel, BuildOptions, Builder, Scene, Structure};
+use crate::error::Result;
+use crate::gpu::Context;
+use crate::render::{diff, Camera, Frame, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
+use crate::tf::{TransferFunction, LUT_SIZE};
+use crate::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
+use crate::Volume;
+
+pub enum View {
+    Camera(RenderSettings),
+    /// Hand-laid rays; normalisation is filled in from the volume.
+    Params(RenderParams),
+}
+
+pub struct HardCase {
+    pub name: &'static str,
+    pub volume: Volume,
+    pub tf: &'static str,
+    pub views: Vec<View>,
+}
+
+/// The structures the suite checks: every registry entry but naive, with
+/// the paper's k-d variants.
+pub fn structures() -> Vec<(&'static str, Accel, BuildOptions)> {
+    let kd = |depth, max_leaf| BuildOptions {
+        kd: KdParams {
+            depth,
+            max_leaf,
+            bins: 4,
+        },
+        ..Default::default()
+    };
+    vec![
+        ("lbvh", Accel::Lbvh, BuildOptions::default()),
+        ("grid", Accel::Grid, BuildOptions::default()),
+        ("kd-cpu shallow", Accel::KdCpu, kd(Depth::Shallow, 32)),
+        ("kd-cpu MLS=32", Accel::KdCpu, kd(Depth::Deep, 32)),
+        ("kd-gpu shallow", Accel::KdGpu, kd(Depth::Shallow, 32)),
+        ("kd-gpu MLS=128", Accel::KdGpu, kd(Depth::Deep, 128)),
+        ("hybrid", Accel::Hybrid, BuildOptions::default()),
+    ]
+}
+
+fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: Option<f32>) -> View {
+    View::Camera(RenderSettings {
+        width: size,
+        height: size,
+        camera: Camera {
+            azimuth_deg: az,
+            elevation_deg: el,
+            projection,
+        },
+        step,
+        ert,
+    })
+}
+
+const ORTHO: Projection = Projection::Orthographic;
+
+/// Orthographic rays laid out by hand: pixel (i, j) starts at start + i * du
+/// + j * dv and travels along dir (normalisation left for the caller).
+pub fn lattice(
+    dims: [u32; 3],
+    size: u32,
+    start: [f32; 3],
+    du: [f32; 3],
+    dv: [f32; 3],
+    dir: [f32; 3],
+    step: f32,
+) -> View {
+    View::Params(RenderParams {
+        base: [0, 1, 2, 3].map(|a| if a < 3 { start[a] - 0.5 * (du[a] + dv[a]) } else { 0.0 }),
+        du: [du[0], du[1], du[2], 0.0],
+        dv: [dv[0], dv[1], dv[2], 0.0],
+        eye_or_dir: [dir[0], dir[1], dir[2], 0.0],
+        dims: [dims[0], dims[1], dims[2], LUT_SIZE as u32],
+        image: [size, size, 0, 0],
+        march: [step, ERT_OFF, 0.0, 0.0],
+    })
+}
+
+fn gen(spec: &str) -> Result<Volume> {
+    Volume::load(spec, &LoadOptions::default())
+}
+
+/// The cases, at sizes a CPU driver renders in seconds.
+pub fn cases() -> Result<Vec<HardCase>> {
+    let persp = |d: Option<f64>, fov: f64| Projection::Perspective {
+        fov_deg: fov,
+        distance: d,
+    };
+    let mut dot = vec![0u8; 40 * 40 * 40];
+    dot[16 + 40 * (16 + 40 * 16)] = 255;
+    let halves: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 12 { 0 } else { 255 }).collect();
+    let long: Vec<u8> = (0..4 * 4 * 3000)
+        .map(|i| if (i / 16) % 97 < 3 { 255 } else { 0 })
+        .collect();
+    Ok(vec![
+        HardCase {
+            name: "rays parallel to an axis",
+            volume: gen("turbulence:33x29x31")?,
+            tf: "ramp:0.5:1:0.3",
+            views: vec![
+                cam(32, 0.0, 0.0, ORTHO, 0.5, None),
+                cam(32, 90.0, 0.0, ORTHO, 0.5, None),
+                cam(32, 0.0, 90.0, ORTHO, 0.5, None),
+            ],
+        },
+        HardCase {
+            name: "rays through brick faces and edges",
+            volume: gen("turbulence:32")?,
+            tf: "ramp:0.55:1:0.5",
+            views: vec![lattice(
+                [32; 3],
+                33,
+                [0.0, 0.0, -5.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                0.5,
+            )],
+        },
+        HardCase {
+            name: "rays through brick corners",
+            volume: gen("turbulence:32")?,
+            tf: "band:0.7:1",
+            views: vec![lattice(
+                [32; 3],
+                17,
+                [-4.0, -4.0, -4.0],
+                [2.0, -2.0, 0.0],
+                [1.0, 1.0, -2.0],
+                [1.0, 1.0, 1.0],
+                0.5,
+            )],
+        },
+        HardCase {
+            name: "grazing rays",
+            volume: gen("turbulence:32")?,
+            tf: "ramp:0.55:1:0.5",
+            views: vec![
+                lattice(
+                    [32; 3],
+                    33,
+                    [40.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                    [-1.0, 0.0, 0.0],
+                    1.0,
+                ),
+                lattice(
+                    [32; 3],
+                    33,
+                    [8.0, -3.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 1.0],
+                    0.5,
+                ),
+            ],
+        },
+        HardCase {
+            name: "camera inside the volume",
+            volume: gen("menger:27")?,
+            tf: "ramp:0.3:1:0.5",
+            views: vec![cam(32, 10.0, 5.0, persp(Some(0.1), 70.0), 0.5, None)],
+        },
+        HardCase {
+            name: "camera inside an empty region",
+            volume: gen("shells:48")?,
+            tf: "ramp:0.2:1:0.8",
+            views: vec![
+                cam(32, 0.0, 0.0, persp(Some(0.0), 90.0), 0.5, None),
+                cam(32, 33.0, 12.0, persp(Some(0.0), 90.0), 0.3, None),
+            ],
+        },
+        HardCase {
+            name: "dims not multiples of the brick size",
+            volume: gen("nbody:13x37x21")?,
+            tf: "ramp:0.2:1:0.6",
+            views: vec![
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None),
+                cam(32, -140.0, -25.0, persp(None, 50.0), 0.5, None),
+            ],
+        },
+        HardCase {
+            name: "degenerate dims 1 x 1 x N",
+            volume: gen("shells:1x1x40")?,
+            tf: "ramp:0.2:1:0.6",
+            views: vec![cam(24, 30.0, 20.0, ORTHO, 0.5, None)],
+        },
+        HardCase {
+            name: "transparent transfer function",
+            volume: gen("vessels:40")?,
+            tf: "band:0:1:0",
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)],
+        },
+        HardCase {
+            name: "opaque transfer function",
+            volume: gen("vessels:40")?,
+            tf: "band:0:1:0.05",
+            views: vec![
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None),
+                cam(32, 30.0, 20.0, ORTHO, 0.5, Some(0.95)),
+            ],
+        },
+        HardCase {
+            name: "a single active voxel",
+            volume: Volume::new("dot", [40; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(dot))?,
+            tf: "band:0.02:1:1",
+            views: vec![
+                cam(32, 0.0, 0.0, ORTHO, 0.5, None),
+                cam(32, 45.0, 35.264389682754654, ORTHO, 0.37, None),
+            ],
+        },
+        HardCase {
+            name: "spike narrower than the gap between voxel values",
+            volume: Volume::new("halves", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(halves))?,
+            tf: "spike:0.5:0.0005",
+            views: vec![
+                cam(24, 90.0, 0.0, ORTHO, 0.5, None),
+                cam(24, 80.0, 10.0, ORTHO, 0.25, None),
+            ],
+        },
+        HardCase {
+            name: "steps that do not divide the box",
+            volume: gen("nbody:40")?,
+            tf: "ramp:0.3:1",
+            views: vec![
+                cam(32, 17.0, 23.0, ORTHO, 0.3, None),
+                cam(32, 17.0, 23.0, ORTHO, 0.77, None),
+                cam(32, 17.0, 23.0, ORTHO, 1.9, None),
+            ],
+        },
+        HardCase {
+            name: "large t (a 4 x 4 x 3000 volume)",
+            volume: Volume::new("long", [4, 4, 3000], [1.0; 3], VoxelType::U8, VoxelData::U8(long))?,
+            tf: "band:0.5:1:0.01",
+            views: vec![
+                cam(16, 0.0, 0.0, ORTHO, 0.5, None),
+                cam(16, 0.3, 0.2, ORTHO, 0.7, None),
+                cam(16, 180.0, 0.0, persp(Some(1.2), 1.0), 0.5, None),
+            ],
+        },
+    ])
+}
+
+/// One case against one structure.
+pub struct Outcome {
+    pub case: &'static str,
+    pub structure: &'static str,
+    pub identical: bool,
+    pub validation_messages: usize,
+    pub finite: bool,
+    pub detail: String,
+}
+
+impl Outcome {
+    pub fn passed(&self) -> bool {
+        self.identical && self.validation_messages == 0 && self.finite
+    }
+}
+
+/// Runs every case for every structure on a validated context.
+pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>> {
+    let builder = Builder::new(ctx)?;
+    let renderer = Renderer::new(ctx)?;
+    let mut out = Vec::new();
+    ctx.take_validation_messages();
+    for case in cases()? {
+        on_case(case.name);
+        let v = &case.volume;
+        let tf = TransferFunction::parse(case.tf)?;
+        let gv = GpuVolume::upload(ctx, v)?;
+        let lut = tf.upload(ctx)?;
+        let scene = Scene {
+            volume: v,
+            gpu_volume: &gv,
+            tf: &tf,
+            gpu_tf: &lut,
+        };
+        let render = |s: &Structure, view: &View| -> Result<Frame> {
+            match view {
+                View::Camera(settings) => Ok(renderer.render(s, &gv, &lut, settings)?.0),
+                View::Params(p) => {
+                    let mut p = *p;
+                    p.march[2] = v.norm[0];
+                    p.march[3] = v.norm[1];
+                    Ok(renderer.render_params(s, &gv, &lut, &p)?.0)
+                }
+            }
+        };
+        let naive: Vec<Frame> = case
+            .views
+            .iter()
+            .map(|view| render(&Structure::Naive, view))
+            .collect::<Result<_>>()?;
+        let baseline = ctx.take_validation_messages().len();
+        let (ranges, _) = builder.ranges(&gv, BuildOptions::default().cell)?;
+        for (label, accel, options) in structures() {
+            let (s, _) = builder.build(accel, &scene, &ranges, &options)?;
+            let (mut identical, mut finite, mut detail) = (true, true, String::new());
+            for (i, view) in case.views.iter().enumerate() {
+                let f = render(&s, view)?;
+                let d = diff(&naive[i], &f)?;
+                if d.differing > 0 {
+                    identical = false;
+                    detail = format!("view {i}: {d}");
+                }
+                finite &= f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()));
+            }
+            let messages = ctx.take_validation_messages();
+            if let Some(m) = messages.first() {
+                detail = format!("{m}");
+            }
+            out.push(Outcome {
+                case: case.name,
+                structure: label,
+                identical,
+                validation_messages: messages.len() + baseline,
+                finite,
+                detail,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The pass/fail table: a row per case, a column per structure.
+pub fn table(outcomes: &[Outcome]) -> String {
+    let labels: Vec<&str> = structures().iter().map(|s| s.0).collect();
+    let mut s = format!(
+        "| hard case | {} |\n|---|{}\n",
+        labels.join(" | "),
+        "---|".repeat(labels.len())
+    );
+    let mut cases: Vec<&str> = Vec::new();
+    for o in outcomes {
+        if !cases.contains(&o.case) {
+            cases.push(o.case);
+        }
+    }
+    for c in cases {
+        let cells: Vec<&str> = labels
+            .iter()
+            .map(|l| match outcomes.iter().find(|o| o.case == c && o.structure == *l) {
+                Some(o) if o.passed() => "pass",
+                Some(_) => "FAIL",
+                None => "-",
+            })
+            .collect();
+        s += &format!("| {c} | {} |\n", cells.join(" | "));
+    }
+    s
+}
