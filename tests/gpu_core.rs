@@ -201,7 +201,9 @@ fn adopted_device_is_used_but_not_destroyed() {
         .queue_family_index(family)
         .queue_priorities(&prio)];
     let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
-    let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+    let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+        .synchronization2(true)
+        .maintenance4(true);
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
         .vulkan_memory_model(true)
         .vulkan_memory_model_device_scope(true);

@@ -5,7 +5,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::gpu::{vk, Buffer, Context};
-use lacuna::prims::{BrickMinMax, Compact, RadixSort, Scan};
+use lacuna::prims::{BlockLayout, BrickMinMax, Compact, RadixSort, Scan};
 use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions};
 use lacuna::Volume;
 
@@ -54,32 +54,49 @@ fn patterns(n: usize, seed: u64) -> Vec<(&'static str, Vec<u32>)> {
     ]
 }
 
+/// The device's layout, then the other layouts the kernels support.
+fn layouts(ctx: &Context) -> Vec<BlockLayout> {
+    let mine = BlockLayout::for_device(ctx.info());
+    let mut all = vec![mine];
+    for (width, items) in [(256, 4), (64, 16), (32, 32), (16, 64)] {
+        let l = BlockLayout { width, items };
+        if l != mine {
+            all.push(l);
+        }
+    }
+    all
+}
+
 #[test]
 fn exclusive_scan_matches_the_cpu() {
     let ctx = gpu();
-    let scan = Scan::new(&ctx).unwrap();
-    for n in SIZES {
-        let scratch = scan.scratch(n as u64).unwrap();
-        for (name, data) in patterns(n, n as u64) {
-            // Small values as well as wrapping ones.
-            let data: Vec<u32> = if name == "random" {
-                data.iter().map(|v| v % 1000).collect()
-            } else {
-                data
-            };
-            let buf = buffer(&ctx, &data);
-            ctx.submit_and_wait(|cmd| scan.record(cmd, &buf, n as u64, &scratch))
-                .unwrap();
-            let mut acc = 0u32;
-            let want: Vec<u32> = data
-                .iter()
-                .map(|v| {
-                    let e = acc;
-                    acc = acc.wrapping_add(*v);
-                    e
-                })
-                .collect();
-            assert_eq!(read(&buf, n), want, "scan of {n} {name}");
+    for (li, layout) in layouts(&ctx).into_iter().enumerate() {
+        let scan = Scan::with_layout(&ctx, layout).unwrap();
+        // Other layouts: every size but the largest.
+        let sizes = if li == 0 { &SIZES[..] } else { &SIZES[..8] };
+        for &n in sizes {
+            let scratch = scan.scratch(n as u64).unwrap();
+            for (name, data) in patterns(n, n as u64) {
+                // Small values as well as wrapping ones.
+                let data: Vec<u32> = if name == "random" {
+                    data.iter().map(|v| v % 1000).collect()
+                } else {
+                    data
+                };
+                let buf = buffer(&ctx, &data);
+                ctx.submit_and_wait(|cmd| scan.record(cmd, &buf, n as u64, &scratch))
+                    .unwrap();
+                let mut acc = 0u32;
+                let want: Vec<u32> = data
+                    .iter()
+                    .map(|v| {
+                        let e = acc;
+                        acc = acc.wrapping_add(*v);
+                        e
+                    })
+                    .collect();
+                assert_eq!(read(&buf, n), want, "scan of {n} {name} ({layout:?})");
+            }
         }
     }
     assert_clean(&ctx);
@@ -139,12 +156,16 @@ fn check_sort(ctx: &Context, sort: &RadixSort, keys: &[u32], bits: u32, what: &s
 #[test]
 fn radix_sort_is_stable_and_matches_the_cpu() {
     let ctx = gpu();
-    let sort = RadixSort::new(&ctx).unwrap();
-    for n in SIZES {
-        for (name, keys) in patterns(n, 99 + n as u64) {
-            check_sort(&ctx, &sort, &keys, 32, &format!("{n} {name} keys, 32 bits"));
+    for (li, layout) in layouts(&ctx).into_iter().enumerate() {
+        let sort = RadixSort::with_layout(&ctx, layout).unwrap();
+        let sizes = if li == 0 { &SIZES[..] } else { &SIZES[..7] };
+        for &n in sizes {
+            for (name, keys) in patterns(n, 99 + n as u64) {
+                check_sort(&ctx, &sort, &keys, 32, &format!("{n} {name} keys, 32 bits, {layout:?}"));
+            }
         }
     }
+    let sort = RadixSort::new(&ctx).unwrap();
     // Fewer key bits: 30-bit codes (even passes) and 13 bits (odd passes,
     // high bits ignored, so equal low bits keep input order).
     let mut r = rng(5);
@@ -153,6 +174,17 @@ fn radix_sort_is_stable_and_matches_the_cpu() {
     let mixed: Vec<u32> = (0..4097).map(|_| r()).collect();
     check_sort(&ctx, &sort, &mixed, 13, "13 of 32 bits");
     assert_clean(&ctx);
+}
+
+#[test]
+fn block_layouts_are_checked() {
+    let ctx = gpu();
+    for (w, i) in [(128, 4), (8, 128), (48, 21)] {
+        let err = Scan::with_layout(&ctx, BlockLayout { width: w, items: i })
+            .err()
+            .unwrap();
+        assert!(err.to_string().contains("block layout"), "{err}");
+    }
 }
 
 #[test]

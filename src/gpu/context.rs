@@ -93,7 +93,8 @@ impl DeviceInfo {
 }
 
 /// The handles a host engine lends to lacuna. The device must have been created
-/// with Vulkan 1.3 `synchronization2` and Vulkan 1.2 `vulkanMemoryModel` (with device scope)
+/// with Vulkan 1.3 `synchronization2` and `maintenance4` (workgroup sizes from
+/// specialization constants) and Vulkan 1.2 `vulkanMemoryModel` (with device scope)
 /// enabled (both required of every 1.3 device) and `VK_KHR_push_descriptor`;
 /// `queue` must belong to `queue_family` and support compute. Drop the
 /// `Context` (and everything made with it) before destroying the device.
@@ -364,7 +365,9 @@ impl Context {
                 .queue_family_index(family)
                 .queue_priorities(&priorities)];
             let extensions = [ash::khr::push_descriptor::NAME.as_ptr()];
-            let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+            let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+                .synchronization2(true)
+                .maintenance4(true);
             // Required by every Vulkan 1.3 device; the LBVH refit relies on its
             // acquire/release atomics.
             let mut v12 = vk::PhysicalDeviceVulkan12Features::default()

@@ -48,6 +48,19 @@ impl Kernel {
         bindings: &[vk::DescriptorType],
         push_size: u32,
     ) -> Result<Self> {
+        Self::with_constants(ctx, name, spirv, bindings, push_size, &[])
+    }
+
+    /// As `new`, with u32 specialization constants for `constant_id` 0, 1, ...
+    /// (`local_size_x_id = 0` makes constant 0 the workgroup width).
+    pub fn with_constants(
+        ctx: &Context,
+        name: &'static str,
+        spirv: &[u32],
+        bindings: &[vk::DescriptorType],
+        push_size: u32,
+        constants: &[u32],
+    ) -> Result<Self> {
         let info = ctx.info();
         info.check(
             format!("push constants of kernel {name}"),
@@ -95,10 +108,23 @@ impl Kernel {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
         kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i,
+                offset: i * 4,
+                size: 4,
+            })
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(constants));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&spec);
+        }
         let create = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(kernel.layout)];

@@ -13,11 +13,13 @@
 
 pub mod brick_minmax;
 pub mod compact;
+pub mod layout;
 pub mod radix_sort;
 pub mod scan;
 
 pub use brick_minmax::BrickMinMax;
 pub use compact::{Compact, CompactScratch};
+pub use layout::BlockLayout;
 pub use radix_sort::{RadixSort, SortScratch};
 pub use scan::{Scan, ScanScratch};
 

@@ -1,6 +1,7 @@
 //! LSD radix sort of u32 keys with u32 payloads, stable, 4 bits per pass;
 //! `key_bits` sets the number of passes (30-bit Morton codes need 8).
 
+use super::layout::BlockLayout;
 use super::scan::{Scan, ScanScratch, BLOCK};
 use super::{check_range, entry_barrier, words};
 use crate::error::{Error, Result};
@@ -26,25 +27,33 @@ pub struct SortScratch {
 }
 
 impl RadixSort {
+    /// With the device's block layout (`BlockLayout::for_device`).
     pub fn new(ctx: &Context) -> Result<Self> {
+        Self::with_layout(ctx, BlockLayout::for_device(ctx.info()))
+    }
+
+    pub fn with_layout(ctx: &Context, layout: BlockLayout) -> Result<Self> {
         use vk::DescriptorType as D;
+        let c = layout.check(ctx.info())?.constants();
         Ok(RadixSort {
             ctx: ctx.clone(),
-            hist: Kernel::new(
+            hist: Kernel::with_constants(
                 ctx,
                 "prims/radix_hist",
                 shaders::PRIMS_RADIX_HIST,
                 &[D::STORAGE_BUFFER; 2],
                 32,
+                &c,
             )?,
-            scatter: Kernel::new(
+            scatter: Kernel::with_constants(
                 ctx,
                 "prims/radix_scatter",
                 shaders::PRIMS_RADIX_SCATTER,
                 &[D::STORAGE_BUFFER; 5],
                 32,
+                &c,
             )?,
-            scan: Scan::new(ctx)?,
+            scan: Scan::with_layout(ctx, layout)?,
         })
     }
 

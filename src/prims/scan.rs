@@ -2,12 +2,13 @@
 //! 1024 are scanned in shared memory, block totals are scanned recursively,
 //! then added back.
 
+use super::layout::BlockLayout;
 use super::{check_range, entry_barrier, words};
 use crate::error::Result;
 use crate::gpu::record::{self};
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
-/// Elements per workgroup (256 threads x 4 items).
+/// Elements per workgroup (see `BlockLayout`).
 pub const BLOCK: u64 = 1024;
 
 pub struct Scan {
@@ -24,13 +25,19 @@ pub struct ScanScratch {
 }
 
 impl Scan {
+    /// With the device's block layout (`BlockLayout::for_device`).
     pub fn new(ctx: &Context) -> Result<Self> {
+        Self::with_layout(ctx, BlockLayout::for_device(ctx.info()))
+    }
+
+    pub fn with_layout(ctx: &Context, layout: BlockLayout) -> Result<Self> {
         use vk::DescriptorType as D;
+        let c = layout.check(ctx.info())?.constants();
         let two = [D::STORAGE_BUFFER, D::STORAGE_BUFFER];
         Ok(Scan {
             ctx: ctx.clone(),
-            blocks: Kernel::new(ctx, "prims/scan_blocks", shaders::PRIMS_SCAN_BLOCKS, &two, 16)?,
-            add: Kernel::new(ctx, "prims/scan_add", shaders::PRIMS_SCAN_ADD, &two, 16)?,
+            blocks: Kernel::with_constants(ctx, "prims/scan_blocks", shaders::PRIMS_SCAN_BLOCKS, &two, 16, &c)?,
+            add: Kernel::with_constants(ctx, "prims/scan_add", shaders::PRIMS_SCAN_ADD, &two, 16, &c)?,
         })
     }
 
