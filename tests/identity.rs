@@ -6,9 +6,9 @@ mod common;
 use common::assert_clean;
 use lacuna::accel::kd::{Depth, KdParams};
 use lacuna::accel::{Accel, BuildOptions, Builder, Classify, Ranges, Scene, Structure};
-use lacuna::bench::hard::{lattice, View};
+use lacuna::bench::hard::{self, lattice, View};
 use lacuna::gpu::Context;
-use lacuna::render::{diff, Camera, Frame, Projection, RenderSettings, Renderer};
+use lacuna::render::{diff, Frame, Projection, RenderSettings, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -111,17 +111,7 @@ impl Fixture {
 }
 
 fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32) -> View {
-    View::Camera(RenderSettings {
-        width: size,
-        height: size,
-        camera: Camera {
-            azimuth_deg: az,
-            elevation_deg: el,
-            projection,
-        },
-        step,
-        ert: None,
-    })
+    hard::cam(size, az, el, projection, step, None)
 }
 
 fn standard_views() -> Vec<View> {

@@ -46,7 +46,8 @@ pub fn structures() -> Vec<(&'static str, Accel, BuildOptions)> {
     ]
 }
 
-fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: Option<f32>) -> View {
+/// An orbit camera view (orthographic or perspective).
+pub fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: Option<f32>) -> View {
     View::Camera(RenderSettings {
         width: size,
         height: size,
