@@ -4,7 +4,7 @@
 //! each structure's image error against naive marching; then the
 //! speed-against-error sweep of step sizes and early-termination thresholds.
 
-use super::config::{BenchConfig, StructureSpec};
+use super::config::{BenchConfig, ErrorConfig, StructureSpec};
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup};
 use crate::accel::{Accel, BuildOptions, Builder, Ranges, Scene, Structure};
@@ -131,6 +131,69 @@ fn load(spec: &str, tf: Option<&str>) -> Result<Loaded> {
     })
 }
 
+/// The speed-against-error sweep of one data set, on its uploaded volume.
+#[allow(clippy::too_many_arguments)]
+fn error_sweep(
+    config: &BenchConfig,
+    e: &ErrorConfig,
+    setup: &Setup,
+    spec: &str,
+    structure: &Structure,
+    gv: &GpuVolume,
+    lut: &GpuTransferFunction,
+    frames: &mut FrameTimer,
+    progress: &Progress,
+) -> Result<Vec<ErrorPoint>> {
+    let mut points = Vec::new();
+    let mut reference = Vec::new();
+    for view in 0..e.frames {
+        let settings = orbit(config, view, e.frames, e.reference_step, None);
+        reference.push(
+            frames
+                .frame(&Structure::Naive, gv, lut, &settings, true)?
+                .1
+                .expect("read back"),
+        );
+        progress.step(1);
+    }
+    for &step in &e.steps {
+        for &ert in &e.ert {
+            let ert = (ert > 0.0).then_some(ert);
+            // One untimed frame first: a new step is a new workload.
+            frames.frame(structure, gv, lut, &orbit(config, 0, e.frames, step, ert), false)?;
+            let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
+            for view in 0..e.frames {
+                let (ms, f) = frames.frame(structure, gv, lut, &orbit(config, view, e.frames, step, ert), true)?;
+                let d = diff(&reference[view as usize], &f.expect("read back"))?;
+                times.push(ms);
+                sq += d.rmse * d.rmse * d.pixels as f64;
+                pixels += d.pixels;
+                max_abs = max_abs.max(d.max_abs);
+                differing += d.differing;
+                progress.step(1);
+            }
+            let rmse = (sq / pixels.max(1) as f64).sqrt();
+            let psnr = (rmse > 0.0).then(|| 20.0 * (1.0 / rmse).log10());
+            points.push(ErrorPoint {
+                setup: setup.clone(),
+                dataset: spec.to_string(),
+                accel: structure.accel().name().into(),
+                sweep_step: step,
+                ert,
+                frame: FrameTimes::of(times),
+                reference_step: e.reference_step,
+                error: ImageError {
+                    rmse,
+                    psnr,
+                    max_abs,
+                    differing,
+                },
+            });
+        }
+    }
+    Ok(points)
+}
+
 pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<BenchOutput> {
     let structures: Vec<StructureSpec> = config.structures.iter().map(|s| s.resolve()).collect::<Result<_>>()?;
     let builder = Builder::new(ctx)?;
@@ -166,7 +229,6 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         notes: Vec::new(),
     };
     let mut frames = FrameTimer::new(ctx, &renderer, config.size[0], config.size[1])?;
-    let mut loaded_sets = Vec::new();
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
@@ -287,78 +349,33 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first));
             }
         }
-        loaded_sets.push(loaded);
-    }
-
-    if let Some(e) = &config.error {
-        let accel: Accel = e.accel.parse()?;
-        let opts = BuildOptions::default();
-        for loaded in &loaded_sets {
-            if e.datasets.as_ref().is_some_and(|d| !d.contains(&loaded.spec)) {
-                continue;
-            }
+        // Speed against error, on the volume and ranges already uploaded.
+        if let Some(e) = config
+            .error
+            .as_ref()
+            .filter(|e| e.datasets.as_ref().is_none_or(|d| d.contains(&loaded.spec)))
+        {
             progress.at(&format!("{} - speed against error", loaded.spec));
-            let (v, tf) = (&loaded.volume, &loaded.tf);
-            let gv = GpuVolume::upload(ctx, v)?;
-            let lut = tf.upload(ctx)?;
-            let scene = Scene {
-                volume: v,
-                gpu_volume: &gv,
-                tf,
-                gpu_tf: &lut,
-            };
-            let (r, _) = builder.ranges(&gv, opts.cell)?;
-            let (structure, _) = builder.build(accel, &scene, &r, &opts)?;
-            let mut reference = Vec::new();
-            for view in 0..e.frames {
-                let settings = orbit(config, view, e.frames, e.reference_step, None);
-                reference.push(
-                    frames
-                        .frame(&Structure::Naive, &gv, &lut, &settings, true)?
-                        .1
-                        .expect("read back"),
-                );
-                progress.step(1);
+            let opts = BuildOptions::default();
+            if let std::collections::hash_map::Entry::Vacant(slot) = ranges.entry(opts.cell) {
+                let (r, t) = builder.ranges(&gv, opts.cell)?;
+                slot.insert((r, t.total()));
             }
-            for &step in &e.steps {
-                for &ert in &e.ert {
-                    let ert = (ert > 0.0).then_some(ert);
-                    // One untimed frame first: a new step is a new workload.
-                    frames.frame(&structure, &gv, &lut, &orbit(config, 0, e.frames, step, ert), false)?;
-                    let (mut times, mut sq, mut max_abs, mut differing, mut pixels) =
-                        (Vec::new(), 0.0, 0.0f64, 0, 0u64);
-                    for view in 0..e.frames {
-                        let (ms, f) =
-                            frames.frame(&structure, &gv, &lut, &orbit(config, view, e.frames, step, ert), true)?;
-                        let d = diff(&reference[view as usize], &f.expect("read back"))?;
-                        times.push(ms);
-                        sq += d.rmse * d.rmse * d.pixels as f64;
-                        pixels += d.pixels;
-                        max_abs = max_abs.max(d.max_abs);
-                        differing += d.differing;
-                        progress.step(1);
-                    }
-                    let rmse = (sq / pixels.max(1) as f64).sqrt();
-                    let psnr = (rmse > 0.0).then(|| 20.0 * (1.0 / rmse).log10());
-                    out.errors.push(ErrorPoint {
-                        setup: setup.clone(),
-                        dataset: loaded.spec.clone(),
-                        accel: accel.name().into(),
-                        sweep_step: step,
-                        ert,
-                        frame: FrameTimes::of(times),
-                        reference_step: e.reference_step,
-                        error: ImageError {
-                            rmse,
-                            psnr,
-                            max_abs,
-                            differing,
-                        },
-                    });
-                }
-            }
+            let (structure, _) = builder.build(e.accel.parse()?, &scene, &ranges[&opts.cell].0, &opts)?;
+            out.errors.extend(error_sweep(
+                config,
+                e,
+                &setup,
+                &loaded.spec,
+                &structure,
+                &gv,
+                &lut,
+                &mut frames,
+                &progress,
+            )?);
         }
     }
+
     progress.finish();
     Ok(out)
 }
