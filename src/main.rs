@@ -318,7 +318,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         }
         println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
     }
-    if let Some(stats) = structure.stats() {
+    if let Some(stats) = structure.stats()? {
         println!("structure {stats}");
     }
     println!("render GPU time per pass:\n{timings}");

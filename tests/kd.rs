@@ -188,7 +188,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
                 let nodes = tree.read_nodes().unwrap();
                 let what = format!("{spec} {accel} {}", kd.describe());
                 check_tree(&what, &occ, &leaf_boxes(&nodes), &kd);
-                let stats = tree.stats;
+                let stats = tree.stats().unwrap();
                 assert_eq!(stats.nodes as usize, nodes.len());
                 assert_eq!(stats.leaves as usize, leaf_boxes(&nodes).len());
                 assert!(stats.height >= 1);

@@ -20,10 +20,34 @@ pub struct Grid {
     pub counts: [u32; 3],
     /// u32 per cell, 1 = active.
     pub flags: Buffer,
-    pub stats: Stats,
+    total: u64,
+    /// Counted from a flag readback only when statistics are asked for.
+    active: std::sync::OnceLock<u64>,
 }
 
 impl Grid {
+    /// The paper's Table 1 statistics (counts the active cells once).
+    pub fn stats(&self) -> Result<Stats> {
+        let active = match self.active.get() {
+            Some(a) => *a,
+            None => {
+                let host: Vec<u32> = bytemuck::pod_collect_to_vec(&self.flags.download(0, self.total * 4)?);
+                let a = host.iter().filter(|&&f| f != 0).count() as u64;
+                *self.active.get_or_init(|| a)
+            }
+        };
+        let unit = if self.cell == 16 { "16^3 cells" } else { "cells" };
+        Ok(Stats {
+            unit,
+            total_bricks: self.total,
+            active_bricks: active,
+            nodes: self.total,
+            leaves: active,
+            height: 1,
+            bytes: self.total * 4,
+        })
+    }
+
     /// The push constants of the grid kernels: cells per axis and edge.
     pub fn push(&self) -> [u32; 4] {
         [self.counts[0], self.counts[1], self.counts[2], self.cell]
@@ -43,7 +67,7 @@ pub fn check_cell(cell: u32) -> Result<()> {
 }
 
 /// Classifies the cells of `cells` (ranges of `cell`^3 bricks) for a TF
-/// ("classify"); counts the active cells on the host.
+/// ("classify").
 pub fn build(
     ctx: &Context,
     classifier: &Classifier,
@@ -66,24 +90,13 @@ pub fn build(
         timer.end(cmd, pass);
         Ok(())
     })?;
-    let host: Vec<u32> = bytemuck::pod_collect_to_vec(&flags.download(0, cells.total * 4)?);
-    let active = host.iter().filter(|&&f| f != 0).count() as u64;
-    let unit = if cells.brick == 16 { "16^3 cells" } else { "cells" };
-    let stats = Stats {
-        unit,
-        total_bricks: cells.total,
-        active_bricks: active,
-        nodes: cells.total,
-        leaves: active,
-        height: 1,
-        bytes: cells.total * 4,
-    };
     Ok((
         Grid {
             cell: cells.brick,
             counts: cells.counts,
             flags,
-            stats,
+            total: cells.total,
+            active: std::sync::OnceLock::new(),
         },
         timer.results()?,
     ))

@@ -102,13 +102,15 @@ impl Structure {
         }
     }
 
-    pub fn stats(&self) -> Option<Stats> {
-        match self {
+    /// The paper's Table 1 statistics (None for naive). May read the
+    /// structure back once; builds never do.
+    pub fn stats(&self) -> Result<Option<Stats>> {
+        Ok(match self {
             Structure::Naive => None,
-            Structure::Tree(_, t) => Some(t.stats),
-            Structure::Grid(g) => Some(g.stats),
-            Structure::Hybrid(h) => Some(h.tree.stats),
-        }
+            Structure::Tree(_, t) => Some(t.stats()?),
+            Structure::Grid(g) => Some(g.stats()?),
+            Structure::Hybrid(h) => Some(h.tree.stats()?),
+        })
     }
 
     /// The tree, for structures that have one.

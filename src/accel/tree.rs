@@ -71,7 +71,11 @@ pub struct GpuTree {
     pub count: Buffer,
     pub leaves: u32,
     pub node_count: u32,
-    pub stats: Stats,
+    /// Statistics known at build time; the height is derived on request.
+    pub(crate) stats: Stats,
+    /// Known at upload for CPU-built trees; an LBVH reads its nodes back for
+    /// it only when statistics are asked for, never on the build path.
+    pub(crate) height: std::sync::OnceLock<u32>,
 }
 
 pub(crate) const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
@@ -93,7 +97,6 @@ impl GpuTree {
         let count = Buffer::with_data(ctx, "tree leaf count", bytemuck::bytes_of(&leaves), STORAGE_XFER)?;
         stats.nodes = nodes.len() as u64;
         stats.leaves = leaves as u64;
-        stats.height = height(nodes);
         stats.bytes = nodes.len() as u64 * 32;
         Ok(GpuTree {
             nodes: node_buf,
@@ -101,6 +104,23 @@ impl GpuTree {
             leaves,
             node_count: nodes.len() as u32,
             stats,
+            height: std::sync::OnceLock::from(height(nodes)),
+        })
+    }
+
+    /// The paper's Table 1 statistics (reads the nodes back once if the
+    /// height is not known yet).
+    pub fn stats(&self) -> Result<Stats> {
+        let h = match self.height.get() {
+            Some(h) => *h,
+            None => {
+                let h = height(&self.read_nodes()?);
+                *self.height.get_or_init(|| h)
+            }
+        };
+        Ok(Stats {
+            height: h,
+            ..self.stats
         })
     }
 

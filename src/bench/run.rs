@@ -322,7 +322,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             }
             let first = first.expect("frame 0 read back");
             let error = diff(&naive0, &first)?;
-            let stats = structure.stats().unwrap_or_default();
+            let stats = structure.stats()?.unwrap_or_default();
             let frame = FrameTimes::of(times);
             out.records.push(Record {
                 setup: setup.clone(),

@@ -335,7 +335,7 @@ impl LbvhBuilder {
         })?;
         timings.extend(timer.results()?);
         let node_count = if n == 0 { 0 } else { 2 * n - 1 };
-        let mut lbvh = Lbvh {
+        let lbvh = Lbvh {
             nodes,
             count: select.count,
             leaves: n as u32,
@@ -349,8 +349,9 @@ impl LbvhBuilder {
                 height: 0,
                 bytes: node_count * 32,
             },
+            // Derived from a node readback only when statistics are asked for.
+            height: std::sync::OnceLock::new(),
         };
-        lbvh.stats.height = height(&lbvh.read_nodes()?);
         Ok((lbvh, timings))
     }
 }
