@@ -265,8 +265,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..runs {
-                // Ranges are per volume; timed with every run so warm-up covers them.
-                let (ranges, mut timings) = builder.ranges(&gpu_volume, options.cell)?;
+                // Ranges (only those this accel uses) are per volume; timed with every
+                // run so warm-up covers them.
+                let (ranges, mut timings) = builder.ranges_for(&[accel], &gpu_volume, options.cell)?;
                 let (structure, t) = builder.build(accel, &scene, &ranges, &options)?;
                 timings.extend(t);
                 times.push(timings);

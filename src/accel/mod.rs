@@ -153,8 +153,38 @@ impl Default for BuildOptions {
 
 /// Per-volume value ranges: 8^3 bricks (LBVH) and macro cells (grid, hybrid).
 pub struct Ranges {
-    pub bricks: GpuBricks,
-    pub cells: GpuBricks,
+    /// 8^3 brick ranges (the LBVH); None if not computed.
+    pub bricks: Option<GpuBricks>,
+    /// Macro-cell ranges (grid, hybrid); None if not computed.
+    pub cells: Option<GpuBricks>,
+}
+
+impl Ranges {
+    fn bricks(&self) -> Result<&GpuBricks> {
+        self.bricks.as_ref().ok_or_else(|| {
+            Error::invalid(
+                "ranges",
+                "cells only",
+                "the LBVH needs 8^3 brick ranges (Builder::ranges)",
+            )
+        })
+    }
+
+    fn cells(&self, cell: u32) -> Result<&GpuBricks> {
+        match &self.cells {
+            Some(c) if c.brick == cell => Ok(c),
+            Some(c) => Err(Error::invalid(
+                "cell",
+                cell.to_string(),
+                format!("ranges were computed for cells of {}", c.brick),
+            )),
+            None => Err(Error::invalid(
+                "ranges",
+                "bricks only",
+                "the grid and hybrid need cell ranges (Builder::ranges)",
+            )),
+        }
+    }
 }
 
 /// Builds every structure; kernels are created once per context.
@@ -180,11 +210,29 @@ impl Builder {
     /// Per-brick and per-cell value ranges: once per volume upload
     /// ("ranges", "cell ranges").
     pub fn ranges(&self, volume: &GpuVolume, cell: u32) -> Result<(Ranges, Timings)> {
+        self.ranges_for(&Accel::ALL, volume, cell)
+    }
+
+    /// Only the ranges `accels` use: brick ranges for the LBVH, cell ranges
+    /// for the grid and the hybrid, none for naive and the k-d trees.
+    pub fn ranges_for(&self, accels: &[Accel], volume: &GpuVolume, cell: u32) -> Result<(Ranges, Timings)> {
         grid::check_cell(cell)?;
-        let (bricks, mut t) = GpuBricks::compute(&self.ctx, &self.minmax, volume, bricks::BRICK)?;
-        let (cells, tc) = GpuBricks::compute(&self.ctx, &self.minmax, volume, cell)?;
-        t.push("cell ranges", tc.get("ranges").unwrap_or(0.0));
-        Ok((Ranges { bricks, cells }, t))
+        let mut t = Timings::default();
+        let mut ranges = Ranges {
+            bricks: None,
+            cells: None,
+        };
+        if accels.contains(&Accel::Lbvh) {
+            let (b, tb) = GpuBricks::compute(&self.ctx, &self.minmax, volume, bricks::BRICK)?;
+            t.extend(tb);
+            ranges.bricks = Some(b);
+        }
+        if accels.iter().any(|a| matches!(a, Accel::Grid | Accel::Hybrid)) {
+            let (c, tc) = GpuBricks::compute(&self.ctx, &self.minmax, volume, cell)?;
+            t.push("cell ranges", tc.get("ranges").unwrap_or(0.0));
+            ranges.cells = Some(c);
+        }
+        Ok((ranges, t))
     }
 
     pub fn classifier(&self) -> &Classifier {
@@ -204,24 +252,17 @@ impl Builder {
         ranges: &Ranges,
         options: &BuildOptions,
     ) -> Result<(Structure, Timings)> {
-        if options.cell != ranges.cells.brick {
-            return Err(Error::invalid(
-                "cell",
-                options.cell.to_string(),
-                format!("ranges were computed for cells of {}", ranges.cells.brick),
-            ));
-        }
         let (v, tf) = (scene.gpu_volume, scene.gpu_tf);
         match accel {
             Accel::Naive => Ok((Structure::Naive, Timings::default())),
             Accel::Lbvh => {
                 let (l, t) = self
                     .lbvh
-                    .build(&self.classifier, options.classify, v, &ranges.bricks, tf)?;
+                    .build(&self.classifier, options.classify, v, ranges.bricks()?, tf)?;
                 Ok((Structure::Tree(Accel::Lbvh, Box::new(l)), t))
             }
             Accel::Grid => {
-                let (g, t) = grid::build(&self.ctx, &self.classifier, v, &ranges.cells, tf)?;
+                let (g, t) = grid::build(&self.ctx, &self.classifier, v, ranges.cells(options.cell)?, tf)?;
                 Ok((Structure::Grid(Box::new(g)), t))
             }
             Accel::KdCpu => {
@@ -238,7 +279,7 @@ impl Builder {
                     ..options.kd
                 };
                 let (tree, mut t) = kd::cpu::build(&self.ctx, scene.volume, scene.tf, &shallow)?;
-                let (g, tg) = grid::build(&self.ctx, &self.classifier, v, &ranges.cells, tf)?;
+                let (g, tg) = grid::build(&self.ctx, &self.classifier, v, ranges.cells(options.cell)?, tf)?;
                 t.extend(tg);
                 Ok((
                     Structure::Hybrid(Box::new(hybrid::Hybrid {

@@ -77,7 +77,8 @@ pub struct Record {
     pub structure: String,
     pub accel: String,
     pub params: BTreeMap<String, String>,
-    /// Per-volume ranges (ms), shared by the structures of a data set.
+    /// Per-volume value ranges this structure reads (ms; 0 for naive and the
+    /// k-d trees), computed once per data set.
     pub ranges_ms: f64,
     /// Median per phase over the timed builds (the TF-change path), ms.
     pub build_phases_ms: BTreeMap<String, f64>,

@@ -263,12 +263,17 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             100.0 * visible as f64 / n as f64,
             100.0 * active as f64 / grid.len() as f64,
         );
-        // Per-volume ranges, once per cell size in use.
-        let mut ranges: HashMap<u32, (Ranges, f64)> = HashMap::new();
+        // Per-volume ranges, once per cell size in use, of the kinds the
+        // structures with that cell size read.
+        let mut ranges: HashMap<u32, (Ranges, Timings)> = HashMap::new();
         for s in &structures {
             if let std::collections::hash_map::Entry::Vacant(e) = ranges.entry(s.options.cell) {
-                let (r, t) = builder.ranges(&gv, s.options.cell)?;
-                e.insert((r, t.total()));
+                let accels: Vec<Accel> = structures
+                    .iter()
+                    .filter(|o| o.options.cell == s.options.cell)
+                    .map(|o| o.accel)
+                    .collect();
+                e.insert(builder.ranges_for(&accels, &gv, s.options.cell)?);
             }
         }
         let (_, naive0) = frames.frame(
@@ -282,7 +287,13 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         progress.step(1);
         for s in &structures {
             progress.at(&format!("{} - {}", loaded.spec, s.label));
-            let (r, ranges_ms) = &ranges[&s.options.cell];
+            let (r, range_times) = &ranges[&s.options.cell];
+            // The per-volume cost this structure depends on.
+            let ranges_ms = match s.accel {
+                Accel::Lbvh => range_times.get("ranges").unwrap_or(0.0),
+                Accel::Grid | Accel::Hybrid => range_times.get("cell ranges").unwrap_or(0.0),
+                _ => 0.0,
+            };
             let mut builds = Vec::new();
             let mut structure = Structure::Naive;
             for i in 0..config.warmup + config.builds {
@@ -334,7 +345,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 structure: s.label.clone(),
                 accel: s.accel.name().into(),
                 params: params_of(s),
-                ranges_ms: *ranges_ms,
+                ranges_ms,
                 build_ms: build.total(),
                 build_phases_ms: build.phases.into_iter().collect(),
                 nodes: stats.nodes,
@@ -357,11 +368,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         {
             progress.at(&format!("{} - speed against error", loaded.spec));
             let opts = BuildOptions::default();
-            if let std::collections::hash_map::Entry::Vacant(slot) = ranges.entry(opts.cell) {
-                let (r, t) = builder.ranges(&gv, opts.cell)?;
-                slot.insert((r, t.total()));
-            }
-            let (structure, _) = builder.build(e.accel.parse()?, &scene, &ranges[&opts.cell].0, &opts)?;
+            let accel: Accel = e.accel.parse()?;
+            let (r, _) = builder.ranges_for(&[accel], &gv, opts.cell)?;
+            let (structure, _) = builder.build(accel, &scene, &r, &opts)?;
             out.errors.extend(error_sweep(
                 config,
                 e,
