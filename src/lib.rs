@@ -10,8 +10,10 @@ pub mod timings;
 
 pub use error::{Error, Result};
 pub use timings::Timings;
+pub mod octree;
 pub mod prims;
 pub mod render;
+pub mod scene;
 pub mod tf;
 pub mod volume;
 

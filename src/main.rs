@@ -10,6 +10,9 @@ use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+#[path = "cli/surfaces.rs"]
+mod surfaces;
+
 #[derive(Parser)]
 #[command(
     name = "lacuna",
@@ -33,6 +36,10 @@ enum Command {
     Devices,
     /// Benchmark every structure (the paper's comparison), speed against error, or the hard-case suite.
     Bench(BenchArgs),
+    /// Generate an SPD surface scene; print its primitive counts, optionally write NFF.
+    Scene(surfaces::SceneArgs),
+    /// Havran's octree comparison on the SPD scenes: build, trace (Whitted), print his statistics.
+    Octree(Box<surfaces::OctreeArgs>),
 }
 
 #[derive(Args)]
@@ -585,6 +592,8 @@ fn main() -> ExitCode {
         Command::Diff(a) => diff(a),
         Command::Devices => devices(),
         Command::Bench(a) => bench(a),
+        Command::Scene(a) => surfaces::scene(a),
+        Command::Octree(a) => surfaces::octree(a),
     };
     match result {
         Ok(code) => code,

@@ -1,0 +1,192 @@
+//! `lacuna scene` and `lacuna octree`: the SPD surface scenes and Havran's
+//! octree traversal comparison.
+
+use clap::Args;
+use lacuna::gpu::{Context, ContextOptions};
+use lacuna::octree::report::{self, Backend, Row};
+use lacuna::octree::{Mode, TraceScene, Traversal, MAX_DEPTH_LIMIT};
+use lacuna::scene::{Scene, SpdScene};
+use lacuna::{Error, Result};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct SceneArgs {
+    /// balls, gears, lattice, mount, rings, teapot, tetra or tree.
+    name: String,
+    /// SPD size factor (default: the SPD's default size).
+    #[arg(long)]
+    size: Option<u32>,
+    /// Write the scene in NFF.
+    #[arg(long)]
+    nff: Option<PathBuf>,
+}
+
+pub fn scene(args: &SceneArgs) -> Result<ExitCode> {
+    let kind: SpdScene = args.name.parse()?;
+    let scene = Scene::generate(kind, args.size)?;
+    let b = scene.bounds();
+    println!("{} (size factor {}): {}", kind, scene.size_factor, scene.counts());
+    println!(
+        "bounds: [{:.4}, {:.4}, {:.4}] - [{:.4}, {:.4}, {:.4}]; {} lights",
+        b.lo[0],
+        b.lo[1],
+        b.lo[2],
+        b.hi[0],
+        b.hi[1],
+        b.hi[2],
+        scene.lights.len()
+    );
+    if let Some(path) = &args.nff {
+        scene.write_nff(path)?;
+        println!("wrote {}", path.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(Args)]
+pub struct OctreeArgs {
+    /// The SPD scene (omit with --all).
+    scene: Option<String>,
+    /// Subdivision: C (centre) or A (adaptive).
+    #[arg(long, default_value = "C")]
+    mode: String,
+    /// Maximum depth (root at depth 0); Havran's range is 4..7.
+    #[arg(long, default_value_t = 6)]
+    max_depth: u32,
+    /// Traversal: 84, 89, 93, rev, or all (every one on the same rays).
+    #[arg(long, default_value = "rev")]
+    traversal: String,
+    /// SPD size factor (default: the SPD's default size).
+    #[arg(long)]
+    size: Option<u32>,
+    /// Image edge in pixels (the SPD's 512; one eye ray per pixel corner).
+    #[arg(long, default_value_t = 512)]
+    resolution: u32,
+    /// Write the image as OpenEXR.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The full comparison: 8 scenes x modes C, A x depths 4..7 x all traversals.
+    #[arg(long, conflicts_with_all = ["scene", "out"])]
+    all: bool,
+    /// With --all: also write the tables as Markdown to this file.
+    #[arg(long, requires = "all")]
+    report: Option<PathBuf>,
+    /// Trace with the CPU reference instead of the GPU.
+    #[arg(long)]
+    cpu: bool,
+    /// Enable Vulkan validation with synchronization validation; fail on any message.
+    #[arg(long)]
+    validate: bool,
+}
+
+fn traversals(spec: &str) -> Result<Vec<Traversal>> {
+    if spec == "all" {
+        return Ok(Traversal::ALL.to_vec());
+    }
+    Ok(vec![spec.parse()?])
+}
+
+fn check_depth(depth: u32) -> Result<()> {
+    if depth > MAX_DEPTH_LIMIT {
+        return Err(Error::invalid(
+            "max depth",
+            depth.to_string(),
+            format!("at most {MAX_DEPTH_LIMIT} (the traversal stacks' size)"),
+        ));
+    }
+    Ok(())
+}
+
+pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
+    let mode: Mode = args.mode.parse()?;
+    check_depth(args.max_depth)?;
+    let kinds = traversals(&args.traversal)?;
+    if args.resolution == 0 || args.resolution > 8192 {
+        return Err(Error::invalid(
+            "resolution",
+            args.resolution.to_string(),
+            "must be 1..=8192",
+        ));
+    }
+    let scenes: Vec<SpdScene> = match (&args.scene, args.all) {
+        (_, true) => SpdScene::ALL.to_vec(),
+        (Some(s), false) => vec![s.parse()?],
+        (None, false) => return Err(Error::invalid("scene", "", "name a scene, or use --all")),
+    };
+    let generated = scenes
+        .iter()
+        .map(|&k| Scene::generate(k, args.size))
+        .collect::<Result<Vec<_>>>()?;
+    let ctx = if args.cpu {
+        None
+    } else {
+        let mut options = ContextOptions::from_env();
+        options.validation |= args.validate;
+        Some(Context::new(&options)?)
+    };
+    let backend = match &ctx {
+        Some(c) => Backend::Gpu(c),
+        None => Backend::Cpu,
+    };
+    let with_image = args.out.is_some();
+    let options = report::options(args.resolution, with_image);
+    let mut rows: Vec<Row> = Vec::new();
+    for scene in &generated {
+        let traced = TraceScene::new(scene);
+        let default_size = args.size.is_none() && args.resolution == 512;
+        let configs: Vec<(Mode, u32)> = if args.all {
+            [Mode::Center, Mode::Adaptive]
+                .into_iter()
+                .flat_map(|m| (4..=7).map(move |d| (m, d)))
+                .collect()
+        } else {
+            vec![(mode, args.max_depth)]
+        };
+        let all_kinds = if args.all {
+            Traversal::ALL.to_vec()
+        } else {
+            kinds.clone()
+        };
+        for (m, d) in configs {
+            let (row, image) = report::run(&backend, scene, &traced, m, d, &all_kinds, &options)?;
+            if !args.all {
+                println!("{}", report::format_counts(scene.kind, &row.counts, default_size));
+                print!("{}", report::format_row(&row));
+                if all_kinds.len() > 1 {
+                    println!("rays whose hit differs between traversals: {}", row.disagreements);
+                }
+            } else {
+                eprintln!(
+                    "{} {}{}: T_B {:.3} s, hit disagreements {}",
+                    row.scene, row.mode, row.max_depth, row.build.build_s, row.disagreements
+                );
+            }
+            if let (Some(path), Some(frame)) = (&args.out, image) {
+                frame.write_exr(path)?;
+                println!("wrote {}", path.display());
+            }
+            rows.push(row);
+        }
+    }
+    if args.all {
+        let md = report::format_all(&rows);
+        print!("{md}");
+        if let Some(path) = &args.report {
+            lacuna::render::write_atomically(path, |tmp| {
+                std::fs::write(tmp, md.as_bytes()).map_err(|e| Error::io(path, e))
+            })?;
+        }
+    }
+    if let Some(c) = &ctx {
+        let messages = c.take_validation_messages();
+        if !messages.is_empty() {
+            for m in &messages {
+                eprintln!("validation: {m}");
+            }
+            eprintln!("error: {} Vulkan validation message(s)", messages.len());
+            return Ok(ExitCode::from(1));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

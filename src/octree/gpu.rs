@@ -1,0 +1,126 @@
+//! The GPU batch tracer: octree, references and primitives uploaded once,
+//! rays traced in batches by `glsl/octree/trace.comp` (one pipeline per
+//! traversal, chosen by a specialization constant), each batch timed with
+//! GPU timestamps.
+
+use super::build::Octree;
+use super::prims::{Ray, TraceResult, TraceScene};
+use super::traverse::Traversal;
+use crate::error::Result;
+use crate::gpu::record::{self, Access};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+
+/// Rays per dispatch (32 MiB of rays and of results at most).
+const BATCH: usize = 1 << 20;
+
+pub struct GpuTracer {
+    ctx: Context,
+    kernels: Vec<(Traversal, Kernel)>,
+    nodes: Buffer,
+    refs: Buffer,
+    prims: Buffer,
+    verts: Buffer,
+    rays: Buffer,
+    results: Buffer,
+    timer: Timer,
+}
+
+fn storage(ctx: &Context, name: &str, bytes: &[u8]) -> Result<Buffer> {
+    // Empty arrays still need a binding.
+    let data: &[u8] = if bytes.is_empty() { &[0u8; 16] } else { bytes };
+    Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER)
+}
+
+impl GpuTracer {
+    pub fn new(ctx: &Context, tree: &Octree, scene: &TraceScene) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let b = [D::STORAGE_BUFFER; 6];
+        let kernels = Traversal::ALL
+            .into_iter()
+            .map(|t| {
+                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[0, t.id()]).map(|k| (t, k))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let info = ctx.info();
+        for (what, bytes) in [
+            ("octree nodes", std::mem::size_of_val(tree.nodes.as_slice())),
+            ("octree references", std::mem::size_of_val(tree.refs.as_slice())),
+            ("primitives", std::mem::size_of_val(scene.prims.as_slice())),
+        ] {
+            info.check(
+                what,
+                "maxStorageBufferRange",
+                bytes as u64,
+                info.max_storage_buffer_range,
+            )?;
+        }
+        let io = |name: &str| {
+            Buffer::new(
+                ctx,
+                name,
+                (BATCH * 32) as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::CpuToGpu,
+            )
+        };
+        let results = Buffer::new(
+            ctx,
+            "trace results",
+            (BATCH * 32) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+        )?;
+        Ok(GpuTracer {
+            ctx: ctx.clone(),
+            kernels,
+            nodes: storage(ctx, "octree nodes", bytemuck::cast_slice(&tree.nodes))?,
+            refs: storage(ctx, "octree references", bytemuck::cast_slice(&tree.refs))?,
+            prims: storage(ctx, "primitives", bytemuck::cast_slice(&scene.prims))?,
+            verts: storage(ctx, "polygon vertices", bytemuck::cast_slice(&scene.verts))?,
+            rays: io("trace rays")?,
+            results,
+            timer: Timer::new(ctx, 1)?,
+        })
+    }
+
+    /// Traces `rays`; returns the results and the GPU time in milliseconds.
+    pub fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)> {
+        let mut out = Vec::with_capacity(rays.len());
+        let mut ms = 0.0;
+        let kernel = &self
+            .kernels
+            .iter()
+            .find(|(t, _)| *t == kind)
+            .expect("a kernel per traversal")
+            .1;
+        for batch in rays.chunks(BATCH) {
+            // Host-visible, coherent: the submission makes these writes visible.
+            let ray_bytes: &[u8] = bytemuck::cast_slice(batch);
+            self.rays.mapped_mut().expect("ray buffer is host visible")[..ray_bytes.len()].copy_from_slice(ray_bytes);
+            let groups = record::groups_linear(self.ctx.info(), "trace rays", batch.len() as u64, 64)?;
+            let push: [u32; 3] = [batch.len() as u32, u32::from(any_hit), groups[0]];
+            let device = self.ctx.device().clone();
+            let timer = &mut self.timer;
+            let bindings = [
+                Binding::Storage(&self.nodes),
+                Binding::Storage(&self.refs),
+                Binding::Storage(&self.prims),
+                Binding::Storage(&self.verts),
+                Binding::Storage(&self.rays),
+                Binding::Storage(&self.results),
+            ];
+            self.ctx.submit_and_wait(|cmd| {
+                timer.reset(cmd);
+                let pass = timer.begin(cmd, "trace")?;
+                kernel.dispatch(cmd, &bindings, bytemuck::cast_slice(&push), groups);
+                timer.end(cmd, pass);
+                record::barrier(&device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+                Ok(())
+            })?;
+            ms += self.timer.results()?.total();
+            let bytes = &self.results.mapped().expect("results are host visible")[..batch.len() * 32];
+            out.extend_from_slice(bytemuck::cast_slice(bytes));
+        }
+        Ok((out, ms))
+    }
+}

@@ -1,0 +1,475 @@
+//! CPU reference of the four octree traversals, written to mirror
+//! `glsl/common/octree_traverse.glsl` step for step: same float operations in
+//! the same order, same tie rules, same counters. Leaves are handed to a
+//! visitor in ray order with their t-span; it returns true to stop.
+//!
+//! Counters per ray (`Counters`):
+//! - N_TS (`steps`): for `84`, interior nodes passed by each point location
+//!   from the root; for `89`, nodes moved up to while looking for the nearest
+//!   common ancestor plus interior nodes passed below it (the first location
+//!   as in `84`); for `93` and `rev`, interior nodes whose children are
+//!   enumerated.
+//! - N_ETS (`leaves`) leaves visited, N_EETS (`empty_leaves`) empty ones.
+//!
+//! Geometry that all four share: a direction component below 1e-20 in
+//! magnitude is replaced by +-1e-20 (so plane crossings are finite), every
+//! crossing is t = (plane - o) / d, and a point exactly on a split plane
+//! belongs to the side the ray is heading to. Glassner and Samet step from a
+//! leaf to the next by the exit point, whose exit-face coordinates are set to
+//! the face exactly, so no epsilon nudge is needed and every step advances.
+
+// Index loops and negated comparisons (NaN-aware) keep the code line for line
+// with the GLSL it must match bit for bit.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+use super::node::{axis_bit, Node};
+use std::fmt;
+use std::str::FromStr;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Traversal {
+    /// Glassner 1984: point location from the root for every leaf.
+    O84,
+    /// Samet 1989: neighbour finding through the nearest common ancestor.
+    O89,
+    /// Gargantini & Atkinson 1993: recursive, sorted split-plane crossings.
+    O93,
+    /// Revelles, Ureña & Lastra 2000: parametric, table driven.
+    Rev,
+}
+
+impl Traversal {
+    pub const ALL: [Traversal; 4] = [Traversal::O84, Traversal::O89, Traversal::O93, Traversal::Rev];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Traversal::O84 => "84",
+            Traversal::O89 => "89",
+            Traversal::O93 => "93",
+            Traversal::Rev => "rev",
+        }
+    }
+
+    /// The specialization constant the GLSL traversal switches on.
+    pub fn id(self) -> u32 {
+        self as u32
+    }
+}
+
+impl fmt::Display for Traversal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Traversal {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        Traversal::ALL
+            .into_iter()
+            .find(|t| t.name() == s)
+            .ok_or_else(|| crate::Error::invalid("octree traversal", s, "expected 84, 89, 93 or rev"))
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    pub steps: u32,
+    pub leaves: u32,
+    pub empty_leaves: u32,
+}
+
+pub const TINY: f32 = 1e-20;
+const BIG: f32 = 3.4e38;
+/// Iteration guard for the point-stepping traversals.
+const GUARD: u32 = 1 << 20;
+
+/// Direction with no component smaller than TINY in magnitude.
+pub fn safe_dir(d: [f32; 3]) -> [f32; 3] {
+    d.map(|x| {
+        if x.abs() < TINY {
+            if x < 0.0 {
+                -TINY
+            } else {
+                TINY
+            }
+        } else {
+            x
+        }
+    })
+}
+
+struct Walk<'a, V> {
+    nodes: &'a [Node],
+    o: [f32; 3],
+    d: [f32; 3],
+    tmin: f32,
+    tmax: f32,
+    c: Counters,
+    visit: V,
+}
+
+/// Traverses `nodes` (root at 0) along o + t d for t in [tmin, tmax].
+pub fn traverse<V: FnMut(&Node, f32, f32) -> bool>(
+    nodes: &[Node],
+    kind: Traversal,
+    o: [f32; 3],
+    d: [f32; 3],
+    tmin: f32,
+    tmax: f32,
+    visit: V,
+) -> Counters {
+    let mut w = Walk {
+        nodes,
+        o,
+        d: safe_dir(d),
+        tmin,
+        tmax,
+        c: Counters::default(),
+        visit,
+    };
+    match kind {
+        Traversal::O84 => w.stepping(false),
+        Traversal::O89 => w.stepping(true),
+        Traversal::O93 => w.o93(),
+        Traversal::Rev => w.rev(),
+    }
+    w.c
+}
+
+impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
+    fn cross(&self, plane: f32, a: usize) -> f32 {
+        (plane - self.o[a]) / self.d[a]
+    }
+
+    fn span(&self, n: &Node) -> (f32, f32) {
+        let (mut t0, mut t1) = (-BIG, BIG);
+        for a in 0..3 {
+            let ta = self.cross(n.lo[a], a);
+            let tb = self.cross(n.hi[a], a);
+            let (near, far) = if self.d[a] > 0.0 { (ta, tb) } else { (tb, ta) };
+            t0 = t0.max(near);
+            t1 = t1.min(far);
+        }
+        (t0, t1)
+    }
+
+    /// Leaf visit with its counters; true to stop.
+    fn leaf(&mut self, index: u32, t0: f32, t1: f32) -> bool {
+        let n = &self.nodes[index as usize];
+        self.c.leaves += 1;
+        if n.count() == 0 {
+            self.c.empty_leaves += 1;
+        }
+        (self.visit)(n, t0, t1)
+    }
+
+    /// Child of `n` holding `p`; a coordinate on a split plane goes to the
+    /// side `high` names for its axis.
+    fn child_at(&self, n: &Node, p: [f32; 3], high: [bool; 3]) -> u32 {
+        let mut child = 0;
+        for a in 0..3 {
+            if p[a] > n.split[a] || (p[a] == n.split[a] && high[a]) {
+                child |= axis_bit(a);
+            }
+        }
+        n.first() + child
+    }
+
+    /// Point location downwards from `node`; `count_start` counts `node` itself.
+    fn locate(&mut self, mut node: u32, p: [f32; 3], high: [bool; 3], count_start: bool) -> u32 {
+        let mut first = true;
+        while !self.nodes[node as usize].is_leaf() {
+            if !first || count_start {
+                self.c.steps += 1;
+            }
+            first = false;
+            node = self.child_at(&self.nodes[node as usize], p, high);
+        }
+        node
+    }
+
+    /// Whether `n` holds `p` under the same tie rule as `child_at`.
+    fn contains(n: &Node, p: [f32; 3], high: [bool; 3]) -> bool {
+        (0..3).all(|a| {
+            !(p[a] < n.lo[a] || p[a] > n.hi[a] || (p[a] == n.hi[a] && high[a]) || (p[a] == n.lo[a] && !high[a]))
+        })
+    }
+
+    /// Glassner (`neighbours` false) and Samet (true). The next point lies on
+    /// the leaf's exit faces (set exactly, ties towards the outside) and
+    /// within the leaf's range on the other axes (clamped, ties towards the
+    /// inside), so the next leaf is always a true neighbour beyond this one.
+    fn stepping(&mut self, neighbours: bool) {
+        let root = self.nodes[0];
+        let (t_in, t_out) = self.span(&root);
+        let mut t = t_in.max(self.tmin);
+        let end = t_out.min(self.tmax);
+        if !(t <= end) {
+            return;
+        }
+        let mut p = [0.0f32; 3];
+        let mut high = [false; 3];
+        for a in 0..3 {
+            p[a] = (self.o[a] + self.d[a] * t).clamp(root.lo[a], root.hi[a]);
+            high[a] = self.d[a] > 0.0;
+        }
+        let mut node = self.locate(0, p, high, true);
+        for _ in 0..GUARD {
+            let n = self.nodes[node as usize];
+            let mut far = [0.0f32; 3];
+            let mut exit = BIG;
+            for a in 0..3 {
+                far[a] = if self.d[a] > 0.0 { n.hi[a] } else { n.lo[a] };
+                exit = exit.min(self.cross(far[a], a));
+            }
+            let exit = exit.max(t);
+            if self.leaf(node, t, exit.min(end)) || exit >= end {
+                return;
+            }
+            for a in 0..3 {
+                if self.cross(far[a], a) <= exit {
+                    p[a] = far[a];
+                    high[a] = self.d[a] > 0.0;
+                } else {
+                    let v = self.o[a] + self.d[a] * exit;
+                    if v >= n.hi[a] {
+                        p[a] = n.hi[a];
+                        high[a] = false;
+                    } else if v <= n.lo[a] {
+                        p[a] = n.lo[a];
+                        high[a] = true;
+                    } else {
+                        p[a] = v;
+                        high[a] = self.d[a] > 0.0;
+                    }
+                }
+            }
+            t = exit;
+            if neighbours {
+                let mut up = node;
+                loop {
+                    if up == 0 {
+                        return;
+                    }
+                    up = self.nodes[up as usize].parent();
+                    self.c.steps += 1;
+                    if Self::contains(&self.nodes[up as usize], p, high) {
+                        break;
+                    }
+                }
+                node = self.locate(up, p, high, false);
+            } else {
+                if !Self::contains(&root, p, high) {
+                    return;
+                }
+                node = self.locate(0, p, high, true);
+            }
+        }
+    }
+
+    fn o93(&mut self) {
+        let root = self.nodes[0];
+        let (t_in, t_out) = self.span(&root);
+        let ta = t_in.max(self.tmin);
+        let tb = t_out.min(self.tmax);
+        if !(ta <= tb) {
+            return;
+        }
+        let mut stack = [(0u32, 0.0f32, 0.0f32); 64];
+        stack[0] = (0, ta, tb);
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (index, ta, tb) = stack[sp];
+            let n = self.nodes[index as usize];
+            if n.is_leaf() {
+                if self.leaf(index, ta, tb) {
+                    return;
+                }
+                continue;
+            }
+            self.c.steps += 1;
+            let mut child = 0u32;
+            let mut cross = [(0.0f32, 0usize); 3];
+            let mut count = 0;
+            for a in 0..3 {
+                let tm = self.cross(n.split[a], a);
+                let high = if self.d[a] > 0.0 { tm <= ta } else { tm > ta };
+                if high {
+                    child |= axis_bit(a);
+                }
+                if tm > ta && tm < tb {
+                    // Insertion keeps equal crossings in axis order.
+                    let mut k = count;
+                    while k > 0 && cross[k - 1].0 > tm {
+                        cross[k] = cross[k - 1];
+                        k -= 1;
+                    }
+                    cross[k] = (tm, a);
+                    count += 1;
+                }
+            }
+            // Children in ray order; pushed in reverse so the first pops first.
+            let mut kids = [(0u32, 0.0f32, 0.0f32); 4];
+            let mut nk = 0;
+            let mut start = ta;
+            for &(tc, a) in cross.iter().take(count) {
+                if tc > start {
+                    kids[nk] = (n.first() + child, start, tc);
+                    nk += 1;
+                }
+                child ^= axis_bit(a);
+                start = tc;
+            }
+            kids[nk] = (n.first() + child, start, tb);
+            nk += 1;
+            for k in (0..nk).rev() {
+                stack[sp] = kids[k];
+                sp += 1;
+            }
+        }
+    }
+
+    fn rev(&mut self) {
+        const FRESH: u32 = 9;
+        let root = self.nodes[0];
+        let mut mask = 0u32;
+        let mut t0 = [0.0f32; 3];
+        let mut t1 = [0.0f32; 3];
+        for a in 0..3 {
+            let ta = self.cross(root.lo[a], a);
+            let tb = self.cross(root.hi[a], a);
+            if self.d[a] > 0.0 {
+                t0[a] = ta;
+                t1[a] = tb;
+            } else {
+                mask |= axis_bit(a);
+                t0[a] = tb;
+                t1[a] = ta;
+            }
+        }
+        if max3(t0) > min3(t1) {
+            return;
+        }
+        #[derive(Clone, Copy, Default)]
+        struct Frame {
+            node: u32,
+            cur: u32,
+            t0: [f32; 3],
+            t1: [f32; 3],
+            tm: [f32; 3],
+        }
+        let mut stack = [Frame::default(); 16];
+        stack[0] = Frame {
+            node: 0,
+            cur: FRESH,
+            t0,
+            t1,
+            tm: [0.0; 3],
+        };
+        let mut sp = 1;
+        while sp > 0 {
+            let f = stack[sp - 1];
+            let n = self.nodes[f.node as usize];
+            let cur;
+            if f.cur == FRESH {
+                let enter = max3(f.t0);
+                let exit = min3(f.t1);
+                if exit < self.tmin || enter > self.tmax {
+                    sp -= 1;
+                    continue;
+                }
+                if n.is_leaf() {
+                    if self.leaf(f.node, enter.max(self.tmin), exit.min(self.tmax)) {
+                        return;
+                    }
+                    sp -= 1;
+                    continue;
+                }
+                self.c.steps += 1;
+                let mut tm = [0.0f32; 3];
+                for (a, v) in tm.iter_mut().enumerate() {
+                    *v = self.cross(n.split[a], a);
+                }
+                stack[sp - 1].tm = tm;
+                cur = first_child(f.t0, tm);
+            } else {
+                let mut t1c = [0.0f32; 3];
+                for a in 0..3 {
+                    t1c[a] = if f.cur & axis_bit(a) != 0 { f.t1[a] } else { f.tm[a] };
+                }
+                let axis = exit_axis(t1c);
+                if f.cur & axis_bit(axis) != 0 {
+                    sp -= 1;
+                    continue;
+                }
+                cur = f.cur | axis_bit(axis);
+            }
+            stack[sp - 1].cur = cur;
+            let tm = stack[sp - 1].tm;
+            let mut c0 = [0.0f32; 3];
+            let mut c1 = [0.0f32; 3];
+            for a in 0..3 {
+                if cur & axis_bit(a) != 0 {
+                    c0[a] = tm[a];
+                    c1[a] = f.t1[a];
+                } else {
+                    c0[a] = f.t0[a];
+                    c1[a] = tm[a];
+                }
+            }
+            stack[sp] = Frame {
+                node: n.first() + (cur ^ mask),
+                cur: FRESH,
+                t0: c0,
+                t1: c1,
+                tm: [0.0; 3],
+            };
+            sp += 1;
+        }
+    }
+}
+
+fn max3(v: [f32; 3]) -> f32 {
+    v[0].max(v[1]).max(v[2])
+}
+
+fn min3(v: [f32; 3]) -> f32 {
+    v[0].min(v[1]).min(v[2])
+}
+
+/// Revelles' first_node: the entry plane is the largest t0 (ties to the
+/// earlier axis); the child is on the far side of each other axis whose
+/// mid-plane is crossed before entry.
+fn first_child(t0: [f32; 3], tm: [f32; 3]) -> u32 {
+    let mut plane = 0;
+    let mut m = t0[0];
+    if t0[1] > m {
+        plane = 1;
+        m = t0[1];
+    }
+    if t0[2] > m {
+        plane = 2;
+        m = t0[2];
+    }
+    let mut c = 0;
+    for a in 0..3 {
+        if a != plane && tm[a] < m {
+            c |= axis_bit(a);
+        }
+    }
+    c
+}
+
+/// Revelles' new_node exit plane: the smallest t1 (ties to the later axis).
+fn exit_axis(t1: [f32; 3]) -> usize {
+    if t1[0] < t1[1] {
+        if t1[0] < t1[2] {
+            return 0;
+        }
+    } else if t1[1] < t1[2] {
+        return 1;
+    }
+    2
+}

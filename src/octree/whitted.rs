@@ -1,0 +1,393 @@
+//! The SPD testing procedure's Whitted ray tracer: one eye ray per pixel
+//! corner (513 x 513 for 512 x 512), Phong shading from positional lights,
+//! a shadow ray to every light the surface faces, mirror reflection for
+//! surfaces with ks > 0 and Snell refraction for transmitters, to a ray tree
+//! depth of 5 (the eye ray is depth 1).
+//!
+//! Rays are traced in waves (all eye rays, then their shadow rays, then all
+//! reflected and refracted rays, ...) by a `Tracer` (the GPU, or the CPU
+//! reference); shading runs on the host between waves. Every wave can be
+//! traced with several traversals: the first one's hits are shaded, and the
+//! others' are compared with them (`RenderStats::disagreements`).
+
+use super::prims::{Ray, TraceResult};
+use super::traverse::Traversal;
+use super::{trace_cpu, GpuTracer, Octree, TraceScene};
+use crate::error::Result;
+use crate::render::Frame;
+use crate::scene::math::{add, cross, dot, length, normalize, scale, sub, V3};
+use crate::scene::{Scene, Shape};
+use std::time::Instant;
+
+/// Traces batches of rays with a given traversal; returns results and the
+/// time spent tracing (GPU timestamps, or CPU wall time) in milliseconds.
+pub trait Tracer {
+    fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)>;
+}
+
+impl Tracer for GpuTracer {
+    fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)> {
+        GpuTracer::trace(self, kind, rays, any_hit)
+    }
+}
+
+/// The CPU reference as a tracer.
+pub struct CpuTracer<'a> {
+    pub tree: &'a Octree,
+    pub scene: &'a TraceScene,
+}
+
+impl Tracer for CpuTracer<'_> {
+    fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)> {
+        let start = Instant::now();
+        let r = trace_cpu(self.tree, self.scene, kind, rays, any_hit);
+        Ok((r, start.elapsed().as_secs_f64() * 1e3))
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct WhittedOptions {
+    /// Image edge in pixels (the SPD's is 512).
+    pub resolution: u32,
+    /// Deepest ray tree level (the SPD's is 5, the eye ray being 1).
+    pub max_depth: u32,
+    /// Whether to shade and return an image.
+    pub image: bool,
+}
+
+impl Default for WhittedOptions {
+    fn default() -> Self {
+        WhittedOptions {
+            resolution: 512,
+            max_depth: 5,
+            image: true,
+        }
+    }
+}
+
+/// The ray counts of the SPD testing procedure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub eye_rays: u64,
+    pub eye_hits: u64,
+    pub shadow_rays: u64,
+    pub shadow_hits: u64,
+    pub secondary_rays: u64,
+    pub secondary_hits: u64,
+}
+
+impl RayCounts {
+    pub fn total(&self) -> u64 {
+        self.eye_rays + self.shadow_rays + self.secondary_rays
+    }
+}
+
+/// Havran's per-traversal totals over every ray of a rendering.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TraversalTotals {
+    pub traversal: Option<Traversal>,
+    pub rays: u64,
+    pub tests: u64,
+    pub steps: u64,
+    pub leaves: u64,
+    pub empty_leaves: u64,
+    /// Tracing time, milliseconds (T_TR).
+    pub trace_ms: f64,
+}
+
+impl TraversalTotals {
+    fn add(&mut self, results: &[TraceResult], ms: f64) {
+        self.rays += results.len() as u64;
+        self.trace_ms += ms;
+        for r in results {
+            self.tests += r.tests as u64;
+            self.steps += r.steps as u64;
+            self.leaves += r.leaves as u64;
+            self.empty_leaves += r.empty_leaves as u64;
+        }
+    }
+
+    /// Per-ray averages (N_IT, N_TS, N_ETS, N_EETS).
+    pub fn per_ray(&self) -> [f64; 4] {
+        let n = self.rays.max(1) as f64;
+        [self.tests, self.steps, self.leaves, self.empty_leaves].map(|v| v as f64 / n)
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderStats {
+    pub counts: RayCounts,
+    pub totals: Vec<TraversalTotals>,
+    /// Rays on which a traversal's hit (primitive or t) differed from the first's.
+    pub disagreements: u64,
+    pub image: Option<Frame>,
+}
+
+/// Host-side shading data per primitive, in f64.
+struct Shading<'a> {
+    scene: &'a Scene,
+    light_scale: f64,
+}
+
+/// A ray waiting to be traced with what its result contributes to.
+#[derive(Clone, Copy)]
+struct Pending {
+    corner: u32,
+    weight: V3,
+    depth: u32,
+}
+
+struct ShadowPending {
+    corner: u32,
+    color: V3,
+}
+
+fn to_ray(o: V3, d: V3, tmin: f64, tmax: f64) -> Ray {
+    Ray {
+        org: o.map(|x| x as f32),
+        tmin: tmin as f32,
+        dir: d.map(|x| x as f32),
+        tmax: tmax as f32,
+    }
+}
+
+const FAR: f64 = 1e30;
+
+impl Shading<'_> {
+    /// Unit geometric (or, for patches, interpolated) normal at p.
+    fn normal(&self, prim: u32, p: V3) -> V3 {
+        match &self.scene.objects[prim as usize].shape {
+            Shape::Sphere { center, .. } => normalize(sub(p, *center)),
+            Shape::Cone {
+                base,
+                base_radius,
+                apex,
+                apex_radius,
+            } => {
+                let axis = sub(*apex, *base);
+                let h = length(axis);
+                let u = scale(axis, 1.0 / h);
+                let w = sub(p, *base);
+                let radial = normalize(sub(w, scale(u, dot(w, u))));
+                let slope = (apex_radius - base_radius) / h;
+                normalize(sub(radial, scale(u, slope)))
+            }
+            Shape::Polygon { .. } => self.scene.objects[prim as usize]
+                .shape
+                .plane_normal()
+                .unwrap_or([0.0, 0.0, 1.0]),
+            Shape::Patch { vertices, normals } => {
+                let (a, b, c) = (vertices[0], vertices[1], vertices[2]);
+                let n = cross(sub(b, a), sub(c, a));
+                let area = dot(n, n);
+                if area == 0.0 {
+                    return normalize(normals[0]);
+                }
+                let wa = dot(cross(sub(b, p), sub(c, p)), n) / area;
+                let wb = dot(cross(sub(c, p), sub(a, p)), n) / area;
+                let wc = 1.0 - wa - wb;
+                let s = add(add(scale(normals[0], wa), scale(normals[1], wb)), scale(normals[2], wc));
+                let s = normalize(s);
+                if dot(s, s) == 0.0 {
+                    normalize(n)
+                } else {
+                    s
+                }
+            }
+        }
+    }
+}
+
+/// Self-intersection allowance for rays leaving a surface at p.
+fn surface_eps(p: V3) -> f64 {
+    2e-5 * p.iter().fold(1.0f64, |m, &x| m.max(x.abs()))
+}
+
+/// Renders `scene` through `tracer` with each of `traversals` (at least one).
+pub fn render(
+    scene: &Scene,
+    tracer: &mut dyn Tracer,
+    traversals: &[Traversal],
+    options: &WhittedOptions,
+) -> Result<RenderStats> {
+    assert!(!traversals.is_empty(), "at least one traversal");
+    let res = options.resolution;
+    let corners = res + 1;
+    let shading = Shading {
+        scene,
+        light_scale: 1.0 / (scene.lights.len().max(1) as f64).sqrt(),
+    };
+    let mut color = vec![[0.0f64; 3]; (corners * corners) as usize];
+    let mut counts = RayCounts::default();
+    let mut totals: Vec<TraversalTotals> = traversals
+        .iter()
+        .map(|&t| TraversalTotals {
+            traversal: Some(t),
+            ..Default::default()
+        })
+        .collect();
+    let mut disagreements = 0u64;
+
+    // Eye rays through the pixel corners; the field of view spans the pixel
+    // centres of the outer rows, so the corners reach half a pixel beyond.
+    let v = &scene.view;
+    let forward = normalize(sub(v.at, v.from));
+    let right = normalize(cross(forward, v.up));
+    let up = cross(right, forward);
+    let half = (v.fov_deg.to_radians() / 2.0).tan();
+    let centre = res as f64 / 2.0;
+    let span = (res as f64 - 1.0) / 2.0;
+    let mut rays = Vec::with_capacity((corners * corners) as usize);
+    let mut pending = Vec::with_capacity(rays.capacity());
+    for j in 0..corners {
+        for i in 0..corners {
+            let x = half * (i as f64 - centre) / span;
+            let y = half * (centre - j as f64) / span;
+            let d = normalize(add(forward, add(scale(right, x), scale(up, y))));
+            rays.push(to_ray(v.from, d, v.hither.max(0.0), FAR));
+            pending.push(Pending {
+                corner: j * corners + i,
+                weight: [1.0; 3],
+                depth: 1,
+            });
+        }
+    }
+    counts.eye_rays = rays.len() as u64;
+
+    let mut trace_all = |rays: &[Ray], any_hit: bool, totals: &mut Vec<TraversalTotals>| -> Result<Vec<TraceResult>> {
+        let mut first: Option<Vec<TraceResult>> = None;
+        for (k, &t) in traversals.iter().enumerate() {
+            let (res, ms) = tracer.trace(t, rays, any_hit)?;
+            totals[k].add(&res, ms);
+            match &first {
+                None => first = Some(res),
+                Some(f) => {
+                    disagreements += f
+                        .iter()
+                        .zip(&res)
+                        .filter(|(a, b)| a.prim != b.prim || a.t_bits != b.t_bits)
+                        .count() as u64
+                }
+            }
+        }
+        Ok(first.unwrap_or_default())
+    };
+
+    while !rays.is_empty() {
+        let hits = trace_all(&rays, false, &mut totals)?;
+        let mut shadow_rays = Vec::new();
+        let mut shadows = Vec::new();
+        let mut next_rays = Vec::new();
+        let mut next = Vec::new();
+        for ((ray, pend), hit) in rays.iter().zip(&pending).zip(&hits) {
+            let primary = pend.depth == 1;
+            if !hit.hit() {
+                let c = &mut color[pend.corner as usize];
+                for ((c, w), b) in c.iter_mut().zip(pend.weight).zip(scene.background) {
+                    *c += w * b;
+                }
+                continue;
+            }
+            if primary {
+                counts.eye_hits += 1;
+            } else {
+                counts.secondary_hits += 1;
+            }
+            let o = ray.org.map(f64::from);
+            let d = ray.dir.map(f64::from);
+            let p = add(o, scale(d, hit.t() as f64));
+            let mut n = shading.normal(hit.prim, p);
+            let entering = dot(n, d) < 0.0;
+            if !entering {
+                n = scale(n, -1.0);
+            }
+            let m = &scene.materials[scene.objects[hit.prim as usize].material as usize];
+            let eps = surface_eps(p);
+            let reflected = sub(d, scale(n, 2.0 * dot(d, n)));
+            for l in &scene.lights {
+                let to = sub(*l, p);
+                let dist = length(to);
+                let ldir = scale(to, 1.0 / dist);
+                let facing = dot(n, ldir);
+                if facing <= 0.0 {
+                    continue;
+                }
+                let spec = if m.ks > 0.0 {
+                    m.ks * dot(reflected, ldir).max(0.0).powf(m.shine.max(1.0))
+                } else {
+                    0.0
+                };
+                let c = [0, 1, 2].map(|a| pend.weight[a] * shading.light_scale * (m.kd * m.color[a] * facing + spec));
+                shadow_rays.push(to_ray(p, ldir, eps, dist - eps));
+                shadows.push(ShadowPending {
+                    corner: pend.corner,
+                    color: c,
+                });
+            }
+            if pend.depth >= options.max_depth {
+                continue;
+            }
+            if m.ks > 0.0 {
+                next_rays.push(to_ray(p, normalize(reflected), eps, FAR));
+                next.push(Pending {
+                    corner: pend.corner,
+                    weight: pend.weight.map(|w| w * m.ks),
+                    depth: pend.depth + 1,
+                });
+            }
+            if m.transmit > 0.0 {
+                let ior = if m.ior > 0.0 { m.ior } else { 1.0 };
+                let eta = if entering { 1.0 / ior } else { ior };
+                let cosi = -dot(d, n);
+                let k = 1.0 - eta * eta * (1.0 - cosi * cosi);
+                if k >= 0.0 {
+                    let t = normalize(add(scale(d, eta), scale(n, eta * cosi - k.sqrt())));
+                    next_rays.push(to_ray(p, t, eps, FAR));
+                    next.push(Pending {
+                        corner: pend.corner,
+                        weight: pend.weight.map(|w| w * m.transmit),
+                        depth: pend.depth + 1,
+                    });
+                }
+            }
+        }
+        if !shadow_rays.is_empty() {
+            counts.shadow_rays += shadow_rays.len() as u64;
+            let blocked = trace_all(&shadow_rays, true, &mut totals)?;
+            for (s, b) in shadows.iter().zip(&blocked) {
+                if b.hit() {
+                    counts.shadow_hits += 1;
+                } else {
+                    for (c, v) in color[s.corner as usize].iter_mut().zip(s.color) {
+                        *c += v;
+                    }
+                }
+            }
+        }
+        counts.secondary_rays += next_rays.len() as u64;
+        rays = next_rays;
+        pending = next;
+    }
+
+    let image = options.image.then(|| {
+        let mut pixels = Vec::with_capacity((res * res) as usize);
+        for y in 0..res {
+            for x in 0..res {
+                let at = |i: u32, j: u32| color[(j * corners + i) as usize];
+                let mut c = [0.0f32; 4];
+                for (a, v) in c.iter_mut().take(3).enumerate() {
+                    *v = ((at(x, y)[a] + at(x + 1, y)[a] + at(x, y + 1)[a] + at(x + 1, y + 1)[a]) / 4.0) as f32;
+                }
+                c[3] = 1.0;
+                pixels.push(c);
+            }
+        }
+        Frame::new(res, res, pixels)
+    });
+    Ok(RenderStats {
+        counts,
+        totals,
+        disagreements,
+        image,
+    })
+}
