@@ -113,7 +113,7 @@ struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<String>,
-    /// Empty space skipping structure: naive, lbvh, grid, kd-cpu, kd-gpu, hybrid.
+    /// Empty space skipping structure: naive, lbvh, grid, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
     #[arg(long, default_value = "naive")]
     accel: String,
     /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
@@ -322,6 +322,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             Accel::KdCpu | Accel::KdGpu => println!("k-d tree {}", options.kd.describe()),
             Accel::Grid => println!("cells {}^3", options.cell),
             Accel::Hybrid => println!("shallow k-d tree over {}^3 cells", options.cell),
+            Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
+                println!("octree over 8^3 bricks, classify {}", classify.describe())
+            }
             Accel::Naive => {}
         }
         println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
@@ -343,7 +346,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             Accel::Grid | Accel::Hybrid => {
                 meta.insert("cell".into(), options.cell.to_string());
             }
-            Accel::Lbvh => {
+            Accel::Lbvh | Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
                 meta.insert("classify".into(), classify.describe().to_string());
             }
         }

@@ -14,8 +14,18 @@ use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
 /// The skipping structures under test: every registry entry but naive,
-/// deep k-d trees with the default max leaf.
-const SKIPPING: [Accel; 5] = [Accel::Lbvh, Accel::Grid, Accel::KdCpu, Accel::KdGpu, Accel::Hybrid];
+/// deep k-d trees with the default max leaf, the octree with each traversal.
+const SKIPPING: [Accel; 9] = [
+    Accel::Lbvh,
+    Accel::Grid,
+    Accel::KdCpu,
+    Accel::KdGpu,
+    Accel::Hybrid,
+    Accel::Octree84,
+    Accel::Octree89,
+    Accel::Octree93,
+    Accel::OctreeRev,
+];
 
 struct Fixture {
     ctx: Context,

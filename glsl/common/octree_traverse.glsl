@@ -30,11 +30,12 @@ struct OctRay {
 
 OctCounters oc;
 
-vec3 oct_safe_dir(vec3 d) {
+vec3 oct_safe_dir(vec3 d, vec3 o) {
     vec3 r = d;
     for (int a = 0; a < 3; ++a) {
         if (abs(d[a]) < OCT_TINY) {
-            r[a] = d[a] < 0.0 ? -OCT_TINY : OCT_TINY;
+            precise float mid = (oct_nodes[0].lo[a] + oct_nodes[0].hi[a]) * 0.5;
+            r[a] = o[a] >= mid ? -OCT_TINY : OCT_TINY;
         }
     }
     return r;
@@ -372,7 +373,7 @@ void oct_rev(OctRay r) {
 // Walks the octree along r, handing leaves to octree_leaf in ray order.
 OctCounters octree_walk(OctRay r) {
     oc = OctCounters(0u, 0u, 0u);
-    r.d = oct_safe_dir(r.d);
+    r.d = oct_safe_dir(r.d, r.o);
     if (OCTREE_KIND == 0u) {
         oct_stepping(r, false);
     } else if (OCTREE_KIND == 1u) {

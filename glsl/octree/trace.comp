@@ -1,11 +1,11 @@
 #version 460
 // Traces a batch of rays through an octree over SPD primitives with one of
-// Havran's four traversals (specialization constant 1), writing each ray's
+// Havran's four traversals (specialization constant 0), writing each ray's
 // nearest hit (or, for shadow rays, the first hit found) and its counters.
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
-layout(constant_id = 1) const uint OCTREE_KIND = 3u;
+layout(constant_id = 0) const uint OCTREE_KIND = 3u;
 
 #include "octree_node.glsl"
 #include "dispatch.glsl"

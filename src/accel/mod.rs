@@ -11,6 +11,7 @@ pub mod hybrid;
 pub mod kd;
 pub mod lbvh;
 pub mod morton;
+pub mod octree;
 mod stats;
 pub mod tree;
 
@@ -40,16 +41,28 @@ pub enum Accel {
     KdGpu,
     /// Shallow CPU k-d tree over the macro-cell grid.
     Hybrid,
+    /// Octree over active 8^3 bricks, Glassner's 1984 traversal.
+    Octree84,
+    /// The same octree, Samet's 1989 neighbour-finding traversal.
+    Octree89,
+    /// The same octree, Gargantini & Atkinson's 1993 traversal.
+    Octree93,
+    /// The same octree, Revelles et al.'s 2000 parametric traversal.
+    OctreeRev,
 }
 
 impl Accel {
-    pub const ALL: [Accel; 6] = [
+    pub const ALL: [Accel; 10] = [
         Accel::Naive,
         Accel::Lbvh,
         Accel::Grid,
         Accel::KdCpu,
         Accel::KdGpu,
         Accel::Hybrid,
+        Accel::Octree84,
+        Accel::Octree89,
+        Accel::Octree93,
+        Accel::OctreeRev,
     ];
 
     pub fn name(self) -> &'static str {
@@ -60,6 +73,22 @@ impl Accel {
             Accel::KdCpu => "kd-cpu",
             Accel::KdGpu => "kd-gpu",
             Accel::Hybrid => "hybrid",
+            Accel::Octree84 => "octree-84",
+            Accel::Octree89 => "octree-89",
+            Accel::Octree93 => "octree-93",
+            Accel::OctreeRev => "octree-rev",
+        }
+    }
+
+    /// The octree traversal of an octree accel.
+    pub fn octree_traversal(self) -> Option<crate::octree::Traversal> {
+        use crate::octree::Traversal as T;
+        match self {
+            Accel::Octree84 => Some(T::O84),
+            Accel::Octree89 => Some(T::O89),
+            Accel::Octree93 => Some(T::O93),
+            Accel::OctreeRev => Some(T::Rev),
+            _ => None,
         }
     }
 }
@@ -90,6 +119,8 @@ pub enum Structure {
     Tree(Accel, Box<tree::GpuTree>),
     Grid(Box<grid::Grid>),
     Hybrid(Box<hybrid::Hybrid>),
+    /// An octree over active bricks with one of the four traversals.
+    Octree(Accel, Box<octree::VolumeOctree>),
 }
 
 impl Structure {
@@ -99,6 +130,7 @@ impl Structure {
             Structure::Tree(a, _) => *a,
             Structure::Grid(_) => Accel::Grid,
             Structure::Hybrid(_) => Accel::Hybrid,
+            Structure::Octree(a, _) => *a,
         }
     }
 
@@ -110,6 +142,7 @@ impl Structure {
             Structure::Tree(_, t) => Some(t.stats()?),
             Structure::Grid(g) => Some(g.stats()?),
             Structure::Hybrid(h) => Some(h.tree.stats()?),
+            Structure::Octree(_, o) => Some(o.stats),
         })
     }
 
@@ -165,7 +198,7 @@ impl Ranges {
             Error::invalid(
                 "ranges",
                 "cells only",
-                "the LBVH needs 8^3 brick ranges (Builder::ranges)",
+                "the LBVH and the octrees need 8^3 brick ranges (Builder::ranges)",
             )
         })
     }
@@ -213,7 +246,7 @@ impl Builder {
         self.ranges_for(&Accel::ALL, volume, cell)
     }
 
-    /// Only the ranges `accels` use: brick ranges for the LBVH, cell ranges
+    /// Only the ranges `accels` use: brick ranges for the LBVH and the octrees, cell ranges
     /// for the grid and the hybrid, none for naive and the k-d trees.
     pub fn ranges_for(&self, accels: &[Accel], volume: &GpuVolume, cell: u32) -> Result<(Ranges, Timings)> {
         grid::check_cell(cell)?;
@@ -222,7 +255,10 @@ impl Builder {
             bricks: None,
             cells: None,
         };
-        if accels.contains(&Accel::Lbvh) {
+        if accels
+            .iter()
+            .any(|a| *a == Accel::Lbvh || a.octree_traversal().is_some())
+        {
             let (b, tb) = GpuBricks::compute(&self.ctx, &self.minmax, volume, bricks::BRICK)?;
             t.extend(tb);
             ranges.bricks = Some(b);
@@ -288,6 +324,19 @@ impl Builder {
                     })),
                     t,
                 ))
+            }
+            Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
+                let traversal = accel.octree_traversal().expect("an octree accel");
+                let (o, t) = octree::build(
+                    &self.ctx,
+                    &self.classifier,
+                    options.classify,
+                    v,
+                    ranges.bricks()?,
+                    tf,
+                    traversal,
+                )?;
+                Ok((Structure::Octree(accel, Box::new(o)), t))
             }
         }
     }

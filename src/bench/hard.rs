@@ -43,6 +43,10 @@ pub fn structures() -> Vec<(&'static str, Accel, BuildOptions)> {
         ("kd-gpu shallow", Accel::KdGpu, kd(Depth::Shallow, 32)),
         ("kd-gpu MLS=128", Accel::KdGpu, kd(Depth::Deep, 128)),
         ("hybrid", Accel::Hybrid, BuildOptions::default()),
+        ("octree-84", Accel::Octree84, BuildOptions::default()),
+        ("octree-89", Accel::Octree89, BuildOptions::default()),
+        ("octree-93", Accel::Octree93, BuildOptions::default()),
+        ("octree-rev", Accel::OctreeRev, BuildOptions::default()),
     ]
 }
 

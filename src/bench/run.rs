@@ -108,6 +108,9 @@ fn params_of(s: &StructureSpec) -> BTreeMap<String, String> {
         Accel::Hybrid => {
             p.insert("cell".into(), o.cell.to_string());
         }
+        Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
+            p.insert("classify".into(), o.classify.describe().into());
+        }
     }
     p
 }
@@ -290,7 +293,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             let (r, range_times) = &ranges[&s.options.cell];
             // The per-volume cost this structure depends on.
             let ranges_ms = match s.accel {
-                Accel::Lbvh => range_times.get("ranges").unwrap_or(0.0),
+                Accel::Lbvh | Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
+                    range_times.get("ranges").unwrap_or(0.0)
+                }
                 Accel::Grid | Accel::Hybrid => range_times.get("cell ranges").unwrap_or(0.0),
                 _ => 0.0,
             };

@@ -38,7 +38,7 @@ impl GpuTracer {
         let kernels = Traversal::ALL
             .into_iter()
             .map(|t| {
-                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[0, t.id()]).map(|k| (t, k))
+                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[t.id()]).map(|k| (t, k))
             })
             .collect::<Result<Vec<_>>>()?;
         let info = ctx.info();

@@ -12,11 +12,14 @@
 //! - N_ETS (`leaves`) leaves visited, N_EETS (`empty_leaves`) empty ones.
 //!
 //! Geometry that all four share: a direction component below 1e-20 in
-//! magnitude is replaced by +-1e-20 (so plane crossings are finite), every
+//! magnitude is replaced by +-1e-20 pointing to the root's centre (so plane
+//! crossings are finite and rays in a root face stay inside), every
 //! crossing is t = (plane - o) / d, and a point exactly on a split plane
 //! belongs to the side the ray is heading to. Glassner and Samet step from a
-//! leaf to the next by the exit point, whose exit-face coordinates are set to
-//! the face exactly, so no epsilon nudge is needed and every step advances.
+//! leaf to the next by the exit point: its exit-face coordinates are set to
+//! the face exactly (ties outwards) and the others clamped into the leaf
+//! (ties inwards), so no epsilon nudge is needed and every step advances to a
+//! true neighbour.
 
 // Index loops and negated comparisons (NaN-aware) keep the code line for line
 // with the GLSL it must match bit for bit.
@@ -84,19 +87,21 @@ const BIG: f32 = 3.4e38;
 /// Iteration guard for the point-stepping traversals.
 const GUARD: u32 = 1 << 20;
 
-/// Direction with no component smaller than TINY in magnitude.
-pub fn safe_dir(d: [f32; 3]) -> [f32; 3] {
-    d.map(|x| {
-        if x.abs() < TINY {
-            if x < 0.0 {
+/// Direction with no component smaller than TINY in magnitude. A vanishing
+/// component points towards the root's centre, so a ray lying in a face of
+/// the root (closed, as the renderers' box tests are) still runs inside it.
+pub fn safe_dir(d: [f32; 3], o: [f32; 3], root: &Node) -> [f32; 3] {
+    let mut r = d;
+    for a in 0..3 {
+        if d[a].abs() < TINY {
+            r[a] = if o[a] >= (root.lo[a] + root.hi[a]) * 0.5 {
                 -TINY
             } else {
                 TINY
-            }
-        } else {
-            x
+            };
         }
-    })
+    }
+    r
 }
 
 struct Walk<'a, V> {
@@ -122,7 +127,7 @@ pub fn traverse<V: FnMut(&Node, f32, f32) -> bool>(
     let mut w = Walk {
         nodes,
         o,
-        d: safe_dir(d),
+        d: safe_dir(d, o, &nodes[0]),
         tmin,
         tmax,
         c: Counters::default(),

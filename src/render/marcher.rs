@@ -90,6 +90,8 @@ pub struct Renderer {
     tree: Kernel,
     grid: Kernel,
     hybrid: Kernel,
+    /// One pipeline per octree traversal (specialization constant).
+    octree: Vec<Kernel>,
 }
 
 impl Renderer {
@@ -104,12 +106,17 @@ impl Renderer {
         let tree = [common.as_slice(), &[D::STORAGE_BUFFER, D::STORAGE_BUFFER]].concat();
         let grid = [common.as_slice(), &[D::STORAGE_BUFFER]].concat();
         let hybrid = [common.as_slice(), &[D::STORAGE_BUFFER; 3]].concat();
+        let octree = crate::octree::Traversal::ALL
+            .iter()
+            .map(|t| Kernel::with_constants(ctx, "march/octree", shaders::MARCH_OCTREE, &grid, 0, &[t.id()]))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Renderer {
             ctx: ctx.clone(),
             naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &common, 0)?,
             tree: Kernel::new(ctx, "march/bvh", shaders::MARCH_BVH, &tree, 0)?,
             grid: Kernel::new(ctx, "march/grid", shaders::MARCH_GRID, &grid, 16)?,
             hybrid: Kernel::new(ctx, "march/hybrid", shaders::MARCH_HYBRID, &hybrid, 16)?,
+            octree,
         })
     }
 
@@ -219,6 +226,10 @@ impl Renderer {
                 push = bytemuck::cast_slice(&h.grid.push()).to_vec();
                 &self.hybrid
             }
+            Structure::Octree(_, o) => {
+                bindings.push(Binding::Storage(&o.nodes));
+                &self.octree[o.traversal.id() as usize]
+            }
         };
         match timer {
             Some(timer) => {
@@ -226,7 +237,7 @@ impl Renderer {
                 kernel.dispatch(cmd, &bindings, &push, groups);
                 timer.end(cmd, pass);
             }
-            None => kernel.dispatch(cmd, &bindings, &[], groups),
+            None => kernel.dispatch(cmd, &bindings, &push, groups),
         }
         Ok(())
     }

@@ -1,0 +1,239 @@
+//! Octree over the active 8^3 bricks (Havran's centre subdivision) for the
+//! volume renderer, walked by any of the four octree traversals
+//! (`--accel octree-84|octree-89|octree-93|octree-rev`): the same node format
+//! and the same GLSL traversals as the surface octrees in `crate::octree`.
+//!
+//! Per transfer function: bricks are classified on the GPU (over the one-voxel
+//! apron, like the LBVH's), the flags are read back, and the tree is built on
+//! the CPU from a summed-area table of the flags: the root is the cube of
+//! 2^k bricks enclosing the volume, split at its centre; a node is a leaf when
+//! it holds no active brick (empty), only active bricks (full) or one brick.
+//! Nonempty leaves' spans are marched on the global lattice with the usual
+//! margins (`glsl/march/octree.comp`), which keeps every image bit-identical
+//! to naive marching.
+
+use super::bricks::GpuBricks;
+use super::classify::{Classifier, Classify};
+use super::stats::Stats;
+use crate::error::Result;
+use crate::gpu::record::{self, Access};
+use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer};
+use crate::octree::node::axis_bit;
+use crate::octree::{Node, Traversal};
+use crate::tf::GpuTransferFunction;
+use crate::timings::Timings;
+use crate::volume::GpuVolume;
+
+pub struct VolumeOctree {
+    pub traversal: Traversal,
+    pub nodes: Buffer,
+    pub stats: Stats,
+}
+
+/// Leaves and interior nodes of a brick octree, as built on the host.
+pub struct BrickOctree {
+    pub nodes: Vec<Node>,
+    pub leaves: u64,
+    pub active_leaves: u64,
+    pub depth: u32,
+}
+
+/// Summed-area table over brick flags, for O(1) box counts.
+struct Sat {
+    n: [usize; 3],
+    s: Vec<u32>,
+}
+
+impl Sat {
+    fn new(counts: [u32; 3], active: &[u32]) -> Sat {
+        let n = counts.map(|c| c as usize + 1);
+        let mut s = vec![0u32; n[0] * n[1] * n[2]];
+        let at = |x: usize, y: usize, z: usize| x + n[0] * (y + n[1] * z);
+        for z in 1..n[2] {
+            for y in 1..n[1] {
+                for x in 1..n[0] {
+                    let f = active[(x - 1) + counts[0] as usize * ((y - 1) + counts[1] as usize * (z - 1))];
+                    let v = u32::from(f != 0) + s[at(x - 1, y, z)] + s[at(x, y - 1, z)] + s[at(x, y, z - 1)]
+                        - s[at(x - 1, y - 1, z)]
+                        - s[at(x - 1, y, z - 1)]
+                        - s[at(x, y - 1, z - 1)]
+                        + s[at(x - 1, y - 1, z - 1)];
+                    s[at(x, y, z)] = v;
+                }
+            }
+        }
+        Sat { n, s }
+    }
+
+    /// Active bricks in [lo, hi) (brick coordinates, clipped by the caller).
+    fn count(&self, lo: [usize; 3], hi: [usize; 3]) -> u32 {
+        let n = self.n;
+        let at = |x: usize, y: usize, z: usize| self.s[x + n[0] * (y + n[1] * z)] as i64;
+        let v = at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) - at(hi[0], hi[1], lo[2])
+            + at(lo[0], lo[1], hi[2])
+            + at(lo[0], hi[1], lo[2])
+            + at(hi[0], lo[1], lo[2])
+            - at(lo[0], lo[1], lo[2]);
+        v as u32
+    }
+}
+
+impl BrickOctree {
+    /// Builds over `counts` bricks of `brick` voxels; `active[b] != 0` marks
+    /// brick b (x fastest).
+    pub fn build(counts: [u32; 3], brick: u32, active: &[u32]) -> BrickOctree {
+        let sat = Sat::new(counts, active);
+        let side = counts.iter().copied().max().unwrap_or(1).next_power_of_two();
+        let mut out = BrickOctree {
+            nodes: vec![Node::default()],
+            leaves: 0,
+            active_leaves: 0,
+            depth: 0,
+        };
+        let mut queue = std::collections::VecDeque::new();
+        queue.push_back((0u32, 0u32, [0u32; 3], side, 0u32));
+        while let Some((index, parent, b0, s, depth)) = queue.pop_front() {
+            let lo = b0.map(|v| v as usize);
+            let hi = [0, 1, 2].map(|a| ((b0[a] + s).min(counts[a])) as usize);
+            let inside: usize = (0..3).map(|a| hi[a].saturating_sub(lo[a])).product();
+            let n_active = if inside == 0 { 0 } else { sat.count(lo, hi) as usize };
+            let first = out.nodes.len() as u32;
+            let node = &mut out.nodes[index as usize];
+            node.lo = [0, 1, 2, 3].map(|a| if a < 3 { (b0[a] * brick) as f32 } else { 0.0 });
+            node.hi = [0, 1, 2, 3].map(|a| if a < 3 { ((b0[a] + s) * brick) as f32 } else { 0.0 });
+            out.depth = out.depth.max(depth);
+            if n_active == 0 || n_active == inside || s == 1 {
+                node.info = [0, u32::from(n_active > 0), parent, 1 | depth << 1];
+                out.leaves += 1;
+                out.active_leaves += u64::from(n_active > 0);
+                continue;
+            }
+            let h = s / 2;
+            node.split = [0, 1, 2, 3].map(|a| if a < 3 { ((b0[a] + h) * brick) as f32 } else { 0.0 });
+            node.info = [first, 0, parent, depth << 1];
+            out.nodes.extend([Node::default(); 8]);
+            for c in 0..8u32 {
+                let cb = [0, 1, 2].map(|a| b0[a] + if c & axis_bit(a) != 0 { h } else { 0 });
+                queue.push_back((first + c, index, cb, h, depth + 1));
+            }
+        }
+        out
+    }
+}
+
+/// Classifies the bricks for `tf`, reads the flags back and builds the
+/// octree ("classify" on the GPU; "octree build" and "upload" on the host).
+#[allow(clippy::too_many_arguments)]
+pub fn build(
+    ctx: &Context,
+    classifier: &Classifier,
+    mode: Classify,
+    volume: &GpuVolume,
+    bricks: &GpuBricks,
+    tf: &GpuTransferFunction,
+    traversal: Traversal,
+) -> Result<(VolumeOctree, Timings)> {
+    let flags = Buffer::new(
+        ctx,
+        "octree brick flags",
+        bricks.total * 4,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuToCpu,
+    )?;
+    let mut timer = Timer::new(ctx, 1)?;
+    ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let pass = timer.begin(cmd, "classify")?;
+        classifier.record(cmd, mode, volume, bricks, tf, &flags)?;
+        timer.end(cmd, pass);
+        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        Ok(())
+    })?;
+    let mut t = timer.results()?;
+    let active: Vec<u32> =
+        bytemuck::pod_collect_to_vec(&flags.mapped().expect("flags are host visible")[..bricks.total as usize * 4]);
+    let tree = t.cpu("octree build", || {
+        BrickOctree::build(bricks.counts, bricks.brick, &active)
+    });
+    let nodes = t.cpu("upload", || {
+        Buffer::with_data(
+            ctx,
+            "volume octree nodes",
+            bytemuck::cast_slice(&tree.nodes),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
+    })?;
+    let stats = Stats {
+        unit: "8^3 bricks",
+        total_bricks: bricks.total,
+        active_bricks: active.iter().filter(|&&f| f != 0).count() as u64,
+        nodes: tree.nodes.len() as u64,
+        leaves: tree.leaves,
+        height: tree.depth + 1,
+        bytes: std::mem::size_of_val(tree.nodes.as_slice()) as u64,
+    };
+    Ok((
+        VolumeOctree {
+            traversal,
+            nodes,
+            stats,
+        },
+        t,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Leaf holding brick `b` (point location at the brick's centre).
+    fn leaf_of(t: &BrickOctree, b: [u32; 3], brick: u32) -> &Node {
+        let p = b.map(|v| ((v * brick) as f32) + brick as f32 * 0.5);
+        let mut n = &t.nodes[0];
+        while !n.is_leaf() {
+            let mut c = 0;
+            for (a, &v) in p.iter().enumerate() {
+                if v > n.split[a] {
+                    c |= axis_bit(a);
+                }
+            }
+            n = &t.nodes[(n.first() + c) as usize];
+        }
+        n
+    }
+
+    #[test]
+    fn leaves_are_empty_exactly_where_every_brick_is_inactive() {
+        let counts = [5u32, 7, 3];
+        let total = (counts[0] * counts[1] * counts[2]) as usize;
+        for seed in 0..20u32 {
+            // A deterministic mix of sparse and dense occupancy.
+            let active: Vec<u32> = (0..total as u32)
+                .map(|i| u32::from((i.wrapping_mul(2654435761).wrapping_add(seed * 977)) % 7 < seed % 7))
+                .collect();
+            let t = BrickOctree::build(counts, 8, &active);
+            assert_eq!(t.nodes[0].lo[..3], [0.0; 3]);
+            assert_eq!(t.nodes[0].hi[..3], [64.0; 3], "the cube of 2^k bricks");
+            for z in 0..counts[2] {
+                for y in 0..counts[1] {
+                    for x in 0..counts[0] {
+                        let i = (x + counts[0] * (y + counts[1] * z)) as usize;
+                        let leaf = leaf_of(&t, [x, y, z], 8);
+                        if active[i] != 0 {
+                            assert_eq!(leaf.count(), 1, "an active brick lies in a nonempty leaf");
+                        }
+                    }
+                }
+            }
+            let interior = t.nodes.len() as u64 - t.leaves;
+            assert_eq!(t.leaves, 7 * interior + 1);
+            let n_active = active.iter().filter(|&&a| a != 0).count();
+            if n_active == 0 {
+                assert_eq!(t.active_leaves, 0);
+            }
+            if n_active == total {
+                assert!(t.active_leaves <= 8 && t.nodes.len() <= 9);
+            }
+        }
+    }
+}
