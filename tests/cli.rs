@@ -415,3 +415,74 @@ fn output_into_a_missing_folder_fails_cleanly() {
     assert_eq!(r.stderr.trim().lines().count(), 1, "{}", r.stderr);
     assert!(r.stderr.contains("/no/such/dir/f.exr"), "{}", r.stderr);
 }
+
+#[test]
+fn scene_prints_counts_and_writes_nff() {
+    let dir = tempfile::tempdir().unwrap();
+    let nff = dir.path().join("tetra.nff");
+    let r = lacuna(&["scene", "tetra", "--nff", nff.to_str().unwrap()], &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("4096 primitives"), "{}", r.stdout);
+    let text = std::fs::read_to_string(&nff).unwrap();
+    assert!(text.contains("\nv\nfrom 1.022846 -3.177154 -2.174512\n"), "view block");
+    assert_eq!(text.lines().filter(|l| *l == "p 3").count(), 4096);
+    assert_eq!(text.lines().filter(|l| l.starts_with("l ")).count(), 1);
+    let r = lacuna(&["scene", "gears", "--size", "1"], &[]);
+    assert!(r.stdout.contains("147 primitives"), "{}", r.stdout);
+}
+
+#[test]
+fn octree_prints_havrans_table_and_writes_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tree.exr");
+    let r = lacuna(
+        &[
+            "octree",
+            "tree",
+            "--size",
+            "4",
+            "--mode",
+            "A",
+            "--max-depth",
+            "5",
+            "--traversal",
+            "all",
+            "--resolution",
+            "24",
+            "--validate",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}\n{}", r.stdout, r.stderr);
+    for needle in [
+        "N_IN", "N_OIV", "T_B", "N_IT", "N_EETS", "T_TR", "O84", "O89", "O93", "Orev", "eye hits",
+    ] {
+        assert!(r.stdout.contains(needle), "{needle} missing:\n{}", r.stdout);
+    }
+    assert!(
+        r.stdout.contains("rays whose hit differs between traversals: 0"),
+        "{}",
+        r.stdout
+    );
+    let frame = Frame::read_exr(&out).unwrap();
+    assert_eq!((frame.width, frame.height), (24, 24));
+    assert_eq!(frame.metadata.get("octree").map(String::as_str), Some("A5"));
+    assert_eq!(frame.metadata.get("scene").map(String::as_str), Some("tree"));
+}
+
+#[test]
+fn bad_octree_and_scene_input_is_one_line() {
+    fails(&["scene", "teapots"], &[], "invalid scene 'teapots'");
+    fails(&["scene", "mount", "--size", "9"], &[], "mount supports 1..=7");
+    fails(&["octree", "tetra", "--mode", "B"], &[], "invalid octree mode 'B'");
+    fails(
+        &["octree", "tetra", "--traversal", "85"],
+        &[],
+        "invalid octree traversal '85'",
+    );
+    fails(&["octree", "tetra", "--max-depth", "20"], &[], "invalid max depth '20'");
+    fails(&["octree", "tetra", "--resolution", "0"], &[], "invalid resolution '0'");
+    fails(&["octree"], &[], "name a scene, or use --all");
+}

@@ -171,6 +171,11 @@ pub fn format_all(rows: &[Row]) -> String {
         let _ = writeln!(s, "### {scene}\n");
         if let Some(r) = rows.iter().find(|r| r.scene == scene) {
             let _ = writeln!(s, "{}\n", format_counts(scene, &r.counts, true));
+            let differing: u64 = rows.iter().filter(|r| r.scene == scene).map(|r| r.disagreements).sum();
+            let _ = writeln!(
+                s,
+                "Rays whose hit differs between traversals, all configurations: {differing}.\n"
+            );
         }
         for mode in [Mode::Center, Mode::Adaptive] {
             let these: Vec<&Row> = rows.iter().filter(|r| r.scene == scene && r.mode == mode).collect();
