@@ -87,12 +87,16 @@ fn traversals(spec: &str) -> Result<Vec<Traversal>> {
     Ok(vec![spec.parse()?])
 }
 
+/// Deeper surface octrees with one object per leaf grow like 4^depth along
+/// every surface; Havran's range is 4..7.
+const CLI_MAX_DEPTH: u32 = if MAX_DEPTH_LIMIT < 10 { MAX_DEPTH_LIMIT } else { 10 };
+
 fn check_depth(depth: u32) -> Result<()> {
-    if depth > MAX_DEPTH_LIMIT {
+    if depth > CLI_MAX_DEPTH {
         return Err(Error::invalid(
             "max depth",
             depth.to_string(),
-            format!("at most {MAX_DEPTH_LIMIT} (the traversal stacks' size)"),
+            format!("at most {CLI_MAX_DEPTH} (Havran's range is 4..7; deeper trees grow like 4^depth)"),
         ));
     }
     Ok(())
