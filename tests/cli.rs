@@ -485,4 +485,15 @@ fn bad_octree_and_scene_input_is_one_line() {
     fails(&["octree", "tetra", "--max-depth", "20"], &[], "invalid max depth '20'");
     fails(&["octree", "tetra", "--resolution", "0"], &[], "invalid resolution '0'");
     fails(&["octree"], &[], "name a scene, or use --all");
+    // Checked before the (long) comparison starts.
+    fails(
+        &["octree", "--all", "--report", "/no/such/dir/t.md"],
+        &[],
+        "/no/such/dir/t.md",
+    );
+    fails(
+        &["scene", "tree", "--nff", "/no/such/dir/t.nff"],
+        &[],
+        "/no/such/dir/t.nff",
+    );
 }

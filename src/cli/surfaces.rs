@@ -7,7 +7,7 @@ use lacuna::octree::report::{self, Backend, Row};
 use lacuna::octree::{Mode, TraceScene, Traversal, MAX_DEPTH_LIMIT};
 use lacuna::scene::{Scene, SpdScene};
 use lacuna::{Error, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -24,6 +24,9 @@ pub struct SceneArgs {
 
 pub fn scene(args: &SceneArgs) -> Result<ExitCode> {
     let kind: SpdScene = args.name.parse()?;
+    if let Some(path) = &args.nff {
+        check_parent(path)?;
+    }
     let scene = Scene::generate(kind, args.size)?;
     let b = scene.bounds();
     println!("{} (size factor {}): {}", kind, scene.size_factor, scene.counts());
@@ -67,7 +70,7 @@ pub struct OctreeArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// The full comparison: 8 scenes x modes C, A x depths 4..7 x all traversals.
-    #[arg(long, conflicts_with_all = ["scene", "out"])]
+    #[arg(long, conflicts_with_all = ["scene", "out", "mode", "max_depth", "traversal"])]
     all: bool,
     /// With --all: also write the tables as Markdown to this file.
     #[arg(long, requires = "all")]
@@ -78,6 +81,21 @@ pub struct OctreeArgs {
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
     validate: bool,
+}
+
+/// Fails before any work when an output's folder does not exist.
+fn check_parent(path: &Path) -> Result<()> {
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
+        ));
+    }
+    Ok(())
 }
 
 fn traversals(spec: &str) -> Result<Vec<Traversal>> {
@@ -106,6 +124,9 @@ pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
     let mode: Mode = args.mode.parse()?;
     check_depth(args.max_depth)?;
     let kinds = traversals(&args.traversal)?;
+    for path in args.out.iter().chain(&args.report) {
+        check_parent(path)?;
+    }
     if args.resolution == 0 || args.resolution > 8192 {
         return Err(Error::invalid(
             "resolution",
