@@ -19,7 +19,6 @@ struct OctCounters {
 const float OCT_TINY = 1e-20;
 const float OCT_BIG = 3.4e38;
 const uint OCT_GUARD = 1048576u;
-const uint OCT_FRESH = 9u;
 
 struct OctRay {
     vec3 o;
@@ -168,76 +167,49 @@ void oct_stepping(OctRay r, bool neighbours) {
     }
 }
 
-// Gargantini & Atkinson 1993: sorted crossings of the three split planes.
-void oct_o93(OctRay r) {
-    vec2 s = oct_span(r, oct_nodes[0]);
-    float ta0 = max(s.x, r.tmin);
-    float tb0 = min(s.y, r.tmax);
-    if (!(ta0 <= tb0)) {
-        return;
-    }
-    uint st_node[64];
-    vec2 st_t[64];
-    int sp = 1;
-    st_node[0] = 0u;
-    st_t[0] = vec2(ta0, tb0);
-    while (sp > 0) {
-        sp -= 1;
-        uint index = st_node[sp];
-        float ta = st_t[sp].x;
-        float tb = st_t[sp].y;
-        OctNode n = oct_nodes[index];
-        if (oct_is_leaf(n)) {
-            if (oct_leaf(index, ta, tb)) {
-                return;
-            }
-            continue;
+// Gargantini & Atkinson's step: the children of n pierced in (ta, tb) come in
+// ray order from the sorted crossings of its split planes (zero-length pieces
+// skipped; equal crossings in axis order). Returns the child after `from`, or
+// the first when `from` is NONE, or NONE after the last. No arrays: private
+// arrays indexed at run time are slow on some drivers.
+uint oct_o93_next(OctRay r, OctNode n, float ta, float tb, uint from) {
+    const uint NONE = 0xffffffffu;
+    uint child = 0u;
+    vec3 tm;
+    bvec3 pending;
+    for (int a = 0; a < 3; ++a) {
+        tm[a] = oct_cross(r, n.split[a], a);
+        bool high = r.d[a] > 0.0 ? tm[a] <= ta : tm[a] > ta;
+        if (high) {
+            child |= oct_axis_bit(a);
         }
-        oc.steps += 1u;
-        uint child = 0u;
-        float ct[3];
-        int ca[3];
-        int count = 0;
+        pending[a] = tm[a] > ta && tm[a] < tb;
+    }
+    bool take = from == NONE;
+    float start = ta;
+    for (int step = 0; step < 4; ++step) {
+        float tc = tb;
+        int axis = 3;
         for (int a = 0; a < 3; ++a) {
-            float tm = oct_cross(r, n.split[a], a);
-            bool high = r.d[a] > 0.0 ? tm <= ta : tm > ta;
-            if (high) {
-                child |= oct_axis_bit(a);
-            }
-            if (tm > ta && tm < tb) {
-                int k = count;
-                while (k > 0 && ct[k - 1] > tm) {
-                    ct[k] = ct[k - 1];
-                    ca[k] = ca[k - 1];
-                    k -= 1;
-                }
-                ct[k] = tm;
-                ca[k] = a;
-                count += 1;
+            if (pending[a] && (axis == 3 || tm[a] < tc)) {
+                tc = tm[a];
+                axis = a;
             }
         }
-        uint kn[4];
-        vec2 kt[4];
-        int nk = 0;
-        float start = ta;
-        for (int i = 0; i < count; ++i) {
-            if (ct[i] > start) {
-                kn[nk] = n.info.x + child;
-                kt[nk] = vec2(start, ct[i]);
-                nk += 1;
+        if (axis == 3 || tc > start) {
+            if (take) {
+                return child;
             }
-            child ^= oct_axis_bit(ca[i]);
-            start = ct[i];
+            take = child == from;
         }
-        kn[nk] = n.info.x + child;
-        kt[nk] = vec2(start, tb);
-        nk += 1;
-        for (int k = nk - 1; k >= 0; --k) {
-            st_node[sp] = kn[k];
-            st_t[sp] = kt[k];
-            sp += 1;
+        if (axis == 3) {
+            return NONE;
         }
+        child ^= oct_axis_bit(axis);
+        pending[axis] = false;
+        start = tc;
     }
+    return NONE;
 }
 
 float oct_max3(vec3 v) {
@@ -279,94 +251,131 @@ int oct_exit_axis(vec3 t1) {
     return 2;
 }
 
-// Revelles, Ureña & Lastra 2000: parametric, mirrored so d > 0 (mask).
-void oct_rev(OctRay r) {
-    OctNode root = oct_nodes[0];
-    uint mask = 0u;
-    vec3 t0;
-    vec3 t1;
+// A node's Revelles parameters from its box (near and far plane crossings).
+void oct_rev_params(OctRay r, OctNode n, out vec3 t0, out vec3 t1) {
     for (int a = 0; a < 3; ++a) {
-        float ta = oct_cross(r, root.lo[a], a);
-        float tb = oct_cross(r, root.hi[a], a);
+        float ta = oct_cross(r, n.lo[a], a);
+        float tb = oct_cross(r, n.hi[a], a);
         if (r.d[a] > 0.0) {
             t0[a] = ta;
             t1[a] = tb;
         } else {
-            mask |= oct_axis_bit(a);
             t0[a] = tb;
             t1[a] = ta;
         }
     }
+}
+
+// Revelles, Ureña & Lastra 2000: parametric, mirrored so d > 0 (mask),
+// without a stack: returning from a child climbs the parent link and
+// recomputes the parent's parameters from its box.
+void oct_rev(OctRay r) {
+    const uint NONE = 0xffffffffu;
+    uint mask = 0u;
+    for (int a = 0; a < 3; ++a) {
+        if (r.d[a] <= 0.0) {
+            mask |= oct_axis_bit(a);
+        }
+    }
+    vec3 t0;
+    vec3 t1;
+    oct_rev_params(r, oct_nodes[0], t0, t1);
     if (oct_max3(t0) > oct_min3(t1)) {
         return;
     }
-    uint f_node[16];
-    uint f_cur[16];
-    vec3 f_t0[16];
-    vec3 f_t1[16];
-    vec3 f_tm[16];
-    f_node[0] = 0u;
-    f_cur[0] = OCT_FRESH;
-    f_t0[0] = t0;
-    f_t1[0] = t1;
-    f_tm[0] = vec3(0.0);
-    int sp = 1;
-    while (sp > 0) {
-        int top = sp - 1;
-        uint index = f_node[top];
-        OctNode n = oct_nodes[index];
-        uint cur;
-        if (f_cur[top] == OCT_FRESH) {
-            float enter = oct_max3(f_t0[top]);
-            float exit = oct_min3(f_t1[top]);
-            if (exit < r.tmin || enter > r.tmax) {
-                sp -= 1;
-                continue;
-            }
-            if (oct_is_leaf(n)) {
-                if (oct_leaf(index, max(enter, r.tmin), min(exit, r.tmax))) {
-                    return;
+    uint node = 0u;
+    uint from = NONE;
+    while (true) {
+        OctNode n = oct_nodes[node];
+        oct_rev_params(r, n, t0, t1);
+        uint next = NONE;
+        if (from == NONE) {
+            float enter = oct_max3(t0);
+            float exit = oct_min3(t1);
+            if (!(exit < r.tmin || enter > r.tmax)) {
+                if (oct_is_leaf(n)) {
+                    if (oct_leaf(node, max(enter, r.tmin), min(exit, r.tmax))) {
+                        return;
+                    }
+                } else {
+                    oc.steps += 1u;
+                    vec3 tm;
+                    for (int a = 0; a < 3; ++a) {
+                        tm[a] = oct_cross(r, n.split[a], a);
+                    }
+                    next = oct_first_child(t0, tm);
                 }
-                sp -= 1;
-                continue;
             }
-            oc.steps += 1u;
-            vec3 tm;
-            for (int a = 0; a < 3; ++a) {
-                tm[a] = oct_cross(r, n.split[a], a);
-            }
-            f_tm[top] = tm;
-            cur = oct_first_child(f_t0[top], tm);
         } else {
+            uint c = from ^ mask;
             vec3 t1c;
             for (int a = 0; a < 3; ++a) {
-                t1c[a] = (f_cur[top] & oct_axis_bit(a)) != 0u ? f_t1[top][a] : f_tm[top][a];
+                t1c[a] = (c & oct_axis_bit(a)) != 0u ? t1[a] : oct_cross(r, n.split[a], a);
             }
             int axis = oct_exit_axis(t1c);
-            if ((f_cur[top] & oct_axis_bit(axis)) != 0u) {
-                sp -= 1;
-                continue;
+            if ((c & oct_axis_bit(axis)) == 0u) {
+                next = c | oct_axis_bit(axis);
             }
-            cur = f_cur[top] | oct_axis_bit(axis);
         }
-        f_cur[top] = cur;
-        vec3 c0;
-        vec3 c1;
-        for (int a = 0; a < 3; ++a) {
-            if ((cur & oct_axis_bit(a)) != 0u) {
-                c0[a] = f_tm[top][a];
-                c1[a] = f_t1[top][a];
+        if (next != NONE) {
+            node = n.info.x + (next ^ mask);
+            from = NONE;
+            continue;
+        }
+        if (node == 0u) {
+            return;
+        }
+        uint parent = n.info.z;
+        from = node - oct_nodes[parent].info.x;
+        node = parent;
+    }
+}
+
+// A node's t-span from its box, clipped to [tmin, tmax].
+vec2 oct_clipped_span(OctRay r, OctNode n) {
+    vec3 t0;
+    vec3 t1;
+    oct_rev_params(r, n, t0, t1);
+    return vec2(max(oct_max3(t0), r.tmin), min(oct_min3(t1), r.tmax));
+}
+
+// Gargantini & Atkinson 1993, without a stack: returning from a child climbs
+// the parent link, recomputes the parent's pierced children and moves on.
+void oct_o93(OctRay r) {
+    const uint NONE = 0xffffffffu;
+    vec2 s0 = oct_clipped_span(r, oct_nodes[0]);
+    if (!(s0.x <= s0.y)) {
+        return;
+    }
+    uint node = 0u;
+    uint from = NONE;
+    while (true) {
+        OctNode n = oct_nodes[node];
+        vec2 s = oct_clipped_span(r, n);
+        uint next = NONE;
+        if (from == NONE) {
+            if (oct_is_leaf(n)) {
+                if (oct_leaf(node, s.x, s.y)) {
+                    return;
+                }
             } else {
-                c0[a] = f_t0[top][a];
-                c1[a] = f_tm[top][a];
+                oc.steps += 1u;
+                next = oct_o93_next(r, n, s.x, s.y, NONE);
             }
+        } else {
+            next = oct_o93_next(r, n, s.x, s.y, from);
         }
-        f_node[sp] = n.info.x + (cur ^ mask);
-        f_cur[sp] = OCT_FRESH;
-        f_t0[sp] = c0;
-        f_t1[sp] = c1;
-        f_tm[sp] = vec3(0.0);
-        sp += 1;
+        if (next != NONE) {
+            node = n.info.x + next;
+            from = NONE;
+            continue;
+        }
+        if (node == 0u) {
+            return;
+        }
+        uint parent = n.info.z;
+        from = node - oct_nodes[parent].info.x;
+        node = parent;
     }
 }
 

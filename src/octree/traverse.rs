@@ -273,165 +273,186 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
         }
     }
 
+    /// A node's t-span from its box, clipped to [tmin, tmax]: the interval
+    /// the recursive formulation hands down (a child's bounds are its
+    /// parent's split values, and every crossing is computed alike).
+    fn clipped_span(&self, n: &Node) -> (f32, f32) {
+        let (t0, t1) = self.rev_params(n);
+        (max3(t0).max(self.tmin), min3(t1).min(self.tmax))
+    }
+
+    /// Gargantini & Atkinson's step: the children of `n` pierced in
+    /// (ta, tb) come in ray order from the sorted crossings of its split
+    /// planes (zero-length pieces skipped; equal crossings in axis order).
+    /// Returns the child (0..8) after `from`, or the first when `from` is
+    /// NONE, or NONE after the last.
+    fn o93_next(&self, n: &Node, ta: f32, tb: f32, from: u32) -> u32 {
+        const NONE: u32 = u32::MAX;
+        let mut child = 0u32;
+        let mut tm = [0.0f32; 3];
+        let mut pending = [false; 3];
+        for a in 0..3 {
+            tm[a] = self.cross(n.split[a], a);
+            let high = if self.d[a] > 0.0 { tm[a] <= ta } else { tm[a] > ta };
+            if high {
+                child |= axis_bit(a);
+            }
+            pending[a] = tm[a] > ta && tm[a] < tb;
+        }
+        let mut take = from == NONE;
+        let mut start = ta;
+        for _ in 0..4 {
+            let mut tc = tb;
+            let mut axis = 3;
+            for a in 0..3 {
+                if pending[a] && (axis == 3 || tm[a] < tc) {
+                    tc = tm[a];
+                    axis = a;
+                }
+            }
+            if axis == 3 || tc > start {
+                if take {
+                    return child;
+                }
+                take = child == from;
+            }
+            if axis == 3 {
+                return NONE;
+            }
+            child ^= axis_bit(axis);
+            pending[axis] = false;
+            start = tc;
+        }
+        NONE
+    }
+
+    /// Gargantini & Atkinson 1993, without a stack: returning from a child
+    /// climbs the parent link, recomputes the parent's pierced children and
+    /// moves to the one after.
     fn o93(&mut self) {
-        let root = self.nodes[0];
-        let (t_in, t_out) = self.span(&root);
-        let ta = t_in.max(self.tmin);
-        let tb = t_out.min(self.tmax);
+        const NONE: u32 = u32::MAX;
+        let (ta, tb) = self.clipped_span(&self.nodes[0]);
         if !(ta <= tb) {
             return;
         }
-        let mut stack = [(0u32, 0.0f32, 0.0f32); 64];
-        stack[0] = (0, ta, tb);
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let (index, ta, tb) = stack[sp];
-            let n = self.nodes[index as usize];
-            if n.is_leaf() {
-                if self.leaf(index, ta, tb) {
-                    return;
+        let mut node = 0u32;
+        let mut from = NONE;
+        loop {
+            let n = self.nodes[node as usize];
+            let (ta, tb) = self.clipped_span(&n);
+            let mut next = NONE;
+            if from == NONE {
+                if n.is_leaf() {
+                    if self.leaf(node, ta, tb) {
+                        return;
+                    }
+                } else {
+                    self.c.steps += 1;
+                    next = self.o93_next(&n, ta, tb, NONE);
                 }
+            } else {
+                next = self.o93_next(&n, ta, tb, from);
+            }
+            if next != NONE {
+                node = n.first() + next;
+                from = NONE;
                 continue;
             }
-            self.c.steps += 1;
-            let mut child = 0u32;
-            let mut cross = [(0.0f32, 0usize); 3];
-            let mut count = 0;
-            for a in 0..3 {
-                let tm = self.cross(n.split[a], a);
-                let high = if self.d[a] > 0.0 { tm <= ta } else { tm > ta };
-                if high {
-                    child |= axis_bit(a);
-                }
-                if tm > ta && tm < tb {
-                    // Insertion keeps equal crossings in axis order.
-                    let mut k = count;
-                    while k > 0 && cross[k - 1].0 > tm {
-                        cross[k] = cross[k - 1];
-                        k -= 1;
-                    }
-                    cross[k] = (tm, a);
-                    count += 1;
-                }
+            if node == 0 {
+                return;
             }
-            // Children in ray order; pushed in reverse so the first pops first.
-            let mut kids = [(0u32, 0.0f32, 0.0f32); 4];
-            let mut nk = 0;
-            let mut start = ta;
-            for &(tc, a) in cross.iter().take(count) {
-                if tc > start {
-                    kids[nk] = (n.first() + child, start, tc);
-                    nk += 1;
-                }
-                child ^= axis_bit(a);
-                start = tc;
-            }
-            kids[nk] = (n.first() + child, start, tb);
-            nk += 1;
-            for k in (0..nk).rev() {
-                stack[sp] = kids[k];
-                sp += 1;
-            }
+            let parent = n.parent();
+            from = node - self.nodes[parent as usize].first();
+            node = parent;
         }
     }
 
-    fn rev(&mut self) {
-        const FRESH: u32 = 9;
-        let root = self.nodes[0];
-        let mut mask = 0u32;
+    /// A node's Revelles parameters from its box: per axis the crossing of
+    /// its near plane (t0) and far plane (t1) along the ray. A child's box
+    /// bounds are its parent's split values, so these equal the values the
+    /// recursive formulation passes down.
+    fn rev_params(&self, n: &Node) -> ([f32; 3], [f32; 3]) {
         let mut t0 = [0.0f32; 3];
         let mut t1 = [0.0f32; 3];
         for a in 0..3 {
-            let ta = self.cross(root.lo[a], a);
-            let tb = self.cross(root.hi[a], a);
+            let ta = self.cross(n.lo[a], a);
+            let tb = self.cross(n.hi[a], a);
             if self.d[a] > 0.0 {
                 t0[a] = ta;
                 t1[a] = tb;
             } else {
-                mask |= axis_bit(a);
                 t0[a] = tb;
                 t1[a] = ta;
             }
         }
+        (t0, t1)
+    }
+
+    /// Revelles et al.'s parametric traversal, without a stack: returning
+    /// from a child climbs the parent link and recomputes the parent's
+    /// parameters from its box, then new_node picks the next child.
+    fn rev(&mut self) {
+        const NONE: u32 = u32::MAX;
+        let mut mask = 0u32;
+        for a in 0..3 {
+            if self.d[a] <= 0.0 {
+                mask |= axis_bit(a);
+            }
+        }
+        let (t0, t1) = self.rev_params(&self.nodes[0]);
         if max3(t0) > min3(t1) {
             return;
         }
-        #[derive(Clone, Copy, Default)]
-        struct Frame {
-            node: u32,
-            cur: u32,
-            t0: [f32; 3],
-            t1: [f32; 3],
-            tm: [f32; 3],
-        }
-        let mut stack = [Frame::default(); 16];
-        stack[0] = Frame {
-            node: 0,
-            cur: FRESH,
-            t0,
-            t1,
-            tm: [0.0; 3],
-        };
-        let mut sp = 1;
-        while sp > 0 {
-            let f = stack[sp - 1];
-            let n = self.nodes[f.node as usize];
-            let cur;
-            if f.cur == FRESH {
-                let enter = max3(f.t0);
-                let exit = min3(f.t1);
-                if exit < self.tmin || enter > self.tmax {
-                    sp -= 1;
-                    continue;
-                }
-                if n.is_leaf() {
-                    if self.leaf(f.node, enter.max(self.tmin), exit.min(self.tmax)) {
-                        return;
+        let mut node = 0u32;
+        // The child (actual index) we return from, or NONE when entering.
+        let mut from = NONE;
+        loop {
+            let n = self.nodes[node as usize];
+            let (t0, t1) = self.rev_params(&n);
+            let mut next = NONE;
+            if from == NONE {
+                let enter = max3(t0);
+                let exit = min3(t1);
+                if !(exit < self.tmin || enter > self.tmax) {
+                    if n.is_leaf() {
+                        if self.leaf(node, enter.max(self.tmin), exit.min(self.tmax)) {
+                            return;
+                        }
+                    } else {
+                        self.c.steps += 1;
+                        let mut tm = [0.0f32; 3];
+                        for (a, v) in tm.iter_mut().enumerate() {
+                            *v = self.cross(n.split[a], a);
+                        }
+                        next = first_child(t0, tm);
                     }
-                    sp -= 1;
-                    continue;
                 }
-                self.c.steps += 1;
-                let mut tm = [0.0f32; 3];
-                for (a, v) in tm.iter_mut().enumerate() {
-                    *v = self.cross(n.split[a], a);
-                }
-                stack[sp - 1].tm = tm;
-                cur = first_child(f.t0, tm);
             } else {
+                let c = from ^ mask;
                 let mut t1c = [0.0f32; 3];
                 for a in 0..3 {
-                    t1c[a] = if f.cur & axis_bit(a) != 0 { f.t1[a] } else { f.tm[a] };
+                    t1c[a] = if c & axis_bit(a) != 0 {
+                        t1[a]
+                    } else {
+                        self.cross(n.split[a], a)
+                    };
                 }
                 let axis = exit_axis(t1c);
-                if f.cur & axis_bit(axis) != 0 {
-                    sp -= 1;
-                    continue;
-                }
-                cur = f.cur | axis_bit(axis);
-            }
-            stack[sp - 1].cur = cur;
-            let tm = stack[sp - 1].tm;
-            let mut c0 = [0.0f32; 3];
-            let mut c1 = [0.0f32; 3];
-            for a in 0..3 {
-                if cur & axis_bit(a) != 0 {
-                    c0[a] = tm[a];
-                    c1[a] = f.t1[a];
-                } else {
-                    c0[a] = f.t0[a];
-                    c1[a] = tm[a];
+                if c & axis_bit(axis) == 0 {
+                    next = c | axis_bit(axis);
                 }
             }
-            stack[sp] = Frame {
-                node: n.first() + (cur ^ mask),
-                cur: FRESH,
-                t0: c0,
-                t1: c1,
-                tm: [0.0; 3],
-            };
-            sp += 1;
+            if next != NONE {
+                node = n.first() + (next ^ mask);
+                from = NONE;
+                continue;
+            }
+            if node == 0 {
+                return;
+            }
+            let parent = n.parent();
+            from = node - self.nodes[parent as usize].first();
+            node = parent;
         }
     }
 }
