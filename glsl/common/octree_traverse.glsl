@@ -1,6 +1,7 @@
 // The four octree traversals of Havran's comparison, mirrored operation for
 // operation by the CPU reference in src/octree/traverse.rs (read its header
-// for the step counters and tie rules). The includer binds `oct_nodes`,
+// for the step counters and tie rules; 93 and rev run without a stack, by
+// parent links). The includer binds `oct_nodes`,
 // defines OCTREE_KIND (0 = 84, 1 = 89, 2 = 93, 3 = rev) and implements
 // `bool octree_leaf(uint node, float t0, float t1)` (true stops the walk).
 #ifndef LACUNA_OCTREE_TRAVERSE_GLSL

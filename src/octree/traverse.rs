@@ -20,6 +20,13 @@
 //! the face exactly (ties outwards) and the others clamped into the leaf
 //! (ties inwards), so no epsilon nudge is needed and every step advances to a
 //! true neighbour.
+//!
+//! Gargantini & Atkinson and Revelles are recursive algorithms; here they run
+//! without a stack: returning from a child climbs the parent link and
+//! recomputes the parent's t-values from its box (a child's bounds are its
+//! parent's split values, so these are the values the recursion would have
+//! passed down). Stacks in private arrays indexed at run time are what GPUs
+//! and llvmpipe handle worst.
 
 // Index loops and negated comparisons (NaN-aware) keep the code line for line
 // with the GLSL it must match bit for bit.
