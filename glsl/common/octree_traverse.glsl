@@ -46,17 +46,36 @@ float oct_cross(OctRay r, float plane, int a) {
     return t;
 }
 
-vec2 oct_span(OctRay r, OctNode n) {
-    float t0 = -OCT_BIG;
-    float t1 = OCT_BIG;
+float oct_max3(vec3 v) {
+    return max(max(v.x, v.y), v.z);
+}
+
+float oct_min3(vec3 v) {
+    return min(min(v.x, v.y), v.z);
+}
+
+// A node's plane crossings (Revelles' parameters): per axis the t of its
+// near plane (t0) and far plane (t1).
+void oct_plane_params(OctRay r, OctNode n, out vec3 t0, out vec3 t1) {
     for (int a = 0; a < 3; ++a) {
         float ta = oct_cross(r, n.lo[a], a);
         float tb = oct_cross(r, n.hi[a], a);
-        bool pos = r.d[a] > 0.0;
-        t0 = max(t0, pos ? ta : tb);
-        t1 = min(t1, pos ? tb : ta);
+        if (r.d[a] > 0.0) {
+            t0[a] = ta;
+            t1[a] = tb;
+        } else {
+            t0[a] = tb;
+            t1[a] = ta;
+        }
     }
-    return vec2(t0, t1);
+}
+
+// The node's t-span: (largest near crossing, smallest far crossing).
+vec2 oct_span(OctRay r, OctNode n) {
+    vec3 t0;
+    vec3 t1;
+    oct_plane_params(r, n, t0, t1);
+    return vec2(oct_max3(t0), oct_min3(t1));
 }
 
 bool oct_leaf(uint index, float t0, float t1) {
@@ -213,14 +232,6 @@ uint oct_o93_next(OctRay r, OctNode n, float ta, float tb, uint from) {
     return NONE;
 }
 
-float oct_max3(vec3 v) {
-    return max(max(v.x, v.y), v.z);
-}
-
-float oct_min3(vec3 v) {
-    return min(min(v.x, v.y), v.z);
-}
-
 uint oct_first_child(vec3 t0, vec3 tm) {
     int plane = 0;
     float m = t0.x;
@@ -252,21 +263,6 @@ int oct_exit_axis(vec3 t1) {
     return 2;
 }
 
-// A node's Revelles parameters from its box (near and far plane crossings).
-void oct_rev_params(OctRay r, OctNode n, out vec3 t0, out vec3 t1) {
-    for (int a = 0; a < 3; ++a) {
-        float ta = oct_cross(r, n.lo[a], a);
-        float tb = oct_cross(r, n.hi[a], a);
-        if (r.d[a] > 0.0) {
-            t0[a] = ta;
-            t1[a] = tb;
-        } else {
-            t0[a] = tb;
-            t1[a] = ta;
-        }
-    }
-}
-
 // Revelles, Ureña & Lastra 2000: parametric, mirrored so d > 0 (mask),
 // without a stack: returning from a child climbs the parent link and
 // recomputes the parent's parameters from its box.
@@ -280,7 +276,7 @@ void oct_rev(OctRay r) {
     }
     vec3 t0;
     vec3 t1;
-    oct_rev_params(r, oct_nodes[0], t0, t1);
+    oct_plane_params(r, oct_nodes[0], t0, t1);
     if (oct_max3(t0) > oct_min3(t1)) {
         return;
     }
@@ -288,7 +284,7 @@ void oct_rev(OctRay r) {
     uint from = NONE;
     while (true) {
         OctNode n = oct_nodes[node];
-        oct_rev_params(r, n, t0, t1);
+        oct_plane_params(r, n, t0, t1);
         uint next = NONE;
         if (from == NONE) {
             float enter = oct_max3(t0);
@@ -334,10 +330,8 @@ void oct_rev(OctRay r) {
 
 // A node's t-span from its box, clipped to [tmin, tmax].
 vec2 oct_clipped_span(OctRay r, OctNode n) {
-    vec3 t0;
-    vec3 t1;
-    oct_rev_params(r, n, t0, t1);
-    return vec2(max(oct_max3(t0), r.tmin), min(oct_min3(t1), r.tmax));
+    vec2 s = oct_span(r, n);
+    return vec2(max(s.x, r.tmin), min(s.y, r.tmax));
 }
 
 // Gargantini & Atkinson 1993, without a stack: returning from a child climbs

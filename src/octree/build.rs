@@ -140,7 +140,6 @@ impl Octree {
             let node = &mut self.nodes[index as usize];
             node.lo = [b.lo[0], b.lo[1], b.lo[2], 0.0];
             node.hi = [b.hi[0], b.hi[1], b.hi[2], 0.0];
-            node.info[2] = parent;
             match t {
                 Tree::Leaf(objs) => {
                     node.info = [self.refs.len() as u32, objs.len() as u32, parent, 1 | depth << 1];

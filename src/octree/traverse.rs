@@ -154,16 +154,31 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
         (plane - self.o[a]) / self.d[a]
     }
 
-    fn span(&self, n: &Node) -> (f32, f32) {
-        let (mut t0, mut t1) = (-BIG, BIG);
+    /// A node's plane crossings (Revelles' parameters): per axis the t of
+    /// its near plane (t0) and far plane (t1) along the ray. A child's box
+    /// bounds are its parent's split values, so these equal the values the
+    /// recursive formulation passes down.
+    fn plane_params(&self, n: &Node) -> ([f32; 3], [f32; 3]) {
+        let mut t0 = [0.0f32; 3];
+        let mut t1 = [0.0f32; 3];
         for a in 0..3 {
             let ta = self.cross(n.lo[a], a);
             let tb = self.cross(n.hi[a], a);
-            let (near, far) = if self.d[a] > 0.0 { (ta, tb) } else { (tb, ta) };
-            t0 = t0.max(near);
-            t1 = t1.min(far);
+            if self.d[a] > 0.0 {
+                t0[a] = ta;
+                t1[a] = tb;
+            } else {
+                t0[a] = tb;
+                t1[a] = ta;
+            }
         }
         (t0, t1)
+    }
+
+    /// The node's t-span: (largest near crossing, smallest far crossing).
+    fn span(&self, n: &Node) -> (f32, f32) {
+        let (t0, t1) = self.plane_params(n);
+        (max3(t0), min3(t1))
     }
 
     /// Leaf visit with its counters; true to stop.
@@ -284,8 +299,8 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
     /// the recursive formulation hands down (a child's bounds are its
     /// parent's split values, and every crossing is computed alike).
     fn clipped_span(&self, n: &Node) -> (f32, f32) {
-        let (t0, t1) = self.rev_params(n);
-        (max3(t0).max(self.tmin), min3(t1).min(self.tmax))
+        let (t0, t1) = self.span(n);
+        (t0.max(self.tmin), t1.min(self.tmax))
     }
 
     /// Gargantini & Atkinson's step: the children of `n` pierced in
@@ -374,27 +389,6 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
         }
     }
 
-    /// A node's Revelles parameters from its box: per axis the crossing of
-    /// its near plane (t0) and far plane (t1) along the ray. A child's box
-    /// bounds are its parent's split values, so these equal the values the
-    /// recursive formulation passes down.
-    fn rev_params(&self, n: &Node) -> ([f32; 3], [f32; 3]) {
-        let mut t0 = [0.0f32; 3];
-        let mut t1 = [0.0f32; 3];
-        for a in 0..3 {
-            let ta = self.cross(n.lo[a], a);
-            let tb = self.cross(n.hi[a], a);
-            if self.d[a] > 0.0 {
-                t0[a] = ta;
-                t1[a] = tb;
-            } else {
-                t0[a] = tb;
-                t1[a] = ta;
-            }
-        }
-        (t0, t1)
-    }
-
     /// Revelles et al.'s parametric traversal, without a stack: returning
     /// from a child climbs the parent link and recomputes the parent's
     /// parameters from its box, then new_node picks the next child.
@@ -406,7 +400,7 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
                 mask |= axis_bit(a);
             }
         }
-        let (t0, t1) = self.rev_params(&self.nodes[0]);
+        let (t0, t1) = self.plane_params(&self.nodes[0]);
         if max3(t0) > min3(t1) {
             return;
         }
@@ -415,7 +409,7 @@ impl<V: FnMut(&Node, f32, f32) -> bool> Walk<'_, V> {
         let mut from = NONE;
         loop {
             let n = self.nodes[node as usize];
-            let (t0, t1) = self.rev_params(&n);
+            let (t0, t1) = self.plane_params(&n);
             let mut next = NONE;
             if from == NONE {
                 let enter = max3(t0);
