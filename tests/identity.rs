@@ -13,19 +13,11 @@ use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
-/// The skipping structures under test: every registry entry but naive,
-/// deep k-d trees with the default max leaf, the octree with each traversal.
-const SKIPPING: [Accel; 9] = [
-    Accel::Lbvh,
-    Accel::Grid,
-    Accel::KdCpu,
-    Accel::KdGpu,
-    Accel::Hybrid,
-    Accel::Octree84,
-    Accel::Octree89,
-    Accel::Octree93,
-    Accel::OctreeRev,
-];
+/// The skipping structures under test: every registry entry but naive
+/// (deep k-d trees with the default max leaf, the octree with each traversal).
+fn skipping() -> impl Iterator<Item = Accel> {
+    Accel::ALL.into_iter().filter(|a| *a != Accel::Naive)
+}
 
 struct Fixture {
     ctx: Context,
@@ -98,7 +90,7 @@ impl Fixture {
             .map(|view| self.frame(&Structure::Naive, &p, view))
             .collect();
         for o in options {
-            for accel in SKIPPING {
+            for accel in skipping() {
                 let s = self.build(&p, accel, o);
                 for (i, view) in views.iter().enumerate() {
                     let f = self.frame(&s, &p, view);
