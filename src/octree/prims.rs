@@ -5,8 +5,8 @@
 //! (no fused multiply-adds on either side), so both find the same t.
 
 use super::build::Box3;
-use crate::scene::math::{dot, length, normalize, scale, sub};
-use crate::scene::{Scene, Shape};
+use crate::scene::math::{dot, normalize};
+use crate::scene::{ConeFrame, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
 
 pub const SPHERE: u32 = 0;
@@ -139,11 +139,10 @@ impl TraceScene {
                     apex,
                     apex_radius,
                 } => {
-                    let axis = sub(*apex, *base);
-                    let h = length(axis);
+                    let f = ConeFrame::new(*base, *base_radius, *apex, *apex_radius);
                     p.a = v4(*base, *base_radius);
-                    p.b = v4(scale(axis, 1.0 / h), h);
-                    p.c = [((apex_radius - base_radius) / h) as f32, 0.0, 0.0, 0.0];
+                    p.b = v4(f.axis, f.height);
+                    p.c = [f.slope as f32, 0.0, 0.0, 0.0];
                     p.info[0] = CONE;
                 }
                 Shape::Polygon { vertices } => push_polygon(&mut p, &mut verts, vertices, &o.shape),

@@ -16,7 +16,7 @@ use super::{trace_cpu, GpuTracer, Octree, TraceScene};
 use crate::error::Result;
 use crate::render::Frame;
 use crate::scene::math::{add, cross, dot, length, normalize, scale, sub, V3};
-use crate::scene::{Scene, Shape};
+use crate::scene::{ConeFrame, Scene, Shape};
 use std::time::Instant;
 
 /// Traces batches of rays with a given traversal; returns results and the
@@ -164,13 +164,10 @@ impl Shading<'_> {
                 apex,
                 apex_radius,
             } => {
-                let axis = sub(*apex, *base);
-                let h = length(axis);
-                let u = scale(axis, 1.0 / h);
+                let f = ConeFrame::new(*base, *base_radius, *apex, *apex_radius);
                 let w = sub(p, *base);
-                let radial = normalize(sub(w, scale(u, dot(w, u))));
-                let slope = (apex_radius - base_radius) / h;
-                normalize(sub(radial, scale(u, slope)))
+                let radial = normalize(sub(w, scale(f.axis, dot(w, f.axis))));
+                normalize(sub(radial, scale(f.axis, f.slope)))
             }
             Shape::Polygon { .. } => self.scene.objects[prim as usize]
                 .shape

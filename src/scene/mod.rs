@@ -17,7 +17,7 @@ mod tree;
 
 use crate::error::{Error, Result};
 use math::V3;
-pub use shape::{Aabb, Shape};
+pub use shape::{Aabb, ConeFrame, Shape};
 use std::fmt;
 use std::str::FromStr;
 

@@ -1,6 +1,6 @@
 //! The primitive kinds the SPD scenes contain, and their exact bounding boxes.
 
-use super::math::{add, cross, normalize, sub, V3};
+use super::math::{add, cross, length, normalize, scale, sub, V3};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
@@ -25,6 +25,27 @@ pub enum Shape {
         vertices: [V3; 3],
         normals: [V3; 3],
     },
+}
+
+/// An open cone's frame: unit axis from base to apex, height, and radius
+/// slope (apex radius - base radius) / height.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConeFrame {
+    pub axis: V3,
+    pub height: f64,
+    pub slope: f64,
+}
+
+impl ConeFrame {
+    pub fn new(base: V3, base_radius: f64, apex: V3, apex_radius: f64) -> ConeFrame {
+        let d = sub(apex, base);
+        let height = length(d);
+        ConeFrame {
+            axis: scale(d, 1.0 / height),
+            height,
+            slope: (apex_radius - base_radius) / height,
+        }
+    }
 }
 
 /// Axis-aligned box.
@@ -73,7 +94,7 @@ impl Shape {
                 apex_radius,
             } => {
                 // A circle of radius r about unit axis u extends r*sqrt(1-u_i^2) along axis i.
-                let u = normalize(sub(*apex, *base));
+                let u = ConeFrame::new(*base, *base_radius, *apex, *apex_radius).axis;
                 let ext = |r: f64| -> V3 {
                     let e = |ui: f64| r * (1.0 - ui * ui).max(0.0).sqrt();
                     [e(u[0]), e(u[1]), e(u[2])]
@@ -90,18 +111,14 @@ impl Shape {
         b
     }
 
-    /// Unit normal of a planar shape's plane (polygons and patches).
+    /// Unit normal of a planar shape's plane (polygons and patches), from
+    /// its first three vertices.
     pub fn plane_normal(&self) -> Option<V3> {
-        match self {
-            Shape::Polygon { vertices } => Some(normalize(cross(
-                sub(vertices[1], vertices[0]),
-                sub(vertices[2], vertices[1]),
-            ))),
-            Shape::Patch { vertices, .. } => Some(normalize(cross(
-                sub(vertices[1], vertices[0]),
-                sub(vertices[2], vertices[1]),
-            ))),
-            _ => None,
-        }
+        let v: &[V3] = match self {
+            Shape::Polygon { vertices } => vertices,
+            Shape::Patch { vertices, .. } => vertices,
+            _ => return None,
+        };
+        Some(normalize(cross(sub(v[1], v[0]), sub(v[2], v[1]))))
     }
 }
