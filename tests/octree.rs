@@ -7,7 +7,8 @@
 mod common;
 use lacuna::octree::whitted::{self, Tracer, WhittedOptions};
 use lacuna::octree::{
-    trace_ray, Box3, CpuTracer, GpuTracer, Mode, Octree, OctreeOptions, Ray, TraceResult, TraceScene, Traversal, MISS,
+    trace_ray, Box3, CpuTracer, GpuTracer, Mode, Octree, OctreeOptions, Ray, TraceKernels, TraceResult, TraceScene,
+    Traversal, MISS,
 };
 use lacuna::scene::{Scene, SpdScene};
 
@@ -36,7 +37,7 @@ fn options(mode: Mode, max_depth: u32) -> OctreeOptions {
 
 /// Traces every batch on the GPU and on the CPU and requires identical results.
 struct Compare<'a> {
-    gpu: GpuTracer,
+    gpu: GpuTracer<'a>,
     cpu: CpuTracer<'a>,
     rays: u64,
     hits: u64,
@@ -62,6 +63,7 @@ impl Tracer for Compare<'_> {
 #[test]
 fn gpu_traversals_match_the_cpu_reference_on_every_ray_and_counter() {
     let ctx = common::gpu();
+    let kernels = TraceKernels::new(&ctx).unwrap();
     let opts = WhittedOptions {
         resolution: 20,
         max_depth: 5,
@@ -73,7 +75,7 @@ fn gpu_traversals_match_the_cpu_reference_on_every_ray_and_counter() {
         for (mode, depth) in [(Mode::Center, 5), (Mode::Adaptive, 4)] {
             let tree = Octree::for_scene(&traced, options(mode, depth));
             let mut cmp = Compare {
-                gpu: GpuTracer::new(&ctx, &tree, &traced).unwrap(),
+                gpu: GpuTracer::new(&kernels, &tree, &traced).unwrap(),
                 cpu: CpuTracer {
                     tree: &tree,
                     scene: &traced,
@@ -103,7 +105,8 @@ fn the_four_traversals_render_identical_images() {
     let scene = reduced(SpdScene::Mount);
     let traced = TraceScene::new(&scene);
     let tree = Octree::for_scene(&traced, options(Mode::Adaptive, 5));
-    let mut gpu = GpuTracer::new(&ctx, &tree, &traced).unwrap();
+    let kernels = TraceKernels::new(&ctx).unwrap();
+    let mut gpu = GpuTracer::new(&kernels, &tree, &traced).unwrap();
     let opts = WhittedOptions {
         resolution: 32,
         max_depth: 5,
@@ -134,41 +137,6 @@ fn brute_force(traced: &TraceScene, ray: &Ray) -> (u32, f32) {
     best
 }
 
-fn eye_rays(scene: &Scene, n: u32) -> Vec<Ray> {
-    let v = &scene.view;
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let norm = |a: [f64; 3]| {
-        let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        a.map(|x| x / l)
-    };
-    let f = norm(sub(v.at, v.from));
-    let r = norm(cross(f, v.up));
-    let u = cross(r, f);
-    let h = (v.fov_deg.to_radians() / 2.0).tan();
-    let mut rays = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let x = h * (2.0 * i as f64 / (n - 1) as f64 - 1.0);
-            let y = h * (1.0 - 2.0 * j as f64 / (n - 1) as f64);
-            let d = norm([0, 1, 2].map(|a| f[a] + x * r[a] + y * u[a]));
-            rays.push(Ray {
-                org: v.from.map(|c| c as f32),
-                tmin: v.hither as f32,
-                dir: d.map(|c| c as f32),
-                tmax: 1e30,
-            });
-        }
-    }
-    rays
-}
-
 #[test]
 fn octree_hits_equal_brute_force_nearest_hits() {
     for kind in SpdScene::ALL {
@@ -177,7 +145,7 @@ fn octree_hits_equal_brute_force_nearest_hits() {
         for mode in [Mode::Center, Mode::Adaptive] {
             let tree = Octree::for_scene(&traced, options(mode, 6));
             let mut hits = 0;
-            for ray in eye_rays(&scene, 40) {
+            for ray in whitted::eye_rays(&scene.view, 39) {
                 let (prim, t) = brute_force(&traced, &ray);
                 for kind_t in Traversal::ALL {
                     let r = trace_ray(&tree, &traced, kind_t, &ray, false);

@@ -2,9 +2,9 @@
 //! octree traversal comparison.
 
 use clap::Args;
-use lacuna::gpu::{Context, ContextOptions};
 use lacuna::octree::report::{self, Backend, Row};
-use lacuna::octree::{Mode, TraceScene, Traversal, MAX_DEPTH_LIMIT};
+use lacuna::octree::whitted::WhittedOptions;
+use lacuna::octree::{Mode, TraceKernels, TraceScene, Traversal, MAX_DEPTH_LIMIT};
 use lacuna::scene::{Scene, SpdScene};
 use lacuna::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -146,16 +146,18 @@ pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
     let ctx = if args.cpu {
         None
     } else {
-        let mut options = ContextOptions::from_env();
-        options.validation |= args.validate;
-        Some(Context::new(&options)?)
+        Some(super::context(args.validate)?)
     };
-    let backend = match &ctx {
-        Some(c) => Backend::Gpu(c),
+    let kernels = ctx.as_ref().map(TraceKernels::new).transpose()?;
+    let backend = match &kernels {
+        Some(k) => Backend::Gpu(k),
         None => Backend::Cpu,
     };
-    let with_image = args.out.is_some();
-    let options = report::options(args.resolution, with_image);
+    let options = WhittedOptions {
+        resolution: args.resolution,
+        max_depth: 5,
+        image: args.out.is_some(),
+    };
     let mut rows: Vec<Row> = Vec::new();
     for scene in &generated {
         let traced = TraceScene::new(scene);
@@ -203,15 +205,6 @@ pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
             })?;
         }
     }
-    if let Some(c) = &ctx {
-        let messages = c.take_validation_messages();
-        if !messages.is_empty() {
-            for m in &messages {
-                eprintln!("validation: {m}");
-            }
-            eprintln!("error: {} Vulkan validation message(s)", messages.len());
-            return Ok(ExitCode::from(1));
-        }
-    }
-    Ok(ExitCode::SUCCESS)
+    drop(kernels);
+    Ok(ctx.as_ref().map_or(ExitCode::SUCCESS, super::validation_verdict))
 }

@@ -1,7 +1,8 @@
-//! The GPU batch tracer: octree, references and primitives uploaded once,
-//! rays traced in batches by `glsl/octree/trace.comp` (one pipeline per
-//! traversal, chosen by a specialization constant), each batch timed with
-//! GPU timestamps.
+//! The GPU batch tracer: `TraceKernels` holds the pipelines of
+//! `glsl/octree/trace.comp` (one per traversal, chosen by a specialization
+//! constant), created once per context; a `GpuTracer` uploads one octree,
+//! its references and primitives, and traces rays in batches, each batch
+//! timed with GPU timestamps.
 
 use super::build::Octree;
 use super::prims::{Ray, TraceResult, TraceScene};
@@ -13,9 +14,40 @@ use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, 
 /// Rays per dispatch (32 MiB of rays and of results at most).
 const BATCH: usize = 1 << 20;
 
-pub struct GpuTracer {
+/// The trace pipelines, once per context.
+pub struct TraceKernels {
     ctx: Context,
     kernels: Vec<(Traversal, Kernel)>,
+}
+
+impl TraceKernels {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        use vk::DescriptorType as D;
+        let b = [D::STORAGE_BUFFER; 6];
+        let kernels = Traversal::ALL
+            .into_iter()
+            .map(|t| {
+                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[t.id()]).map(|k| (t, k))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(TraceKernels {
+            ctx: ctx.clone(),
+            kernels,
+        })
+    }
+
+    fn kernel(&self, kind: Traversal) -> &Kernel {
+        &self
+            .kernels
+            .iter()
+            .find(|(t, _)| *t == kind)
+            .expect("a kernel per traversal")
+            .1
+    }
+}
+
+pub struct GpuTracer<'k> {
+    kernels: &'k TraceKernels,
     nodes: Buffer,
     refs: Buffer,
     prims: Buffer,
@@ -31,16 +63,10 @@ fn storage(ctx: &Context, name: &str, bytes: &[u8]) -> Result<Buffer> {
     Buffer::with_data(ctx, name, data, vk::BufferUsageFlags::STORAGE_BUFFER)
 }
 
-impl GpuTracer {
-    pub fn new(ctx: &Context, tree: &Octree, scene: &TraceScene) -> Result<Self> {
-        use vk::DescriptorType as D;
-        let b = [D::STORAGE_BUFFER; 6];
-        let kernels = Traversal::ALL
-            .into_iter()
-            .map(|t| {
-                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[t.id()]).map(|k| (t, k))
-            })
-            .collect::<Result<Vec<_>>>()?;
+impl<'k> GpuTracer<'k> {
+    /// Uploads `tree` over `scene` for tracing with `kernels`.
+    pub fn new(kernels: &'k TraceKernels, tree: &Octree, scene: &TraceScene) -> Result<Self> {
+        let ctx = &kernels.ctx;
         let info = ctx.info();
         for (what, bytes) in [
             ("octree nodes", std::mem::size_of_val(tree.nodes.as_slice())),
@@ -71,7 +97,6 @@ impl GpuTracer {
             MemoryLocation::GpuToCpu,
         )?;
         Ok(GpuTracer {
-            ctx: ctx.clone(),
             kernels,
             nodes: storage(ctx, "octree nodes", bytemuck::cast_slice(&tree.nodes))?,
             refs: storage(ctx, "octree references", bytemuck::cast_slice(&tree.refs))?,
@@ -87,19 +112,14 @@ impl GpuTracer {
     pub fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)> {
         let mut out = Vec::with_capacity(rays.len());
         let mut ms = 0.0;
-        let kernel = &self
-            .kernels
-            .iter()
-            .find(|(t, _)| *t == kind)
-            .expect("a kernel per traversal")
-            .1;
+        let kernels: &'k TraceKernels = self.kernels;
+        let (ctx, kernel) = (&kernels.ctx, kernels.kernel(kind));
         for batch in rays.chunks(BATCH) {
             // Host-visible, coherent: the submission makes these writes visible.
             let ray_bytes: &[u8] = bytemuck::cast_slice(batch);
             self.rays.mapped_mut().expect("ray buffer is host visible")[..ray_bytes.len()].copy_from_slice(ray_bytes);
-            let groups = record::groups_linear(self.ctx.info(), "trace rays", batch.len() as u64, 64)?;
+            let groups = record::groups_linear(ctx.info(), "trace rays", batch.len() as u64, 64)?;
             let push: [u32; 3] = [batch.len() as u32, u32::from(any_hit), groups[0]];
-            let device = self.ctx.device().clone();
             let timer = &mut self.timer;
             let bindings = [
                 Binding::Storage(&self.nodes),
@@ -109,12 +129,12 @@ impl GpuTracer {
                 Binding::Storage(&self.rays),
                 Binding::Storage(&self.results),
             ];
-            self.ctx.submit_and_wait(|cmd| {
+            ctx.submit_and_wait(|cmd| {
                 timer.reset(cmd);
                 let pass = timer.begin(cmd, "trace")?;
                 kernel.dispatch(cmd, &bindings, bytemuck::cast_slice(&push), groups);
                 timer.end(cmd, pass);
-                record::barrier(&device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+                record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
             ms += self.timer.results()?.total();

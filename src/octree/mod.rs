@@ -13,7 +13,7 @@ pub mod traverse;
 pub mod whitted;
 
 pub use build::{Box3, BuildStats, Mode, Octree, OctreeOptions, MAX_DEPTH_LIMIT};
-pub use gpu::GpuTracer;
+pub use gpu::{GpuTracer, TraceKernels};
 pub use node::Node;
 pub use prims::{Prim, Ray, TraceResult, TraceScene, MISS};
 pub use traverse::{Counters, Traversal};

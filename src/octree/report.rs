@@ -4,9 +4,8 @@
 //! depths across, per scene and mode).
 
 use super::whitted::{self, RayCounts, Tracer, TraversalTotals, WhittedOptions};
-use super::{BuildStats, CpuTracer, GpuTracer, Mode, Octree, OctreeOptions, TraceScene, Traversal};
+use super::{BuildStats, CpuTracer, GpuTracer, Mode, Octree, OctreeOptions, TraceKernels, TraceScene, Traversal};
 use crate::error::Result;
-use crate::gpu::Context;
 use crate::render::Frame;
 use crate::scene::{Scene, SpdScene};
 use std::fmt::Write as _;
@@ -23,9 +22,10 @@ pub struct Row {
     pub disagreements: u64,
 }
 
-/// Where rays are traced.
+/// Where rays are traced: the GPU (pipelines created once, shared by every
+/// configuration) or the CPU reference.
 pub enum Backend<'a> {
-    Gpu(&'a Context),
+    Gpu(&'a TraceKernels),
     Cpu,
 }
 
@@ -49,8 +49,8 @@ pub fn run(
         },
     );
     let stats = match backend {
-        Backend::Gpu(ctx) => {
-            let mut gpu = GpuTracer::new(ctx, &tree, traced)?;
+        Backend::Gpu(kernels) => {
+            let mut gpu = GpuTracer::new(kernels, &tree, traced)?;
             // Lavapipe compiles a pipeline on its first dispatch: warm each up.
             for &t in traversals {
                 let probe = [super::Ray {
@@ -218,13 +218,4 @@ pub fn format_all(rows: &[Row]) -> String {
         }
     }
     s
-}
-
-/// Default render options for a configuration.
-pub fn options(resolution: u32, image: bool) -> WhittedOptions {
-    WhittedOptions {
-        resolution,
-        max_depth: 5,
-        image,
-    }
 }

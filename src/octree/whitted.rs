@@ -16,7 +16,7 @@ use super::{trace_cpu, GpuTracer, Octree, TraceScene};
 use crate::error::Result;
 use crate::render::Frame;
 use crate::scene::math::{add, cross, dot, length, normalize, scale, sub, V3};
-use crate::scene::{ConeFrame, Scene, Shape};
+use crate::scene::{ConeFrame, Scene, Shape, View};
 use std::time::Instant;
 
 /// Traces batches of rays with a given traversal; returns results and the
@@ -25,7 +25,7 @@ pub trait Tracer {
     fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)>;
 }
 
-impl Tracer for GpuTracer {
+impl Tracer for GpuTracer<'_> {
     fn trace(&mut self, kind: Traversal, rays: &[Ray], any_hit: bool) -> Result<(Vec<TraceResult>, f64)> {
         GpuTracer::trace(self, kind, rays, any_hit)
     }
@@ -200,6 +200,29 @@ fn surface_eps(p: V3) -> f64 {
     2e-5 * p.iter().fold(1.0f64, |m, &x| m.max(x.abs()))
 }
 
+/// The SPD's eye rays for a `resolution`^2 image: one per pixel corner,
+/// (resolution + 1)^2, rows from the top. The field of view spans the pixel
+/// centres of the outer rows, so the corners reach half a pixel beyond.
+pub fn eye_rays(v: &View, resolution: u32) -> Vec<Ray> {
+    let corners = resolution + 1;
+    let forward = normalize(sub(v.at, v.from));
+    let right = normalize(cross(forward, v.up));
+    let up = cross(right, forward);
+    let half = (v.fov_deg.to_radians() / 2.0).tan();
+    let centre = resolution as f64 / 2.0;
+    let span = (resolution as f64 - 1.0).max(1.0) / 2.0;
+    let mut rays = Vec::with_capacity((corners * corners) as usize);
+    for j in 0..corners {
+        for i in 0..corners {
+            let x = half * (i as f64 - centre) / span;
+            let y = half * (centre - j as f64) / span;
+            let d = normalize(add(forward, add(scale(right, x), scale(up, y))));
+            rays.push(to_ray(v.from, d, v.hither.max(0.0), FAR));
+        }
+    }
+    rays
+}
+
 /// Renders `scene` through `tracer` with each of `traversals` (at least one).
 pub fn render(
     scene: &Scene,
@@ -225,30 +248,14 @@ pub fn render(
         .collect();
     let mut disagreements = 0u64;
 
-    // Eye rays through the pixel corners; the field of view spans the pixel
-    // centres of the outer rows, so the corners reach half a pixel beyond.
-    let v = &scene.view;
-    let forward = normalize(sub(v.at, v.from));
-    let right = normalize(cross(forward, v.up));
-    let up = cross(right, forward);
-    let half = (v.fov_deg.to_radians() / 2.0).tan();
-    let centre = res as f64 / 2.0;
-    let span = (res as f64 - 1.0) / 2.0;
-    let mut rays = Vec::with_capacity((corners * corners) as usize);
-    let mut pending = Vec::with_capacity(rays.capacity());
-    for j in 0..corners {
-        for i in 0..corners {
-            let x = half * (i as f64 - centre) / span;
-            let y = half * (centre - j as f64) / span;
-            let d = normalize(add(forward, add(scale(right, x), scale(up, y))));
-            rays.push(to_ray(v.from, d, v.hither.max(0.0), FAR));
-            pending.push(Pending {
-                corner: j * corners + i,
-                weight: [1.0; 3],
-                depth: 1,
-            });
-        }
-    }
+    let mut rays = eye_rays(&scene.view, res);
+    let mut pending: Vec<Pending> = (0..rays.len() as u32)
+        .map(|corner| Pending {
+            corner,
+            weight: [1.0; 3],
+            depth: 1,
+        })
+        .collect();
     counts.eye_rays = rays.len() as u64;
 
     let mut trace_all = |rays: &[Ray], any_hit: bool, totals: &mut Vec<TraversalTotals>| -> Result<Vec<TraceResult>> {
