@@ -150,7 +150,7 @@ pub fn format_row(r: &Row) -> String {
         let _ = writeln!(
             s,
             "{:<10} {:>10.2} {:>10.2} {:>10.2} {:>10.2} {:>10.3}",
-            t.traversal.map(|x| format!("O{}", x.name())).unwrap_or_default(),
+            format!("O{}", t.traversal),
             it,
             ts,
             ets,
@@ -203,7 +203,7 @@ pub fn format_all(rows: &[Row]) -> String {
             line("N_EV", &|r| r.build.empty_leaves.to_string());
             line("N_OIV", &|r| r.build.references.to_string());
             line("T_B [s]", &|r| format!("{:.3}", r.build.build_s));
-            let traversals: Vec<Traversal> = these[0].totals.iter().filter_map(|t| t.traversal).collect();
+            let traversals: Vec<Traversal> = these[0].totals.iter().map(|t| t.traversal).collect();
             for (k, t) in traversals.iter().enumerate() {
                 let per = |r: &Row, i: usize| r.totals.get(k).map(|x| x.per_ray()[i]).unwrap_or(f64::NAN);
                 line(&format!("O{t} N_IT"), &|r| format!("{:.2}", per(r, 0)));

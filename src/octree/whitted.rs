@@ -83,9 +83,9 @@ impl RayCounts {
 }
 
 /// Havran's per-traversal totals over every ray of a rendering.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraversalTotals {
-    pub traversal: Option<Traversal>,
+    pub traversal: Traversal,
     pub rays: u64,
     pub tests: u64,
     pub steps: u64,
@@ -96,6 +96,18 @@ pub struct TraversalTotals {
 }
 
 impl TraversalTotals {
+    fn new(traversal: Traversal) -> Self {
+        TraversalTotals {
+            traversal,
+            rays: 0,
+            tests: 0,
+            steps: 0,
+            leaves: 0,
+            empty_leaves: 0,
+            trace_ms: 0.0,
+        }
+    }
+
     fn add(&mut self, results: &[TraceResult], ms: f64) {
         self.rays += results.len() as u64;
         self.trace_ms += ms;
@@ -239,13 +251,7 @@ pub fn render(
     };
     let mut color = vec![[0.0f64; 3]; (corners * corners) as usize];
     let mut counts = RayCounts::default();
-    let mut totals: Vec<TraversalTotals> = traversals
-        .iter()
-        .map(|&t| TraversalTotals {
-            traversal: Some(t),
-            ..Default::default()
-        })
-        .collect();
+    let mut totals: Vec<TraversalTotals> = traversals.iter().map(|&t| TraversalTotals::new(t)).collect();
     let mut disagreements = 0u64;
 
     let mut rays = eye_rays(&scene.view, res);
