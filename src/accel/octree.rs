@@ -78,6 +78,12 @@ impl Sat {
     }
 }
 
+/// The corner `b0 + offset` (in bricks) in voxel units, as a node vec4.
+fn voxels(b0: [u32; 3], offset: u32, brick: u32) -> [f32; 4] {
+    let v = |a: usize| ((b0[a] + offset) * brick) as f32;
+    [v(0), v(1), v(2), 0.0]
+}
+
 impl BrickOctree {
     /// Builds over `counts` bricks of `brick` voxels; `active[b] != 0` marks
     /// brick b (x fastest).
@@ -99,8 +105,8 @@ impl BrickOctree {
             let n_active = if inside == 0 { 0 } else { sat.count(lo, hi) as usize };
             let first = out.nodes.len() as u32;
             let node = &mut out.nodes[index as usize];
-            node.lo = [0, 1, 2, 3].map(|a| if a < 3 { (b0[a] * brick) as f32 } else { 0.0 });
-            node.hi = [0, 1, 2, 3].map(|a| if a < 3 { ((b0[a] + s) * brick) as f32 } else { 0.0 });
+            node.lo = voxels(b0, 0, brick);
+            node.hi = voxels(b0, s, brick);
             out.depth = out.depth.max(depth);
             if n_active == 0 || n_active == inside || s == 1 {
                 node.info = [0, u32::from(n_active > 0), parent, 1 | depth << 1];
@@ -109,7 +115,7 @@ impl BrickOctree {
                 continue;
             }
             let h = s / 2;
-            node.split = [0, 1, 2, 3].map(|a| if a < 3 { ((b0[a] + h) * brick) as f32 } else { 0.0 });
+            node.split = voxels(b0, h, brick);
             node.info = [first, 0, parent, depth << 1];
             out.nodes.extend([Node::default(); 8]);
             for c in 0..8u32 {
