@@ -1,6 +1,8 @@
 //! Compiles every `glsl/**/*.comp` to SPIR-V with glslang and writes the words
 //! into `$OUT_DIR/shaders.rs` as `u32` arrays, so the binary needs no shader
-//! files and the SPIR-V is 4-byte aligned by construction.
+//! files and the SPIR-V is 4-byte aligned by construction. Beside the words
+//! goes each shader's interface read from the SPIR-V (`build/reflect.rs`):
+//! bindings, push-constant size, workgroup size. Kernels are created from it.
 
 use glslang::include::{IncludeHandler, IncludeResult, IncludeType};
 use glslang::{
@@ -9,6 +11,9 @@ use glslang::{
 };
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+#[path = "build/reflect.rs"]
+mod reflect;
 
 /// Resolves `#include "x.glsl"` against `glsl/common/` (and the including
 /// file's own folder), recording every file it opens for `rerun-if-changed`.
@@ -64,6 +69,7 @@ fn main() {
     let glsl = root.join("glsl");
     let common = glsl.join("common");
     println!("cargo:rerun-if-changed=glsl");
+    println!("cargo:rerun-if-changed=build/reflect.rs");
 
     let mut shaders = Vec::new();
     collect(&glsl, "comp", &mut shaders);
@@ -115,14 +121,38 @@ fn main() {
             }
             shader.compile().map_err(|e| e.to_string())
         })();
-        match result {
-            Ok(words) => {
-                let _ = writeln!(generated, "/// SPIR-V of `glsl/{rel}`.\npub static {name}: &[u32] = &[");
+        match result.and_then(|words| reflect::reflect(&words).map(|i| (words, i))) {
+            Ok((words, iface)) => {
+                let kernel = rel.trim_end_matches(".comp");
+                let _ = writeln!(generated, "static {name}_WORDS: [u32; {}] = [", words.len());
                 for chunk in words.chunks(8) {
                     let line: Vec<String> = chunk.iter().map(|w| format!("{w:#010x}")).collect();
                     let _ = writeln!(generated, "    {},", line.join(", "));
                 }
-                generated.push_str("];\n\n");
+                generated.push_str("];\n");
+                let bindings: Vec<String> = iface
+                    .bindings
+                    .iter()
+                    .map(|d| format!("vk::DescriptorType::{}", d.vk_name()))
+                    .collect();
+                let dims: Vec<String> = iface
+                    .local_size
+                    .iter()
+                    .map(|d| match d {
+                        reflect::Dim::Fixed(n) => format!("LocalDim::Fixed({n})"),
+                        reflect::Dim::Spec { id, default } => {
+                            format!("LocalDim::Spec {{ id: {id}, default: {default} }}")
+                        }
+                    })
+                    .collect();
+                let _ = writeln!(
+                    generated,
+                    "/// `glsl/{rel}`: SPIR-V and its reflected interface.\npub const {name}: Shader = Shader {{\n    name: \"{kernel}\",\n    words: &{name}_WORDS,\n    bindings: &[{}],\n    block_sizes: &{:?},\n    push_size: {},\n    local_size: [{}],\n}};\n",
+                    bindings.join(", "),
+                    iface.block_sizes,
+                    iface.push_size,
+                    dims.join(", ")
+                );
                 names.push((rel.clone(), name));
             }
             Err(log) => {
@@ -144,10 +174,9 @@ fn main() {
         }
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
     }
-    generated
-        .push_str("/// Every embedded shader by its path under `glsl/`.\npub static ALL: &[(&str, &[u32])] = &[\n");
-    for (rel, name) in &names {
-        let _ = writeln!(generated, "    (\"{rel}\", {name}),");
+    generated.push_str("/// Every embedded shader.\npub static ALL: &[Shader] = &[\n");
+    for (_, name) in &names {
+        let _ = writeln!(generated, "    {name},");
     }
     generated.push_str("];\n");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap()).join("shaders.rs");

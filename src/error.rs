@@ -42,6 +42,13 @@ pub enum Error {
         call: &'static str,
         result: ash::vk::Result,
     },
+    /// The Rust side of a kernel does not match the shader's reflected
+    /// interface (a programming error, reported instead of aborting).
+    #[error("shader interface mismatch: {0}")]
+    Interface(String),
+    /// A structure cannot do what was asked (e.g. record a host-driven build).
+    #[error("{0}")]
+    Unsupported(String),
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },

@@ -26,6 +26,19 @@ impl Timings {
         self.phases.iter().find(|(n, _)| n == name).map(|(_, ms)| *ms)
     }
 
+    /// The phase `name`, or an error naming it: a misspelt phase must not
+    /// read as zero.
+    pub fn phase(&self, name: &str) -> crate::Result<f64> {
+        self.get(name).ok_or_else(|| {
+            let have: Vec<&str> = self.phases.iter().map(|(n, _)| n.as_str()).collect();
+            crate::Error::invalid(
+                "timing phase",
+                name,
+                format!("not measured (have: {})", have.join(", ")),
+            )
+        })
+    }
+
     pub fn total(&self) -> f64 {
         self.phases.iter().map(|(_, ms)| ms).sum()
     }

@@ -8,15 +8,7 @@ use lacuna::gpu::{shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, Memo
 use lacuna::Error;
 
 fn copy_kernel(ctx: &Context) -> Kernel {
-    use vk::DescriptorType as D;
-    Kernel::new(
-        ctx,
-        "prims/copy",
-        shaders::PRIMS_COPY,
-        &[D::STORAGE_BUFFER, D::STORAGE_BUFFER],
-        16,
-    )
-    .unwrap()
+    Kernel::new::<[u32; 4]>(ctx, &shaders::PRIMS_COPY).unwrap()
 }
 
 fn storage(ctx: &Context, name: &str, words: &[u32]) -> Buffer {
@@ -44,7 +36,7 @@ fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
             &[Binding::Storage(&a), Binding::Storage(&b)],
             &push(n, groups[0]),
             groups,
-        );
+        )?;
         if with_barrier {
             record::compute_to_compute(ctx.device(), cmd);
         }
@@ -53,7 +45,7 @@ fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
             &[Binding::Storage(&b), Binding::Storage(&c)],
             &push(n, groups[0]),
             groups,
-        );
+        )?;
         Ok(())
     })
     .unwrap();
@@ -100,7 +92,7 @@ fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
             &[Binding::Storage(&a), Binding::Storage(&b)],
             &push(n, groups_x),
             groups,
-        );
+        )?;
         Ok(())
     })
     .unwrap();
@@ -144,7 +136,7 @@ fn timer_reports_named_passes_in_order() {
             &[Binding::Storage(&a), Binding::Storage(&b)],
             &push(n as u32, groups[0]),
             groups,
-        );
+        )?;
         timer.end(cmd, p);
         record::compute_to_compute(ctx.device(), cmd);
         let p = timer.begin(cmd, "second")?;
@@ -153,7 +145,7 @@ fn timer_reports_named_passes_in_order() {
             &[Binding::Storage(&b), Binding::Storage(&a)],
             &push(n as u32, groups[0]),
             groups,
-        );
+        )?;
         timer.end(cmd, p);
         Ok(())
     })
@@ -215,14 +207,18 @@ fn adopted_device_is_used_but_not_destroyed() {
     let device = unsafe { instance.create_device(pd, &dinfo, None) }.unwrap();
     let queue = unsafe { device.get_device_queue(family, 0) };
 
-    let ctx = Context::adopt(AdoptInfo {
-        entry: Some(entry.clone()),
-        instance: instance.clone(),
-        physical_device: pd,
-        device: device.clone(),
-        queue,
-        queue_family: family,
-    })
+    // SAFETY: the handles were created above with the features AdoptInfo
+    // lists, outlive the context, and nothing else uses the queue.
+    let ctx = unsafe {
+        Context::adopt(AdoptInfo {
+            entry: Some(entry.clone()),
+            instance: instance.clone(),
+            physical_device: pd,
+            device: device.clone(),
+            queue,
+            queue_family: family,
+        })
+    }
     .unwrap();
     assert!(!ctx.owns_device());
     let out = chained_copies(&ctx, true);
@@ -244,14 +240,17 @@ fn adopted_device_is_used_but_not_destroyed() {
 #[test]
 fn adopting_a_queue_family_that_does_not_exist_is_an_error() {
     let ctx = gpu();
-    let err = Context::adopt(AdoptInfo {
-        entry: None,
-        instance: ctx.instance().clone(),
-        physical_device: ctx.physical_device(),
-        device: ctx.device().clone(),
-        queue: vk::Queue::null(),
-        queue_family: 99,
-    })
+    // SAFETY: the handles are the live context's; adoption fails before use.
+    let err = unsafe {
+        Context::adopt(AdoptInfo {
+            entry: None,
+            instance: ctx.instance().clone(),
+            physical_device: ctx.physical_device(),
+            device: ctx.device().clone(),
+            queue: vk::Queue::null(),
+            queue_family: 99,
+        })
+    }
     .err()
     .unwrap();
     assert!(err.to_string().contains("queue family '99'"), "{err}");
@@ -288,5 +287,71 @@ fn limits_are_checked_by_name_before_use() {
     .unwrap();
     assert_eq!(g[0], info.max_compute_work_group_count[0]);
     assert_eq!(g[1], 4);
+    assert_clean(&ctx);
+}
+
+#[test]
+fn interfaces_are_read_from_the_spirv() {
+    use lacuna::gpu::LocalDim;
+    let d = vk::DescriptorType::STORAGE_BUFFER;
+    let g = shaders::MARCH_GRID;
+    assert_eq!(g.name, "march/grid");
+    assert_eq!(
+        g.bindings,
+        &[
+            vk::DescriptorType::UNIFORM_BUFFER,
+            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            d,
+            d,
+            d
+        ]
+    );
+    assert_eq!(g.push_size, 16);
+    assert_eq!(
+        g.local_size,
+        [LocalDim::Fixed(8), LocalDim::Fixed(8), LocalDim::Fixed(1)]
+    );
+    assert_eq!(
+        g.block_sizes[0] as usize,
+        std::mem::size_of::<lacuna::render::RenderParams>()
+    );
+    // local_size_x_id = 0: the width is specialization constant 0.
+    let scan = shaders::PRIMS_SCAN_BLOCKS;
+    assert!(matches!(scan.local_size[0], LocalDim::Spec { id: 0, .. }));
+    assert_eq!(scan.local_size_with(&[32, 32])[0], 32);
+    assert!(shaders::ALL.iter().any(|s| s.name == "march/naive"));
+}
+
+#[test]
+fn a_push_block_of_the_wrong_size_fails_at_creation_naming_the_kernel() {
+    let ctx = gpu();
+    // march/grid's block is a uvec4; a Rust side of three words is refused.
+    let err = Kernel::new::<[u32; 3]>(&ctx, &shaders::MARCH_GRID).err().unwrap();
+    let text = err.to_string();
+    assert!(matches!(err, Error::Interface(_)), "{text}");
+    assert!(
+        text.contains("march/grid") && text.contains("12") && text.contains("16"),
+        "{text}"
+    );
+    assert!(Kernel::new::<[u32; 4]>(&ctx, &shaders::MARCH_GRID).is_ok());
+    assert_clean(&ctx);
+}
+
+#[test]
+fn bindings_that_differ_from_the_shader_are_an_error_naming_the_kernel() {
+    let ctx = gpu();
+    let kernel = copy_kernel(&ctx);
+    let a = storage(&ctx, "a", &[1, 2, 3, 4]);
+    let push = push(4, 1);
+    let result = ctx.submit_and_wait(|cmd| {
+        // prims/copy reads two storage buffers: one is missing, then one is a uniform.
+        let one = kernel.dispatch(cmd, &[Binding::Storage(&a)], &push, [1, 1, 1]);
+        let wrong = kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Uniform(&a)], &push, [1, 1, 1]);
+        Ok((one, wrong))
+    });
+    let (one, wrong) = result.unwrap();
+    for err in [one.err().unwrap(), wrong.err().unwrap()] {
+        assert!(err.to_string().contains("kernel prims/copy"), "{err}");
+    }
     assert_clean(&ctx);
 }

@@ -5,10 +5,11 @@
 mod common;
 use common::assert_clean;
 use lacuna::accel::kd::{Depth, KdParams};
-use lacuna::accel::{Accel, BuildOptions, Builder, Classify, Ranges, Scene, Structure};
+use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Ranges, Structure};
 use lacuna::bench::hard::{self, lattice, View};
+use lacuna::frame::{diff, Frame};
 use lacuna::gpu::Context;
-use lacuna::render::{diff, Frame, Projection, RenderSettings, Renderer};
+use lacuna::render::{Projection, RenderSettings, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -16,7 +17,7 @@ use lacuna::{TransferFunction, Volume};
 /// The skipping structures under test: every registry entry but naive
 /// (deep k-d trees with the default max leaf, the octree with each traversal).
 fn skipping() -> impl Iterator<Item = Accel> {
-    Accel::ALL.into_iter().filter(|a| *a != Accel::Naive)
+    Accel::skipping()
 }
 
 struct Fixture {
@@ -58,7 +59,7 @@ impl Fixture {
     }
 
     fn build(&self, p: &Prepared, accel: Accel, options: &BuildOptions) -> Structure {
-        let scene = Scene {
+        let scene = BuildInput {
             volume: p.volume,
             gpu_volume: &p.gv,
             tf: p.tf,
@@ -87,7 +88,7 @@ impl Fixture {
         let p = self.prepare(v, tf, options[0].cell);
         let naive: Vec<Frame> = views
             .iter()
-            .map(|view| self.frame(&Structure::Naive, &p, view))
+            .map(|view| self.frame(&Structure::naive(), &p, view))
             .collect();
         for o in options {
             for accel in skipping() {
@@ -233,19 +234,39 @@ fn transparent_opaque_and_single_voxel_cases() {
     assert!(frames.iter().all(|f| f.pixels.iter().all(|p| *p == [0.0; 4])));
     let clear = tf("band:0:1:0");
     let p = fx.prepare(&v, &clear, 16);
-    for accel in [Accel::Lbvh, Accel::KdCpu, Accel::KdGpu, Accel::Hybrid] {
+    for accel in [
+        common::accel("lbvh"),
+        common::accel("kd-cpu"),
+        common::accel("kd-gpu"),
+        common::accel("hybrid"),
+    ] {
         assert_eq!(fx.build(&p, accel, &o).stats().unwrap().unwrap().leaves, 0, "{accel}");
     }
-    assert_eq!(fx.build(&p, Accel::Grid, &o).stats().unwrap().unwrap().active_bricks, 0);
+    assert_eq!(
+        fx.build(&p, common::accel("grid"), &o)
+            .stats()
+            .unwrap()
+            .unwrap()
+            .active_bricks,
+        0
+    );
     // All active.
     let opaque = tf("band:0:1:0.05");
     let p = fx.prepare(&v, &opaque, 16);
     assert_eq!(
-        fx.build(&p, Accel::Lbvh, &o).stats().unwrap().unwrap().active_bricks,
+        fx.build(&p, common::accel("lbvh"), &o)
+            .stats()
+            .unwrap()
+            .unwrap()
+            .active_bricks,
         125
     );
     assert_eq!(
-        fx.build(&p, Accel::KdCpu, &o).stats().unwrap().unwrap().active_bricks,
+        fx.build(&p, common::accel("kd-cpu"), &o)
+            .stats()
+            .unwrap()
+            .unwrap()
+            .active_bricks,
         40 * 40 * 40
     );
     fx.check("opaque", &v, &opaque, &standard_views());
@@ -265,11 +286,11 @@ fn transparent_opaque_and_single_voxel_cases() {
     assert!(frames[1].pixels.iter().any(|p| p[3] > 0.0));
     let p = fx.prepare(&dot, &dot_tf, 16);
     assert_eq!(
-        fx.build(&p, Accel::Lbvh, &o).stats().unwrap().unwrap().leaves,
+        fx.build(&p, common::accel("lbvh"), &o).stats().unwrap().unwrap().leaves,
         8,
         "voxel 16 sits on the corner of 8 bricks' aprons"
     );
-    let kd = fx.build(&p, Accel::KdCpu, &o);
+    let kd = fx.build(&p, common::accel("kd-cpu"), &o);
     assert_eq!(
         kd.stats().unwrap().unwrap().active_bricks,
         27,
@@ -420,7 +441,7 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
         let nodes = |classify| {
             let s = fx.build(
                 &p,
-                Accel::Lbvh,
+                common::accel("lbvh"),
                 &BuildOptions {
                     classify,
                     ..Default::default()
@@ -441,10 +462,10 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     let t = tf("spike:0.5:0.01");
     let p = fx.prepare(&v, &t, 16);
     let view = cam(24, 90.0, 0.0, Projection::Orthographic, 0.5);
-    let naive = fx.frame(&Structure::Naive, &p, &view);
+    let naive = fx.frame(&Structure::naive(), &p, &view);
     let paper = fx.build(
         &p,
-        Accel::Lbvh,
+        common::accel("lbvh"),
         &BuildOptions {
             classify: Classify::Voxel { apron: false },
             ..Default::default()
@@ -456,7 +477,7 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     );
     let exact = fx.build(
         &p,
-        Accel::Lbvh,
+        common::accel("lbvh"),
         &BuildOptions {
             classify: Classify::Voxel { apron: true },
             ..Default::default()

@@ -7,7 +7,7 @@ mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::kd::occupancy::Occupancy;
 use lacuna::accel::kd::{leaf_boxes, volume, Depth, IBox, KdParams};
-use lacuna::accel::{Accel, BuildOptions, Builder, Scene};
+use lacuna::accel::{BuildInput, BuildOptions, Builder};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -165,14 +165,14 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
         let gv = GpuVolume::upload(&ctx, &v).unwrap();
         let lut = tf.upload(&ctx).unwrap();
         let (ranges, _) = builder.ranges(&gv, 16).unwrap();
-        let scene = Scene {
+        let scene = BuildInput {
             volume: &v,
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
         };
         for kd in params {
-            for accel in [Accel::KdCpu, Accel::KdGpu] {
+            for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {
                 let (s, timings) = builder
                     .build(
                         accel,
@@ -192,7 +192,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
                 assert_eq!(stats.nodes as usize, nodes.len());
                 assert_eq!(stats.leaves as usize, leaf_boxes(&nodes).len());
                 assert!(stats.height >= 1);
-                let phases: &[&str] = if accel == Accel::KdCpu {
+                let phases: &[&str] = if accel == common::accel("kd-cpu") {
                     &["svt", "tree", "upload"]
                 } else {
                     &["bricks", "sort", "queries", "upload"]

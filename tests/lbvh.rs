@@ -5,7 +5,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::lbvh::{cpu, Node};
-use lacuna::accel::{BuildOptions, Builder, Classify, Scene};
+use lacuna::accel::{BuildInput, BuildOptions, Builder, Classify};
 use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
 use lacuna::{TransferFunction, Volume};
 
@@ -41,7 +41,7 @@ fn gpu_lbvh(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction, class
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let (ranges, _) = builder.ranges(&gv, 16).unwrap();
-    let scene = Scene {
+    let scene = BuildInput {
         volume: v,
         gpu_volume: &gv,
         tf,
@@ -51,9 +51,7 @@ fn gpu_lbvh(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction, class
         classify,
         ..Default::default()
     };
-    let (s, t) = builder
-        .build(lacuna::accel::Accel::Lbvh, &scene, &ranges, &options)
-        .unwrap();
+    let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, &options).unwrap();
     let l = s.tree().unwrap();
     for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
         assert!(t.get(phase).is_some() || l.leaves == 0, "missing phase {phase}");
@@ -132,7 +130,11 @@ fn karras_emit_matches_the_cpu_with_duplicate_codes() {
     }
     for codes in &cases {
         let n = codes.len();
-        let got = builder.lbvh().emit_links(codes).unwrap();
+        let got = builder
+            .kernels::<lacuna::accel::lbvh::LbvhBuilder>()
+            .unwrap()
+            .emit_links(codes)
+            .unwrap();
         let want: Vec<[i32; 2]> = cpu::emit(codes)[..n - 1]
             .iter()
             .map(|nd| [nd.lo[3], nd.hi[3]])

@@ -4,8 +4,9 @@
 
 mod common;
 use common::{gpu, max_abs, render};
+use lacuna::accel::Accel;
 use lacuna::render::reference;
-use lacuna::render::{Accel, Camera, Projection, RenderSettings};
+use lacuna::render::{Camera, Projection, RenderSettings};
 use lacuna::volume::{VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -30,7 +31,7 @@ const PERSP: Projection = Projection::Perspective {
 
 fn check_against_reference(volume: &Volume, tf: &TransferFunction, s: &RenderSettings) {
     let ctx = gpu();
-    let frame = render(&ctx, volume, tf, s, Accel::Naive);
+    let frame = render(&ctx, volume, tf, s, Accel::naive());
     let params = s.params(volume.dims, volume.spacing, volume.norm).unwrap();
     let cpu = reference::render(volume, tf, &params);
     let err = max_abs(&frame, &cpu);
@@ -87,9 +88,9 @@ fn camera_inside_the_volume_and_early_termination_match_the_reference() {
     check_against_reference(&v, &tf, &s);
     // ERT only truncates rays that reached the threshold; others are untouched.
     let ctx = gpu();
-    let cut = render(&ctx, &v, &tf, &s, Accel::Naive);
+    let cut = render(&ctx, &v, &tf, &s, Accel::naive());
     s.ert = None;
-    let full = render(&ctx, &v, &tf, &s, Accel::Naive);
+    let full = render(&ctx, &v, &tf, &s, Accel::naive());
     let mut truncated = 0;
     for (c, f) in cut.pixels.iter().zip(&full.pixels) {
         if c[3] < 0.9 {
@@ -148,7 +149,7 @@ fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
     for (az, el, step) in [(0.0, 0.0, 0.5), (33.0, 21.0, 0.37), (60.0, -40.0, 1.3)] {
         let mut s = settings(48, az, el, Projection::Orthographic);
         s.step = step;
-        let frame = render(&ctx, &v, &tf, &s, Accel::Naive);
+        let frame = render(&ctx, &v, &tf, &s, Accel::naive());
         let p = s.params(v.dims, v.spacing, v.norm).unwrap();
         let dir = [p.eye_or_dir[0] as f64, p.eye_or_dir[1] as f64, p.eye_or_dir[2] as f64];
         let len = (dir.iter().map(|c| c * c).sum::<f64>()).sqrt();
@@ -178,9 +179,9 @@ fn rendering_is_deterministic_bit_for_bit() {
     let tf = TransferFunction::parse("ramp:0.2:1").unwrap();
     let s = settings(64, 12.0, 34.0, PERSP);
     let ctx = gpu();
-    let a = render(&ctx, &v, &tf, &s, Accel::Naive);
-    let b = render(&ctx, &v, &tf, &s, Accel::Naive);
-    assert_eq!(lacuna::render::diff(&a, &b).unwrap().differing, 0);
+    let a = render(&ctx, &v, &tf, &s, Accel::naive());
+    let b = render(&ctx, &v, &tf, &s, Accel::naive());
+    assert_eq!(lacuna::frame::diff(&a, &b).unwrap().differing, 0);
 }
 
 #[test]

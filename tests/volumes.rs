@@ -334,7 +334,7 @@ fn the_real_ch2_mri_loads_and_renders() {
         ..Default::default()
     };
     let ctx = common::gpu();
-    let frame = common::render(&ctx, &v, &tf, &s, lacuna::render::Accel::Naive);
+    let frame = common::render(&ctx, &v, &tf, &s, lacuna::accel::Accel::naive());
     let cpu = lacuna::render::reference::render(&v, &tf, &s.params(v.dims, v.spacing, v.norm).unwrap());
     assert!(common::max_abs(&frame, &cpu) <= 1e-4);
     assert!(

@@ -5,7 +5,6 @@
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer};
 use crate::prims::brick_minmax::{brick_counts, BrickMinMax};
-use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 /// Brick edge in voxels for the LBVH and classification.
@@ -20,8 +19,9 @@ pub struct GpuBricks {
 }
 
 impl GpuBricks {
-    /// Computes the ranges of `volume`'s `brick`^3 bricks (timed as "ranges").
-    pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume, brick: u32) -> Result<(Self, Timings)> {
+    /// Computes the ranges of `volume`'s `brick`^3 bricks; returns them and
+    /// the GPU milliseconds it took.
+    pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume, brick: u32) -> Result<(Self, f64)> {
         if !brick.is_power_of_two() {
             return Err(Error::invalid(
                 "brick size",
@@ -60,7 +60,7 @@ impl GpuBricks {
                 total,
                 ranges,
             },
-            timer.results()?,
+            timer.results()?.phase("ranges")?,
         ))
     }
 }

@@ -12,8 +12,8 @@
 use super::bricks::GpuBricks;
 use crate::error::{Error, Result};
 use crate::gpu::record;
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel};
-use crate::prims::{entry_barrier, words};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel};
+use crate::prims::entry_barrier;
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
 
@@ -52,6 +52,33 @@ impl Classify {
     }
 }
 
+/// Push block of `classify_range.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RangePush {
+    bricks: u32,
+    groups_x: u32,
+    lut_size: u32,
+    pad: u32,
+}
+check_push!(RangePush, shaders::BUILD_CLASSIFY_RANGE);
+
+/// Push block of `classify_voxel.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct VoxelPush {
+    /// xyz: volume dims; w: brick edge.
+    dims: [u32; 4],
+    /// xyz: bricks per axis; w: total bricks.
+    counts: [u32; 4],
+    norm: [f32; 2],
+    apron: u32,
+    groups_x: u32,
+    lut_size: u32,
+    pad: [u32; 3],
+}
+check_push!(VoxelPush, shaders::BUILD_CLASSIFY_VOXEL);
+
 pub struct Classifier {
     ctx: Context,
     range: Kernel,
@@ -60,28 +87,10 @@ pub struct Classifier {
 
 impl Classifier {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
         Ok(Classifier {
             ctx: ctx.clone(),
-            range: Kernel::new(
-                ctx,
-                "build/classify_range",
-                shaders::BUILD_CLASSIFY_RANGE,
-                &[D::STORAGE_BUFFER; 3],
-                16,
-            )?,
-            voxel: Kernel::new(
-                ctx,
-                "build/classify_voxel",
-                shaders::BUILD_CLASSIFY_VOXEL,
-                &[
-                    D::COMBINED_IMAGE_SAMPLER,
-                    D::STORAGE_BUFFER,
-                    D::STORAGE_BUFFER,
-                    D::STORAGE_BUFFER,
-                ],
-                64,
-            )?,
+            range: Kernel::new::<RangePush>(ctx, &shaders::BUILD_CLASSIFY_RANGE)?,
+            voxel: Kernel::new::<VoxelPush>(ctx, &shaders::BUILD_CLASSIFY_VOXEL)?,
         })
     }
 
@@ -97,10 +106,15 @@ impl Classifier {
         flags: &Buffer,
     ) -> Result<()> {
         entry_barrier(self.ctx.device(), cmd);
-        let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, 64)?;
+        let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.range.local_size()[0])?;
         match mode {
             Classify::Range => {
-                let push = words(&[bricks.total as u32, groups[0], LUT_SIZE as u32, 0]);
+                let push = RangePush {
+                    bricks: bricks.total as u32,
+                    groups_x: groups[0],
+                    lut_size: LUT_SIZE as u32,
+                    pad: 0,
+                };
                 self.range.dispatch(
                     cmd,
                     &[
@@ -108,24 +122,21 @@ impl Classifier {
                         Binding::Storage(&tf.max_table),
                         Binding::Storage(flags),
                     ],
-                    &push,
+                    bytemuck::bytes_of(&push),
                     groups,
-                );
+                )
             }
             Classify::Voxel { apron } => {
                 let c = bricks.counts;
-                let mut push = words(&[
-                    volume.dims[0],
-                    volume.dims[1],
-                    volume.dims[2],
-                    bricks.brick,
-                    c[0],
-                    c[1],
-                    c[2],
-                    bricks.total as u32,
-                ]);
-                push.extend(bytemuck::cast_slice(&volume.norm));
-                push.extend(words(&[apron as u32, groups[0], LUT_SIZE as u32, 0, 0, 0]));
+                let push = VoxelPush {
+                    dims: [volume.dims[0], volume.dims[1], volume.dims[2], bricks.brick],
+                    counts: [c[0], c[1], c[2], bricks.total as u32],
+                    norm: volume.norm,
+                    apron: apron as u32,
+                    groups_x: groups[0],
+                    lut_size: LUT_SIZE as u32,
+                    pad: [0; 3],
+                };
                 self.voxel.dispatch(
                     cmd,
                     &[
@@ -134,11 +145,10 @@ impl Classifier {
                         Binding::Storage(&tf.max_table),
                         Binding::Storage(flags),
                     ],
-                    &push,
+                    bytemuck::bytes_of(&push),
                     groups,
-                );
+                )
             }
         }
-        Ok(())
     }
 }

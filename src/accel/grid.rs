@@ -4,12 +4,12 @@
 
 use super::bricks::GpuBricks;
 use super::classify::{Classifier, Classify};
+use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
 use crate::error::{Error, Result};
-use crate::gpu::{Buffer, Context, MemoryLocation, Timer};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, MemoryLocation, Timer};
 use crate::tf::GpuTransferFunction;
-use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 /// Default cell edge in voxels.
@@ -49,8 +49,11 @@ impl Grid {
     }
 
     /// The push constants of the grid kernels: cells per axis and edge.
-    pub fn push(&self) -> [u32; 4] {
-        [self.counts[0], self.counts[1], self.counts[2], self.cell]
+    pub fn push(&self) -> GridPush {
+        GridPush {
+            counts: self.counts,
+            cell: self.cell,
+        }
     }
 }
 
@@ -66,15 +69,19 @@ pub fn check_cell(cell: u32) -> Result<()> {
     Ok(())
 }
 
-/// Classifies the cells of `cells` (ranges of `cell`^3 bricks) for a TF
-/// ("classify").
-pub fn build(
+/// Records the classification of the cells of `cells` (ranges of `cell`^3
+/// bricks) for a TF into a new flag buffer ("classify"). Ends with compute
+/// writes.
+#[allow(clippy::too_many_arguments)]
+pub fn record(
     ctx: &Context,
     classifier: &Classifier,
+    cmd: vk::CommandBuffer,
+    timer: &mut Timer,
     volume: &GpuVolume,
     cells: &GpuBricks,
     tf: &GpuTransferFunction,
-) -> Result<(Grid, Timings)> {
+) -> Result<Grid> {
     let flags = Buffer::new(
         ctx,
         "grid cell flags",
@@ -82,22 +89,84 @@ pub fn build(
         STORAGE_XFER,
         MemoryLocation::GpuOnly,
     )?;
-    let mut timer = Timer::new(ctx, 1)?;
-    ctx.submit_and_wait(|cmd| {
-        timer.reset(cmd);
-        let pass = timer.begin(cmd, "classify")?;
-        classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
-        timer.end(cmd, pass);
-        Ok(())
-    })?;
-    Ok((
-        Grid {
-            cell: cells.brick,
-            counts: cells.counts,
-            flags,
-            total: cells.total,
-            active: std::sync::OnceLock::new(),
-        },
-        timer.results()?,
-    ))
+    let pass = timer.begin(cmd, "classify")?;
+    classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
+    timer.end(cmd, pass);
+    Ok(Grid {
+        cell: cells.brick,
+        counts: cells.counts,
+        flags,
+        total: cells.total,
+        active: std::sync::OnceLock::new(),
+    })
+}
+
+/// Push block of `glsl/march/grid.comp` and `hybrid.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GridPush {
+    /// Cells per axis.
+    pub counts: [u32; 3],
+    /// Cell edge in voxels.
+    pub cell: u32,
+}
+check_push!(GridPush, shaders::MARCH_GRID);
+check_push!(GridPush, shaders::MARCH_HYBRID);
+
+/// `--accel grid`.
+pub struct GridMethod;
+
+impl Method for GridMethod {
+    fn name(&self) -> &'static str {
+        "grid"
+    }
+    fn description(&self) -> &'static str {
+        "macro-cell grid (OSPRay style), 3D-DDA traversal"
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::Cells
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![("cell", o.cell.to_string())]
+    }
+    fn march(&self) -> March {
+        March {
+            shader: shaders::MARCH_GRID,
+            constants: &[],
+            push_size: std::mem::size_of::<GridPush>(),
+        }
+    }
+    fn record_build(
+        &self,
+        builder: &Builder,
+        cmd: vk::CommandBuffer,
+        timer: &mut Timer,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<Box<dyn Built>> {
+        let classifier = builder.kernels::<Classifier>()?;
+        let grid = record(
+            builder.context(),
+            &classifier,
+            cmd,
+            timer,
+            input.gpu_volume,
+            ranges.cells(options.cell)?,
+            input.gpu_tf,
+        )?;
+        Ok(Box::new(grid))
+    }
+}
+
+impl Built for Grid {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        vec![Binding::Storage(&self.flags)]
+    }
+    fn push(&self) -> Vec<u8> {
+        bytemuck::bytes_of(&self.push()).to_vec()
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        Grid::stats(self).map(Some)
+    }
 }

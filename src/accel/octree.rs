@@ -14,12 +14,13 @@
 
 use super::bricks::GpuBricks;
 use super::classify::{Classifier, Classify};
+use super::registry::{classify_param, BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
 use super::stats::Stats;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer};
-use crate::octree::node::axis_bit;
-use crate::octree::{Node, Traversal};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, MemoryLocation, Timer};
+use crate::spatial::octree_node::{axis_bit, Node};
+use crate::spatial::{Sat3, Traversal};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
@@ -38,46 +39,6 @@ pub struct BrickOctree {
     pub depth: u32,
 }
 
-/// Summed-area table over brick flags, for O(1) box counts.
-struct Sat {
-    n: [usize; 3],
-    s: Vec<u32>,
-}
-
-impl Sat {
-    fn new(counts: [u32; 3], active: &[u32]) -> Sat {
-        let n = counts.map(|c| c as usize + 1);
-        let mut s = vec![0u32; n[0] * n[1] * n[2]];
-        let at = |x: usize, y: usize, z: usize| x + n[0] * (y + n[1] * z);
-        for z in 1..n[2] {
-            for y in 1..n[1] {
-                for x in 1..n[0] {
-                    let f = active[(x - 1) + counts[0] as usize * ((y - 1) + counts[1] as usize * (z - 1))];
-                    let v = u32::from(f != 0) + s[at(x - 1, y, z)] + s[at(x, y - 1, z)] + s[at(x, y, z - 1)]
-                        - s[at(x - 1, y - 1, z)]
-                        - s[at(x - 1, y, z - 1)]
-                        - s[at(x, y - 1, z - 1)]
-                        + s[at(x - 1, y - 1, z - 1)];
-                    s[at(x, y, z)] = v;
-                }
-            }
-        }
-        Sat { n, s }
-    }
-
-    /// Active bricks in [lo, hi) (brick coordinates, clipped by the caller).
-    fn count(&self, lo: [usize; 3], hi: [usize; 3]) -> u32 {
-        let n = self.n;
-        let at = |x: usize, y: usize, z: usize| self.s[x + n[0] * (y + n[1] * z)] as i64;
-        let v = at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) - at(hi[0], hi[1], lo[2])
-            + at(lo[0], lo[1], hi[2])
-            + at(lo[0], hi[1], lo[2])
-            + at(hi[0], lo[1], lo[2])
-            - at(lo[0], lo[1], lo[2]);
-        v as u32
-    }
-}
-
 /// The corner `b0 + offset` (in bricks) in voxel units, as a node vec4.
 fn voxels(b0: [u32; 3], offset: u32, brick: u32) -> [f32; 4] {
     let v = |a: usize| ((b0[a] + offset) * brick) as f32;
@@ -88,7 +49,8 @@ impl BrickOctree {
     /// Builds over `counts` bricks of `brick` voxels; `active[b] != 0` marks
     /// brick b (x fastest).
     pub fn build(counts: [u32; 3], brick: u32, active: &[u32]) -> BrickOctree {
-        let sat = Sat::new(counts, active);
+        let n = counts.map(|c| c as usize);
+        let sat = Sat3::<u32>::new(n, |x, y, z| active[x + n[0] * (y + n[1] * z)] != 0);
         let side = counts.iter().copied().max().unwrap_or(1).next_power_of_two();
         let mut out = BrickOctree {
             nodes: vec![Node::default()],
@@ -102,7 +64,7 @@ impl BrickOctree {
             let lo = b0.map(|v| v as usize);
             let hi = [0, 1, 2].map(|a| ((b0[a] + s).min(counts[a])) as usize);
             let inside: usize = (0..3).map(|a| hi[a].saturating_sub(lo[a])).product();
-            let n_active = if inside == 0 { 0 } else { sat.count(lo, hi) as usize };
+            let n_active = sat.count(lo, hi) as usize;
             let first = out.nodes.len() as u32;
             let node = &mut out.nodes[index as usize];
             node.lo = voxels(b0, 0, brick);
@@ -186,6 +148,75 @@ pub fn build(
         },
         t,
     ))
+}
+
+/// `--accel octree-84|octree-89|octree-93|octree-rev`: one entry per traversal.
+pub struct OctreeMethod(pub Traversal);
+
+impl Method for OctreeMethod {
+    fn name(&self) -> &'static str {
+        match self.0 {
+            Traversal::O84 => "octree-84",
+            Traversal::O89 => "octree-89",
+            Traversal::O93 => "octree-93",
+            Traversal::Rev => "octree-rev",
+        }
+    }
+    fn description(&self) -> &'static str {
+        match self.0 {
+            Traversal::O84 => "octree over active 8^3 bricks, Glassner's 1984 traversal",
+            Traversal::O89 => "octree over active 8^3 bricks, Samet's 1989 neighbour finding",
+            Traversal::O93 => "octree over active 8^3 bricks, Gargantini & Atkinson's 1993 traversal",
+            Traversal::Rev => "octree over active 8^3 bricks, Revelles et al.'s 2000 parametric traversal",
+        }
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::Bricks
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![classify_param(o.classify)]
+    }
+    fn march(&self) -> March {
+        // The GLSL traversal switches on specialization constant 0.
+        const IDS: [u32; 4] = [0, 1, 2, 3];
+        March {
+            shader: shaders::MARCH_OCTREE,
+            constants: std::slice::from_ref(&IDS[self.0 as usize]),
+            push_size: 0,
+        }
+    }
+    /// Host-driven: the tree is built on the CPU from the flags read back.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let classifier = builder.kernels::<Classifier>()?;
+        let (tree, t) = build(
+            builder.context(),
+            &classifier,
+            options.classify,
+            input.gpu_volume,
+            ranges.bricks()?,
+            input.gpu_tf,
+            self.0,
+        )?;
+        Ok((Box::new(tree), t))
+    }
+}
+
+impl Built for VolumeOctree {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        vec![Binding::Storage(&self.nodes)]
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        Ok(Some(self.stats))
+    }
 }
 
 #[cfg(test)]

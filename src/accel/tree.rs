@@ -8,9 +8,25 @@
 //! Siblings' boxes lie on opposite sides of their split plane, which is what
 //! makes the stack traversal visit leaves in ray order.
 
+use super::registry::{Built, March};
 use super::stats::Stats;
 use crate::error::Result;
-use crate::gpu::{vk, Buffer, Context, MemoryLocation};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, MemoryLocation};
+
+/// The march kernel of every structure in this format (`glsl/march/bvh.comp`).
+pub const TREE_MARCH: March = March::plain(shaders::MARCH_BVH);
+
+impl Built for GpuTree {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        vec![Binding::Storage(&self.nodes), Binding::Storage(&self.count)]
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        GpuTree::stats(self).map(Some)
+    }
+    fn tree(&self) -> Option<&GpuTree> {
+        Some(self)
+    }
+}
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]

@@ -2,11 +2,11 @@
 //! each case exactly as naive marching does (bit for bit), with no
 //! validation message and no NaN or infinity in the frame.
 
-use crate::accel::kd::{Depth, KdParams};
-use crate::accel::{Accel, BuildOptions, Builder, Scene, Structure};
+use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Structure};
 use crate::error::Result;
+use crate::frame::{diff, Frame};
 use crate::gpu::Context;
-use crate::render::{diff, Camera, Frame, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
+use crate::render::{Camera, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
 use crate::tf::{TransferFunction, LUT_SIZE};
 use crate::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use crate::Volume;
@@ -25,29 +25,16 @@ pub struct HardCase {
 }
 
 /// The structures the suite checks: every registry entry but naive, with
-/// the paper's k-d variants.
-pub fn structures() -> Vec<(&'static str, Accel, BuildOptions)> {
-    let kd = |depth, max_leaf| BuildOptions {
-        kd: KdParams {
-            depth,
-            max_leaf,
-            bins: 4,
-        },
-        ..Default::default()
-    };
-    vec![
-        ("lbvh", Accel::Lbvh, BuildOptions::default()),
-        ("grid", Accel::Grid, BuildOptions::default()),
-        ("kd-cpu shallow", Accel::KdCpu, kd(Depth::Shallow, 32)),
-        ("kd-cpu MLS=32", Accel::KdCpu, kd(Depth::Deep, 32)),
-        ("kd-gpu shallow", Accel::KdGpu, kd(Depth::Shallow, 32)),
-        ("kd-gpu MLS=128", Accel::KdGpu, kd(Depth::Deep, 128)),
-        ("hybrid", Accel::Hybrid, BuildOptions::default()),
-        ("octree-84", Accel::Octree84, BuildOptions::default()),
-        ("octree-89", Accel::Octree89, BuildOptions::default()),
-        ("octree-93", Accel::Octree93, BuildOptions::default()),
-        ("octree-rev", Accel::OctreeRev, BuildOptions::default()),
-    ]
+/// each entry's parameter variants (the paper's k-d sets).
+pub fn structures() -> Vec<(String, Accel, BuildOptions)> {
+    Accel::skipping()
+        .flat_map(|a| {
+            a.method()
+                .variants()
+                .into_iter()
+                .map(move |(label, options)| (label, a, options))
+        })
+        .collect()
 }
 
 /// An orbit camera view (orthographic or perspective).
@@ -258,7 +245,7 @@ pub fn cases() -> Result<Vec<HardCase>> {
 /// One case against one structure.
 pub struct Outcome {
     pub case: &'static str,
-    pub structure: &'static str,
+    pub structure: String,
     pub identical: bool,
     pub validation_messages: usize,
     pub finite: bool,
@@ -283,7 +270,7 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
         let tf = TransferFunction::parse(case.tf)?;
         let gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
-        let scene = Scene {
+        let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
             tf: &tf,
@@ -303,7 +290,7 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
         let naive: Vec<Frame> = case
             .views
             .iter()
-            .map(|view| render(&Structure::Naive, view))
+            .map(|view| render(&Structure::naive(), view))
             .collect::<Result<_>>()?;
         let baseline = ctx.take_validation_messages().len();
         let (ranges, _) = builder.ranges(&gv, BuildOptions::default().cell)?;
@@ -338,7 +325,8 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
 
 /// The pass/fail table: a row per case, a column per structure.
 pub fn table(outcomes: &[Outcome]) -> String {
-    let labels: Vec<&str> = structures().iter().map(|s| s.0).collect();
+    let structures = structures();
+    let labels: Vec<&str> = structures.iter().map(|s| s.0.as_str()).collect();
     let mut s = format!(
         "| hard case | {} |\n|---|{}\n",
         labels.join(" | "),

@@ -16,7 +16,7 @@ pub use record::{ErrorPoint, Record};
 pub use run::{BenchOutput, RunOptions};
 
 use crate::error::{Error, Result};
-use crate::render::write_atomically;
+use crate::frame::write_atomically;
 use std::path::Path;
 
 fn write(path: &Path, text: &str) -> Result<()> {

@@ -5,7 +5,7 @@
 
 use super::record::{ErrorPoint, Record};
 use crate::error::{Error, Result};
-use crate::render::write_atomically;
+use crate::frame::write_atomically;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;

@@ -52,8 +52,8 @@ pub struct ImageError {
     pub differing: u64,
 }
 
-impl From<crate::render::DiffStats> for ImageError {
-    fn from(d: crate::render::DiffStats) -> Self {
+impl From<crate::frame::DiffStats> for ImageError {
+    fn from(d: crate::frame::DiffStats) -> Self {
         ImageError {
             rmse: d.rmse,
             psnr: d.psnr.is_finite().then_some(d.psnr),

@@ -7,10 +7,11 @@
 use super::config::{BenchConfig, ErrorConfig, StructureSpec};
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup};
-use crate::accel::{Accel, BuildOptions, Builder, Ranges, Scene, Structure};
+use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
 use crate::error::{Error, Result};
+use crate::frame::{diff, Frame};
 use crate::gpu::{Context, Timer};
-use crate::render::{diff, Camera, Frame, Projection, RenderSettings, RenderTarget, Renderer};
+use crate::render::{Camera, Projection, RenderSettings, RenderTarget, Renderer};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::timings::Timings;
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
@@ -68,7 +69,7 @@ impl<'a> FrameTimer<'a> {
             }
             Ok(())
         })?;
-        let ms = self.timer.results()?.get("march").unwrap_or(f64::NAN);
+        let ms = self.timer.results()?.phase("march")?;
         Ok((ms, read.then(|| self.target.read())))
     }
 }
@@ -88,31 +89,12 @@ fn orbit(config: &BenchConfig, view: u32, views: u32, step: f32, ert: Option<f32
 }
 
 fn params_of(s: &StructureSpec) -> BTreeMap<String, String> {
-    let o = &s.options;
-    let mut p = BTreeMap::new();
-    match s.accel {
-        Accel::Naive => {}
-        Accel::Lbvh => {
-            p.insert("classify".into(), o.classify.describe().into());
-        }
-        Accel::Grid => {
-            p.insert("cell".into(), o.cell.to_string());
-        }
-        Accel::KdCpu => {
-            p.insert("kd".into(), o.kd.describe());
-        }
-        Accel::KdGpu => {
-            p.insert("kd".into(), o.kd.describe());
-            p.insert("bins".into(), o.kd.bins.to_string());
-        }
-        Accel::Hybrid => {
-            p.insert("cell".into(), o.cell.to_string());
-        }
-        Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
-            p.insert("classify".into(), o.classify.describe().into());
-        }
-    }
-    p
+    s.accel
+        .method()
+        .params(&s.options)
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
 }
 
 struct Loaded {
@@ -153,7 +135,7 @@ fn error_sweep(
         let settings = orbit(config, view, e.frames, e.reference_step, None);
         reference.push(
             frames
-                .frame(&Structure::Naive, gv, lut, &settings, true)?
+                .frame(&Structure::naive(), gv, lut, &settings, true)?
                 .1
                 .expect("read back"),
         );
@@ -249,7 +231,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
-        let scene = Scene {
+        let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
             tf,
@@ -280,7 +262,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             }
         }
         let (_, naive0) = frames.frame(
-            &Structure::Naive,
+            &Structure::naive(),
             &gv,
             &lut,
             &orbit(config, 0, config.frames, config.step, None),
@@ -290,17 +272,11 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         progress.step(1);
         for s in &structures {
             progress.at(&format!("{} - {}", loaded.spec, s.label));
-            let (r, range_times) = &ranges[&s.options.cell];
+            let (r, _) = &ranges[&s.options.cell];
             // The per-volume cost this structure depends on.
-            let ranges_ms = match s.accel {
-                Accel::Lbvh | Accel::Octree84 | Accel::Octree89 | Accel::Octree93 | Accel::OctreeRev => {
-                    range_times.get("ranges").unwrap_or(0.0)
-                }
-                Accel::Grid | Accel::Hybrid => range_times.get("cell ranges").unwrap_or(0.0),
-                _ => 0.0,
-            };
+            let ranges_ms = r.ms(s.accel.method().ranges())?;
             let mut builds = Vec::new();
-            let mut structure = Structure::Naive;
+            let mut structure = Structure::naive();
             for i in 0..config.warmup + config.builds {
                 let (st, t) = builder.build(s.accel, &scene, r, &s.options)?;
                 if i >= config.warmup {

@@ -116,6 +116,9 @@ pub(crate) struct Inner {
     pub(crate) physical_device: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     pub(crate) push_descriptor: ash::khr::push_descriptor::Device,
+    /// Present when the instance has `VK_EXT_debug_utils` (validation on): GPU
+    /// objects get names that validation messages and capture tools show.
+    debug_utils: Option<ash::ext::debug_utils::Device>,
     queue: Mutex<vk::Queue>,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
@@ -399,8 +402,22 @@ impl Context {
     }
 
     /// Adopts a host's instance, device and queue. lacuna creates its own
-    /// allocator and command pool on them and destroys only those.
-    pub fn adopt(host: AdoptInfo) -> Result<Self> {
+    /// allocator and command pool on them and destroys only those; dropping
+    /// the context waits for nothing of the host's (lacuna's own submissions
+    /// are waited for by the call that made them).
+    ///
+    /// # Safety
+    /// The host guarantees that:
+    /// - `instance`, `physical_device`, `device` and `queue` are valid, belong
+    ///   together, and outlive the `Context` and every object made with it;
+    /// - the device was created with what [`AdoptInfo`] lists (Vulkan 1.3
+    ///   `synchronization2` and `maintenance4`, Vulkan 1.2 `vulkanMemoryModel`
+    ///   with device scope, `VK_KHR_push_descriptor`);
+    /// - `queue` is of `queue_family`, and no other thread uses `queue` while a
+    ///   lacuna convenience call (`submit_and_wait`: uploads, `build`,
+    ///   `render`, downloads) runs, since lacuna submits on it then;
+    /// - lacuna's objects are not in use by pending host work when dropped.
+    pub unsafe fn adopt(host: AdoptInfo) -> Result<Self> {
         let families = unsafe {
             host.instance
                 .get_physical_device_queue_family_properties(host.physical_device)
@@ -491,6 +508,9 @@ impl Context {
             }
         };
         let push_descriptor = ash::khr::push_descriptor::Device::new(&instance, &device);
+        let debug_utils = messenger
+            .as_ref()
+            .map(|_| ash::ext::debug_utils::Device::new(&instance, &device));
         Ok(Context {
             inner: Arc::new(Inner {
                 _entry: entry,
@@ -498,6 +518,7 @@ impl Context {
                 physical_device: pd,
                 device,
                 push_descriptor,
+                debug_utils,
                 queue: Mutex::new(queue),
                 queue_family: family,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
@@ -511,6 +532,22 @@ impl Context {
 
     pub fn device(&self) -> &ash::Device {
         &self.inner.device
+    }
+
+    /// Names a GPU object for validation messages and capture tools (a no-op
+    /// without `VK_EXT_debug_utils`).
+    pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(utils) = &self.inner.debug_utils else {
+            return;
+        };
+        let Ok(name) = std::ffi::CString::new(name) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&name);
+        // Naming is a debugging aid: a failure changes nothing else.
+        let _ = unsafe { utils.set_debug_utils_object_name(&info) };
     }
 
     pub fn instance(&self) -> &ash::Instance {
@@ -595,7 +632,12 @@ impl Context {
 impl Drop for Inner {
     fn drop(&mut self) {
         unsafe {
-            let _ = self.device.device_wait_idle();
+            // An adopted device is the host's: its queues may be busy with its
+            // own work, which lacuna must not wait for. Every lacuna
+            // submission was waited for by the call that made it.
+            if self.owned {
+                let _ = self.device.device_wait_idle();
+            }
             ManuallyDrop::drop(&mut self.allocator);
             self.device
                 .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);

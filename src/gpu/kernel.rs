@@ -2,8 +2,9 @@
 //! descriptors (`VK_KHR_push_descriptor`), so recording needs no descriptor
 //! pools and a recorded command buffer holds no lacuna-owned descriptor state.
 
+use super::shaders::Shader;
 use super::Context;
-use crate::error::{Result, VkContext};
+use crate::error::{Error, Result, VkContext};
 use ash::vk;
 
 /// A resource bound at one binding slot, in binding order.
@@ -34,33 +35,35 @@ pub struct Kernel {
     set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pub pipeline: vk::Pipeline,
-    bindings: Vec<vk::DescriptorType>,
+    bindings: &'static [vk::DescriptorType],
     push_size: u32,
+    local_size: [u32; 3],
 }
 
 impl Kernel {
-    /// `bindings` lists the descriptor type of bindings 0.. of set 0;
-    /// `push_size` is the push-constant block size in bytes (0 for none).
-    pub fn new(
-        ctx: &Context,
-        name: &'static str,
-        spirv: &[u32],
-        bindings: &[vk::DescriptorType],
-        push_size: u32,
-    ) -> Result<Self> {
-        Self::with_constants(ctx, name, spirv, bindings, push_size, &[])
+    /// The kernel of `shader`, whose push-constant block is `P` (`()` for
+    /// none). Descriptor bindings, push size and workgroup size come from the
+    /// shader's reflected interface; a `P` of another size than the shader's
+    /// block is an error naming the kernel.
+    pub fn new<P: bytemuck::Pod>(ctx: &Context, shader: &Shader) -> Result<Self> {
+        Self::create(ctx, shader, std::mem::size_of::<P>(), &[])
     }
 
     /// As `new`, with u32 specialization constants for `constant_id` 0, 1, ...
     /// (`local_size_x_id = 0` makes constant 0 the workgroup width).
-    pub fn with_constants(
-        ctx: &Context,
-        name: &'static str,
-        spirv: &[u32],
-        bindings: &[vk::DescriptorType],
-        push_size: u32,
-        constants: &[u32],
-    ) -> Result<Self> {
+    pub fn with_constants<P: bytemuck::Pod>(ctx: &Context, shader: &Shader, constants: &[u32]) -> Result<Self> {
+        Self::create(ctx, shader, std::mem::size_of::<P>(), constants)
+    }
+
+    /// As `with_constants`, with the Rust side's push block size in bytes.
+    pub fn create(ctx: &Context, shader: &Shader, push_size: usize, constants: &[u32]) -> Result<Self> {
+        let name = shader.name;
+        if push_size != shader.push_size as usize {
+            return Err(Error::Interface(format!(
+                "kernel {name}: the Rust push-constant block is {push_size} bytes, the shader's is {} bytes",
+                shader.push_size
+            )));
+        }
         let info = ctx.info();
         info.check(
             format!("push constants of kernel {name}"),
@@ -68,9 +71,18 @@ impl Kernel {
             push_size as u64,
             info.max_push_constants_size as u64,
         )?;
+        let local_size = shader.local_size_with(constants);
+        let threads: u64 = local_size.iter().map(|&n| n as u64).product();
+        info.check(
+            format!("workgroup of kernel {name} ({local_size:?})"),
+            "maxComputeWorkGroupInvocations",
+            threads,
+            info.max_compute_work_group_invocations as u64,
+        )?;
         let device = ctx.device();
-        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None) }
-            .vk("vkCreateShaderModule")?;
+        let module =
+            unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
+                .vk("vkCreateShaderModule")?;
         let mut kernel = Kernel {
             ctx: ctx.clone(),
             name,
@@ -78,10 +90,13 @@ impl Kernel {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
-            bindings: bindings.to_vec(),
-            push_size,
+            bindings: shader.bindings,
+            push_size: shader.push_size,
+            local_size,
         };
-        let slots: Vec<_> = bindings
+        ctx.name_object(module, name);
+        let slots: Vec<_> = shader
+            .bindings
             .iter()
             .enumerate()
             .map(|(i, &ty)| {
@@ -100,11 +115,11 @@ impl Kernel {
         let ranges = [vk::PushConstantRange {
             stage_flags: vk::ShaderStageFlags::COMPUTE,
             offset: 0,
-            size: push_size,
+            size: shader.push_size,
         }];
         let set_layouts = [kernel.set_layout];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if push_size > 0 {
+        if shader.push_size > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
         kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
@@ -131,24 +146,45 @@ impl Kernel {
         kernel.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
             .map_err(|(_, r)| r)
             .vk("vkCreateComputePipelines")?[0];
+        ctx.name_object(kernel.pipeline, name);
+        ctx.name_object(kernel.layout, name);
         Ok(kernel)
     }
 
+    /// Threads per workgroup, after specialization.
+    pub fn local_size(&self) -> [u32; 3] {
+        self.local_size
+    }
+
+    /// Workgroups covering `threads` invocations (checked against
+    /// `maxComputeWorkGroupCount`).
+    pub fn groups(&self, what: &str, threads: [u32; 3]) -> Result<[u32; 3]> {
+        super::record::groups_for(self.ctx.info(), what, threads, self.local_size)
+    }
+
     /// Binds the pipeline, pushes `bindings` and `push` constants, and
-    /// dispatches `groups` workgroups. Records only; no barriers.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) {
-        assert_eq!(
-            bindings.len(),
-            self.bindings.len(),
-            "kernel {}: binding count",
-            self.name
-        );
-        assert_eq!(
-            push.len() as u32,
-            self.push_size,
-            "kernel {}: push constant size",
-            self.name
-        );
+    /// dispatches `groups` workgroups. Records only; no barriers. Bindings
+    /// that do not match the shader's (count or type) are an error naming the
+    /// kernel, and nothing is recorded.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) -> Result<()> {
+        if bindings.len() != self.bindings.len() || push.len() != self.push_size as usize {
+            return Err(Error::Interface(format!(
+                "kernel {}: {} bindings and {} push bytes given, the shader has {} and {}",
+                self.name,
+                bindings.len(),
+                push.len(),
+                self.bindings.len(),
+                self.push_size
+            )));
+        }
+        if let Some(i) = (0..bindings.len()).find(|&i| bindings[i].descriptor_type() != self.bindings[i]) {
+            return Err(Error::Interface(format!(
+                "kernel {}: binding {i} is a {:?}, the shader declares a {:?}",
+                self.name,
+                bindings[i].descriptor_type(),
+                self.bindings[i]
+            )));
+        }
         let device = self.ctx.device();
         let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .iter()
@@ -178,7 +214,6 @@ impl Kernel {
             .enumerate()
             .map(|(i, b)| {
                 let ty = b.descriptor_type();
-                assert_eq!(ty, self.bindings[i], "kernel {}: binding {i} type", self.name);
                 let w = vk::WriteDescriptorSet::default()
                     .dst_binding(i as u32)
                     .descriptor_type(ty);
@@ -202,6 +237,7 @@ impl Kernel {
             }
             device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
         }
+        Ok(())
     }
 }
 

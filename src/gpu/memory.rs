@@ -43,6 +43,7 @@ impl Buffer {
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { device.create_buffer(&create, None) }.vk("vkCreateBuffer")?;
+        ctx.name_object(raw, name);
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -248,6 +249,7 @@ impl Image3d {
             .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { device.create_image(&create, None) }.vk("vkCreateImage")?;
+        ctx.name_object(raw, name);
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
         let allocation = match ctx.allocator().allocate(&AllocationCreateDesc {
             name,

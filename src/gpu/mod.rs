@@ -13,6 +13,24 @@ pub use ash::vk;
 pub use context::{list_devices, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
+pub use shaders::{LocalDim, Shader};
+
+/// Compile-time check that a `#[repr(C)]` push-constant block has the size of
+/// the shader's block as reflected from its SPIR-V.
+macro_rules! check_push {
+    ($ty:ty, $shader:expr) => {
+        const _: () = assert!(
+            std::mem::size_of::<$ty>() == $shader.push_size as usize,
+            concat!(
+                "push block ",
+                stringify!($ty),
+                " does not match the shader ",
+                stringify!($shader)
+            )
+        );
+    };
+}
+pub(crate) use check_push;
 pub use memory::{Buffer, Image3d};
 pub use timer::{Pass, Timer};
 pub use validation::ValidationMessage;

@@ -9,7 +9,19 @@ use super::prims::{Ray, TraceResult, TraceScene};
 use super::traverse::Traversal;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+
+/// Push block of `trace.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct TracePush {
+    /// Rays in this batch.
+    count: u32,
+    /// 1: shadow rays (stop at the first hit found).
+    any_hit: u32,
+    groups_x: u32,
+}
+check_push!(TracePush, shaders::OCTREE_TRACE);
 
 /// Rays per dispatch (32 MiB of rays and of results at most).
 const BATCH: usize = 1 << 20;
@@ -22,13 +34,9 @@ pub struct TraceKernels {
 
 impl TraceKernels {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
-        let b = [D::STORAGE_BUFFER; 6];
         let kernels = Traversal::ALL
             .into_iter()
-            .map(|t| {
-                Kernel::with_constants(ctx, "octree/trace", shaders::OCTREE_TRACE, &b, 12, &[t.id()]).map(|k| (t, k))
-            })
+            .map(|t| Kernel::with_constants::<TracePush>(ctx, &shaders::OCTREE_TRACE, &[t.id()]).map(|k| (t, k)))
             .collect::<Result<Vec<_>>>()?;
         Ok(TraceKernels {
             ctx: ctx.clone(),
@@ -118,8 +126,12 @@ impl<'k> GpuTracer<'k> {
             // Host-visible, coherent: the submission makes these writes visible.
             let ray_bytes: &[u8] = bytemuck::cast_slice(batch);
             self.rays.mapped_mut().expect("ray buffer is host visible")[..ray_bytes.len()].copy_from_slice(ray_bytes);
-            let groups = record::groups_linear(ctx.info(), "trace rays", batch.len() as u64, 64)?;
-            let push: [u32; 3] = [batch.len() as u32, u32::from(any_hit), groups[0]];
+            let groups = record::groups_linear(ctx.info(), "trace rays", batch.len() as u64, kernel.local_size()[0])?;
+            let push = TracePush {
+                count: batch.len() as u32,
+                any_hit: u32::from(any_hit),
+                groups_x: groups[0],
+            };
             let timer = &mut self.timer;
             let bindings = [
                 Binding::Storage(&self.nodes),
@@ -132,7 +144,7 @@ impl<'k> GpuTracer<'k> {
             ctx.submit_and_wait(|cmd| {
                 timer.reset(cmd);
                 let pass = timer.begin(cmd, "trace")?;
-                kernel.dispatch(cmd, &bindings, bytemuck::cast_slice(&push), groups);
+                kernel.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
                 timer.end(cmd, pass);
                 record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
                 Ok(())

@@ -6,11 +6,12 @@
 
 pub mod build;
 mod gpu;
-pub mod node;
 pub mod prims;
 pub mod report;
-pub mod traverse;
 pub mod whitted;
+
+pub use crate::spatial::octree_node as node;
+pub use crate::spatial::octree_traverse as traverse;
 
 pub use build::{Box3, BuildStats, Mode, Octree, OctreeOptions, MAX_DEPTH_LIMIT};
 pub use gpu::{GpuTracer, TraceKernels};

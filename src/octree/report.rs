@@ -6,7 +6,7 @@
 use super::whitted::{self, RayCounts, Tracer, TraversalTotals, WhittedOptions};
 use super::{BuildStats, CpuTracer, GpuTracer, Mode, Octree, OctreeOptions, TraceKernels, TraceScene, Traversal};
 use crate::error::Result;
-use crate::render::Frame;
+use crate::frame::Frame;
 use crate::scene::{Scene, SpdScene};
 use std::fmt::Write as _;
 

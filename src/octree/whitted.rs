@@ -14,7 +14,7 @@ use super::prims::{Ray, TraceResult};
 use super::traverse::Traversal;
 use super::{trace_cpu, GpuTracer, Octree, TraceScene};
 use crate::error::Result;
-use crate::render::Frame;
+use crate::frame::Frame;
 use crate::scene::math::{add, cross, dot, length, normalize, scale, sub, V3};
 use crate::scene::{ConeFrame, Scene, Shape, View};
 use std::time::Instant;

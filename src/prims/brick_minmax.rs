@@ -7,6 +7,20 @@ use crate::gpu::record;
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel};
 use crate::volume::GpuVolume;
 
+/// Push block of `brick_minmax.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct MinMaxPush {
+    /// xyz: volume dims; w: brick edge.
+    dims: [u32; 4],
+    /// xyz: bricks per axis; w: total bricks.
+    counts: [u32; 4],
+    norm: [f32; 2],
+    apron: u32,
+    groups_x: u32,
+}
+crate::gpu::check_push!(MinMaxPush, shaders::PRIMS_BRICK_MINMAX);
+
 pub struct BrickMinMax {
     ctx: Context,
     kernel: Kernel,
@@ -19,11 +33,9 @@ pub fn brick_counts(dims: [u32; 3], brick: u32) -> [u32; 3] {
 
 impl BrickMinMax {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
-        let b = [D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER];
         Ok(BrickMinMax {
             ctx: ctx.clone(),
-            kernel: Kernel::new(ctx, "prims/brick_minmax", shaders::PRIMS_BRICK_MINMAX, &b, 48)?,
+            kernel: Kernel::new::<MinMaxPush>(ctx, &shaders::PRIMS_BRICK_MINMAX)?,
         })
     }
 
@@ -41,29 +53,22 @@ impl BrickMinMax {
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         check_range(self.ctx.info(), "brick ranges", total * 8)?;
         entry_barrier(self.ctx.device(), cmd);
-        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, 64)?;
-        let mut push = Vec::with_capacity(48);
-        push.extend(bytemuck::cast_slice(&[
-            volume.dims[0],
-            volume.dims[1],
-            volume.dims[2],
-            brick,
-            counts[0],
-            counts[1],
-            counts[2],
-            total as u32,
-        ]));
-        push.extend(bytemuck::cast_slice(&volume.norm));
-        push.extend(bytemuck::cast_slice(&[apron, groups[0]]));
+        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.kernel.local_size()[0])?;
+        let push = MinMaxPush {
+            dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
+            counts: [counts[0], counts[1], counts[2], total as u32],
+            norm: volume.norm,
+            apron,
+            groups_x: groups[0],
+        };
         self.kernel.dispatch(
             cmd,
             &[
                 Binding::Sampled(volume.image.view, volume.sampler),
                 Binding::Storage(out),
             ],
-            &push,
+            bytemuck::bytes_of(&push),
             groups,
-        );
-        Ok(())
+        )
     }
 }

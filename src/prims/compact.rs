@@ -1,8 +1,8 @@
 //! Stream compaction by flag: the indices i with flags[i] != 0, in order, and
 //! their count.
 
+use super::entry_barrier;
 use super::scan::{Scan, ScanScratch};
-use super::{entry_barrier, words};
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
@@ -13,6 +13,16 @@ pub struct Compact {
     scan: Scan,
 }
 
+/// Push block of `compact.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CompactPush {
+    n: u32,
+    groups_x: u32,
+    pad: [u32; 2],
+}
+crate::gpu::check_push!(CompactPush, shaders::PRIMS_COMPACT);
+
 pub struct CompactScratch {
     capacity: u64,
     offsets: Buffer,
@@ -21,11 +31,9 @@ pub struct CompactScratch {
 
 impl Compact {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
-        let b = [D::STORAGE_BUFFER; 4];
         Ok(Compact {
             ctx: ctx.clone(),
-            kernel: Kernel::new(ctx, "prims/compact", shaders::PRIMS_COMPACT, &b, 16)?,
+            kernel: Kernel::new::<CompactPush>(ctx, &shaders::PRIMS_COMPACT)?,
             scan: Scan::new(ctx)?,
         })
     }
@@ -77,8 +85,12 @@ impl Compact {
         unsafe { device.cmd_copy_buffer(cmd, flags.raw, scratch.offsets.raw, &region) };
         self.scan.record(cmd, &scratch.offsets, n, &scratch.scan)?;
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
-        let groups = record::groups_linear(self.ctx.info(), "compact", n, 256)?;
-        let push = words(&[n as u32, groups[0], 0, 0]);
+        let groups = record::groups_linear(self.ctx.info(), "compact", n, self.kernel.local_size()[0])?;
+        let push = CompactPush {
+            n: n as u32,
+            groups_x: groups[0],
+            pad: [0; 2],
+        };
         self.kernel.dispatch(
             cmd,
             &[
@@ -87,9 +99,8 @@ impl Compact {
                 Binding::Storage(indices),
                 Binding::Storage(count),
             ],
-            &push,
+            bytemuck::bytes_of(&push),
             groups,
-        );
-        Ok(())
+        )
     }
 }

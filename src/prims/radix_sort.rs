@@ -3,7 +3,7 @@
 
 use super::layout::BlockLayout;
 use super::scan::{Scan, ScanScratch, BLOCK};
-use super::{check_range, entry_barrier, words};
+use super::{check_range, entry_barrier};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
@@ -16,6 +16,20 @@ pub struct RadixSort {
     scatter: Kernel,
     scan: Scan,
 }
+
+/// Push block of `radix_hist.comp` and `radix_scatter.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SortPush {
+    n: u32,
+    groups_x: u32,
+    shift: u32,
+    blocks: u32,
+    digit_mask: u32,
+    pad: [u32; 3],
+}
+crate::gpu::check_push!(SortPush, shaders::PRIMS_RADIX_HIST);
+crate::gpu::check_push!(SortPush, shaders::PRIMS_RADIX_SCATTER);
 
 /// Ping-pong and histogram buffers for sorts of up to `capacity` elements.
 pub struct SortScratch {
@@ -33,26 +47,11 @@ impl RadixSort {
     }
 
     pub fn with_layout(ctx: &Context, layout: BlockLayout) -> Result<Self> {
-        use vk::DescriptorType as D;
         let c = layout.check(ctx.info())?.constants();
         Ok(RadixSort {
             ctx: ctx.clone(),
-            hist: Kernel::with_constants(
-                ctx,
-                "prims/radix_hist",
-                shaders::PRIMS_RADIX_HIST,
-                &[D::STORAGE_BUFFER; 2],
-                32,
-                &c,
-            )?,
-            scatter: Kernel::with_constants(
-                ctx,
-                "prims/radix_scatter",
-                shaders::PRIMS_RADIX_SCATTER,
-                &[D::STORAGE_BUFFER; 5],
-                32,
-                &c,
-            )?,
+            hist: Kernel::with_constants::<SortPush>(ctx, &shaders::PRIMS_RADIX_HIST, &c)?,
+            scatter: Kernel::with_constants::<SortPush>(ctx, &shaders::PRIMS_RADIX_SCATTER, &c)?,
             scan: Scan::with_layout(ctx, layout)?,
         })
     }
@@ -132,16 +131,24 @@ impl RadixSort {
             // The last pass of a key width that is not a multiple of 4 sees only the remaining bits.
             let shift = pass * BITS_PER_PASS;
             let digit_mask = (1u32 << (key_bits - shift).min(BITS_PER_PASS)) - 1;
-            let push = words(&[n as u32, groups[0], shift, blocks as u32, digit_mask, 0, 0, 0]);
+            let push = SortPush {
+                n: n as u32,
+                groups_x: groups[0],
+                shift,
+                blocks: blocks as u32,
+                digit_mask,
+                pad: [0; 3],
+            };
+            let push = bytemuck::bytes_of(&push);
             if pass > 0 {
                 record::compute_to_compute(device, cmd);
             }
             self.hist.dispatch(
                 cmd,
                 &[Binding::Storage(src.0), Binding::Storage(&scratch.hist)],
-                &push,
+                push,
                 groups,
-            );
+            )?;
             self.scan.record(cmd, &scratch.hist, 16 * blocks, &scratch.scan)?;
             record::compute_to_compute(device, cmd);
             self.scatter.dispatch(
@@ -153,9 +160,9 @@ impl RadixSort {
                     Binding::Storage(dst.1),
                     Binding::Storage(&scratch.hist),
                 ],
-                &push,
+                push,
                 groups,
-            );
+            )?;
         }
         if passes % 2 == 1 {
             record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);

@@ -3,10 +3,22 @@
 //! then added back.
 
 use super::layout::BlockLayout;
-use super::{check_range, entry_barrier, words};
+use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+
+/// Push block of `scan_blocks.comp` and `scan_add.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ScanPush {
+    n: u32,
+    groups_x: u32,
+    write_sums: u32,
+    pad: u32,
+}
+check_push!(ScanPush, shaders::PRIMS_SCAN_BLOCKS);
+check_push!(ScanPush, shaders::PRIMS_SCAN_ADD);
 
 /// Elements per workgroup (see `BlockLayout`).
 pub const BLOCK: u64 = 1024;
@@ -31,13 +43,11 @@ impl Scan {
     }
 
     pub fn with_layout(ctx: &Context, layout: BlockLayout) -> Result<Self> {
-        use vk::DescriptorType as D;
         let c = layout.check(ctx.info())?.constants();
-        let two = [D::STORAGE_BUFFER, D::STORAGE_BUFFER];
         Ok(Scan {
             ctx: ctx.clone(),
-            blocks: Kernel::with_constants(ctx, "prims/scan_blocks", shaders::PRIMS_SCAN_BLOCKS, &two, 16, &c)?,
-            add: Kernel::with_constants(ctx, "prims/scan_add", shaders::PRIMS_SCAN_ADD, &two, 16, &c)?,
+            blocks: Kernel::with_constants::<ScanPush>(ctx, &shaders::PRIMS_SCAN_BLOCKS, &c)?,
+            add: Kernel::with_constants::<ScanPush>(ctx, &shaders::PRIMS_SCAN_ADD, &c)?,
         })
     }
 
@@ -93,16 +103,21 @@ impl Scan {
         } else {
             &scratch.dummy
         };
-        let push = words(&[n as u32, groups[0], (blocks > 1) as u32, 0]);
+        let push = ScanPush {
+            n: n as u32,
+            groups_x: groups[0],
+            write_sums: (blocks > 1) as u32,
+            pad: 0,
+        };
+        let bindings = [Binding::Storage(data), Binding::Storage(sums)];
         self.blocks
-            .dispatch(cmd, &[Binding::Storage(data), Binding::Storage(sums)], &push, groups);
+            .dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
         if blocks > 1 {
             record::compute_to_compute(self.ctx.device(), cmd);
             self.level(cmd, sums, blocks, scratch, depth + 1)?;
             record::compute_to_compute(self.ctx.device(), cmd);
-            let push = words(&[n as u32, groups[0], 0, 0]);
-            self.add
-                .dispatch(cmd, &[Binding::Storage(data), Binding::Storage(sums)], &push, groups);
+            let push = ScanPush { write_sums: 0, ..push };
+            self.add.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
         }
         Ok(())
     }

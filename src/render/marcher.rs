@@ -1,18 +1,25 @@
 //! Marcher dispatch: one kernel per traversal style, a render target, and the
 //! `record_*` functions that only record into a caller's command buffer.
 
-use super::frame::Frame;
 use super::params::RenderParams;
 use super::settings::RenderSettings;
-use crate::accel::Structure;
+use crate::accel::{Accel, Structure};
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
-const LOCAL: [u32; 3] = [8, 8, 1];
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// A march kernel: shader name and specialization constants.
+type KernelKey = (&'static str, &'static [u32]);
+
+/// Bindings every march kernel starts with: render parameters, volume, LUT, frame.
+const COMMON_BINDINGS: usize = 4;
 
 /// Where a frame goes: the RGBA f32 frame buffer, its parameter block, and a
 /// host-visible copy for readback.
@@ -42,7 +49,8 @@ impl RenderTarget {
             bytes,
             info.max_storage_buffer_range,
         )?;
-        record::groups_for(info, "frame", [width, height, 1], LOCAL)?;
+        let local = crate::gpu::shaders::MARCH_NAIVE.local_size_with(&[]);
+        record::groups_for(info, "frame", [width, height, 1], local)?;
         let frame = Buffer::new(
             ctx,
             "frame",
@@ -83,41 +91,43 @@ impl RenderTarget {
     }
 }
 
-/// The march kernels of every accel, created once per context.
+/// The march kernels, created once per context when a structure first
+/// needs them (each structure names its kernel: `Method::march`).
 pub struct Renderer {
     ctx: Context,
-    naive: Kernel,
-    tree: Kernel,
-    grid: Kernel,
-    hybrid: Kernel,
-    /// One pipeline per octree traversal (specialization constant).
-    octree: Vec<Kernel>,
+    kernels: Mutex<HashMap<KernelKey, Arc<Kernel>>>,
 }
 
 impl Renderer {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
-        let common = [
-            D::UNIFORM_BUFFER,
-            D::COMBINED_IMAGE_SAMPLER,
-            D::STORAGE_BUFFER,
-            D::STORAGE_BUFFER,
-        ];
-        let tree = [common.as_slice(), &[D::STORAGE_BUFFER, D::STORAGE_BUFFER]].concat();
-        let grid = [common.as_slice(), &[D::STORAGE_BUFFER]].concat();
-        let hybrid = [common.as_slice(), &[D::STORAGE_BUFFER; 3]].concat();
-        let octree = crate::octree::Traversal::ALL
-            .iter()
-            .map(|t| Kernel::with_constants(ctx, "march/octree", shaders::MARCH_OCTREE, &grid, 0, &[t.id()]))
-            .collect::<Result<Vec<_>>>()?;
         Ok(Renderer {
             ctx: ctx.clone(),
-            naive: Kernel::new(ctx, "march/naive", shaders::MARCH_NAIVE, &common, 0)?,
-            tree: Kernel::new(ctx, "march/bvh", shaders::MARCH_BVH, &tree, 0)?,
-            grid: Kernel::new(ctx, "march/grid", shaders::MARCH_GRID, &grid, 16)?,
-            hybrid: Kernel::new(ctx, "march/hybrid", shaders::MARCH_HYBRID, &hybrid, 16)?,
-            octree,
+            kernels: Mutex::new(HashMap::new()),
         })
+    }
+
+    /// The march kernel of `accel`, created on first use.
+    pub fn kernel(&self, accel: Accel) -> Result<Arc<Kernel>> {
+        let march = accel.method().march();
+        let key = (march.shader.name, march.constants);
+        let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(k) = map.get(&key) {
+            return Ok(k.clone());
+        }
+        if march.shader.bindings.len() < COMMON_BINDINGS {
+            return Err(Error::Interface(format!(
+                "kernel {}: a march kernel has at least {COMMON_BINDINGS} bindings",
+                march.shader.name
+            )));
+        }
+        let k = Arc::new(Kernel::create(
+            &self.ctx,
+            &march.shader,
+            march.push_size,
+            march.constants,
+        )?);
+        map.insert(key, k.clone());
+        Ok(k)
     }
 
     /// Records one frame into `cmd`: parameter update, then the march pass of
@@ -191,7 +201,8 @@ impl Renderer {
                 "must be a finite number > 0 (voxels)",
             ));
         }
-        let groups = record::groups_for(self.ctx.info(), "frame", [target.width, target.height, 1], LOCAL)?;
+        let kernel = self.kernel(structure.accel)?;
+        let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
@@ -205,39 +216,15 @@ impl Renderer {
             Binding::Storage(&tf.lut),
             Binding::Storage(&target.frame),
         ];
-        let mut push = Vec::new();
-        let kernel = match structure {
-            Structure::Naive => &self.naive,
-            Structure::Tree(_, t) => {
-                bindings.extend([Binding::Storage(&t.nodes), Binding::Storage(&t.count)]);
-                &self.tree
-            }
-            Structure::Grid(g) => {
-                bindings.push(Binding::Storage(&g.flags));
-                push = bytemuck::cast_slice(&g.push()).to_vec();
-                &self.grid
-            }
-            Structure::Hybrid(h) => {
-                bindings.extend([
-                    Binding::Storage(&h.tree.nodes),
-                    Binding::Storage(&h.tree.count),
-                    Binding::Storage(&h.grid.flags),
-                ]);
-                push = bytemuck::cast_slice(&h.grid.push()).to_vec();
-                &self.hybrid
-            }
-            Structure::Octree(_, o) => {
-                bindings.push(Binding::Storage(&o.nodes));
-                &self.octree[o.traversal.id() as usize]
-            }
-        };
+        bindings.extend(structure.built.bindings());
+        let push = structure.built.push();
         match timer {
             Some(timer) => {
                 let pass = timer.begin(cmd, "march")?;
-                kernel.dispatch(cmd, &bindings, &push, groups);
+                kernel.dispatch(cmd, &bindings, &push, groups)?;
                 timer.end(cmd, pass);
             }
-            None => kernel.dispatch(cmd, &bindings, &push, groups),
+            None => kernel.dispatch(cmd, &bindings, &push, groups)?,
         }
         Ok(())
     }

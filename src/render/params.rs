@@ -20,5 +20,31 @@ pub struct RenderParams {
     pub march: [f32; 4],
 }
 
+// Every march kernel reads the block at binding 0.
+const _: () = {
+    use crate::gpu::shaders::*;
+    let size = std::mem::size_of::<RenderParams>() as u32;
+    assert!(
+        size == MARCH_NAIVE.block_sizes[0],
+        "RenderParams does not match render_params.glsl"
+    );
+    assert!(
+        size == MARCH_BVH.block_sizes[0],
+        "RenderParams does not match render_params.glsl"
+    );
+    assert!(
+        size == MARCH_GRID.block_sizes[0],
+        "RenderParams does not match render_params.glsl"
+    );
+    assert!(
+        size == MARCH_HYBRID.block_sizes[0],
+        "RenderParams does not match render_params.glsl"
+    );
+    assert!(
+        size == MARCH_OCTREE.block_sizes[0],
+        "RenderParams does not match render_params.glsl"
+    );
+};
+
 /// ERT threshold meaning "off": accumulated alpha never exceeds 1.
 pub const ERT_OFF: f32 = 2.0;

@@ -1,8 +1,8 @@
 //! CPU reference of the naive marcher: the same ray setup, lattice, trilinear
 //! sampling, LUT lookup and compositing as the GLSL, in f32, for tests.
 
-use super::frame::Frame;
 use super::params::RenderParams;
+use crate::frame::Frame;
 use crate::tf::TransferFunction;
 use crate::volume::Volume;
 use rayon::prelude::*;

@@ -4,7 +4,7 @@
 use super::math::V3;
 use super::{Scene, Shape};
 use crate::error::{Error, Result};
-use crate::render::write_atomically;
+use crate::frame::write_atomically;
 use std::fmt::Write as _;
 use std::path::Path;
 

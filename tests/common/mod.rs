@@ -2,9 +2,10 @@
 //! synchronization validation, and tests fail on any message.
 #![allow(dead_code)]
 
-use lacuna::accel::{BuildOptions, Builder, Scene};
+use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder};
+use lacuna::frame::Frame;
 use lacuna::gpu::{Context, ContextOptions};
-use lacuna::render::{Accel, Frame, RenderSettings, Renderer};
+use lacuna::render::{RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
 
@@ -47,7 +48,7 @@ pub fn render_with(
     let lut = tf.upload(ctx).unwrap();
     let builder = Builder::new(ctx).unwrap();
     let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
-    let scene = Scene {
+    let scene = BuildInput {
         volume,
         gpu_volume: &gv,
         tf,
@@ -61,5 +62,10 @@ pub fn render_with(
 
 /// Per-channel max abs difference.
 pub fn max_abs(a: &Frame, b: &Frame) -> f64 {
-    lacuna::render::diff(a, b).unwrap().max_abs
+    lacuna::frame::diff(a, b).unwrap().max_abs
+}
+
+/// The registry entry named `name`.
+pub fn accel(name: &str) -> Accel {
+    name.parse().unwrap()
 }

@@ -6,8 +6,10 @@ use super::occupancy::Occupancy;
 use super::{
     choose, flatten, forced_plane, halves, longest_axis, raster_planes, volume, Candidate, IBox, KdNode, KdParams,
 };
+use super::{kd_variants, Depth};
+use crate::accel::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
 use crate::accel::stats::Stats;
-use crate::accel::tree::{GpuTree, Node};
+use crate::accel::tree::{GpuTree, Node, TREE_MARCH};
 use crate::error::Result;
 use crate::gpu::Context;
 use crate::tf::TransferFunction;
@@ -70,4 +72,42 @@ pub fn build(ctx: &Context, volume: &Volume, tf: &TransferFunction, params: &KdP
     let tree = GpuTree::upload(ctx, &nodes, stats)?;
     t.push("upload", start.elapsed().as_secs_f64() * 1e3);
     Ok((tree, t))
+}
+
+/// `--accel kd-cpu`.
+pub struct KdCpu;
+
+impl Method for KdCpu {
+    fn name(&self) -> &'static str {
+        "kd-cpu"
+    }
+    fn description(&self) -> &'static str {
+        "k-d tree built on the multi-core CPU from summed volume tables (Zellmann et al. 2018)"
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::None
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![("kd", o.kd.describe())]
+    }
+    fn march(&self) -> March {
+        TREE_MARCH
+    }
+    fn variants(&self) -> Vec<(String, BuildOptions)> {
+        kd_variants(self.name(), &[(Depth::Shallow, 32), (Depth::Deep, 32)])
+    }
+    /// Host-driven: built on the CPU from the host volume, then uploaded.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        _: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let (tree, t) = build(builder.context(), input.volume, input.tf, &options.kd)?;
+        Ok((Box::new(tree), t))
+    }
 }

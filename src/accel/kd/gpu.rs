@@ -9,16 +9,45 @@
 use super::{
     binned_planes, choose, forced_plane, halves, longest_axis, volume, Candidate, IBox, KdNode, KdParams, RASTER,
 };
-use crate::accel::morton::MAX_BRICKS_PER_AXIS;
+use super::{kd_variants, Depth};
+use crate::accel::morton::{MortonPush, MAX_BRICKS_PER_AXIS};
+use crate::accel::registry::{BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges};
 use crate::accel::stats::Stats;
-use crate::accel::tree::{GpuTree, STORAGE_XFER};
+use crate::accel::tree::{GpuTree, STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
-use crate::prims::{entry_barrier, words, RadixSort};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::prims::{entry_barrier, RadixSort};
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
+
+/// Push block of `brick_tight.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct TightPush {
+    /// xyz: volume dims; w: brick edge.
+    dims: [u32; 4],
+    /// xyz: bricks per axis; w: total bricks.
+    counts: [u32; 4],
+    norm: [f32; 2],
+    groups_x: u32,
+    lut_size: u32,
+}
+check_push!(TightPush, shaders::BUILD_BRICK_TIGHT);
+
+/// Push block of `box_query.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct QueryPush {
+    /// xyz: bricks per axis; w: bricks.
+    counts: [u32; 4],
+    queries: u32,
+    groups_x: u32,
+    brick: u32,
+    pad: u32,
+}
+check_push!(QueryPush, shaders::BUILD_BOX_QUERY);
 
 pub struct KdGpuBuilder {
     ctx: Context,
@@ -41,24 +70,11 @@ fn decode(r: &[[i32; 4]], q: usize) -> Option<IBox> {
 
 impl KdGpuBuilder {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
         Ok(KdGpuBuilder {
             ctx: ctx.clone(),
-            tight: Kernel::new(
-                ctx,
-                "build/brick_tight",
-                shaders::BUILD_BRICK_TIGHT,
-                &[D::COMBINED_IMAGE_SAMPLER, D::STORAGE_BUFFER, D::STORAGE_BUFFER],
-                48,
-            )?,
-            morton: Kernel::new(ctx, "build/morton", shaders::BUILD_MORTON, &[D::STORAGE_BUFFER; 3], 32)?,
-            query: Kernel::new(
-                ctx,
-                "build/box_query",
-                shaders::BUILD_BOX_QUERY,
-                &[D::STORAGE_BUFFER; 5],
-                32,
-            )?,
+            tight: Kernel::new::<TightPush>(ctx, &shaders::BUILD_BRICK_TIGHT)?,
+            morton: Kernel::new::<MortonPush>(ctx, &shaders::BUILD_MORTON)?,
+            query: Kernel::new::<QueryPush>(ctx, &shaders::BUILD_BOX_QUERY)?,
             sort: RadixSort::new(ctx)?,
         })
     }
@@ -100,9 +116,15 @@ impl KdGpuBuilder {
                     Binding::Storage(&qbuf),
                     Binding::Storage(&rbuf),
                 ],
-                &words(&[c[0], c[1], c[2], s.total as u32, n as u32, groups[0], RASTER as u32, 0]),
+                bytemuck::bytes_of(&QueryPush {
+                    counts: [c[0], c[1], c[2], s.total as u32],
+                    queries: n as u32,
+                    groups_x: groups[0],
+                    brick: RASTER as u32,
+                    pad: 0,
+                }),
                 groups,
-            );
+            )?;
             timer.end(cmd, pass);
             record::barrier(
                 self.ctx.device(),
@@ -258,18 +280,13 @@ impl KdGpuBuilder {
             timer.reset(cmd);
             let pass = timer.begin(cmd, "bricks")?;
             let groups = record::groups_linear(info, "brick boxes", total, 1)?;
-            let mut push = words(&[
-                gv.dims[0],
-                gv.dims[1],
-                gv.dims[2],
-                brick,
-                counts[0],
-                counts[1],
-                counts[2],
-                total as u32,
-            ]);
-            push.extend(bytemuck::cast_slice(&gv.norm));
-            push.extend(words(&[groups[0], LUT_SIZE as u32]));
+            let push = TightPush {
+                dims: [gv.dims[0], gv.dims[1], gv.dims[2], brick],
+                counts: [counts[0], counts[1], counts[2], total as u32],
+                norm: gv.norm,
+                groups_x: groups[0],
+                lut_size: LUT_SIZE as u32,
+            };
             self.tight.dispatch(
                 cmd,
                 &[
@@ -277,12 +294,12 @@ impl KdGpuBuilder {
                     Binding::Storage(&tf.max_table),
                     Binding::Storage(&boxes),
                 ],
-                &push,
+                bytemuck::bytes_of(&push),
                 groups,
-            );
+            )?;
             timer.end(cmd, pass);
             let pass = timer.begin(cmd, "morton")?;
-            let groups = record::groups_linear(info, "morton", total, 64)?;
+            let groups = record::groups_linear(info, "morton", total, self.morton.local_size()[0])?;
             self.morton.dispatch(
                 cmd,
                 &[
@@ -290,9 +307,9 @@ impl KdGpuBuilder {
                     Binding::Storage(&codes),
                     Binding::Storage(&order),
                 ],
-                &words(&[counts[0], counts[1], counts[2], 0, total as u32, groups[0], 1, 0]),
+                bytemuck::bytes_of(&MortonPush::every(counts, total as u32, groups[0])),
                 groups,
-            );
+            )?;
             timer.end(cmd, pass);
             let pass = timer.begin(cmd, "sort")?;
             self.sort.record(cmd, &codes, &order, total, 30, &scratch)?;
@@ -320,4 +337,49 @@ struct Sorted {
     boxes: Buffer,
     codes: Buffer,
     order: Buffer,
+}
+
+impl KernelSet for KdGpuBuilder {
+    fn new(ctx: &Context) -> Result<Self> {
+        KdGpuBuilder::new(ctx)
+    }
+}
+
+/// `--accel kd-gpu`.
+pub struct KdGpu;
+
+impl Method for KdGpu {
+    fn name(&self) -> &'static str {
+        "kd-gpu"
+    }
+    fn description(&self) -> &'static str {
+        "k-d tree built with GPU reductions over Morton-ordered bricks (Zellmann et al. 2019)"
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::None
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![("kd", o.kd.describe()), ("bins", o.kd.bins.to_string())]
+    }
+    fn march(&self) -> March {
+        TREE_MARCH
+    }
+    fn variants(&self) -> Vec<(String, BuildOptions)> {
+        kd_variants(self.name(), &[(Depth::Shallow, 32), (Depth::Deep, 128)])
+    }
+    /// Host-driven: the host recursion submits one batch of queries per level.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        _: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let kd = builder.kernels::<KdGpuBuilder>()?;
+        let (tree, t) = kd.build(input.gpu_volume, input.gpu_tf, &options.kd)?;
+        Ok((Box::new(tree), t))
+    }
 }

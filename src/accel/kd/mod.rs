@@ -219,3 +219,27 @@ pub fn leaf_boxes(nodes: &[Node]) -> Vec<IBox> {
         })
         .collect()
 }
+
+/// The paper's k-d parameter sets as registry variants: (depth, max leaf).
+pub(crate) fn kd_variants(name: &str, sets: &[(Depth, u32)]) -> Vec<(String, crate::accel::BuildOptions)> {
+    sets.iter()
+        .map(|&(depth, max_leaf)| {
+            let kd = KdParams {
+                depth,
+                max_leaf,
+                ..KdParams::default()
+            };
+            let label = match depth {
+                Depth::Shallow => format!("{name} shallow"),
+                Depth::Deep => format!("{name} MLS={max_leaf}"),
+            };
+            (
+                label,
+                crate::accel::BuildOptions {
+                    kd,
+                    ..Default::default()
+                },
+            )
+        })
+        .collect()
+}

@@ -5,12 +5,12 @@
 //! brick (in parallel) and takes the union: O(bricks overlapped).
 
 use super::IBox;
+use crate::spatial::Sat3;
 use crate::tf::TransferFunction;
 use crate::volume::Volume;
 use rayon::prelude::*;
 
 pub const SVT_BRICK: i32 = 32;
-const E: usize = SVT_BRICK as usize + 1; // table edge with a zero border
 
 /// A brick index, its origin, and a box clipped to it in local coordinates.
 type Clipped = (usize, [i32; 3], [i32; 3], [i32; 3]);
@@ -18,8 +18,8 @@ type Clipped = (usize, [i32; 3], [i32; 3], [i32; 3]);
 pub struct Occupancy {
     pub dims: [i32; 3],
     counts: [i32; 3],
-    /// Per brick: E^3 inclusive prefix counts, index (x+1) + E*((y+1) + E*(z+1)).
-    tables: Vec<Vec<u16>>,
+    /// Per brick: the summed-area table of its active footprints.
+    tables: Vec<Sat3<u16>>,
     /// Active footprints in the whole volume.
     pub active: u64,
 }
@@ -48,7 +48,7 @@ impl Occupancy {
         let dims = volume.dims.map(|d| d as i32);
         let counts = dims.map(|d| (d + SVT_BRICK - 1) / SVT_BRICK);
         let n = counts.iter().product::<i32>() as usize;
-        let tables: Vec<Vec<u16>> = (0..n)
+        let tables: Vec<Sat3<u16>> = (0..n)
             .into_par_iter()
             .map(|b| {
                 let bc = [
@@ -75,35 +75,19 @@ impl Occupancy {
                     lo = filter3(&lo.0, lo.1, axis, f32::min);
                     hi = filter3(&hi.0, hi.1, axis, f32::max);
                 }
-                let mut table = vec![0u16; E * E * E];
                 let b = SVT_BRICK as usize;
-                for z in 0..b {
-                    for y in 0..b {
-                        for x in 0..b {
-                            let inside = [x, y, z]
-                                .iter()
-                                .zip(&origin)
-                                .zip(&dims)
-                                .all(|((c, o), d)| o + (*c as i32) < *d);
-                            let i = x + b * (y + b * z);
-                            let active = inside && tf.max_alpha(lo.0[i], hi.0[i]) > 0.0;
-                            table[(x + 1) + E * ((y + 1) + E * (z + 1))] = active as u16;
-                        }
-                    }
-                }
-                // Inclusive prefix sums along x, then y, then z.
-                for (axis, stride) in [1usize, E, E * E].into_iter().enumerate() {
-                    for i in 0..E * E * E {
-                        let c = [i % E, (i / E) % E, i / (E * E)];
-                        if c[axis] >= 1 {
-                            table[i] += table[i - stride];
-                        }
-                    }
-                }
-                table
+                Sat3::<u16>::new([b; 3], |x, y, z| {
+                    let inside = [x, y, z]
+                        .iter()
+                        .zip(&origin)
+                        .zip(&dims)
+                        .all(|((c, o), d)| o + (*c as i32) < *d);
+                    let i = x + b * (y + b * z);
+                    inside && tf.max_alpha(lo.0[i], hi.0[i]) > 0.0
+                })
             })
             .collect();
-        let active = tables.iter().map(|t| t[E * E * E - 1] as u64).sum();
+        let active = tables.iter().map(|t| t.total() as u64).sum();
         Occupancy {
             dims,
             counts,
@@ -112,22 +96,12 @@ impl Occupancy {
         }
     }
 
-    fn at(t: &[u16], x: i32, y: i32, z: i32) -> i64 {
-        t[x as usize + E * (y as usize + E * z as usize)] as i64
-    }
-
     /// Active footprints of brick `b` in local `[lo, hi)` (clipped to the brick).
     fn count_local(&self, b: usize, lo: [i32; 3], hi: [i32; 3]) -> i64 {
         if (0..3).any(|a| lo[a] >= hi[a]) {
             return 0;
         }
-        let t = &self.tables[b];
-        let ([lx, ly, lz], [hx, hy, hz]) = (lo, hi);
-        Self::at(t, hx, hy, hz) - Self::at(t, lx, hy, hz) - Self::at(t, hx, ly, hz) - Self::at(t, hx, hy, lz)
-            + Self::at(t, lx, ly, hz)
-            + Self::at(t, lx, hy, lz)
-            + Self::at(t, hx, ly, lz)
-            - Self::at(t, lx, ly, lz)
+        self.tables[b].count(lo.map(|c| c as usize), hi.map(|c| c as usize))
     }
 
     /// The bricks `bx` overlaps, with the box clipped to each in local coordinates.

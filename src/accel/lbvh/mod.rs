@@ -17,20 +17,47 @@ pub mod cpu;
 
 use super::bricks::GpuBricks;
 use super::classify::{Classifier, Classify};
+use super::morton::MortonPush;
 use super::morton::MAX_BRICKS_PER_AXIS;
+use super::registry::{
+    classify_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
+};
 use super::stats::Stats;
-use super::tree::STORAGE_XFER;
 pub use super::tree::{height, GpuTree, Node};
+use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
-use crate::prims::{entry_barrier, words, Compact, CompactScratch, RadixSort, SortScratch};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::prims::{entry_barrier, Compact, CompactScratch, RadixSort, SortScratch};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 /// A built LBVH is a tree in the shared node format.
 pub type Lbvh = GpuTree;
+
+/// Push block of `lbvh_emit.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct EmitPush {
+    n: u32,
+    groups_x: u32,
+    pad: [u32; 2],
+}
+check_push!(EmitPush, shaders::BUILD_LBVH_EMIT);
+
+/// Push block of `lbvh_refit.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RefitPush {
+    /// xyz: volume dims; w: brick edge.
+    dims: [u32; 4],
+    /// xyz: bricks per axis.
+    counts: [u32; 4],
+    n: u32,
+    groups_x: u32,
+}
+check_push!(RefitPush, shaders::BUILD_LBVH_REFIT);
 
 /// Per-volume buffers of the selection phase (classify + compact).
 pub struct SelectScratch {
@@ -62,26 +89,13 @@ pub struct LbvhBuilder {
 
 impl LbvhBuilder {
     pub fn new(ctx: &Context) -> Result<Self> {
-        use vk::DescriptorType as D;
         Ok(LbvhBuilder {
             ctx: ctx.clone(),
             compact: Compact::new(ctx)?,
             sort: RadixSort::new(ctx)?,
-            morton: Kernel::new(ctx, "build/morton", shaders::BUILD_MORTON, &[D::STORAGE_BUFFER; 3], 32)?,
-            emit: Kernel::new(
-                ctx,
-                "build/lbvh_emit",
-                shaders::BUILD_LBVH_EMIT,
-                &[D::STORAGE_BUFFER; 3],
-                16,
-            )?,
-            refit: Kernel::new(
-                ctx,
-                "build/lbvh_refit",
-                shaders::BUILD_LBVH_REFIT,
-                &[D::STORAGE_BUFFER; 4],
-                48,
-            )?,
+            morton: Kernel::new::<MortonPush>(ctx, &shaders::BUILD_MORTON)?,
+            emit: Kernel::new::<EmitPush>(ctx, &shaders::BUILD_LBVH_EMIT)?,
+            refit: Kernel::new::<RefitPush>(ctx, &shaders::BUILD_LBVH_REFIT)?,
         })
     }
 
@@ -211,7 +225,7 @@ impl LbvhBuilder {
         let c = bricks.counts;
         entry_barrier(device, cmd);
         let pass = timer.begin(cmd, "morton")?;
-        let groups = record::groups_linear(info, "morton", n, 64)?;
+        let groups = record::groups_linear(info, "morton", n, self.morton.local_size()[0])?;
         self.morton.dispatch(
             cmd,
             &[
@@ -219,9 +233,9 @@ impl LbvhBuilder {
                 Binding::Storage(&h.codes),
                 Binding::Storage(&h.payload),
             ],
-            &words(&[c[0], c[1], c[2], 0, n as u32, groups[0], 0, 0]),
+            bytemuck::bytes_of(&MortonPush::list(c, n as u32, groups[0])),
             groups,
-        );
+        )?;
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "sort")?;
         self.sort.record(cmd, &h.codes, &h.payload, n, 30, &h.sort)?;
@@ -237,7 +251,7 @@ impl LbvhBuilder {
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "refit")?;
         record::compute_to_compute(device, cmd);
-        let groups = record::groups_linear(info, "refit", n, 64)?;
+        let groups = record::groups_linear(info, "refit", n, self.refit.local_size()[0])?;
         let d = volume.dims;
         self.refit.dispatch(
             cmd,
@@ -247,22 +261,14 @@ impl LbvhBuilder {
                 Binding::Storage(&h.parents),
                 Binding::Storage(&h.visits),
             ],
-            &words(&[
-                d[0],
-                d[1],
-                d[2],
-                bricks.brick,
-                c[0],
-                c[1],
-                c[2],
-                0,
-                n as u32,
-                groups[0],
-                0,
-                0,
-            ]),
+            bytemuck::bytes_of(&RefitPush {
+                dims: [d[0], d[1], d[2], bricks.brick],
+                counts: [c[0], c[1], c[2], 0],
+                n: n as u32,
+                groups_x: groups[0],
+            }),
             groups,
-        );
+        )?;
         timer.end(cmd, pass);
         Ok(())
     }
@@ -278,7 +284,7 @@ impl LbvhBuilder {
         if n < 2 {
             return Ok(());
         }
-        let groups = record::groups_linear(self.ctx.info(), "emit", n - 1, 64)?;
+        let groups = record::groups_linear(self.ctx.info(), "emit", n - 1, self.emit.local_size()[0])?;
         self.emit.dispatch(
             cmd,
             &[
@@ -286,10 +292,13 @@ impl LbvhBuilder {
                 Binding::Storage(nodes),
                 Binding::Storage(parents),
             ],
-            &words(&[n as u32, groups[0], 0, 0]),
+            bytemuck::bytes_of(&EmitPush {
+                n: n as u32,
+                groups_x: groups[0],
+                pad: [0; 2],
+            }),
             groups,
-        );
-        Ok(())
+        )
     }
 
     /// Runs the hierarchy emit alone on sorted `codes` (duplicates allowed)
@@ -353,5 +362,55 @@ impl LbvhBuilder {
             height: std::sync::OnceLock::new(),
         };
         Ok((lbvh, timings))
+    }
+}
+
+impl KernelSet for LbvhBuilder {
+    fn new(ctx: &Context) -> Result<Self> {
+        LbvhBuilder::new(ctx)
+    }
+}
+
+/// `--accel lbvh`.
+pub struct LbvhMethod;
+
+impl Method for LbvhMethod {
+    fn name(&self) -> &'static str {
+        "lbvh"
+    }
+    fn description(&self) -> &'static str {
+        "linear BVH over active 8^3 bricks (Karras 2012), built on the GPU"
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::Bricks
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![classify_param(o.classify)]
+    }
+    fn march(&self) -> March {
+        TREE_MARCH
+    }
+    /// Host-driven for now: the hierarchy is sized by the active count,
+    /// read back between the selection and the hierarchy submissions.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let lbvh = builder.kernels::<LbvhBuilder>()?;
+        let classifier = builder.kernels::<Classifier>()?;
+        let (tree, t) = lbvh.build(
+            &classifier,
+            options.classify,
+            input.gpu_volume,
+            ranges.bricks()?,
+            input.gpu_tf,
+        )?;
+        Ok((Box::new(tree), t))
     }
 }

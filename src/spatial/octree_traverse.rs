@@ -32,7 +32,7 @@
 // with the GLSL it must match bit for bit.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-use super::node::{axis_bit, Node};
+use super::octree_node::{axis_bit, Node};
 use std::fmt;
 use std::str::FromStr;
 

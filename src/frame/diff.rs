@@ -1,7 +1,7 @@
 //! Frame comparison: rmse, psnr, max abs difference over all RGBA channels,
 //! and the count of pixels that differ at all; optional PNG heatmap.
 
-use super::frame::{write_atomically, Frame};
+use super::{write_atomically, Frame};
 use crate::error::{Error, Result};
 use std::path::Path;
 

@@ -1,8 +1,8 @@
-//! Frames: RGBA f32, linear, premultiplied alpha, row 0 at the top; written as
-//! OpenEXR with lacuna's metadata as text attributes (`lacuna.*`). Files are
-//! written under a temporary name and renamed, so no partial file is left.
+//! `Frame`: RGBA f32, linear, premultiplied alpha, row 0 at the top; written
+//! as OpenEXR with lacuna's metadata as text attributes (`lacuna.*`).
 
-use crate::error::{Error, Result};
+use super::write_atomically;
+use crate::error::Result;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -16,20 +16,6 @@ pub struct Frame {
 }
 
 const PREFIX: &str = "lacuna.";
-
-/// Writes to `path` through a sibling temporary file and a rename.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .ok_or_else(|| Error::invalid("output path", path.display().to_string(), "has no file name"))?;
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| crate::Error::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
 
 impl Frame {
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {

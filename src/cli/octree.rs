@@ -1,59 +1,22 @@
-//! `lacuna scene` and `lacuna octree`: the SPD surface scenes and Havran's
-//! octree traversal comparison.
+//! `lacuna octree`: Havran's octree traversal comparison on the SPD scenes.
 
+use super::{check_parent, context, validation_verdict};
 use clap::Args;
 use lacuna::octree::report::{self, Backend, Row};
 use lacuna::octree::whitted::WhittedOptions;
 use lacuna::octree::{Mode, TraceKernels, TraceScene, Traversal, MAX_DEPTH_LIMIT};
 use lacuna::scene::{Scene, SpdScene};
 use lacuna::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
-
-#[derive(Args)]
-pub struct SceneArgs {
-    /// balls, gears, lattice, mount, rings, teapot, tetra or tree.
-    name: String,
-    /// SPD size factor (default: the SPD's default size).
-    #[arg(long)]
-    size: Option<u32>,
-    /// Write the scene in NFF.
-    #[arg(long)]
-    nff: Option<PathBuf>,
-}
-
-pub fn scene(args: &SceneArgs) -> Result<ExitCode> {
-    let kind: SpdScene = args.name.parse()?;
-    if let Some(path) = &args.nff {
-        check_parent(path)?;
-    }
-    let scene = Scene::generate(kind, args.size)?;
-    let b = scene.bounds();
-    println!("{} (size factor {}): {}", kind, scene.size_factor, scene.counts());
-    println!(
-        "bounds: [{:.4}, {:.4}, {:.4}] - [{:.4}, {:.4}, {:.4}]; {} lights",
-        b.lo[0],
-        b.lo[1],
-        b.lo[2],
-        b.hi[0],
-        b.hi[1],
-        b.hi[2],
-        scene.lights.len()
-    );
-    if let Some(path) = &args.nff {
-        scene.write_nff(path)?;
-        println!("wrote {}", path.display());
-    }
-    Ok(ExitCode::SUCCESS)
-}
 
 #[derive(Args)]
 pub struct OctreeArgs {
     /// The SPD scene (omit with --all).
-    scene: Option<String>,
+    scene: Option<SpdScene>,
     /// Subdivision: C (centre) or A (adaptive).
     #[arg(long, default_value = "C")]
-    mode: String,
+    mode: Mode,
     /// Maximum depth (root at depth 0); Havran's range is 4..7.
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
@@ -83,21 +46,6 @@ pub struct OctreeArgs {
     validate: bool,
 }
 
-/// Fails before any work when an output's folder does not exist.
-fn check_parent(path: &Path) -> Result<()> {
-    let parent = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !parent.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
-        ));
-    }
-    Ok(())
-}
-
 fn traversals(spec: &str) -> Result<Vec<Traversal>> {
     if spec == "all" {
         return Ok(Traversal::ALL.to_vec());
@@ -120,8 +68,8 @@ fn check_depth(depth: u32) -> Result<()> {
     Ok(())
 }
 
-pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
-    let mode: Mode = args.mode.parse()?;
+pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
+    let mode = args.mode;
     check_depth(args.max_depth)?;
     let kinds = traversals(&args.traversal)?;
     for path in args.out.iter().chain(&args.report) {
@@ -136,18 +84,14 @@ pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
     }
     let scenes: Vec<SpdScene> = match (&args.scene, args.all) {
         (_, true) => SpdScene::ALL.to_vec(),
-        (Some(s), false) => vec![s.parse()?],
+        (Some(s), false) => vec![*s],
         (None, false) => return Err(Error::invalid("scene", "", "name a scene, or use --all")),
     };
     let generated = scenes
         .iter()
         .map(|&k| Scene::generate(k, args.size))
         .collect::<Result<Vec<_>>>()?;
-    let ctx = if args.cpu {
-        None
-    } else {
-        Some(super::context(args.validate)?)
-    };
+    let ctx = if args.cpu { None } else { Some(context(args.validate)?) };
     let kernels = ctx.as_ref().map(TraceKernels::new).transpose()?;
     let backend = match &kernels {
         Some(k) => Backend::Gpu(k),
@@ -200,11 +144,11 @@ pub fn octree(args: &OctreeArgs) -> Result<ExitCode> {
         let md = report::format_all(&rows);
         print!("{md}");
         if let Some(path) = &args.report {
-            lacuna::render::write_atomically(path, |tmp| {
+            lacuna::frame::write_atomically(path, |tmp| {
                 std::fs::write(tmp, md.as_bytes()).map_err(|e| Error::io(path, e))
             })?;
         }
     }
     drop(kernels);
-    Ok(ctx.as_ref().map_or(ExitCode::SUCCESS, super::validation_verdict))
+    Ok(ctx.as_ref().map_or(ExitCode::SUCCESS, validation_verdict))
 }

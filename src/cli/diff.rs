@@ -1,0 +1,43 @@
+//! `lacuna diff`: compare two EXR frames (exit 1 past --max-abs).
+
+use clap::Args;
+use lacuna::frame::diff::{diff, write_heatmap};
+use lacuna::frame::Frame;
+use lacuna::{Error, Result};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct DiffArgs {
+    a: PathBuf,
+    b: PathBuf,
+    /// Fail (exit 1) when the max abs difference exceeds this.
+    #[arg(long, allow_hyphen_values = true)]
+    max_abs: Option<f64>,
+    /// Write a PNG heatmap of per-pixel differences.
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+}
+
+pub fn run(args: &DiffArgs) -> Result<ExitCode> {
+    if let Some(m) = args.max_abs {
+        if m.is_nan() || m < 0.0 {
+            return Err(Error::invalid("max-abs", m.to_string(), "must be a number >= 0"));
+        }
+    }
+    let a = Frame::read_exr(&args.a)?;
+    let b = Frame::read_exr(&args.b)?;
+    let stats = diff(&a, &b)?;
+    println!("{stats}");
+    if let Some(path) = &args.heatmap {
+        write_heatmap(&a, &b, path, None)?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(m) = args.max_abs {
+        if stats.max_abs > m {
+            eprintln!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
+            return Ok(ExitCode::from(1));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

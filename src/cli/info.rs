@@ -1,0 +1,71 @@
+//! `lacuna info`: a volume's dims, type, values, and occupancy under a TF.
+
+use super::{tf_for, VolumeArgs};
+use clap::Args;
+use lacuna::volume::{BrickGrid, BRICK};
+use lacuna::{Result, TransferFunction};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Transfer function for occupancy (default: the generator's, if any).
+    #[arg(long)]
+    tf: Option<TransferFunction>,
+}
+
+pub fn run(args: &InfoArgs) -> Result<ExitCode> {
+    let v = args.volume.load()?;
+    println!("volume   {}", v.name);
+    println!(
+        "dims     {}x{}x{} ({} voxels)",
+        v.dims[0],
+        v.dims[1],
+        v.dims[2],
+        v.voxel_count()
+    );
+    println!("type     {}", v.source_type);
+    println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
+    println!("values   {} .. {}", v.value_range[0], v.value_range[1]);
+    let mut bins = [0u64; 10];
+    for i in 0..v.data.len() {
+        let n = v.normalize(v.data.texel(i));
+        bins[((n * 10.0) as usize).min(9)] += 1;
+    }
+    let total = v.voxel_count() as f64;
+    println!("histogram of normalised values (10 bins, % of voxels):");
+    let cells: Vec<String> = bins
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            format!(
+                "[{:.1},{:.1}{} {:.2}",
+                i as f32 / 10.0,
+                (i + 1) as f32 / 10.0,
+                if i == 9 { "]" } else { ")" },
+                100.0 * *c as f64 / total
+            )
+        })
+        .collect();
+    for row in cells.chunks(5) {
+        println!("  {}", row.join("  "));
+    }
+    if let Some(tf) = tf_for(args.tf.as_ref(), &v)? {
+        let visible = (0..v.data.len())
+            .filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0)
+            .count();
+        let grid = BrickGrid::new(&v, BRICK, 1);
+        let active = grid.active(&tf).iter().filter(|a| **a).count();
+        println!("tf       {}", tf.spec);
+        println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
+        println!(
+            "active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)",
+            100.0 * active as f64 / grid.len() as f64,
+            BRICK,
+            active,
+            grid.len()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,91 @@
+//! The command line: one module per command; what they share lives here.
+
+pub mod bench;
+pub mod devices;
+pub mod diff;
+pub mod info;
+pub mod octree;
+pub mod render;
+pub mod scene;
+
+use clap::Args;
+use lacuna::gpu::{Context, ContextOptions};
+use lacuna::volume::{LoadOptions, RawLayout, VoxelType};
+use lacuna::{Error, Result, TransferFunction, Volume};
+use std::path::Path;
+use std::process::ExitCode;
+
+/// A volume on the command line: a file or a generator spec.
+#[derive(Args)]
+pub struct VolumeArgs {
+    /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
+    pub volume: String,
+    /// Dimensions of a raw file whose name does not give them (WxHxD).
+    #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
+    pub dims: Option<[u32; 3]>,
+    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
+    #[arg(long = "type", id = "voxel_type", requires = "dims", value_parser = parse_type)]
+    pub voxel_type: Option<VoxelType>,
+}
+
+fn parse_dims(s: &str) -> Result<[u32; 3]> {
+    lacuna::volume::parse_dims(s)
+}
+
+fn parse_type(s: &str) -> Result<VoxelType> {
+    lacuna::volume::parse_type(s)
+}
+
+impl VolumeArgs {
+    pub fn load(&self) -> Result<Volume> {
+        let raw = match (self.dims, self.voxel_type) {
+            (Some(dims), Some(ty)) => Some(RawLayout { dims, ty }),
+            _ => None,
+        };
+        Volume::load(&self.volume, &LoadOptions { raw })
+    }
+}
+
+/// A headless context; `validate` adds validation with synchronization validation.
+pub fn context(validate: bool) -> Result<Context> {
+    let mut options = ContextOptions::from_env();
+    options.validation |= validate;
+    Context::new(&options)
+}
+
+/// Exit 1 after printing every collected validation message, else success.
+pub fn validation_verdict(ctx: &Context) -> ExitCode {
+    let messages = ctx.take_validation_messages();
+    if messages.is_empty() {
+        return ExitCode::SUCCESS;
+    }
+    for m in &messages {
+        eprintln!("validation: {m}");
+    }
+    eprintln!("error: {} Vulkan validation message(s)", messages.len());
+    ExitCode::from(1)
+}
+
+/// The transfer function given, else the volume's default (generators have one).
+pub fn tf_for(spec: Option<&TransferFunction>, volume: &Volume) -> Result<Option<TransferFunction>> {
+    match (spec, &volume.default_tf) {
+        (Some(tf), _) => Ok(Some(tf.clone())),
+        (None, Some(s)) => Ok(Some(TransferFunction::parse(s)?)),
+        (None, None) => Ok(None),
+    }
+}
+
+/// Fails before any work when an output's folder does not exist.
+pub fn check_parent(path: &Path) -> Result<()> {
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
+        ));
+    }
+    Ok(())
+}
