@@ -5,9 +5,10 @@
 //! (no fused multiply-adds on either side), so both find the same t.
 
 use super::build::Box3;
-use crate::scene::math::{dot, normalize};
+use crate::scene::math::normalize;
 use crate::scene::{ConeFrame, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
 
 pub const SPHERE: u32 = 0;
 pub const CONE: u32 = 1;
@@ -113,8 +114,8 @@ pub struct TraceScene {
     pub bounds: Box3,
 }
 
-fn v4(p: [f64; 3], w: f64) -> [f32; 4] {
-    [p[0] as f32, p[1] as f32, p[2] as f32, w as f32]
+fn v4(p: DVec3, w: f64) -> [f32; 4] {
+    p.as_vec3().extend(w as f32).to_array()
 }
 
 impl TraceScene {
@@ -150,8 +151,8 @@ impl TraceScene {
             }
             let b = o.shape.bounds();
             let fb = Box3 {
-                lo: b.lo.map(f32_down),
-                hi: b.hi.map(f32_up),
+                lo: b.lo.to_array().map(f32_down),
+                hi: b.hi.to_array().map(f32_up),
             };
             for a in 0..3 {
                 bounds.lo[a] = bounds.lo[a].min(fb.lo[a]);
@@ -181,10 +182,10 @@ impl TraceScene {
     }
 }
 
-fn push_polygon(p: &mut Prim, verts: &mut Vec<[f32; 4]>, vertices: &[[f64; 3]], shape: &Shape) {
-    let n = normalize(shape.plane_normal().unwrap_or([0.0, 0.0, 1.0]));
+fn push_polygon(p: &mut Prim, verts: &mut Vec<[f32; 4]>, vertices: &[DVec3], shape: &Shape) {
+    let n = normalize(shape.plane_normal().unwrap_or(DVec3::Z));
     let drop = (0..3).max_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(2);
-    p.b = v4(n, dot(n, vertices[0]));
+    p.b = v4(n, n.dot(vertices[0]));
     p.info = [POLYGON, verts.len() as u32, vertices.len() as u32, drop as u32];
     verts.extend(vertices.iter().map(|v| v4(*v, 0.0)));
 }
