@@ -5,9 +5,10 @@
 //! (no fused multiply-adds on either side), so both find the same t.
 
 use super::build::Box3;
-use crate::scene::math::{dot, normalize};
+use crate::scene::math::normalize;
 use crate::scene::{ConeFrame, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
 
 pub const SPHERE: u32 = 0;
 pub const CONE: u32 = 1;
@@ -113,8 +114,8 @@ pub struct TraceScene {
     pub bounds: Box3,
 }
 
-fn v4(p: [f64; 3], w: f64) -> [f32; 4] {
-    [p[0] as f32, p[1] as f32, p[2] as f32, w as f32]
+fn v4(p: DVec3, w: f64) -> [f32; 4] {
+    p.as_vec3().extend(w as f32).to_array()
 }
 
 impl TraceScene {
@@ -150,8 +151,8 @@ impl TraceScene {
             }
             let b = o.shape.bounds();
             let fb = Box3 {
-                lo: b.lo.map(f32_down),
-                hi: b.hi.map(f32_up),
+                lo: b.lo.to_array().map(f32_down),
+                hi: b.hi.to_array().map(f32_up),
             };
             for a in 0..3 {
                 bounds.lo[a] = bounds.lo[a].min(fb.lo[a]);
@@ -181,34 +182,31 @@ impl TraceScene {
     }
 }
 
-fn push_polygon(p: &mut Prim, verts: &mut Vec<[f32; 4]>, vertices: &[[f64; 3]], shape: &Shape) {
-    let n = normalize(shape.plane_normal().unwrap_or([0.0, 0.0, 1.0]));
+fn push_polygon(p: &mut Prim, verts: &mut Vec<[f32; 4]>, vertices: &[DVec3], shape: &Shape) {
+    let n = normalize(shape.plane_normal().unwrap_or(DVec3::Z));
     let drop = (0..3).max_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(2);
-    p.b = v4(n, dot(n, vertices[0]));
+    p.b = v4(n, n.dot(vertices[0]));
     p.info = [POLYGON, verts.len() as u32, vertices.len() as u32, drop as u32];
     verts.extend(vertices.iter().map(|v| v4(*v, 0.0)));
 }
 
-fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn xyz(v: [f32; 4]) -> [f32; 3] {
-    [v[0], v[1], v[2]]
-}
-
 /// Nearest t in (tmin, tmax) where `ray` meets primitive `p` (unit direction).
+///
+/// On glam's `Vec3` (plain per-component IEEE operations, no fused
+/// multiply-adds): `a.dot(b)` is `a.x*b.x + a.y*b.y + a.z*b.z` summed left to
+/// right, as the shader's `dot3`, and `v * s` multiplies each component (the
+/// shader's `s * v`: the same IEEE products).
 pub fn intersect(scene: &TraceScene, p: &Prim, r: &Ray, tmin: f32, tmax: f32) -> Option<f32> {
-    let o = r.org;
-    let d = r.dir;
+    let o = Vec3::from(r.org);
+    let d = Vec3::from(r.dir);
     let inside = |t: f32| t > tmin && t < tmax;
     match p.info[0] {
         SPHERE => {
-            let oc = [o[0] - p.a[0], o[1] - p.a[1], o[2] - p.a[2]];
-            let b = dot3(oc, d);
+            let oc = o - Vec3::from_slice(&p.a);
+            let b = oc.dot(d);
             // Distance to the centre across the ray, without cancellation.
-            let f = [oc[0] - b * d[0], oc[1] - b * d[1], oc[2] - b * d[2]];
-            let disc = p.a[3] * p.a[3] - dot3(f, f);
+            let f = oc - d * b;
+            let disc = p.a[3] * p.a[3] - f.dot(f);
             if disc < 0.0 {
                 return None;
             }
@@ -221,18 +219,18 @@ pub fn intersect(scene: &TraceScene, p: &Prim, r: &Ray, tmin: f32, tmax: f32) ->
             inside(t1).then_some(t1)
         }
         CONE => {
-            let u = xyz(p.b);
-            let w = [o[0] - p.a[0], o[1] - p.a[1], o[2] - p.a[2]];
-            let a0 = dot3(w, u);
-            let ad = dot3(d, u);
+            let u = Vec3::from_slice(&p.b);
+            let w = o - Vec3::from_slice(&p.a);
+            let a0 = w.dot(u);
+            let ad = d.dot(u);
             // Components across the axis, free of the large along-axis part.
-            let wp = [w[0] - a0 * u[0], w[1] - a0 * u[1], w[2] - a0 * u[2]];
-            let dp = [d[0] - ad * u[0], d[1] - ad * u[1], d[2] - ad * u[2]];
+            let wp = w - u * a0;
+            let dp = d - u * ad;
             let k = p.c[0];
             let rr = p.a[3] + k * a0;
-            let qa = dot3(dp, dp) - k * k * ad * ad;
-            let qb = 2.0 * (dot3(wp, dp) - rr * k * ad);
-            let qc = dot3(wp, wp) - rr * rr;
+            let qa = dp.dot(dp) - k * k * ad * ad;
+            let qb = 2.0 * (wp.dot(dp) - rr * k * ad);
+            let qc = wp.dot(wp) - rr * rr;
             let disc = qb * qb - 4.0 * qa * qc;
             if qa == 0.0 || disc < 0.0 {
                 return None;
@@ -254,16 +252,16 @@ pub fn intersect(scene: &TraceScene, p: &Prim, r: &Ray, tmin: f32, tmax: f32) ->
             None
         }
         _ => {
-            let n = xyz(p.b);
-            let denom = dot3(n, d);
+            let n = Vec3::from_slice(&p.b);
+            let denom = n.dot(d);
             if denom == 0.0 {
                 return None;
             }
-            let t = (p.b[3] - dot3(n, o)) / denom;
+            let t = (p.b[3] - n.dot(o)) / denom;
             if !inside(t) {
                 return None;
             }
-            let hit = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
+            let hit = o + d * t;
             let drop = p.info[3] as usize;
             let (iu, iv) = ((drop + 1) % 3, (drop + 2) % 3);
             let (pu, pv) = (hit[iu], hit[iv]);

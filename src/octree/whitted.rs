@@ -15,8 +15,9 @@ use super::traverse::Traversal;
 use super::{trace_cpu, GpuTracer, Octree, TraceScene};
 use crate::error::Result;
 use crate::frame::Frame;
-use crate::scene::math::{add, cross, dot, length, normalize, scale, sub, V3};
+use crate::scene::math::normalize;
 use crate::scene::{ConeFrame, Scene, Shape, View};
+use glam::{DVec3, Vec3};
 use std::time::Instant;
 
 /// Traces batches of rays with a given traversal; returns results and the
@@ -145,20 +146,20 @@ struct Shading<'a> {
 #[derive(Clone, Copy)]
 struct Pending {
     corner: u32,
-    weight: V3,
+    weight: DVec3,
     depth: u32,
 }
 
 struct ShadowPending {
     corner: u32,
-    color: V3,
+    color: DVec3,
 }
 
-fn to_ray(o: V3, d: V3, tmin: f64, tmax: f64) -> Ray {
+fn to_ray(o: DVec3, d: DVec3, tmin: f64, tmax: f64) -> Ray {
     Ray {
-        org: o.map(|x| x as f32),
+        org: o.as_vec3().to_array(),
         tmin: tmin as f32,
-        dir: d.map(|x| x as f32),
+        dir: d.as_vec3().to_array(),
         tmax: tmax as f32,
     }
 }
@@ -167,9 +168,9 @@ const FAR: f64 = 1e30;
 
 impl Shading<'_> {
     /// Unit geometric (or, for patches, interpolated) normal at p.
-    fn normal(&self, prim: u32, p: V3) -> V3 {
+    fn normal(&self, prim: u32, p: DVec3) -> DVec3 {
         match &self.scene.objects[prim as usize].shape {
-            Shape::Sphere { center, .. } => normalize(sub(p, *center)),
+            Shape::Sphere { center, .. } => normalize(p - *center),
             Shape::Cone {
                 base,
                 base_radius,
@@ -177,27 +178,27 @@ impl Shading<'_> {
                 apex_radius,
             } => {
                 let f = ConeFrame::new(*base, *base_radius, *apex, *apex_radius);
-                let w = sub(p, *base);
-                let radial = normalize(sub(w, scale(f.axis, dot(w, f.axis))));
-                normalize(sub(radial, scale(f.axis, f.slope)))
+                let w = p - *base;
+                let radial = normalize(w - f.axis * w.dot(f.axis));
+                normalize(radial - f.axis * f.slope)
             }
             Shape::Polygon { .. } => self.scene.objects[prim as usize]
                 .shape
                 .plane_normal()
-                .unwrap_or([0.0, 0.0, 1.0]),
+                .unwrap_or(DVec3::Z),
             Shape::Patch { vertices, normals } => {
                 let (a, b, c) = (vertices[0], vertices[1], vertices[2]);
-                let n = cross(sub(b, a), sub(c, a));
-                let area = dot(n, n);
+                let n = (b - a).cross(c - a);
+                let area = n.dot(n);
                 if area == 0.0 {
                     return normalize(normals[0]);
                 }
-                let wa = dot(cross(sub(b, p), sub(c, p)), n) / area;
-                let wb = dot(cross(sub(c, p), sub(a, p)), n) / area;
+                let wa = (b - p).cross(c - p).dot(n) / area;
+                let wb = (c - p).cross(a - p).dot(n) / area;
                 let wc = 1.0 - wa - wb;
-                let s = add(add(scale(normals[0], wa), scale(normals[1], wb)), scale(normals[2], wc));
+                let s = normals[0] * wa + normals[1] * wb + normals[2] * wc;
                 let s = normalize(s);
-                if dot(s, s) == 0.0 {
+                if s.dot(s) == 0.0 {
                     normalize(n)
                 } else {
                     s
@@ -208,8 +209,10 @@ impl Shading<'_> {
 }
 
 /// Self-intersection allowance for rays leaving a surface at p.
-fn surface_eps(p: V3) -> f64 {
-    2e-5 * p.iter().fold(1.0f64, |m, &x| m.max(x.abs()))
+fn surface_eps(p: DVec3) -> f64 {
+    // f64::max from 1 over x, y, z, not glam's max_element (another order
+    // and NaN rule).
+    2e-5 * p.to_array().into_iter().fold(1.0f64, |m, x| m.max(x.abs()))
 }
 
 /// The SPD's eye rays for a `resolution`^2 image: one per pixel corner,
@@ -217,9 +220,9 @@ fn surface_eps(p: V3) -> f64 {
 /// centres of the outer rows, so the corners reach half a pixel beyond.
 pub fn eye_rays(v: &View, resolution: u32) -> Vec<Ray> {
     let corners = resolution + 1;
-    let forward = normalize(sub(v.at, v.from));
-    let right = normalize(cross(forward, v.up));
-    let up = cross(right, forward);
+    let forward = normalize(v.at - v.from);
+    let right = normalize(forward.cross(v.up));
+    let up = right.cross(forward);
     let half = (v.fov_deg.to_radians() / 2.0).tan();
     let centre = resolution as f64 / 2.0;
     let span = (resolution as f64 - 1.0).max(1.0) / 2.0;
@@ -228,7 +231,7 @@ pub fn eye_rays(v: &View, resolution: u32) -> Vec<Ray> {
         for i in 0..corners {
             let x = half * (i as f64 - centre) / span;
             let y = half * (centre - j as f64) / span;
-            let d = normalize(add(forward, add(scale(right, x), scale(up, y))));
+            let d = normalize(forward + (right * x + up * y));
             rays.push(to_ray(v.from, d, v.hither.max(0.0), FAR));
         }
     }
@@ -249,7 +252,7 @@ pub fn render(
         scene,
         light_scale: 1.0 / (scene.lights.len().max(1) as f64).sqrt(),
     };
-    let mut color = vec![[0.0f64; 3]; (corners * corners) as usize];
+    let mut color = vec![DVec3::ZERO; (corners * corners) as usize];
     let mut counts = RayCounts::default();
     let mut totals: Vec<TraversalTotals> = traversals.iter().map(|&t| TraversalTotals::new(t)).collect();
     let mut disagreements = 0u64;
@@ -258,7 +261,7 @@ pub fn render(
     let mut pending: Vec<Pending> = (0..rays.len() as u32)
         .map(|corner| Pending {
             corner,
-            weight: [1.0; 3],
+            weight: DVec3::ONE,
             depth: 1,
         })
         .collect();
@@ -292,10 +295,7 @@ pub fn render(
         for ((ray, pend), hit) in rays.iter().zip(&pending).zip(&hits) {
             let primary = pend.depth == 1;
             if !hit.hit() {
-                let c = &mut color[pend.corner as usize];
-                for ((c, w), b) in c.iter_mut().zip(pend.weight).zip(scene.background) {
-                    *c += w * b;
-                }
+                color[pend.corner as usize] += pend.weight * scene.background;
                 continue;
             }
             if primary {
@@ -303,31 +303,32 @@ pub fn render(
             } else {
                 counts.secondary_hits += 1;
             }
-            let o = ray.org.map(f64::from);
-            let d = ray.dir.map(f64::from);
-            let p = add(o, scale(d, hit.t() as f64));
+            let o = Vec3::from(ray.org).as_dvec3();
+            let d = Vec3::from(ray.dir).as_dvec3();
+            let p = o + d * hit.t() as f64;
             let mut n = shading.normal(hit.prim, p);
-            let entering = dot(n, d) < 0.0;
+            let entering = n.dot(d) < 0.0;
             if !entering {
-                n = scale(n, -1.0);
+                // Times -1 as before (-n would differ in a NaN's sign bit).
+                n *= -1.0;
             }
             let m = &scene.materials[scene.objects[hit.prim as usize].material as usize];
             let eps = surface_eps(p);
-            let reflected = sub(d, scale(n, 2.0 * dot(d, n)));
+            let reflected = d - n * (2.0 * d.dot(n));
             for l in &scene.lights {
-                let to = sub(*l, p);
-                let dist = length(to);
-                let ldir = scale(to, 1.0 / dist);
-                let facing = dot(n, ldir);
+                let to = *l - p;
+                let dist = to.length();
+                let ldir = to * (1.0 / dist);
+                let facing = n.dot(ldir);
                 if facing <= 0.0 {
                     continue;
                 }
                 let spec = if m.ks > 0.0 {
-                    m.ks * dot(reflected, ldir).max(0.0).powf(m.shine.max(1.0))
+                    m.ks * reflected.dot(ldir).max(0.0).powf(m.shine.max(1.0))
                 } else {
                     0.0
                 };
-                let c = [0, 1, 2].map(|a| pend.weight[a] * shading.light_scale * (m.kd * m.color[a] * facing + spec));
+                let c = pend.weight * shading.light_scale * (m.kd * m.color * facing + spec);
                 shadow_rays.push(to_ray(p, ldir, eps, dist - eps));
                 shadows.push(ShadowPending {
                     corner: pend.corner,
@@ -341,21 +342,21 @@ pub fn render(
                 next_rays.push(to_ray(p, normalize(reflected), eps, FAR));
                 next.push(Pending {
                     corner: pend.corner,
-                    weight: pend.weight.map(|w| w * m.ks),
+                    weight: pend.weight * m.ks,
                     depth: pend.depth + 1,
                 });
             }
             if m.transmit > 0.0 {
                 let ior = if m.ior > 0.0 { m.ior } else { 1.0 };
                 let eta = if entering { 1.0 / ior } else { ior };
-                let cosi = -dot(d, n);
+                let cosi = -d.dot(n);
                 let k = 1.0 - eta * eta * (1.0 - cosi * cosi);
                 if k >= 0.0 {
-                    let t = normalize(add(scale(d, eta), scale(n, eta * cosi - k.sqrt())));
+                    let t = normalize(d * eta + n * (eta * cosi - k.sqrt()));
                     next_rays.push(to_ray(p, t, eps, FAR));
                     next.push(Pending {
                         corner: pend.corner,
-                        weight: pend.weight.map(|w| w * m.transmit),
+                        weight: pend.weight * m.transmit,
                         depth: pend.depth + 1,
                     });
                 }
@@ -368,9 +369,7 @@ pub fn render(
                 if b.hit() {
                     counts.shadow_hits += 1;
                 } else {
-                    for (c, v) in color[s.corner as usize].iter_mut().zip(s.color) {
-                        *c += v;
-                    }
+                    color[s.corner as usize] += s.color;
                 }
             }
         }
@@ -384,12 +383,8 @@ pub fn render(
         for y in 0..res {
             for x in 0..res {
                 let at = |i: u32, j: u32| color[(j * corners + i) as usize];
-                let mut c = [0.0f32; 4];
-                for (a, v) in c.iter_mut().take(3).enumerate() {
-                    *v = ((at(x, y)[a] + at(x + 1, y)[a] + at(x, y + 1)[a] + at(x + 1, y + 1)[a]) / 4.0) as f32;
-                }
-                c[3] = 1.0;
-                pixels.push(c);
+                let c = (at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1)) / 4.0;
+                pixels.push(c.as_vec3().extend(1.0).to_array());
             }
         }
         Frame::new(res, res, pixels)

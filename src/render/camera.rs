@@ -4,6 +4,7 @@
 
 use super::params::RenderParams;
 use crate::error::{Error, Result};
+use glam::{BVec3, DVec3, UVec3, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
@@ -45,24 +46,6 @@ fn sincos_deg(deg: f64) -> (f64, f64) {
         };
     }
     deg.to_radians().sin_cos()
-}
-
-type V3 = [f64; 3];
-fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: V3, s: f64) -> V3 {
-    a.map(|c| c * s)
-}
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 impl Camera {
@@ -112,48 +95,52 @@ impl Camera {
                 ));
             }
         }
-        let extent: V3 = [0, 1, 2].map(|a| dims[a] as f64 * spacing[a] as f64);
-        let centre = scale(extent, 0.5);
-        let radius = dot(centre, centre).sqrt();
+        let spacing = Vec3::from(spacing).as_dvec3();
+        let extent = UVec3::from(dims).as_dvec3() * spacing;
+        let centre = extent * 0.5;
+        let radius = centre.length();
         let (sa, ca) = sincos_deg(self.azimuth_deg);
         let (se, ce) = sincos_deg(self.elevation_deg);
-        let to_eye: V3 = [ce * sa, se, ce * ca];
-        let forward = scale(to_eye, -1.0);
-        let right: V3 = [ca, 0.0, -sa];
-        let up = cross(right, forward);
+        let to_eye = DVec3::new(ce * sa, se, ce * ca);
+        // Times -1 as before (-to_eye would differ in a NaN's sign bit).
+        let forward = to_eye * -1.0;
+        let right = DVec3::new(ca, 0.0, -sa);
+        let up = right.cross(forward);
         let (w, h) = (width as f64, height as f64);
-        let to_voxel = |p: V3| [0, 1, 2].map(|a| (p[a] / spacing[a] as f64) as f32);
-        let v4 = |p: [f32; 3], w: f32| [p[0], p[1], p[2], w];
+        let to_voxel = |p: DVec3| (p / spacing).as_vec3();
+        let v4 = |p: Vec3, w: f32| p.extend(w).to_array();
         let mut params = RenderParams::default();
         match self.projection {
             Projection::Orthographic => {
                 let mut half = [0.0f64; 2];
                 for i in 0..8 {
-                    let corner = [0, 1, 2].map(|a| if i >> a & 1 == 1 { centre[a] } else { -centre[a] });
-                    half[0] = half[0].max(dot(corner, right).abs());
-                    half[1] = half[1].max(dot(corner, up).abs());
+                    let high = BVec3::new(i & 1 == 1, i >> 1 & 1 == 1, i >> 2 & 1 == 1);
+                    let corner = DVec3::select(high, centre, -centre);
+                    half[0] = half[0].max(corner.dot(right).abs());
+                    half[1] = half[1].max(corner.dot(up).abs());
                 }
                 let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
                 // Ray origins on a plane in front of the whole volume.
-                let plane = add(centre, scale(to_eye, radius + 1.0));
-                let base = add(add(plane, scale(right, -pixel * w / 2.0)), scale(up, pixel * h / 2.0));
+                let plane = centre + to_eye * (radius + 1.0);
+                let base = plane + right * (-pixel * w / 2.0) + up * (pixel * h / 2.0);
                 params.base = v4(to_voxel(base), 0.0);
-                params.du = v4(to_voxel(scale(right, pixel)), 0.0);
-                params.dv = v4(to_voxel(scale(up, -pixel)), 0.0);
-                let d = to_voxel(forward);
-                let n = (d.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
-                params.eye_or_dir = v4(d.map(|c| (c as f64 / n) as f32), 0.0);
+                params.du = v4(to_voxel(right * pixel), 0.0);
+                params.dv = v4(to_voxel(up * -pixel), 0.0);
+                // The f32 direction normalised in f64: divided by the length
+                // (not times its reciprocal, as glam's normalize() does).
+                let d = to_voxel(forward).as_dvec3();
+                params.eye_or_dir = v4((d / d.length()).as_vec3(), 0.0);
             }
             Projection::Perspective { fov_deg, distance } => {
                 let half_fov = (fov_deg / 2.0).to_radians();
                 let dist = distance.map_or(radius / half_fov.sin(), |d| d * radius);
-                let eye = add(centre, scale(to_eye, dist));
+                let eye = centre + to_eye * dist;
                 let hh = half_fov.tan();
                 let hw = hh * w / h;
-                let base = add(add(add(eye, forward), scale(right, -hw)), scale(up, hh));
+                let base = eye + forward + right * -hw + up * hh;
                 params.base = v4(to_voxel(base), 0.0);
-                params.du = v4(to_voxel(scale(right, 2.0 * hw / w)), 0.0);
-                params.dv = v4(to_voxel(scale(up, -2.0 * hh / h)), 0.0);
+                params.du = v4(to_voxel(right * (2.0 * hw / w)), 0.0);
+                params.dv = v4(to_voxel(up * (-2.0 * hh / h)), 0.0);
                 params.eye_or_dir = v4(to_voxel(eye), 1.0);
             }
         }

@@ -5,17 +5,11 @@ use super::params::RenderParams;
 use crate::frame::Frame;
 use crate::tf::TransferFunction;
 use crate::volume::Volume;
+use glam::{I64Vec3, UVec3, Vec3};
 use rayon::prelude::*;
 
-type V3 = [f32; 3];
-
-fn normalize(v: V3) -> V3 {
-    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    v.map(|c| c / n)
-}
-
 /// As `intersect_box` in `glsl/common/ray.glsl`.
-pub fn intersect_box(org: V3, dir: V3, lo: V3, hi: V3) -> (f32, f32) {
+pub fn intersect_box(org: Vec3, dir: Vec3, lo: Vec3, hi: Vec3) -> (f32, f32) {
     let (mut t0, mut t1) = (-3.4e38f32, 3.4e38f32);
     for a in 0..3 {
         if dir[a] == 0.0 {
@@ -34,23 +28,23 @@ pub fn intersect_box(org: V3, dir: V3, lo: V3, hi: V3) -> (f32, f32) {
 }
 
 /// Trilinear sample with clamp-to-edge at voxel-space point `p`.
-pub fn sample(volume: &Volume, p: V3) -> f32 {
-    let hi = volume.dims.map(|d| d as i64 - 1);
-    let q = p.map(|c| c - 0.5);
-    let fl = q.map(f32::floor);
-    let f = [0, 1, 2].map(|a| q[a] - fl[a]);
-    let i = fl.map(|c| c as i64);
+pub fn sample(volume: &Volume, p: Vec3) -> f32 {
+    let hi = UVec3::from(volume.dims).as_i64vec3() - 1;
+    let q = p - 0.5;
+    let fl = q.floor();
+    let f = q - fl;
+    let i = fl.as_i64vec3();
     let texel = |dx: i64, dy: i64, dz: i64| {
-        let c = [i[0] + dx, i[1] + dy, i[2] + dz];
+        let c = i + I64Vec3::new(dx, dy, dz);
         let c = [0, 1, 2].map(|a| c[a].clamp(0, hi[a]) as u32);
         volume.data.texel(volume.index(c[0], c[1], c[2]))
     };
     let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-    let c00 = mix(texel(0, 0, 0), texel(1, 0, 0), f[0]);
-    let c10 = mix(texel(0, 1, 0), texel(1, 1, 0), f[0]);
-    let c01 = mix(texel(0, 0, 1), texel(1, 0, 1), f[0]);
-    let c11 = mix(texel(0, 1, 1), texel(1, 1, 1), f[0]);
-    let raw = mix(mix(c00, c10, f[1]), mix(c01, c11, f[1]), f[2]);
+    let c00 = mix(texel(0, 0, 0), texel(1, 0, 0), f.x);
+    let c10 = mix(texel(0, 1, 0), texel(1, 1, 0), f.x);
+    let c01 = mix(texel(0, 0, 1), texel(1, 0, 1), f.x);
+    let c11 = mix(texel(0, 1, 1), texel(1, 1, 1), f.x);
+    let raw = mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
     volume.normalize(raw)
 }
 
@@ -58,17 +52,23 @@ pub fn sample(volume: &Volume, p: V3) -> f32 {
 // Negated comparisons mirror the GLSL: a NaN bound stops the march.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y: u32) -> [f32; 4] {
-    let v3 = |v: [f32; 4]| [v[0], v[1], v[2]];
-    let (base, du, dv) = (v3(p.base), v3(p.du), v3(p.dv));
-    let point = [0, 1, 2].map(|a| base[a] + (x as f32 + 0.5) * du[a] + (y as f32 + 0.5) * dv[a]);
+    let (base, du, dv) = (
+        Vec3::from_slice(&p.base),
+        Vec3::from_slice(&p.du),
+        Vec3::from_slice(&p.dv),
+    );
+    let point = base + du * (x as f32 + 0.5) + dv * (y as f32 + 0.5);
     let (org, dir) = if p.eye_or_dir[3] == 0.0 {
-        (point, normalize(v3(p.eye_or_dir)))
+        (point, Vec3::from_slice(&p.eye_or_dir))
     } else {
-        let eye = v3(p.eye_or_dir);
-        (eye, normalize([0, 1, 2].map(|a| point[a] - eye[a])))
+        let eye = Vec3::from_slice(&p.eye_or_dir);
+        (eye, point - eye)
     };
-    let hi = volume.dims.map(|d| d as f32);
-    let (t_near, t_exit) = intersect_box(org, dir, [0.0; 3], hi);
+    // Divided by the length, not glam's normalize() (times its reciprocal,
+    // which rounds differently).
+    let dir = dir / dir.length();
+    let hi = UVec3::from(volume.dims).as_vec3();
+    let (t_near, t_exit) = intersect_box(org, dir, Vec3::ZERO, hi);
     let t_enter = t_near.max(0.0);
     let dt = p.march[0];
     let ert = p.march[1];
@@ -83,7 +83,7 @@ pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y
             break;
         }
         let w = dt.min(t_exit - t);
-        let pos = [0, 1, 2].map(|a| org[a] + t * dir[a]);
+        let pos = org + dir * t;
         let c = tf.lookup(sample(volume, pos));
         if c[3] > 0.0 {
             let a = 1.0 - (1.0 - c[3].min(1.0)).powf(w);

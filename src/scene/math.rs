@@ -1,136 +1,58 @@
-//! The little vector and matrix algebra the SPD generators need, in f64 and
-//! with the SPD's conventions: row vectors (`v' = v·M`), so `mul(a, b)`
-//! applies `a` first.
+//! The SPD generators' algebra, on glam's f64 types.
+//!
+//! The SPD writes matrices for row vectors (`v' = v·M`, translation in row 3,
+//! `a·b` applies `a` first). Here they are glam's column-vector `DMat4`s, that
+//! is the transposes: the SPD's row i is glam's column i, `v·M` is
+//! `m.transform_point3(v)` (or `transform_vector3`), and `a·b` is `b * a`.
+//! glam sums the products of a matrix-vector and a matrix-matrix product in
+//! the SPD's order (only the two factors of each product swap, which is
+//! exact), and its axis rotations have the SPD's entries, so every result is
+//! bit for bit the one of the row-vector code. The exceptions, kept here as
+//! explicit formulas, are `normalize` and `rotate_about`.
 
-pub type V3 = [f64; 3];
-
-pub fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-pub fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub fn scale(a: V3, s: f64) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-pub fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub fn length(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
+use glam::{DMat4, DVec3};
 
 /// Unit vector along `a`; a zero vector stays zero.
-pub fn normalize(a: V3) -> V3 {
-    let l = length(a);
+///
+/// Not glam's `normalize()` (NaN for a zero vector) nor `normalize_or_zero()`
+/// (which also zeroes NaN, infinite and tiny vectors whose reciprocal length
+/// overflows): the SPD's formula, `a * (1 / |a|)` when `|a| > 0`, else `a`.
+pub fn normalize(a: DVec3) -> DVec3 {
+    let l = a.length();
     if l > 0.0 {
-        scale(a, 1.0 / l)
+        a * (1.0 / l)
     } else {
         a
     }
 }
 
-/// 4x4 matrix, row-vector convention (translation in row 3).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Mat4(pub [[f64; 4]; 4]);
-
-pub enum Axis {
-    X,
-    Y,
-    Z,
-}
-
-impl Mat4 {
-    pub fn identity() -> Mat4 {
-        let mut m = [[0.0; 4]; 4];
-        for (i, row) in m.iter_mut().enumerate() {
-            row[i] = 1.0;
-        }
-        Mat4(m)
-    }
-
-    /// Rotation by `angle` radians about a coordinate axis.
-    pub fn rotate(axis: Axis, angle: f64) -> Mat4 {
-        let (s, c) = angle.sin_cos();
-        let mut m = Mat4::identity().0;
-        let (i, j) = match axis {
-            Axis::X => (1, 2),
-            Axis::Y => (2, 0),
-            Axis::Z => (0, 1),
-        };
-        m[i][i] = c;
-        m[j][j] = c;
-        m[i][j] = s;
-        m[j][i] = -s;
-        Mat4(m)
-    }
-
-    /// Rotation by `angle` radians about the unit vector `a`.
-    pub fn rotate_about(a: V3, angle: f64) -> Mat4 {
-        let (s, c) = angle.sin_cos();
-        let t = 1.0 - c;
-        Mat4([
-            [
-                a[0] * a[0] + (1.0 - a[0] * a[0]) * c,
-                a[0] * a[1] * t + a[2] * s,
-                a[0] * a[2] * t - a[1] * s,
-                0.0,
-            ],
-            [
-                a[0] * a[1] * t - a[2] * s,
-                a[1] * a[1] + (1.0 - a[1] * a[1]) * c,
-                a[1] * a[2] * t + a[0] * s,
-                0.0,
-            ],
-            [
-                a[0] * a[2] * t + a[1] * s,
-                a[1] * a[2] * t - a[0] * s,
-                a[2] * a[2] + (1.0 - a[2] * a[2]) * c,
-                0.0,
-            ],
-            [0.0, 0.0, 0.0, 1.0],
-        ])
-    }
-
-    /// `self` then `other`.
-    pub fn then(&self, other: &Mat4) -> Mat4 {
-        let (a, b) = (&self.0, &other.0);
-        let mut m = [[0.0; 4]; 4];
-        for (i, row) in m.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j] + a[i][3] * b[3][j];
-            }
-        }
-        Mat4(m)
-    }
-
-    pub fn point(&self, v: V3) -> V3 {
-        let m = &self.0;
+/// Rotation by `angle` radians about the unit vector `a`, with the SPD's
+/// entries: glam's `from_axis_angle` computes the diagonal as
+/// `a_i² (1 - cos) + cos` rather than `a_i² + (1 - a_i²) cos`, which rounds
+/// differently.
+pub fn rotate_about(a: DVec3, angle: f64) -> DMat4 {
+    let (s, c) = angle.sin_cos();
+    let t = 1.0 - c;
+    // The SPD's rows, as glam's columns.
+    DMat4::from_cols_array_2d(&[
         [
-            v[0] * m[0][0] + v[1] * m[1][0] + v[2] * m[2][0] + m[3][0],
-            v[0] * m[0][1] + v[1] * m[1][1] + v[2] * m[2][1] + m[3][1],
-            v[0] * m[0][2] + v[1] * m[1][2] + v[2] * m[2][2] + m[3][2],
-        ]
-    }
-
-    pub fn vector(&self, v: V3) -> V3 {
-        let m = &self.0;
+            a.x * a.x + (1.0 - a.x * a.x) * c,
+            a.x * a.y * t + a.z * s,
+            a.x * a.z * t - a.y * s,
+            0.0,
+        ],
         [
-            v[0] * m[0][0] + v[1] * m[1][0] + v[2] * m[2][0],
-            v[0] * m[0][1] + v[1] * m[1][1] + v[2] * m[2][1],
-            v[0] * m[0][2] + v[1] * m[1][2] + v[2] * m[2][2],
-        ]
-    }
+            a.x * a.y * t - a.z * s,
+            a.y * a.y + (1.0 - a.y * a.y) * c,
+            a.y * a.z * t + a.x * s,
+            0.0,
+        ],
+        [
+            a.x * a.z * t + a.y * s,
+            a.y * a.z * t - a.x * s,
+            a.z * a.z + (1.0 - a.z * a.z) * c,
+            0.0,
+        ],
+        [0.0, 0.0, 0.0, 1.0],
+    ])
 }

@@ -16,7 +16,7 @@ mod tetra;
 mod tree;
 
 use crate::error::{Error, Result};
-use math::V3;
+use glam::DVec3;
 pub use shape::{Aabb, ConeFrame, Shape};
 use std::fmt;
 use std::str::FromStr;
@@ -110,7 +110,7 @@ impl FromStr for SpdScene {
 /// `shine` Phong exponent, `transmit` and `ior` refraction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
-    pub color: V3,
+    pub color: DVec3,
     pub kd: f64,
     pub ks: f64,
     pub shine: f64,
@@ -122,7 +122,7 @@ impl Material {
     /// As the SPD library defines a surface: `half_angle_deg` is the angle at
     /// which the highlight falls to half strength, turned into a Phong
     /// exponent as the NFF output does.
-    pub fn new(color: V3, kd: f64, ks: f64, half_angle_deg: f64, transmit: f64, ior: f64) -> Material {
+    pub fn new(color: DVec3, kd: f64, ks: f64, half_angle_deg: f64, transmit: f64, ior: f64) -> Material {
         let a = half_angle_deg.to_radians();
         let shine = if a <= 0.0 {
             100000.0
@@ -152,9 +152,9 @@ pub struct Object {
 /// image's outer pixel rows; intersections nearer than `hither` are ignored.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
-    pub from: V3,
-    pub at: V3,
-    pub up: V3,
+    pub from: DVec3,
+    pub at: DVec3,
+    pub up: DVec3,
     pub fov_deg: f64,
     pub hither: f64,
     pub resolution: u32,
@@ -165,8 +165,8 @@ pub struct Scene {
     pub kind: SpdScene,
     pub size_factor: u32,
     pub view: View,
-    pub lights: Vec<V3>,
-    pub background: V3,
+    pub lights: Vec<DVec3>,
+    pub background: DVec3,
     pub materials: Vec<Material>,
     pub objects: Vec<Object>,
 }
@@ -228,7 +228,7 @@ impl Scene {
             size_factor: sf,
             view,
             lights,
-            background: [0.078, 0.361, 0.753],
+            background: DVec3::new(0.078, 0.361, 0.753),
             materials: b.materials,
             objects: b.objects,
         })
@@ -287,11 +287,11 @@ impl Builder {
         self.objects.push(Object { shape, material });
     }
 
-    fn sphere(&mut self, center: V3, radius: f64) {
+    fn sphere(&mut self, center: DVec3, radius: f64) {
         self.push(Shape::Sphere { center, radius });
     }
 
-    fn cone(&mut self, base: V3, base_radius: f64, apex: V3, apex_radius: f64) {
+    fn cone(&mut self, base: DVec3, base_radius: f64, apex: DVec3, apex_radius: f64) {
         self.push(Shape::Cone {
             base,
             base_radius,
@@ -300,12 +300,12 @@ impl Builder {
         });
     }
 
-    fn polygon(&mut self, vertices: Vec<V3>) {
+    fn polygon(&mut self, vertices: Vec<DVec3>) {
         self.push(Shape::Polygon { vertices });
     }
 }
 
-fn view(from: V3, at: V3, up: V3, fov_deg: f64, hither: f64) -> View {
+fn view(from: DVec3, at: DVec3, up: DVec3, fov_deg: f64, hither: f64) -> View {
     View {
         from,
         at,
@@ -345,28 +345,28 @@ mod tests {
     #[test]
     fn bounding_boxes_match_the_published_sizes() {
         let size = |k| Scene::generate(k, None).unwrap().bounds().size();
-        let close = |a: V3, b: V3, tol: f64| (0..3).all(|i| (a[i] - b[i]).abs() <= tol);
+        let close = |a: DVec3, b: DVec3, tol: f64| (a - b).abs().cmple(DVec3::splat(tol)).all();
         assert!(
-            close(size(SpdScene::Balls), [24.0, 24.0, 1.331], 2e-3),
+            close(size(SpdScene::Balls), DVec3::new(24.0, 24.0, 1.331), 2e-3),
             "{:?}",
             size(SpdScene::Balls)
         );
-        assert!(close(size(SpdScene::Gears), [4.0, 4.0, 1.0], 1e-9));
-        assert!(close(size(SpdScene::Lattice), [1.0417; 3], 1e-4));
+        assert!(close(size(SpdScene::Gears), DVec3::new(4.0, 4.0, 1.0), 1e-9));
+        assert!(close(size(SpdScene::Lattice), DVec3::splat(1.0417), 1e-4));
         assert!(
-            close(size(SpdScene::Mount), [2.160, 2.160, 2.081], 2e-3),
+            close(size(SpdScene::Mount), DVec3::new(2.160, 2.160, 2.081), 2e-3),
             "{:?}",
             size(SpdScene::Mount)
         );
         assert!(
-            close(size(SpdScene::Rings), [19.678, 19.251, 19.678], 2e-3),
+            close(size(SpdScene::Rings), DVec3::new(19.678, 19.251, 19.678), 2e-3),
             "{:?}",
             size(SpdScene::Rings)
         );
-        assert!(close(size(SpdScene::Teapot), [8.0, 8.0, 3.15], 1e-9));
-        assert!(close(size(SpdScene::Tetra), [2.0; 3], 1e-12));
+        assert!(close(size(SpdScene::Teapot), DVec3::new(8.0, 8.0, 3.15), 1e-9));
+        assert!(close(size(SpdScene::Tetra), DVec3::splat(2.0), 1e-12));
         assert!(
-            close(size(SpdScene::Tree), [100.0, 100.0, 3.15], 0.02),
+            close(size(SpdScene::Tree), DVec3::new(100.0, 100.0, 3.15), 0.02),
             "{:?}",
             size(SpdScene::Tree)
         );

@@ -1,18 +1,19 @@
 //! Fractal mountain (Carpenter's midpoint displacement on a square grid, with
 //! the SPD's original hash, kept for comparability) and four glass spheres.
 
-use super::math::{add, normalize, Axis, Mat4, V3};
+use super::math::rotate_about;
 use super::{view, Builder, Material, View};
+use glam::{DMat4, DVec3};
 use std::f64::consts::PI;
 
 const MOUNTAIN_NO: i64 = 21;
 const CORNER: f64 = -1.0;
 const WIDTH: f64 = 2.0;
 
-pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
-    b.material(Material::new([1.0, 1.0, 1.0], 0.1, 0.1, 6.7, 0.9, 1.5));
-    spheres(b, [-0.8, 0.8, 1.0], 0.17);
-    b.material(Material::new([0.5, 0.45, 0.35], 1.0, 0.0, 0.0, 0.0, 0.0));
+pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<DVec3>) {
+    b.material(Material::new(DVec3::ONE, 0.1, 0.1, 6.7, 0.9, 1.5));
+    spheres(b, DVec3::new(-0.8, 0.8, 1.0), 0.17);
+    b.material(Material::new(DVec3::new(0.5, 0.45, 0.35), 1.0, 0.0, 0.0, 0.0, 0.0));
     let ratio = 2.0 / ((2f64).ln() / (2.2 - 1.0)).exp();
     let m = Mountain {
         sf,
@@ -21,18 +22,19 @@ pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
     };
     m.grow(b, 1 << sf, 0, 0, [0.0; 4]);
     (
-        view([-1.6, 1.6, 1.7], [0.0; 3], [0.0, 0.0, 1.0], 45.0, 0.01),
-        vec![[-100.0, -100.0, 100.0]],
+        view(DVec3::new(-1.6, 1.6, 1.7), DVec3::ZERO, DVec3::Z, 45.0, 0.01),
+        vec![DVec3::new(-100.0, -100.0, 100.0)],
     )
 }
 
-fn spheres(b: &mut Builder, center: V3, r: f64) {
-    let top = [0.0, 0.0, r * 1.5f64.sqrt()];
-    b.sphere(add(center, top), r);
-    let tilted = Mat4::rotate_about(normalize([1.0, 1.0, 0.0]), (-1.0f64 / 3.0).acos()).vector(top);
+fn spheres(b: &mut Builder, center: DVec3, r: f64) {
+    let top = DVec3::new(0.0, 0.0, r * 1.5f64.sqrt());
+    b.sphere(center + top, r);
+    // glam's normalize(): a constant non-zero vector, times 1/length as the SPD does.
+    let tilted = rotate_about(DVec3::new(1.0, 1.0, 0.0).normalize(), (-1.0f64 / 3.0).acos()).transform_vector3(top);
     for i in 0..3 {
-        let p = Mat4::rotate(Axis::Z, i as f64 * 2.0 * PI / 3.0).vector(tilted);
-        b.sphere(add(p, center), r);
+        let p = DMat4::from_rotation_z(i as f64 * 2.0 * PI / 3.0).transform_vector3(tilted);
+        b.sphere(p + center, r);
     }
 }
 
@@ -78,7 +80,12 @@ impl Mountain {
             let rx = CORNER + (x + 1) as f64 * WIDTH / self.points;
             let ly = CORNER + y as f64 * WIDTH / self.points;
             let uy = CORNER + (y + 1) as f64 * WIDTH / self.points;
-            let corner = [[lx, ly, z[0]], [rx, ly, z[1]], [rx, uy, z[2]], [lx, uy, z[3]]];
+            let corner = [
+                DVec3::new(lx, ly, z[0]),
+                DVec3::new(rx, ly, z[1]),
+                DVec3::new(rx, uy, z[2]),
+                DVec3::new(lx, uy, z[3]),
+            ];
             for tri in 0..2 {
                 b.polygon((0..3).map(|v| corner[(v + tri * 2) % 4]).collect());
             }

@@ -1,15 +1,15 @@
 //! Eric Haines' Neutral File Format writer, for inspecting a generated scene
 //! with other tools.
 
-use super::math::V3;
 use super::{Scene, Shape};
 use crate::error::{Error, Result};
 use crate::frame::write_atomically;
+use glam::DVec3;
 use std::fmt::Write as _;
 use std::path::Path;
 
-fn v(p: V3) -> String {
-    format!("{} {} {}", p[0], p[1], p[2])
+fn v(p: DVec3) -> String {
+    format!("{} {} {}", p.x, p.y, p.z)
 }
 
 pub(super) fn write(scene: &Scene, path: &Path) -> Result<()> {

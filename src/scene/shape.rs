@@ -1,29 +1,30 @@
 //! The primitive kinds the SPD scenes contain, and their exact bounding boxes.
 
-use super::math::{add, cross, length, normalize, scale, sub, V3};
+use super::math::normalize;
+use glam::DVec3;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     Sphere {
-        center: V3,
+        center: DVec3,
         radius: f64,
     },
     /// Open cylinder or cone (no caps) from `base` to `apex`.
     Cone {
-        base: V3,
+        base: DVec3,
         base_radius: f64,
-        apex: V3,
+        apex: DVec3,
         apex_radius: f64,
     },
     /// Planar polygon, convex or concave; its first three vertices span a
     /// convex corner (the SPD guarantees it), which gives the plane.
     Polygon {
-        vertices: Vec<V3>,
+        vertices: Vec<DVec3>,
     },
     /// Triangle with per-vertex normals (smooth shaded, double sided).
     Patch {
-        vertices: [V3; 3],
-        normals: [V3; 3],
+        vertices: [DVec3; 3],
+        normals: [DVec3; 3],
     },
 }
 
@@ -31,17 +32,19 @@ pub enum Shape {
 /// slope (apex radius - base radius) / height.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConeFrame {
-    pub axis: V3,
+    pub axis: DVec3,
     pub height: f64,
     pub slope: f64,
 }
 
 impl ConeFrame {
-    pub fn new(base: V3, base_radius: f64, apex: V3, apex_radius: f64) -> ConeFrame {
-        let d = sub(apex, base);
-        let height = length(d);
+    pub fn new(base: DVec3, base_radius: f64, apex: DVec3, apex_radius: f64) -> ConeFrame {
+        let d = apex - base;
+        let height = d.length();
         ConeFrame {
-            axis: scale(d, 1.0 / height),
+            // d * (1 / height) as glam's normalize() does, but with the
+            // length kept (and no fallback for a zero-length cone).
+            axis: d * (1.0 / height),
             height,
             slope: (apex_radius - base_radius) / height,
         }
@@ -51,20 +54,22 @@ impl ConeFrame {
 /// Axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
-    pub lo: V3,
-    pub hi: V3,
+    pub lo: DVec3,
+    pub hi: DVec3,
 }
 
 impl Aabb {
     pub const EMPTY: Aabb = Aabb {
-        lo: [f64::INFINITY; 3],
-        hi: [f64::NEG_INFINITY; 3],
+        lo: DVec3::INFINITY,
+        hi: DVec3::NEG_INFINITY,
     };
 
-    pub fn grow(&mut self, p: V3) {
-        for ((lo, hi), v) in self.lo.iter_mut().zip(self.hi.iter_mut()).zip(p) {
-            *lo = lo.min(v);
-            *hi = hi.max(v);
+    pub fn grow(&mut self, p: DVec3) {
+        // f64::min and f64::max per component, not glam's min/max (a
+        // comparison and select, which differ on NaN and on signed zeros).
+        for a in 0..3 {
+            self.lo[a] = self.lo[a].min(p[a]);
+            self.hi[a] = self.hi[a].max(p[a]);
         }
     }
 
@@ -73,8 +78,8 @@ impl Aabb {
         self.grow(b.hi);
     }
 
-    pub fn size(&self) -> V3 {
-        sub(self.hi, self.lo)
+    pub fn size(&self) -> DVec3 {
+        self.hi - self.lo
     }
 }
 
@@ -84,8 +89,8 @@ impl Shape {
         let mut b = Aabb::EMPTY;
         match self {
             Shape::Sphere { center, radius } => {
-                b.grow(sub(*center, [*radius; 3]));
-                b.grow(add(*center, [*radius; 3]));
+                b.grow(*center - *radius);
+                b.grow(*center + *radius);
             }
             Shape::Cone {
                 base,
@@ -95,14 +100,11 @@ impl Shape {
             } => {
                 // A circle of radius r about unit axis u extends r*sqrt(1-u_i^2) along axis i.
                 let u = ConeFrame::new(*base, *base_radius, *apex, *apex_radius).axis;
-                let ext = |r: f64| -> V3 {
-                    let e = |ui: f64| r * (1.0 - ui * ui).max(0.0).sqrt();
-                    [e(u[0]), e(u[1]), e(u[2])]
-                };
+                let ext = |r: f64| u.map(|ui| r * (1.0 - ui * ui).max(0.0).sqrt());
                 for (c, r) in [(*base, *base_radius), (*apex, *apex_radius)] {
                     let e = ext(r);
-                    b.grow(sub(c, e));
-                    b.grow(add(c, e));
+                    b.grow(c - e);
+                    b.grow(c + e);
                 }
             }
             Shape::Polygon { vertices } => vertices.iter().for_each(|v| b.grow(*v)),
@@ -113,12 +115,12 @@ impl Shape {
 
     /// Unit normal of a planar shape's plane (polygons and patches), from
     /// its first three vertices.
-    pub fn plane_normal(&self) -> Option<V3> {
-        let v: &[V3] = match self {
+    pub fn plane_normal(&self) -> Option<DVec3> {
+        let v: &[DVec3] = match self {
             Shape::Polygon { vertices } => vertices,
             Shape::Patch { vertices, .. } => vertices,
             _ => return None,
         };
-        Some(normalize(cross(sub(v[1], v[0]), sub(v[2], v[1]))))
+        Some(normalize((v[1] - v[0]).cross(v[2] - v[1])))
     }
 }

@@ -2,23 +2,24 @@
 //! into SF x SF x 2 smooth triangles (degenerate cusp triangles dropped), on
 //! an SF x SF checkerboard. Double sided.
 
-use super::math::{cross, normalize, V3};
+use super::math::normalize;
 use super::{view, Builder, Material, Shape, View};
+use glam::{DMat4, DVec3, DVec4};
 
-pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
+pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<DVec3>) {
     let n = sf as f64;
-    let square = |s: u32, t: u32| -> Vec<V3> {
+    let square = |s: u32, t: u32| -> Vec<DVec3> {
         (0..4)
             .map(|i| {
                 let x = 4.0 * (2.0 * (s + u32::from(i % 3 != 0)) as f64 / n - 1.0);
                 let y = 4.0 * (2.0 * (t + u32::from(i / 2 != 0)) as f64 / n - 1.0);
-                [x, y, 0.0]
+                DVec3::new(x, y, 0.0)
             })
             .collect()
     };
     for white in [true, false] {
         let c = if white { 1.0 } else { 0.5 };
-        b.material(Material::new([c, c, c], 0.5, 0.5, 30.0, 0.0, 0.0));
+        b.material(Material::new(DVec3::splat(c), 0.5, 0.5, 30.0, 0.0, 0.0));
         for s in 0..sf {
             for t in 0..sf {
                 if ((s + t) % 2 == 1) == white {
@@ -27,7 +28,7 @@ pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
             }
         }
     }
-    b.material(Material::new([1.0, 0.5, 0.1], 0.75, 0.25, 37.0, 0.0, 0.0));
+    b.material(Material::new(DVec3::new(1.0, 0.5, 0.1), 0.75, 0.25, 37.0, 0.0, 0.0));
     for patch in &PATCHES {
         let basis = [0, 1, 2].map(|axis| coefficients(patch, axis));
         for s in 0..sf {
@@ -39,8 +40,8 @@ pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
                         p[0] = (s + u32::from(corner / 2 != 0)) as f64 / n;
                         p[1] = (t + u32::from(corner % 3 != 0)) as f64 / n;
                     }
-                    let mut vertices = [[0.0; 3]; 3];
-                    let mut normals = [[0.0; 3]; 3];
+                    let mut vertices = [DVec3::ZERO; 3];
+                    let mut normals = [DVec3::ZERO; 3];
                     for v in 0..3 {
                         (vertices[v], normals[v]) = evaluate(&basis, st[v][0], st[v][1]);
                     }
@@ -52,65 +53,57 @@ pub(super) fn generate(b: &mut Builder, sf: u32) -> (View, Vec<V3>) {
         }
     }
     (
-        view([4.86, 7.2, 5.4], [0.0; 3], [0.0, 0.0, 1.0], 45.0, 1.0),
-        vec![[-3.1, 9.8, 12.1], [11.3, 5.1, 8.8]],
+        view(DVec3::new(4.86, 7.2, 5.4), DVec3::ZERO, DVec3::Z, 45.0, 1.0),
+        vec![DVec3::new(-3.1, 9.8, 12.1), DVec3::new(11.3, 5.1, 8.8)],
     )
 }
 
 /// The cusps (lid knob and bottom centre) have zero normals: a triangle with
 /// two vertices on the z axis is degenerate and dropped, one with a single
 /// cusp vertex gets the axis normal there.
-fn cusp_normals(v: &[V3; 3], mut n: [V3; 3]) -> Option<[V3; 3]> {
-    let on_axis: Vec<usize> = (0..3)
-        .filter(|&i| v[i][0].abs() < 1e-4 && v[i][1].abs() < 1e-4)
-        .collect();
+fn cusp_normals(v: &[DVec3; 3], mut n: [DVec3; 3]) -> Option<[DVec3; 3]> {
+    let on_axis: Vec<usize> = (0..3).filter(|&i| v[i].x.abs() < 1e-4 && v[i].y.abs() < 1e-4).collect();
     match on_axis.len() {
         0 => Some(n),
         1 => {
             let i = on_axis[0];
-            n[i] = [0.0, 0.0, if v[i][2] > 1.5 { 1.0 } else { -1.0 }];
+            n[i] = DVec3::new(0.0, 0.0, if v[i].z > 1.5 { 1.0 } else { -1.0 });
             Some(n)
         }
         _ => None,
     }
 }
 
-/// M·G·Mᵀ for one coordinate, with M the cubic Bézier basis.
-fn coefficients(patch: &[u16; 16], axis: usize) -> [[f64; 4]; 4] {
-    const M: [[f64; 4]; 4] = [
+/// M·G·Mᵀ for one coordinate, with M the cubic Bézier basis (symmetric) and
+/// G the patch's 4x4 control values, as a glam matrix whose column i is row
+/// i of M·G·Mᵀ (its transpose). With that layout every glam product sums its
+/// four terms in the order of the textbook row-times-column sums (terms
+/// k = 0..3; only the two factors of each term swap, which is exact).
+fn coefficients(patch: &[u16; 16], axis: usize) -> DMat4 {
+    const M: DMat4 = DMat4::from_cols_array_2d(&[
         [-1.0, 3.0, -3.0, 1.0],
         [3.0, -6.0, 3.0, 0.0],
         [-3.0, 3.0, 0.0, 0.0],
         [1.0, 0.0, 0.0, 0.0],
-    ];
-    let g = |r: usize, c: usize| VERTS[patch[r * 4 + c] as usize][axis];
-    let mut mg = [[0.0; 4]; 4];
-    for (i, row) in mg.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = (0..4).map(|k| M[i][k] * g(k, j)).sum();
-        }
-    }
-    let mut out = [[0.0; 4]; 4];
-    for (i, row) in out.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = (0..4).map(|k| mg[i][k] * M[j][k]).sum();
-        }
-    }
-    out
+    ]);
+    // Column r is row r of G.
+    let g =
+        DMat4::from_cols_array_2d(&[0, 1, 2, 3].map(|r| [0, 1, 2, 3].map(|c| VERTS[patch[r * 4 + c] as usize][axis])));
+    // (M·G)ᵀ = Gᵀ·M, then (M·G·Mᵀ)ᵀ = M·(M·G)ᵀ, in that grouping (M = Mᵀ).
+    M * (g * M)
 }
 
 /// Point and unit normal (t-tangent x s-tangent) at (s, t).
-fn evaluate(basis: &[[[f64; 4]; 4]; 3], s: f64, t: f64) -> (V3, V3) {
-    let pow = |x: f64| [x * x * x, x * x, x, 1.0];
-    let dpow = |x: f64| [3.0 * x * x, 2.0 * x, 1.0, 0.0];
-    let form = |m: &[[f64; 4]; 4], a: [f64; 4], b: [f64; 4]| -> f64 {
-        (0..4).map(|j| (0..4).map(|i| a[i] * m[i][j]).sum::<f64>() * b[j]).sum()
-    };
+fn evaluate(basis: &[DMat4; 3], s: f64, t: f64) -> (DVec3, DVec3) {
+    let pow = |x: f64| DVec4::new(x * x * x, x * x, x, 1.0);
+    let dpow = |x: f64| DVec4::new(3.0 * x * x, 2.0 * x, 1.0, 0.0);
+    // a·C·b for the coefficients C (stored transposed: Cᵀ·a is a·C).
+    let form = |m: &DMat4, a: DVec4, b: DVec4| -> f64 { (*m * a).dot(b) };
     let (sp, tp, dsp, dtp) = (pow(s), pow(t), dpow(s), dpow(t));
-    let p = [0, 1, 2].map(|a| form(&basis[a], sp, tp));
-    let ds = [0, 1, 2].map(|a| form(&basis[a], dsp, tp));
-    let dt = [0, 1, 2].map(|a| form(&basis[a], sp, dtp));
-    (p, normalize(cross(dt, ds)))
+    let p = DVec3::from_array([0, 1, 2].map(|a| form(&basis[a], sp, tp)));
+    let ds = DVec3::from_array([0, 1, 2].map(|a| form(&basis[a], dsp, tp)));
+    let dt = DVec3::from_array([0, 1, 2].map(|a| form(&basis[a], sp, dtp)));
+    (p, normalize(dt.cross(ds)))
 }
 
 // Newell's teapot control net (public domain data, as distributed with the
@@ -152,7 +145,7 @@ const PATCHES: [[u16; 16]; 32] = [
 ];
 
 #[rustfmt::skip]
-const VERTS: [V3; 290] = [
+const VERTS: [[f64; 3]; 290] = [
     [1.4, 0.0, 2.4], [1.4, -0.784, 2.4], [0.784, -1.4, 2.4], [0.0, -1.4, 2.4],
     [1.3375, 0.0, 2.53125], [1.3375, -0.749, 2.53125], [0.749, -1.3375, 2.53125], [0.0, -1.3375, 2.53125],
     [1.4375, 0.0, 2.53125], [1.4375, -0.805, 2.53125], [0.805, -1.4375, 2.53125], [0.0, -1.4375, 2.53125],
