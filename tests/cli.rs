@@ -375,6 +375,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:16", "--step", "NaN"], &[], "invalid step 'NaN'");
     fails(&["render", "menger:16", "--step", "x"], &[], "--step");
     fails(&["render", "menger:16", "--ert", "1.5"], &[], "invalid ert");
+    fails(&["render", "menger:16", "--repeat", "0"], &[], "invalid repeat '0'");
     fails(
         &["render", "menger:16", "--accel", "magic"],
         &[],
