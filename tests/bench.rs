@@ -58,6 +58,48 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
                 s.label,
                 r.frame
             );
+            // Every view timed in every round; warm-up within its bounds.
+            assert_eq!(r.setup.rounds, 2);
+            assert_eq!(r.frame.samples, r.setup.frames * r.setup.rounds, "{d} {}", s.label);
+            assert!(
+                (2..=config.warmup_cap).contains(&r.warmed_up.frames)
+                    && (2..=config.warmup_cap).contains(&r.warmed_up.builds),
+                "{d} {}: {:?}",
+                s.label,
+                r.warmed_up
+            );
+            assert!(
+                r.build_min_ms <= r.build_ms && r.build_ms <= r.build_max_ms,
+                "{d} {}",
+                s.label
+            );
+            // The noise flag follows the spreads it is defined by.
+            assert!(r.frame_spread >= 1.0 && r.build_spread >= 1.0);
+            assert_eq!(
+                r.unstable,
+                r.frame_spread > 1.5 || r.build_spread > 1.5,
+                "{d} {}",
+                s.label
+            );
+            assert!(
+                r.frame_spread <= r.frame.max_ms / r.frame.min_ms + 1e-9,
+                "a view's spread cannot exceed the record's"
+            );
+            // Speed-up over naive from the same rounds: naive's own is 1.
+            assert!(r.speedup.is_finite() && r.speedup > 0.0, "{d} {}", s.label);
+            if s.accel == "naive" {
+                assert_eq!(r.speedup, 1.0);
+            } else {
+                // The median of paired ratios lies between the extreme ratios.
+                let naive = records.iter().find(|n| n.dataset == d && n.accel == "naive").unwrap();
+                assert!(
+                    r.speedup <= naive.frame.max_ms / r.frame.min_ms + 1e-9
+                        && r.speedup >= naive.frame.min_ms / r.frame.max_ms - 1e-9,
+                    "{d} {}: speed-up {} outside what the times allow",
+                    s.label,
+                    r.speedup
+                );
+            }
             assert!(r.visible_percent > 0.0 && r.active_brick_percent > 0.0);
             if s.accel == "naive" {
                 assert_eq!(r.nodes, 0);
@@ -77,13 +119,62 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         records.iter().find(|r| r.dataset == "menger:27").unwrap().tf,
         "ramp:0.3:1:0.3"
     );
-    // CSV: a header and a row per record.
-    assert_eq!(
-        std::fs::read_to_string(out.join("results.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        records.len() + 1
+    // CSV: a header and a row per record, with the speed-up and the flag.
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), records.len() + 1);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    for column in [
+        "frame_min_ms",
+        "frame_median_ms",
+        "frame_max_ms",
+        "speedup",
+        "unstable",
+        "warmup_capped",
+    ] {
+        assert!(header.contains(&column), "CSV lacks {column}");
+    }
+    // Tables: speed-ups in Table 2 and the frame table; a dagger exactly
+    // when a record is unstable.
+    let table2 = std::fs::read_to_string(out.join("table2.md")).unwrap();
+    let frames_md = std::fs::read_to_string(out.join("frames.md")).unwrap();
+    assert!(table2.contains("(1.00x)"), "{table2}");
+    assert!(frames_md.contains(" 1.00x"), "{frames_md}");
+    let marked = |t: &str| {
+        t.lines()
+            .filter(|l| l.starts_with('|'))
+            .map(|l| l.matches(" †").count())
+            .sum::<usize>()
+    };
+    let unstable = records.iter().filter(|r| r.unstable).count();
+    assert_eq!(marked(&table2), unstable, "{table2}");
+    assert_eq!(marked(&frames_md), unstable, "{frames_md}");
+    assert!(stdout.contains("fastest on nbody:32: "), "{stdout}");
+
+    // The run compared with itself passes; with one median doubled it fails.
+    let results = out.join("results.json");
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        "--compare",
+        results.to_str().unwrap(),
+        results.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("largest change of a median 0.0 %"), "{stdout}");
+    let mut slower = records.clone();
+    let last = slower.len() - 1;
+    slower[last].frame.median_ms *= 2.0;
+    let slower_path = dir.path().join("slower.json");
+    std::fs::write(&slower_path, serde_json::to_string(&slower).unwrap()).unwrap();
+    let (code, stdout, _) = lacuna(&[
+        "bench",
+        "--compare",
+        results.to_str().unwrap(),
+        slower_path.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(
+        stdout.contains("largest change of a median 100.0 %") && stdout.contains("FAIL"),
+        "{stdout}"
     );
     // Speed against error: 2 steps x 2 thresholds, errors shrink with the step.
     let points: Vec<ErrorPoint> =
@@ -102,6 +193,7 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         "table1.md",
         "table2.md",
         "exactness.md",
+        "frames.md",
         "error.md",
         "error.csv",
         "notes.txt",
@@ -173,7 +265,14 @@ fn bad_bench_input_is_one_line() {
         (vec!["bench", "/no/such.toml"], "/no/such.toml"),
         (vec!["bench", bad.to_str().unwrap()], "unknown field"),
         (vec!["bench", dup.to_str().unwrap()], "appears twice"),
-        (vec!["bench", "--quick", "--frames", "0"], "invalid frames"),
+        (
+            vec!["bench", "--quick", "--frames", "0"],
+            "frames and builds must be at least 1",
+        ),
+        (vec!["bench", "--quick", "--rounds", "1"], "rounds must be at least 2"),
+        (vec!["bench", "--quick", "--ert", "1.5"], "ert must be in (0, 1]"),
+        (vec!["bench", "--compare", "/no/a.json", "/no/b.json"], "/no/a.json"),
+        (vec!["bench", "--quick", "--compare", "a", "b"], "give exactly one of"),
         (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
     ];
     for (args, needle) in cases {
@@ -182,4 +281,44 @@ fn bad_bench_input_is_one_line() {
         assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
         assert!(stderr.contains(needle), "{args:?}: {stderr}");
     }
+}
+
+#[test]
+fn interleaving_visits_every_structure_in_every_round_naive_first() {
+    let (views, rounds, structures) = (3, 4, 5);
+    let slots: Vec<_> = lacuna::bench::schedule(views, rounds, structures).collect();
+    assert_eq!(slots.len(), (views * rounds) as usize * structures);
+    for (i, chunk) in slots.chunks(structures).enumerate() {
+        // One round: the same view and round, every structure once, in order.
+        let (view, round) = (chunk[0].view, chunk[0].round);
+        assert_eq!((view, round), (i as u32 / rounds, i as u32 % rounds));
+        let order: Vec<usize> = chunk.iter().map(|s| s.structure).collect();
+        assert_eq!(order, (0..structures).collect::<Vec<_>>());
+        assert!(chunk.iter().all(|s| s.view == view && s.round == round));
+    }
+}
+
+#[test]
+fn warm_up_runs_until_two_consecutive_times_agree_and_reports_the_cap() {
+    use lacuna::bench::{warm_up, WarmedUp};
+    let run = |times: &[f64], least, cap| {
+        let mut seen = 0;
+        let w = warm_up(least, cap, 0.05, |i| {
+            seen += 1;
+            Ok(times[i as usize % times.len()])
+        })
+        .unwrap();
+        assert_eq!(seen, w.runs, "one call per run");
+        w
+    };
+    // A cold cache: slow first frames, then stable.
+    let cold = [120.0, 90.0, 40.0, 33.0, 32.0, 32.5];
+    assert_eq!(run(&cold, 1, 30), WarmedUp { runs: 5, capped: false });
+    // Never two alike: stops at the cap and says so.
+    assert_eq!(run(&[10.0, 20.0], 1, 7), WarmedUp { runs: 7, capped: true });
+    // Stable at once still runs the least number asked for (never fewer than 2).
+    assert_eq!(run(&[5.0], 0, 30), WarmedUp { runs: 2, capped: false });
+    assert_eq!(run(&[5.0], 4, 30), WarmedUp { runs: 4, capped: false });
+    // An error in a run stops the warm-up with it.
+    assert!(warm_up(1, 5, 0.05, |_| Err(lacuna::Error::invalid("x", "y", "z"))).is_err());
 }

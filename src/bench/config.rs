@@ -20,10 +20,26 @@ pub struct BenchConfig {
     pub size: [u32; 2],
     /// Views of the rotating orthographic camera (the paper: 36).
     pub frames: u32,
-    /// Untimed frames (and builds) before timing: lavapipe compiles on first use.
+    /// Untimed frames (and builds) at least, per structure, before timing:
+    /// lavapipe compiles on first use. Warm-up goes on until two consecutive
+    /// times agree within `stable`, up to `warmup_cap`.
     pub warmup: u32,
-    /// Timed builds per structure (the TF-change path); the median is reported.
+    /// Most warm-up frames (and builds) per structure; hitting it is reported.
+    #[serde(default = "default_warmup_cap")]
+    pub warmup_cap: u32,
+    /// Two consecutive warm-up times within this fraction count as stable.
+    #[serde(default = "default_stable")]
+    pub stable: f64,
+    /// Timed builds per structure (the TF-change path), interleaved across
+    /// structures; the median is reported.
     pub builds: u32,
+    /// Timed rounds per view: each round renders every structure once, in
+    /// order, so machine noise falls on all alike.
+    #[serde(default = "default_rounds")]
+    pub rounds: u32,
+    /// Early ray termination threshold for the timed frames (default off, as
+    /// in the paper).
+    pub ert: Option<f32>,
     /// Sample step in voxels.
     pub step: f32,
     /// Camera elevation in degrees; the azimuth turns through 360 over the frames.
@@ -34,6 +50,22 @@ pub struct BenchConfig {
     pub structures: Vec<StructureConfig>,
     pub error: Option<ErrorConfig>,
 }
+
+fn default_warmup_cap() -> u32 {
+    30
+}
+
+fn default_stable() -> f64 {
+    0.05
+}
+
+fn default_rounds() -> u32 {
+    3
+}
+
+/// Frame times whose max/min over the rounds of one view exceed this are
+/// marked unstable.
+pub const UNSTABLE_SPREAD: f64 = 1.5;
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -126,13 +158,26 @@ impl BenchConfig {
         Self::parse(&text, &path.display().to_string())
     }
 
-    fn validate(&self, origin: &str) -> Result<()> {
+    /// Checks the protocol; run again after command-line overrides.
+    pub fn validate(&self, origin: &str) -> Result<()> {
         let bad = |m: &str| Err(Error::format(origin, m.to_string()));
         if self.size.contains(&0) {
             return bad("size must be positive");
         }
         if self.frames == 0 || self.builds == 0 {
             return bad("frames and builds must be at least 1");
+        }
+        if self.rounds < 2 {
+            return bad("rounds must be at least 2 (the noise spread needs two rounds of each view)");
+        }
+        if self.warmup_cap < self.warmup.max(2) {
+            return bad("warmup_cap must be at least warmup and at least 2");
+        }
+        if !(self.stable.is_finite() && self.stable > 0.0 && self.stable < 1.0) {
+            return bad("stable must be a fraction in (0, 1), like 0.05");
+        }
+        if self.ert.is_some_and(|t| !(t > 0.0 && t <= 1.0)) {
+            return bad("ert must be in (0, 1]");
         }
         if !(self.step.is_finite() && self.step > 0.0) {
             return bad("step must be > 0");

@@ -3,6 +3,7 @@
 //! hard-case suite. Results go to JSON (one record per run), Markdown and CSV
 //! tables, and SVG/PNG plots.
 
+pub mod compare;
 pub mod config;
 pub mod hard;
 mod plots;
@@ -13,7 +14,7 @@ pub mod tables;
 
 pub use config::BenchConfig;
 pub use record::{ErrorPoint, Record};
-pub use run::{BenchOutput, RunOptions};
+pub use run::{schedule, warm_up, BenchOutput, RunOptions, Slot, WarmedUp};
 
 use crate::error::{Error, Result};
 use crate::frame::write_atomically;
@@ -39,6 +40,7 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput) -> Result<Vec<String>> {
     put("results.csv", tables::records_csv(&out.records))?;
     put("table1.md", tables::table1_md(&out.records))?;
     put("table2.md", tables::table2_md(&out.records))?;
+    put("frames.md", tables::frames_md(&out.records))?;
     put("exactness.md", tables::exactness_md(&out.records))?;
     if !out.errors.is_empty() {
         put("error.json", json(&out.errors))?;

@@ -95,17 +95,18 @@ fn groups(records: &[Record], skip_naive: bool) -> Groups {
     g
 }
 
-#[allow(clippy::too_many_arguments)]
-fn grouped_bars<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    path: &Path,
-    title: &str,
-    y_label: &str,
-    records: &[Record],
-    value: &dyn Fn(&Record) -> f64,
-    log: bool,
-    skip_naive: bool,
-) -> Result<()> {
+fn grouped_bars<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, bars: &Bars) -> Result<()> {
+    let Bars {
+        path,
+        title,
+        y_label,
+        records,
+        value,
+        log,
+        skip_naive,
+        range,
+        tag,
+    } = *bars;
     let g = groups(records, skip_naive);
     // Colours follow the structure's place among all structures, so a
     // structure has the same colour in every figure.
@@ -115,7 +116,10 @@ fn grouped_bars<DB: DrawingBackend>(
     let values: Vec<f64> = records
         .iter()
         .filter(|r| !(skip_naive && r.accel == "naive"))
-        .map(value)
+        .flat_map(|r| {
+            let (lo, hi) = range.map_or((value(r), value(r)), |f| f(r));
+            [value(r), lo, hi]
+        })
         .filter(|v| v.is_finite() && *v > 0.0)
         .collect();
     let max = values.iter().cloned().fold(1e-9, f64::max);
@@ -167,6 +171,36 @@ fn grouped_bars<DB: DrawingBackend>(
                     .map_err(|e| err(path, e))?
                     .label(s.as_str())
                     .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
+                // Whiskers (the spread) and a tag above each bar.
+                for (di, d) in g.datasets.iter().enumerate() {
+                    let Some(r) = records.iter().find(|r| &r.dataset == d && &r.structure == s) else {
+                        continue;
+                    };
+                    let x = di as f64 + 0.1 + 0.8 * (si as f64 + 0.5) / k;
+                    let mut top_of_bar = value(r);
+                    if let Some((lo, hi)) = range
+                        .map(|f| f(r))
+                        .filter(|(lo, hi)| lo.is_finite() && hi.is_finite() && *lo > 0.0)
+                    {
+                        chart
+                            .draw_series(std::iter::once(PathElement::new(
+                                vec![(x, lo), (x, hi)],
+                                BLACK.stroke_width(1),
+                            )))
+                            .map_err(|e| err(path, e))?;
+                        top_of_bar = top_of_bar.max(hi);
+                    }
+                    if let (Some(tag), true) = (tag, top_of_bar.is_finite() && top_of_bar > 0.0) {
+                        let style =
+                            TextStyle::from((FONT, 10).into_font()).pos(plotters::style::text_anchor::Pos::new(
+                                plotters::style::text_anchor::HPos::Center,
+                                plotters::style::text_anchor::VPos::Bottom,
+                            ));
+                        chart
+                            .draw_series(std::iter::once(Text::new(tag(r), (x, top_of_bar), style)))
+                            .map_err(|e| err(path, e))?;
+                    }
+                }
             }
             chart
                 .configure_series_labels()
@@ -201,6 +235,10 @@ fn grouped_bars<DB: DrawingBackend>(
     root.present().map_err(|e| err(path, e))
 }
 
+/// A low and a high value per record.
+type Span = fn(&Record) -> (f64, f64);
+
+#[derive(Clone, Copy)]
 struct Bars<'a> {
     path: &'a Path,
     title: &'a str,
@@ -209,33 +247,32 @@ struct Bars<'a> {
     value: fn(&Record) -> f64,
     log: bool,
     skip_naive: bool,
+    /// A whisker from .0 to .1 over each bar.
+    range: Option<Span>,
+    /// Text above each bar.
+    tag: Option<fn(&Record) -> String>,
 }
 
 impl Figure for Bars<'_> {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()> {
-        grouped_bars(
-            root,
-            self.path,
-            self.title,
-            self.y_label,
-            self.records,
-            &self.value,
-            self.log,
-            self.skip_naive,
-        )
+        grouped_bars(root, self)
     }
 }
 
-/// Figure 3: frames per second per data set and structure.
+/// Figure 3: frames per second per data set and structure (bar: median
+/// frame; whisker: slowest to fastest frame; tag: speed-up over naive, †
+/// when unstable).
 pub fn figure3(records: &[Record], stem: &Path) -> Result<()> {
     let fig = Bars {
         path: stem,
-        title: "Figure 3: frames per second",
+        title: "Figure 3: frames per second (whiskers: min-max; labels: speed-up over naive, † unstable)",
         y_label: "fps",
         records,
         value: |r| r.fps,
         log: false,
         skip_naive: false,
+        range: Some(|r| (1000.0 / r.frame.max_ms, 1000.0 / r.frame.min_ms)),
+        tag: Some(|r| format!("{:.2}x{}", r.speedup, if r.unstable { "†" } else { "" })),
     };
     both(stem, (1100, 560), &fig)
 }
@@ -250,6 +287,8 @@ pub fn figure4(records: &[Record], stem: &Path) -> Result<()> {
         value: |r| 1000.0 / r.build_ms,
         log: true,
         skip_naive: true,
+        range: Some(|r| (1000.0 / r.build_max_ms, 1000.0 / r.build_min_ms)),
+        tag: None,
     };
     both(stem, (1100, 560), &fig)
 }

@@ -25,6 +25,11 @@ impl Progress {
         self.bar.set_message(what.to_string());
     }
 
+    /// More work than planned (a warm-up that needed more runs).
+    pub fn grow(&self, n: u64) {
+        self.bar.inc_length(n);
+    }
+
     pub fn step(&self, n: u64) {
         self.bar.inc(n);
     }

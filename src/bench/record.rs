@@ -12,8 +12,14 @@ pub struct Setup {
     pub width: u32,
     pub height: u32,
     pub frames: u32,
+    /// Least warm-up frames (and builds) per structure.
     pub warmup: u32,
+    pub warmup_cap: u32,
+    /// Timed rounds per view (frames) and per structure (builds).
+    pub rounds: u32,
     pub step: f32,
+    /// Early ray termination threshold of the timed frames; null = off.
+    pub timed_ert: Option<f32>,
     pub camera: String,
 }
 
@@ -22,25 +28,48 @@ pub struct FrameTimes {
     pub median_ms: f64,
     pub min_ms: f64,
     pub max_ms: f64,
+    /// Timed frames behind the figures.
+    pub samples: u32,
+}
+
+/// The median of `v` (NaN when empty).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
 }
 
 impl FrameTimes {
-    pub fn of(mut ms: Vec<f64>) -> Self {
-        ms.sort_by(f64::total_cmp);
-        let n = ms.len();
-        let median = if n == 0 {
-            f64::NAN
-        } else if n % 2 == 1 {
-            ms[n / 2]
-        } else {
-            (ms[n / 2 - 1] + ms[n / 2]) / 2.0
-        };
+    pub fn of(ms: Vec<f64>) -> Self {
+        let min = ms.iter().cloned().fold(f64::INFINITY, f64::min);
+        let max = ms.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let samples = ms.len() as u32;
+        let empty = samples == 0;
         FrameTimes {
-            median_ms: median,
-            min_ms: *ms.first().unwrap_or(&f64::NAN),
-            max_ms: *ms.last().unwrap_or(&f64::NAN),
+            median_ms: median(ms),
+            min_ms: if empty { f64::NAN } else { min },
+            max_ms: if empty { f64::NAN } else { max },
+            samples,
         }
     }
+}
+
+/// How a structure's warm-up ended.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Warmup {
+    /// Untimed builds run before the timed ones.
+    pub builds: u32,
+    /// Untimed frames run before the timed ones.
+    pub frames: u32,
+    /// True when builds or frames stopped at the cap without two
+    /// consecutive times agreeing: the figures may include warm-up cost.
+    pub capped: bool,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -82,14 +111,32 @@ pub struct Record {
     pub ranges_ms: f64,
     /// Median per phase over the timed builds (the TF-change path), ms.
     pub build_phases_ms: BTreeMap<String, f64>,
+    /// Median, least and most total build time over the timed builds, ms.
     pub build_ms: f64,
+    pub build_min_ms: f64,
+    pub build_max_ms: f64,
     pub nodes: u64,
     pub leaves: u64,
     /// Nodes on the longest root-to-leaf path (the paper's Table 1 height).
     pub tree_height: u32,
     pub bytes: u64,
+    /// Over every view and round.
     pub frame: FrameTimes,
+    /// Frames per second at the median frame time.
     pub fps: f64,
+    /// Speed-up over naive marching in this run: the median, over every
+    /// (view, round), of naive's frame time over this structure's, the two
+    /// timed back to back in the same round. 1 for naive.
+    pub speedup: f64,
+    /// Noise: the largest max/min of one view's frame times over the rounds
+    /// (view-to-view differences are the workload, not noise).
+    pub frame_spread: f64,
+    /// max/min of the timed builds (1 for naive).
+    pub build_spread: f64,
+    /// True when either spread exceeds 1.5: the machine was too noisy for
+    /// these figures to be trusted.
+    pub unstable: bool,
+    pub warmed_up: Warmup,
     /// Frame 0 against naive marching's frame 0 (0 for every exact structure).
     pub error_vs_naive: ImageError,
 }

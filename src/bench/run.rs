@@ -1,12 +1,15 @@
-//! The benchmark runner: per data set, per structure, the TF-change build
-//! (median over timed builds after warm-up) and the frame time of the
-//! rotating orthographic camera (median, min, max after warm-up frames), plus
-//! each structure's image error against naive marching; then the
-//! speed-against-error sweep of step sizes and early-termination thresholds.
+//! The benchmark runner. Per data set: every structure is built and rendered
+//! until its times are stable (a cold shader cache compiles on first use),
+//! then builds and frames are timed round-robin across the structures
+//! (naive, A, B, ..., naive, A, B, ...) so that machine noise falls on all
+//! alike; each record keeps min, median and max, its speed-up over naive
+//! from the same rounds, its noise spread, and its image error against
+//! naive. Then the speed-against-error sweep of step sizes and
+//! early-termination thresholds.
 
-use super::config::{BenchConfig, ErrorConfig, StructureSpec};
+use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
-use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup};
+use super::record::{median, ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
@@ -137,19 +140,22 @@ fn error_sweep(
             frames
                 .frame(&Structure::naive(), gv, lut, &settings, true)?
                 .1
-                .expect("read back"),
+                .ok_or_else(|| missing("reference frame"))?,
         );
         progress.step(1);
     }
     for &step in &e.steps {
         for &ert in &e.ert {
             let ert = (ert > 0.0).then_some(ert);
-            // One untimed frame first: a new step is a new workload.
-            frames.frame(structure, gv, lut, &orbit(config, 0, e.frames, step, ert), false)?;
+            // A new step is a new workload: warm up again.
+            let first = orbit(config, 0, e.frames, step, ert);
+            warm_up(config.warmup, config.warmup_cap, config.stable, |_| {
+                Ok(frames.frame(structure, gv, lut, &first, false)?.0)
+            })?;
             let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
             for view in 0..e.frames {
                 let (ms, f) = frames.frame(structure, gv, lut, &orbit(config, view, e.frames, step, ert), true)?;
-                let d = diff(&reference[view as usize], &f.expect("read back"))?;
+                let d = diff(&reference[view as usize], &f.ok_or_else(|| missing("sweep frame"))?)?;
                 times.push(ms);
                 sq += d.rmse * d.rmse * d.pixels as f64;
                 pixels += d.pixels;
@@ -179,8 +185,111 @@ fn error_sweep(
     Ok(points)
 }
 
+/// One timed frame of the interleaved schedule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    pub view: u32,
+    pub round: u32,
+    /// Index into the structures, in timing order (naive first).
+    pub structure: usize,
+}
+
+/// The order frames are timed in: for each view, `rounds` rounds, and in
+/// each round every structure once, in order. A structure's frames of one
+/// view are thus spread over the same stretch of time as every other's.
+pub fn schedule(views: u32, rounds: u32, structures: usize) -> impl Iterator<Item = Slot> {
+    (0..views).flat_map(move |view| {
+        (0..rounds).flat_map(move |round| (0..structures).map(move |structure| Slot { view, round, structure }))
+    })
+}
+
+/// How a warm-up ended: runs made, and whether it stopped at the cap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WarmedUp {
+    pub runs: u32,
+    pub capped: bool,
+}
+
+/// Runs `once` (which returns a time) at least `least` times and until two
+/// consecutive times agree within the fraction `stable`, or `cap` times.
+/// One run is never enough: on lavapipe the frames after the first are
+/// still slow with a cold shader cache.
+pub fn warm_up(least: u32, cap: u32, stable: f64, mut once: impl FnMut(u32) -> Result<f64>) -> Result<WarmedUp> {
+    let least = least.max(2);
+    let mut previous: Option<f64> = None;
+    for i in 0..cap.max(least) {
+        let t = once(i)?;
+        if i + 1 >= least {
+            if let Some(p) = previous {
+                if (t - p).abs() <= stable * t.min(p) {
+                    return Ok(WarmedUp {
+                        runs: i + 1,
+                        capped: false,
+                    });
+                }
+            }
+        }
+        previous = Some(t);
+    }
+    Ok(WarmedUp {
+        runs: cap.max(least),
+        capped: true,
+    })
+}
+
+/// max/min of positive times; 1 when there is nothing to compare.
+fn spread(ms: &[f64]) -> f64 {
+    let min = ms.iter().cloned().fold(f64::INFINITY, f64::min);
+    let max = ms.iter().cloned().fold(0.0, f64::max);
+    if min > 0.0 && min.is_finite() {
+        max / min
+    } else {
+        1.0
+    }
+}
+
+/// The structures in timing order: naive first (added when the config has
+/// none), the rest in config order.
+fn timing_order(structures: Vec<StructureSpec>) -> Vec<StructureSpec> {
+    let is_naive = |s: &StructureSpec| s.accel == Accel::naive();
+    let mut out: Vec<StructureSpec> = structures.iter().filter(|s| is_naive(s)).take(1).cloned().collect();
+    if out.is_empty() {
+        out.push(StructureSpec {
+            label: "naive".into(),
+            accel: Accel::naive(),
+            options: BuildOptions::default(),
+        });
+    }
+    let first_naive = structures.iter().position(is_naive);
+    out.extend(
+        structures
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| Some(*i) != first_naive)
+            .map(|(_, s)| s),
+    );
+    out
+}
+
+/// Per structure of one data set, while it is measured.
+struct Run {
+    structure: Structure,
+    builds: Vec<Timings>,
+    warmup: Warmup,
+    /// Frame times by view, then round.
+    times: Vec<Vec<f64>>,
+    first: Option<Frame>,
+    error: Option<ImageError>,
+}
+
 pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<BenchOutput> {
-    let structures: Vec<StructureSpec> = config.structures.iter().map(|s| s.resolve()).collect::<Result<_>>()?;
+    let structures = timing_order(
+        config
+            .structures
+            .iter()
+            .map(|s| s.resolve())
+            .collect::<Result<Vec<_>>>()?,
+    );
     let builder = Builder::new(ctx)?;
     let renderer = Renderer::new(ctx)?;
     let info = ctx.info();
@@ -192,19 +301,23 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         height: config.size[1],
         frames: config.frames,
         warmup: config.warmup,
+        warmup_cap: config.warmup_cap,
+        rounds: config.rounds,
         step: config.step,
+        timed_ert: config.ert,
         camera: format!(
             "orthographic orbit, elevation {}, {} views",
             config.elevation, config.frames
         ),
     };
-    let per_structure = (config.builds + config.warmup + config.frames + config.warmup) as u64;
+    let least = config.warmup.max(2) as u64;
+    let per_structure = 2 * least + (config.builds + config.frames * config.rounds) as u64;
     let sweep = config.error.as_ref().map_or(0, |e| {
         let n = e.datasets.as_ref().map_or(config.datasets.len(), |d| d.len()) as u64;
         n * e.frames as u64 * (1 + (e.steps.len() * e.ert.len()) as u64)
     });
     let progress = Progress::new(
-        config.datasets.len() as u64 * (structures.len() as u64 * per_structure + 1) + sweep,
+        config.datasets.len() as u64 * structures.len() as u64 * per_structure + sweep,
         options.quiet,
     );
     let mut out = BenchOutput {
@@ -214,6 +327,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         notes: Vec::new(),
     };
     let mut frames = FrameTimer::new(ctx, &renderer, config.size[0], config.size[1])?;
+    let settings = |view: u32| orbit(config, view, config.frames, config.step, config.ert);
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
@@ -223,7 +337,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
                 progress.note(&note);
                 out.notes.push(note);
-                progress.step(structures.len() as u64 * per_structure + 1);
+                progress.step(structures.len() as u64 * per_structure);
                 continue;
             }
             Err(e) => return Err(e),
@@ -261,61 +375,111 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 e.insert(builder.ranges_for(&accels, &gv, s.options.cell)?);
             }
         }
-        let (_, naive0) = frames.frame(
-            &Structure::naive(),
-            &gv,
-            &lut,
-            &orbit(config, 0, config.frames, config.step, None),
-            true,
-        )?;
-        let naive0 = naive0.expect("read back");
-        progress.step(1);
+
+        // Builds: warm up each structure, then time them round-robin.
+        let mut runs: Vec<Run> = Vec::with_capacity(structures.len());
         for s in &structures {
-            progress.at(&format!("{} - {}", loaded.spec, s.label));
-            let (r, _) = &ranges[&s.options.cell];
-            // The per-volume cost this structure depends on.
-            let ranges_ms = r.ms(s.accel.method().ranges())?;
-            let mut builds = Vec::new();
+            progress.at(&format!("{} - {} warm-up", loaded.spec, s.label));
+            let r = &ranges[&s.options.cell].0;
             let mut structure = Structure::naive();
-            for i in 0..config.warmup + config.builds {
+            let warmed = warm_up(config.warmup, config.warmup_cap, config.stable, |i| {
                 let (st, t) = builder.build(s.accel, &scene, r, &s.options)?;
-                if i >= config.warmup {
-                    builds.push(t);
-                }
                 structure = st;
+                advance(&progress, i, least);
+                Ok(t.total())
+            })?;
+            runs.push(Run {
+                structure,
+                builds: Vec::new(),
+                warmup: Warmup {
+                    builds: warmed.runs,
+                    frames: 0,
+                    capped: warmed.capped,
+                },
+                times: vec![Vec::new(); config.frames as usize],
+                first: None,
+                error: None,
+            });
+        }
+        progress.at(&format!("{} - timed builds", loaded.spec));
+        for _ in 0..config.builds {
+            for (s, run) in structures.iter().zip(&mut runs) {
+                let (st, t) = builder.build(s.accel, &scene, &ranges[&s.options.cell].0, &s.options)?;
+                run.structure = st;
+                run.builds.push(t);
                 progress.step(1);
             }
-            let build = Timings::median(&builds);
-            for w in 0..config.warmup {
-                frames.frame(
-                    &structure,
-                    &gv,
-                    &lut,
-                    &orbit(config, w, config.frames, config.step, None),
-                    false,
-                )?;
-                progress.step(1);
+        }
+
+        // Frames: warm up each structure's pipelines, then time every view
+        // round-robin.
+        for (s, run) in structures.iter().zip(&mut runs) {
+            progress.at(&format!("{} - {} warm-up frames", loaded.spec, s.label));
+            let structure = &run.structure;
+            let warmed = warm_up(config.warmup, config.warmup_cap, config.stable, |i| {
+                let (ms, _) = frames.frame(structure, &gv, &lut, &settings(0), false)?;
+                advance(&progress, i, least);
+                Ok(ms)
+            })?;
+            run.warmup.frames = warmed.runs;
+            run.warmup.capped |= warmed.capped;
+        }
+        progress.at(&format!("{} - timed frames", loaded.spec));
+        for slot in schedule(config.frames, config.rounds, structures.len()) {
+            let first = slot.view == 0 && slot.round == 0;
+            let run = &mut runs[slot.structure];
+            let (ms, frame) = frames.frame(&run.structure, &gv, &lut, &settings(slot.view), first)?;
+            run.times[slot.view as usize].push(ms);
+            if let Some(frame) = frame {
+                run.first = Some(frame);
             }
-            let mut times = Vec::new();
-            let mut first = None;
-            for view in 0..config.frames {
-                let (ms, f) = frames.frame(
-                    &structure,
-                    &gv,
-                    &lut,
-                    &orbit(config, view, config.frames, config.step, None),
-                    view == 0,
-                )?;
-                times.push(ms);
-                if view == 0 {
-                    first = f;
-                }
-                progress.step(1);
+            progress.step(1);
+        }
+        // Naive is first in the order, so its frame 0 is the reference.
+        let naive0 = runs[0].first.take().ok_or_else(|| missing("naive frame 0"))?;
+        for run in &mut runs {
+            if let Some(f) = &run.first {
+                run.error = Some(ImageError::from(diff(&naive0, f)?));
             }
-            let first = first.expect("frame 0 read back");
-            let error = diff(&naive0, &first)?;
-            let stats = structure.stats()?.unwrap_or_default();
-            let frame = FrameTimes::of(times);
+        }
+        runs[0].error = Some(ImageError::from(diff(&naive0, &naive0)?));
+        runs[0].first = Some(naive0);
+
+        let naive_times = runs[0].times.clone();
+        for (s, run) in structures.iter().zip(runs) {
+            let r = &ranges[&s.options.cell].0;
+            let ranges_ms = r.ms(s.accel.method().ranges())?;
+            let totals: Vec<f64> = run.builds.iter().map(Timings::total).collect();
+            let build = FrameTimes::of(totals.clone());
+            let phases = Timings::median(&run.builds);
+            let ratios: Vec<f64> = naive_times
+                .iter()
+                .flatten()
+                .zip(run.times.iter().flatten())
+                .map(|(n, t)| n / t)
+                .collect();
+            let frame_spread = run.times.iter().map(|t| spread(t)).fold(1.0, f64::max);
+            let build_spread = spread(&totals);
+            let unstable = frame_spread > UNSTABLE_SPREAD || build_spread > UNSTABLE_SPREAD;
+            let frame = FrameTimes::of(run.times.concat());
+            if run.warmup.capped {
+                out.notes.push(format!(
+                    "{} - {}: warm-up stopped at the cap ({} builds, {} frames) before two consecutive times agreed within {}%",
+                    loaded.spec,
+                    s.label,
+                    run.warmup.builds,
+                    run.warmup.frames,
+                    config.stable * 100.0
+                ));
+            }
+            if unstable {
+                out.notes.push(format!(
+                    "{} - {}: unstable (frame max/min over rounds {:.2}, build max/min {:.2}, above {UNSTABLE_SPREAD})",
+                    loaded.spec, s.label, frame_spread, build_spread
+                ));
+            }
+            let stats = run.structure.stats()?.unwrap_or_default();
+            let first = run.first.ok_or_else(|| missing("frame 0"))?;
             out.records.push(Record {
                 setup: setup.clone(),
                 dataset: loaded.spec.clone(),
@@ -327,15 +491,22 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 accel: s.accel.name().into(),
                 params: params_of(s),
                 ranges_ms,
-                build_ms: build.total(),
-                build_phases_ms: build.phases.into_iter().collect(),
+                build_ms: build.median_ms,
+                build_min_ms: build.min_ms,
+                build_max_ms: build.max_ms,
+                build_phases_ms: phases.phases.into_iter().collect(),
                 nodes: stats.nodes,
                 leaves: stats.leaves,
                 tree_height: stats.height,
                 bytes: stats.bytes,
                 fps: 1000.0 / frame.median_ms,
                 frame,
-                error_vs_naive: ImageError::from(error),
+                speedup: median(ratios),
+                frame_spread,
+                build_spread,
+                unstable,
+                warmed_up: run.warmup,
+                error_vs_naive: run.error.ok_or_else(|| missing("image error"))?,
             });
             if options.keep_frames {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first));
@@ -368,6 +539,18 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
     progress.finish();
     Ok(out)
+}
+
+/// Counts warm-up run `i` on the progress bar, growing it past the least.
+fn advance(progress: &Progress, i: u32, least: u64) {
+    if i as u64 >= least {
+        progress.grow(1);
+    }
+    progress.step(1);
+}
+
+fn missing(what: &str) -> Error {
+    Error::invalid("benchmark", what, "was not read back")
 }
 
 /// A file name for a run label.

@@ -1,6 +1,7 @@
 //! The paper's tables from benchmark records: Table 1 (nodes and height per
-//! structure), Table 2 (build seconds and fps), and the speed-against-error
-//! table, as Markdown and CSV.
+//! structure), Table 2 (build seconds, fps and speed-up over naive), frame
+//! times with their spread, and the speed-against-error table, as Markdown
+//! and CSV. A record measured on a noisy machine carries a dagger.
 
 use super::record::{ErrorPoint, Record};
 
@@ -64,15 +65,69 @@ pub fn table1_md(records: &[Record]) -> String {
     })
 }
 
-/// Table 2: build seconds (per TF change) / fps.
+/// Marks a record whose times spread more than the noise bound.
+fn dagger(r: &Record) -> &'static str {
+    if r.unstable {
+        " †"
+    } else {
+        ""
+    }
+}
+
+const UNSTABLE_NOTE: &str =
+    "† unstable: a view's frame times (or the builds) spread more than 1.5x over the rounds; re-run on a quieter machine.";
+
+/// Table 2: build seconds (per TF change) / fps (xspeed-up over naive).
 pub fn table2_md(records: &[Record]) -> String {
-    markdown("Table 2: build s (per TF change) / fps (median frame)", records, |r| {
-        if r.accel == "naive" {
-            format!("- / {:.2}", r.fps)
-        } else {
-            format!("{:.4} / {:.2}", r.build_ms / 1000.0, r.fps)
-        }
-    })
+    markdown(
+        "Table 2: build s (per TF change) / fps (median frame) (speed-up over naive, same run)",
+        records,
+        |r| {
+            let build = if r.accel == "naive" {
+                "-".to_string()
+            } else {
+                format!("{:.4}", r.build_ms / 1000.0)
+            };
+            format!("{build} / {:.2} ({:.2}x){}", r.fps, r.speedup, dagger(r))
+        },
+    ) + "\n"
+        + UNSTABLE_NOTE
+        + "\n"
+}
+
+/// Frame times: median [min, max] ms over every view and round, and the
+/// speed-up over naive.
+pub fn frames_md(records: &[Record]) -> String {
+    let rounds = records.first().map_or(0, |r| r.setup.rounds);
+    markdown(
+        &format!("Frame ms: median [min, max] over every view x {rounds} interleaved rounds; speed-up over naive"),
+        records,
+        |r| {
+            format!(
+                "{:.2} [{:.2}, {:.2}] {:.2}x{}",
+                r.frame.median_ms,
+                r.frame.min_ms,
+                r.frame.max_ms,
+                r.speedup,
+                dagger(r)
+            )
+        },
+    ) + "\n"
+        + UNSTABLE_NOTE
+        + "\n"
+}
+
+/// The fastest structure per data set (by median frame), with its speed-up.
+pub fn fastest(records: &[Record]) -> Vec<&Record> {
+    datasets(records)
+        .iter()
+        .filter_map(|d| {
+            records
+                .iter()
+                .filter(|r| &r.dataset == d)
+                .min_by(|a, b| a.frame.median_ms.total_cmp(&b.frame.median_ms))
+        })
+        .collect()
 }
 
 /// Error of every structure against naive marching.
@@ -93,7 +148,7 @@ pub fn exactness_md(records: &[Record]) -> String {
 /// One CSV row per record.
 pub fn records_csv(records: &[Record]) -> String {
     let mut out = String::from(
-        "dataset,structure,accel,params,device,width,height,frames,step,tf,visible_percent,active_brick_percent,ranges_ms,build_ms,nodes,leaves,tree_height,bytes,frame_median_ms,frame_min_ms,frame_max_ms,fps,error_max_abs,error_rmse,error_differing\n",
+        "dataset,structure,accel,params,device,width,height,frames,rounds,step,ert,tf,visible_percent,active_brick_percent,ranges_ms,build_ms,build_min_ms,build_max_ms,nodes,leaves,tree_height,bytes,frame_median_ms,frame_min_ms,frame_max_ms,fps,speedup,frame_spread,build_spread,unstable,warmup_builds,warmup_frames,warmup_capped,error_max_abs,error_rmse,error_differing\n",
     );
     for r in records {
         let params: Vec<String> = r.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
@@ -106,12 +161,16 @@ pub fn records_csv(records: &[Record]) -> String {
             r.setup.width.to_string(),
             r.setup.height.to_string(),
             r.setup.frames.to_string(),
+            r.setup.rounds.to_string(),
             r.setup.step.to_string(),
+            r.setup.timed_ert.map_or("off".into(), |e| e.to_string()),
             csv_escape(&r.tf),
             format!("{:.4}", r.visible_percent),
             format!("{:.4}", r.active_brick_percent),
             format!("{:.4}", r.ranges_ms),
             format!("{:.4}", r.build_ms),
+            format!("{:.4}", r.build_min_ms),
+            format!("{:.4}", r.build_max_ms),
             r.nodes.to_string(),
             r.leaves.to_string(),
             r.tree_height.to_string(),
@@ -120,6 +179,13 @@ pub fn records_csv(records: &[Record]) -> String {
             format!("{:.4}", r.frame.min_ms),
             format!("{:.4}", r.frame.max_ms),
             format!("{:.4}", r.fps),
+            format!("{:.4}", r.speedup),
+            format!("{:.4}", r.frame_spread),
+            format!("{:.4}", r.build_spread),
+            r.unstable.to_string(),
+            r.warmed_up.builds.to_string(),
+            r.warmed_up.frames.to_string(),
+            r.warmed_up.capped.to_string(),
             format!("{:e}", r.error_vs_naive.max_abs),
             format!("{:e}", r.error_vs_naive.rmse),
             r.error_vs_naive.differing.to_string(),

@@ -3,7 +3,7 @@
 use super::{context, validation_verdict};
 use clap::Args;
 use lacuna::{Error, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -16,6 +16,13 @@ pub struct BenchArgs {
     /// The built-in paper config (bench/paper.toml): the paper's grid of data sets x structures.
     #[arg(long)]
     paper: bool,
+    /// Compare two runs' results.json (A then B): per record the ratio of median frame times, and the
+    /// fastest structure per data set; exit 1 when a median moved more than --tolerance or the fastest differs.
+    #[arg(long, num_args = 2, value_names = ["A", "B"])]
+    compare: Option<Vec<PathBuf>>,
+    /// Largest relative change of a median --compare accepts.
+    #[arg(long, default_value_t = 0.2, requires = "compare")]
+    tolerance: f64,
     /// Run a test suite instead: "hard" (the DESIGN hard cases for every structure; exit 1 on failure).
     #[arg(long)]
     suite: Option<String>,
@@ -31,9 +38,15 @@ pub struct BenchArgs {
     /// Override the config's timed builds per structure.
     #[arg(long)]
     builds: Option<u32>,
-    /// Override the config's untimed warm-up frames and builds.
+    /// Override the config's least untimed warm-up frames and builds per structure.
     #[arg(long)]
     warmup: Option<u32>,
+    /// Override the config's interleaved timing rounds per view (at least 2).
+    #[arg(long)]
+    rounds: Option<u32>,
+    /// Early ray termination threshold for the timed frames (default: the config's, usually off).
+    #[arg(long)]
+    ert: Option<f32>,
     /// Write frame 0 of every run as EXR under OUT/frames.
     #[arg(long)]
     frames_out: bool,
@@ -47,13 +60,20 @@ pub struct BenchArgs {
 
 pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     use lacuna::bench::{self, BenchConfig};
-    let sources = args.config.is_some() as u32 + args.quick as u32 + args.paper as u32 + args.suite.is_some() as u32;
+    let sources = args.config.is_some() as u32
+        + args.quick as u32
+        + args.paper as u32
+        + args.suite.is_some() as u32
+        + args.compare.is_some() as u32;
     if sources != 1 {
         return Err(Error::invalid(
             "bench",
             format!("{sources} sources"),
-            "give exactly one of: a config file, --quick, --paper, --suite hard",
+            "give exactly one of: a config file, --quick, --paper, --suite hard, --compare A B",
         ));
+    }
+    if let Some(paths) = &args.compare {
+        return compare(&paths[0], &paths[1], args.tolerance);
     }
     if let Some(suite) = &args.suite {
         if suite != "hard" {
@@ -92,23 +112,25 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         (None, false) => BenchConfig::parse(bench::config::PAPER, "bench/paper.toml (built in)")?,
     };
     if let Some(f) = args.frames {
-        if f == 0 {
-            return Err(Error::invalid("frames", "0", "must be at least 1"));
-        }
         config.frames = f;
     }
     if let Some((w, h)) = args.size {
         config.size = [w, h];
     }
     if let Some(b) = args.builds {
-        if b == 0 {
-            return Err(Error::invalid("builds", "0", "must be at least 1"));
-        }
         config.builds = b;
     }
     if let Some(w) = args.warmup {
         config.warmup = w;
+        config.warmup_cap = config.warmup_cap.max(w);
     }
+    if let Some(r) = args.rounds {
+        config.rounds = r;
+    }
+    if args.ert.is_some() {
+        config.ert = args.ert;
+    }
+    config.validate("the command line")?;
     let out_dir = args
         .out
         .clone()
@@ -125,16 +147,66 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let written = bench::write_outputs(&out_dir, &output)?;
     println!("device {} ({})", ctx.info().name, ctx.info().driver);
     println!(
-        "config {}: {}x{}, {} views after {} warm-up, step {}, {} builds per structure",
-        config.name, config.size[0], config.size[1], config.frames, config.warmup, config.step, config.builds
+        "config {}: {}x{}, {} views x {} interleaved rounds, step {}, ERT {}, {} interleaved builds per structure, \
+         warm-up until two consecutive times agree within {}% (at least {}, at most {})",
+        config.name,
+        config.size[0],
+        config.size[1],
+        config.frames,
+        config.rounds,
+        config.step,
+        config.ert.map_or("off".into(), |e| e.to_string()),
+        config.builds,
+        config.stable * 100.0,
+        config.warmup.max(2),
+        config.warmup_cap
     );
     println!();
     println!("{}", bench::tables::table2_md(&output.records));
+    println!("{}", bench::tables::frames_md(&output.records));
     println!("{}", bench::tables::table1_md(&output.records));
     println!("{}", bench::tables::exactness_md(&output.records));
+    for r in bench::tables::fastest(&output.records) {
+        println!(
+            "fastest on {}: {} ({:.2} ms median, {:.2}x naive{})",
+            r.dataset,
+            r.structure,
+            r.frame.median_ms,
+            r.speedup,
+            if r.unstable { ", unstable" } else { "" }
+        );
+    }
     for note in &output.notes {
         println!("note: {note}");
     }
     println!("wrote {} files to {}", written.len(), out_dir.display());
     Ok(validation_verdict(&ctx))
+}
+
+fn read_records(path: &Path) -> Result<Vec<lacuna::bench::Record>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    serde_json::from_str(&text).map_err(|e| Error::format(path, format!("not a bench results.json: {e}")))
+}
+
+fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
+    if !(tolerance.is_finite() && tolerance >= 0.0) {
+        return Err(Error::invalid("tolerance", tolerance.to_string(), "must be >= 0"));
+    }
+    let (ra, rb) = (read_records(a)?, read_records(b)?);
+    let c = lacuna::bench::compare::Comparison::new(&ra, &rb);
+    if c.rows.is_empty() {
+        return Err(Error::invalid(
+            "compare",
+            format!("{} and {}", a.display(), b.display()),
+            "no data set x structure is in both runs",
+        ));
+    }
+    println!("{}", c.markdown(&a.display().to_string(), &b.display().to_string()));
+    let ok = c.worst() <= tolerance && c.same_fastest();
+    println!(
+        "{}: every median within {:.0} % and the same fastest structure",
+        if ok { "PASS" } else { "FAIL" },
+        100.0 * tolerance
+    );
+    Ok(if ok { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
