@@ -6,6 +6,6 @@ mod atomic;
 pub mod diff;
 mod exr;
 
-pub use atomic::write_atomically;
+pub use atomic::{check_parent, write_atomically};
 pub use diff::{diff, DiffStats};
 pub use exr::Frame;
