@@ -23,6 +23,8 @@ enum Command {
     Render(Box<cli::render::RenderArgs>),
     /// Describe a volume: dims, type, spacing, values; occupancy under a TF.
     Info(cli::info::InfoArgs),
+    /// Write a volume (file or generator) as an Open SciVis raw file in its source units.
+    Export(cli::export::ExportArgs),
     /// Compare two EXR frames (exit 1 if --max-abs is exceeded, 2 on bad input).
     Diff(cli::diff::DiffArgs),
     /// List Vulkan devices (select one with LACUNA_DEVICE=<index or name>).
@@ -60,6 +62,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Render(a) => cli::render::run(a),
         Command::Info(a) => cli::info::run(a),
+        Command::Export(a) => cli::export::run(a),
         Command::Diff(a) => cli::diff::run(a),
         Command::Devices => cli::devices::run(),
         Command::Bench(a) => cli::bench::run(a),

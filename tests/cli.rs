@@ -3,29 +3,9 @@
 //! input as a one-line error with a non-zero exit and no output file.
 
 mod common;
+use common::{lacuna, Run};
 use lacuna::frame::Frame;
 use std::path::Path;
-use std::process::Command;
-
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lacuna"));
-    cmd.args(args);
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    let out = cmd.output().unwrap();
-    Run {
-        code: out.status.code().unwrap_or(-1),
-        stdout: String::from_utf8_lossy(&out.stdout).into(),
-        stderr: String::from_utf8_lossy(&out.stderr).into(),
-    }
-}
 
 /// Renders `spec` at a small size with validation on; panics on failure.
 fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod devices;
 pub mod diff;
+pub mod export;
 pub mod info;
 pub mod octree;
 pub mod render;
