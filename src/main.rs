@@ -53,9 +53,19 @@ fn main() -> ExitCode {
                 let missing = e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand;
                 return ExitCode::from(if missing { 2 } else { 0 });
             }
-            // One line: clap's first line names the bad argument.
+            // One line: clap's first line names the bad argument, or ends in
+            // ':' with the arguments (missing ones) indented below it.
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            let mut lines = text.lines();
+            let mut line = lines.next().unwrap_or("error: invalid arguments").to_string();
+            if line.ends_with(':') {
+                let listed: Vec<&str> = lines
+                    .take_while(|l| l.starts_with(char::is_whitespace))
+                    .map(str::trim)
+                    .collect();
+                line = format!("{line} {}", listed.join(", "));
+            }
+            eprintln!("{}", line.trim_end());
             return ExitCode::from(2);
         }
     };

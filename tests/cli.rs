@@ -471,6 +471,12 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:16", "--perspective", "0"], &[], "field of view");
     fails(&["info", "blob:16"], &[], "not a generator");
     fails(&["render", "menger:16", "--unknown-flag"], &[], "--unknown-flag");
+    // A missing required argument is named on the one line.
+    fails(
+        &["render", "menger:16", "--dims", "8x8x8"],
+        &[],
+        "required arguments were not provided: --type <TYPE>",
+    );
     // No Vulkan driver at all: the loader finds no ICD.
     let none = [
         ("VK_DRIVER_FILES", "/nonexistent/icd.json"),

@@ -25,7 +25,7 @@ pub struct VolumeArgs {
     #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
     pub dims: Option<[u32; 3]>,
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
-    #[arg(long = "type", id = "voxel_type", requires = "dims", value_parser = parse_type)]
+    #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     pub voxel_type: Option<VoxelType>,
 }
 
