@@ -364,58 +364,50 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
     write_source(input.path(), "big", DIMS, VoxelType::U16, &values(0.0, 3.0));
     write_source(input.path(), "neg", DIMS, VoxelType::I16, &values(-2.0, 1.0));
     write_source(input.path(), "frac", DIMS, VoxelType::F32, &values(0.0, 0.5));
-    fails(input.path(), &["menger:9", "{out}/existing"], "is a folder");
-    fails(input.path(), &["menger:9", "{out}/"], "is a folder");
-    fails(
-        input.path(),
-        &["menger:9", "{out}/missing/v"],
-        "its folder does not exist",
-    );
-    fails(
-        input.path(),
-        &["menger:9", "{out}/missing/v_9x9x9_uint8.raw"],
-        "its folder does not exist",
-    );
     // 105 values 0, 3, .., 312, shuffled: the first above 255 in x-fastest
     // order is named.
     let first = (0..105u32).find(|i| (i * 47 % 105) * 3 > 255).unwrap();
     let (x, y, z) = (first % 7, first / 7 % 5, first / 35);
-    let value = (first * 47 % 105) * 3;
-    fails(
-        input.path(),
-        &["{in}/big_7x5x3_uint16.raw", "{out}/v", "--type", "uint8"],
-        &format!("invalid export type 'uint8': voxel ({x}, {y}, {z}) is {value}, outside uint8's range 0 to 255; uint16 holds every value"),
+    let too_big = format!(
+        "invalid export type 'uint8': voxel ({x}, {y}, {z}) is {}, outside uint8's range 0 to 255; \
+         uint16 holds every value",
+        (first * 47 % 105) * 3
     );
-    fails(
-        input.path(),
-        &["{in}/neg_7x5x3_int16.raw", "{out}/v", "--type", "uint16"],
-        "is -2, outside uint16's range 0 to 65535; float32 holds every value",
-    );
-    fails(
-        input.path(),
-        &["{in}/frac_7x5x3_float32.raw", "{out}/v", "--type", "uint8"],
-        "voxel (1, 0, 0) is 23.5, not an integer; float32 holds every value",
-    );
-    fails(
-        input.path(),
-        &["menger:9", "{out}/sponge.raw"],
-        "must be sponge_9x9x9_uint8.raw",
-    );
-    fails(
-        input.path(),
-        &["menger:9", "{out}/sponge_9x9x9_float32.raw"],
-        "must be sponge_9x9x9_uint8.raw",
-    );
-    fails(
-        input.path(),
-        &["menger:9", "{out}/sponge_9x9x9_uint8.raw", "--type", "uint16"],
-        "must be sponge_9x9x9_uint16.raw",
-    );
-    fails(
-        input.path(),
-        &["menger:9", "{out}/v", "--type", "int16"],
-        "expected uint8, uint16 or float32",
-    );
-    fails(input.path(), &["menger:9", "{out}/v", "--type", "uint9"], "uint9");
-    fails(input.path(), &["nosuch:9", "{out}/v"], "not a generator");
+    let cases: [(&[&str], &str); 14] = [
+        (&["menger:9", "{out}/existing"], "is a folder"),
+        (&["menger:9", "{out}/"], "is a folder"),
+        (&["menger:9", "{out}/missing/v"], "its folder does not exist"),
+        (
+            &["menger:9", "{out}/missing/v_9x9x9_uint8.raw"],
+            "its folder does not exist",
+        ),
+        (&["{in}/big_7x5x3_uint16.raw", "{out}/v", "--type", "uint8"], &too_big),
+        (
+            &["{in}/neg_7x5x3_int16.raw", "{out}/v", "--type", "uint16"],
+            "is -2, outside uint16's range 0 to 65535; float32 holds every value",
+        ),
+        (
+            &["{in}/frac_7x5x3_float32.raw", "{out}/v", "--type", "uint8"],
+            "voxel (1, 0, 0) is 23.5, not an integer; float32 holds every value",
+        ),
+        (&["menger:9", "{out}/sponge.raw"], "must be sponge_9x9x9_uint8.raw"),
+        (
+            &["menger:9", "{out}/sponge_9x9x9_float32.raw"],
+            "must be sponge_9x9x9_uint8.raw",
+        ),
+        (
+            &["menger:9", "{out}/sponge_9x9x9_uint8.raw", "--type", "uint16"],
+            "must be sponge_9x9x9_uint16.raw",
+        ),
+        (
+            &["menger:9", "{out}/v", "--type", "int16"],
+            "expected uint8, uint16 or float32",
+        ),
+        (&["menger:9", "{out}/v", "--type", "uint9"], "uint9"),
+        (&["menger:9", "{out}/v", "--dims", "9x9x9"], "--source-type"),
+        (&["nosuch:9", "{out}/v"], "not a generator"),
+    ];
+    for (args, needle) in cases {
+        fails(input.path(), args, needle);
+    }
 }
