@@ -23,6 +23,8 @@ enum Command {
     Render(Box<cli::render::RenderArgs>),
     /// Describe a volume: dims, type, spacing, values; occupancy under a TF.
     Info(cli::info::InfoArgs),
+    /// Write a volume (file or generator) as an Open SciVis raw file in its source units.
+    Export(cli::export::ExportArgs),
     /// Compare two EXR frames (exit 1 if --max-abs is exceeded, 2 on bad input).
     Diff(cli::diff::DiffArgs),
     /// List Vulkan devices (select one with LACUNA_DEVICE=<index or name>).
@@ -51,15 +53,26 @@ fn main() -> ExitCode {
                 let missing = e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand;
                 return ExitCode::from(if missing { 2 } else { 0 });
             }
-            // One line: clap's first line names the bad argument.
+            // One line: clap's first line names the bad argument, or ends in
+            // ':' with the arguments (missing ones) indented below it.
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            let mut lines = text.lines();
+            let mut line = lines.next().unwrap_or("error: invalid arguments").to_string();
+            if line.ends_with(':') {
+                let listed: Vec<&str> = lines
+                    .take_while(|l| l.starts_with(char::is_whitespace))
+                    .map(str::trim)
+                    .collect();
+                line = format!("{line} {}", listed.join(", "));
+            }
+            eprintln!("{}", line.trim_end());
             return ExitCode::from(2);
         }
     };
     let result = match &cli.command {
         Command::Render(a) => cli::render::run(a),
         Command::Info(a) => cli::info::run(a),
+        Command::Export(a) => cli::export::run(a),
         Command::Diff(a) => cli::diff::run(a),
         Command::Devices => cli::devices::run(),
         Command::Bench(a) => cli::bench::run(a),

@@ -1,31 +1,11 @@
 //! The `lacuna` binary end to end: render to EXR (read back with the `exr`
-//! crate, metadata checked), info, diff exit codes, devices, and every bad
+//! crate, metadata checked) and PNG (decoded with the `png` crate), info, diff exit codes, devices, and every bad
 //! input as a one-line error with a non-zero exit and no output file.
 
 mod common;
+use common::{lacuna, Run};
 use lacuna::frame::Frame;
 use std::path::Path;
-use std::process::Command;
-
-struct Run {
-    code: i32,
-    stdout: String,
-    stderr: String,
-}
-
-fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lacuna"));
-    cmd.args(args);
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    let out = cmd.output().unwrap();
-    Run {
-        code: out.status.code().unwrap_or(-1),
-        stdout: String::from_utf8_lossy(&out.stdout).into(),
-        stderr: String::from_utf8_lossy(&out.stderr).into(),
-    }
-}
 
 /// Renders `spec` at a small size with validation on; panics on failure.
 fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
@@ -71,6 +51,112 @@ fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
     assert!(frame.metadata["gpu_ms"].parse::<f64>().unwrap() >= 0.0);
     // Only the frame is in the folder: no temporary left behind.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+/// The sRGB encoding of a linear value, written here from IEC 61966-2-1
+/// rather than taken from the library.
+fn srgb(linear: f64) -> f64 {
+    if linear <= 0.0031308 {
+        12.92 * linear
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+#[test]
+fn render_to_png_matches_the_exr_in_8_bit_srgb_with_straight_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let (exr, png) = (dir.path().join("frame.exr"), dir.path().join("frame.png"));
+    let args = ["--camera", "-20,35", "--tf", "ramp:0.2:1:0.3"];
+    render_ok("menger:27", &exr, &args);
+    render_ok("menger:27", &png, &args);
+    let frame = Frame::read_exr(&exr).unwrap();
+
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let info = reader.info();
+    assert_eq!((info.width, info.height), (40, 32));
+    assert_eq!(
+        (info.color_type, info.bit_depth),
+        (png::ColorType::Rgba, png::BitDepth::Eight)
+    );
+    assert!(info.srgb.is_some(), "no sRGB chunk");
+    let text: Vec<(String, String)> = info
+        .utf8_text
+        .iter()
+        .map(|t| (t.keyword.clone(), t.get_text().unwrap()))
+        .collect();
+    assert!(
+        text.contains(&("lacuna.volume".into(), "menger:27x27x27".into())),
+        "{text:?}"
+    );
+    let mut rgba = vec![0u8; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut rgba).unwrap();
+
+    // Row 0 at the top in both: the frame is not symmetric top to bottom,
+    // so a flipped PNG could not match.
+    let (w, h) = (frame.width, frame.height);
+    assert!((0..w).any(|x| frame.pixel(x, 0) != frame.pixel(x, h - 1) || frame.pixel(x, 5) != frame.pixel(x, h - 6)));
+    let (mut partial, mut opaque_ish) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let p = frame.pixel(x, y).map(f64::from);
+            let i = 4 * (y * w + x) as usize;
+            let got = &rgba[i..i + 4];
+            // Straight alpha: colour / alpha, sRGB-encoded; alpha linear.
+            let a = p[3].clamp(0.0, 1.0);
+            let want_a = (a * 255.0).round();
+            assert_eq!(got[3] as f64, want_a, "alpha at ({x},{y}): {p:?}");
+            for c in 0..3 {
+                let want = if a == 0.0 {
+                    0.0
+                } else {
+                    (srgb((p[c] / a).clamp(0.0, 1.0)) * 255.0).round()
+                };
+                assert!(
+                    (got[c] as f64 - want).abs() <= 1.0,
+                    "channel {c} at ({x},{y}): {} vs {want} from {p:?}",
+                    got[c]
+                );
+            }
+            partial += (a > 0.02 && a < 0.98) as u32;
+            opaque_ish += (a > 0.5) as u32;
+        }
+    }
+    assert!(partial > 50 && opaque_ish > 0, "{partial} partial, {opaque_ish} > 0.5");
+    // Only the two frames: no temporary left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn a_frame_name_that_is_not_exr_or_png_fails_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["frame.jpg", "frame", "frame.exr.tmp"] {
+        let out = dir.path().join(name);
+        // A missing volume and no Vulkan driver: the name is refused first.
+        let r = lacuna(
+            &[
+                "render",
+                "/no/such/volume_8x8x8_uint8.raw",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[
+                ("VK_DRIVER_FILES", "/nonexistent/icd.json"),
+                ("VK_ICD_FILENAMES", "/nonexistent/icd.json"),
+            ],
+        );
+        assert_eq!(r.code, 2, "{name}: {}{}", r.stdout, r.stderr);
+        assert!(r.stdout.is_empty(), "{name}: {}", r.stdout);
+        let lines: Vec<&str> = r.stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{name}: {}", r.stderr);
+        assert!(
+            lines[0].starts_with("error: invalid frame output") && lines[0].contains("expected a .exr"),
+            "{name}: {}",
+            lines[0]
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
 #[test]
@@ -385,6 +471,12 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:16", "--perspective", "0"], &[], "field of view");
     fails(&["info", "blob:16"], &[], "not a generator");
     fails(&["render", "menger:16", "--unknown-flag"], &[], "--unknown-flag");
+    // A missing required argument is named on the one line.
+    fails(
+        &["render", "menger:16", "--dims", "8x8x8"],
+        &[],
+        "required arguments were not provided: --type <TYPE>",
+    );
     // No Vulkan driver at all: the loader finds no ICD.
     let none = [
         ("VK_DRIVER_FILES", "/nonexistent/icd.json"),

@@ -3,16 +3,17 @@
 pub mod bench;
 pub mod devices;
 pub mod diff;
+pub mod export;
 pub mod info;
 pub mod octree;
 pub mod render;
 pub mod scene;
 
 use clap::Args;
+pub use lacuna::frame::check_parent;
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::volume::{LoadOptions, RawLayout, VoxelType};
-use lacuna::{Error, Result, TransferFunction, Volume};
-use std::path::Path;
+use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
 
 /// A volume on the command line: a file or a generator spec.
@@ -24,26 +25,31 @@ pub struct VolumeArgs {
     #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
     pub dims: Option<[u32; 3]>,
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
-    #[arg(long = "type", id = "voxel_type", requires = "dims", value_parser = parse_type)]
+    #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     pub voxel_type: Option<VoxelType>,
 }
 
-fn parse_dims(s: &str) -> Result<[u32; 3]> {
+pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
     lacuna::volume::parse_dims(s)
 }
 
-fn parse_type(s: &str) -> Result<VoxelType> {
+pub fn parse_type(s: &str) -> Result<VoxelType> {
     lacuna::volume::parse_type(s)
 }
 
 impl VolumeArgs {
     pub fn load(&self) -> Result<Volume> {
-        let raw = match (self.dims, self.voxel_type) {
-            (Some(dims), Some(ty)) => Some(RawLayout { dims, ty }),
-            _ => None,
-        };
-        Volume::load(&self.volume, &LoadOptions { raw })
+        load_volume(&self.volume, self.dims, self.voxel_type)
     }
+}
+
+/// Loads a volume spec; `dims` and `ty` (given together) are a raw file's layout.
+pub fn load_volume(spec: &str, dims: Option<[u32; 3]>, ty: Option<VoxelType>) -> Result<Volume> {
+    let raw = match (dims, ty) {
+        (Some(dims), Some(ty)) => Some(RawLayout { dims, ty }),
+        _ => None,
+    };
+    Volume::load(spec, &LoadOptions { raw })
 }
 
 /// A headless context; `validate` adds validation with synchronization validation.
@@ -73,19 +79,4 @@ pub fn tf_for(spec: Option<&TransferFunction>, volume: &Volume) -> Result<Option
         (None, Some(s)) => Ok(Some(TransferFunction::parse(s)?)),
         (None, None) => Ok(None),
     }
-}
-
-/// Fails before any work when an output's folder does not exist.
-pub fn check_parent(path: &Path) -> Result<()> {
-    let parent = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !parent.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
-        ));
-    }
-    Ok(())
 }

@@ -1,10 +1,10 @@
-//! `lacuna render`: one frame with any structure, GPU time per pass, EXR out.
+//! `lacuna render`: one frame with any structure, GPU time per pass, EXR or PNG out.
 
 use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::kd::KdParams;
 use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
-use lacuna::frame::Frame;
+use lacuna::frame::{Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::render::{self, Camera, Projection, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
@@ -64,7 +64,7 @@ pub struct RenderArgs {
     /// Untimed builds and frames first (lavapipe compiles shaders on first use).
     #[arg(long, default_value_t = 0)]
     warmup: u32,
-    /// Write the frame as OpenEXR (RGBA f32, premultiplied).
+    /// Write the frame: .exr (OpenEXR, RGBA f32, linear, premultiplied) or .png (8-bit sRGB, straight alpha).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
@@ -74,7 +74,7 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     /// Every option checked, before any file is read or GPU work is done.
-    fn options(&self) -> Result<(BuildOptions, RenderSettings)> {
+    fn options(&self) -> Result<(BuildOptions, RenderSettings, Option<FrameFormat>)> {
         let options = BuildOptions {
             classify: Classify::parse(&self.classify, &self.apron)?,
             kd: KdParams::parse(&self.kd, self.max_leaf, self.bins)?,
@@ -103,10 +103,11 @@ impl RenderArgs {
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
         }
+        let format = self.out.as_deref().map(FrameFormat::from_path).transpose()?;
         if let Some(out) = &self.out {
             check_parent(out)?;
         }
-        Ok((options, settings))
+        Ok((options, settings, format))
     }
 }
 
@@ -138,7 +139,7 @@ fn build(
 }
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
-    let (options, settings) = args.options()?;
+    let (options, settings, format) = args.options()?;
     let volume = args.volume.load()?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     settings.params(volume.dims, volume.spacing, volume.norm)?;
@@ -202,9 +203,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         println!("structure {stats}");
     }
     println!("render GPU time per pass:\n{timings}");
-    if let Some(out) = &args.out {
+    if let (Some(out), Some(format)) = (&args.out, format) {
         describe(&mut frame, &volume, &tf, args.accel, &params, &settings, &ctx, &timings)?;
-        frame.write_exr(out)?;
+        frame.write(out, format)?;
         println!("wrote {}", out.display());
     }
     Ok(validation_verdict(&ctx))

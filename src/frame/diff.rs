@@ -1,7 +1,7 @@
 //! Frame comparison: rmse, psnr, max abs difference over all RGBA channels,
 //! and the count of pixels that differ at all; optional PNG heatmap.
 
-use super::{write_atomically, Frame};
+use super::Frame;
 use crate::error::{Error, Result};
 use std::path::Path;
 
@@ -110,15 +110,5 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         };
         rgb.extend_from_slice(&px);
     }
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| Error::io(path, e))?;
-        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), a.width, a.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(|e| Error::format(path, e.to_string()))?;
-        writer
-            .write_image_data(&rgb)
-            .map_err(|e| Error::format(path, e.to_string()))?;
-        writer.finish().map_err(|e| Error::format(path, e.to_string()))
-    })
+    super::png::write_png8(path, a.width, a.height, ::png::ColorType::Rgb, &rgb, &[])
 }

@@ -15,7 +15,7 @@ pub struct Frame {
     pub metadata: BTreeMap<String, String>,
 }
 
-const PREFIX: &str = "lacuna.";
+pub(super) const PREFIX: &str = "lacuna.";
 
 impl Frame {
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {

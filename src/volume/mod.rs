@@ -1,8 +1,9 @@
 //! Volumes: the `Volume` type, loaders (raw, NRRD, NIfTI), procedural
-//! generators, value ranges over bricks, and GPU upload.
+//! generators, value ranges over bricks, GPU upload, and raw export.
 
 mod bricks;
 mod decode;
+mod export;
 mod gpu;
 mod nifti;
 mod nrrd;
@@ -12,6 +13,9 @@ mod spec;
 
 pub use bricks::{BrickGrid, BRICK};
 pub use decode::VoxelType;
+pub use export::{
+    check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
+};
 pub use gpu::GpuVolume;
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use spec::{LoadOptions, VolumeSpec};

@@ -8,6 +8,7 @@ use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
+use std::process::Command;
 
 /// A validated context (LACUNA_DEVICE still selects the device).
 pub fn gpu() -> Context {
@@ -68,4 +69,25 @@ pub fn max_abs(a: &Frame, b: &Frame) -> f64 {
 /// The registry entry named `name`.
 pub fn accel(name: &str) -> Accel {
     name.parse().unwrap()
+}
+
+/// What a run of the `lacuna` binary printed and returned.
+pub struct Run {
+    pub code: i32,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+pub fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_lacuna"));
+    cmd.args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let out = cmd.output().unwrap();
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into(),
+        stderr: String::from_utf8_lossy(&out.stderr).into(),
+    }
 }

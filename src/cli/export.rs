@@ -1,0 +1,43 @@
+//! `lacuna export`: any volume lacuna loads or generates as an Open
+//! SciVis-named raw file in its source units, for VTK, ParaView and others.
+
+use super::{load_volume, parse_dims, parse_type};
+use clap::Args;
+use lacuna::volume::{check_raw_out, parse_export_type, write_raw, VoxelType};
+use lacuna::Result;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct ExportArgs {
+    /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
+    volume: String,
+    /// Output: a stem (_WxHxD_TYPE.raw is appended) or the Open SciVis name NAME_WxHxD_TYPE.raw.
+    out: PathBuf,
+    /// Voxel type written: uint8, uint16 or float32 (default: the source type if it is one of them,
+    /// else the smallest that holds every value).
+    #[arg(long = "type", value_name = "TYPE", value_parser = parse_export_type)]
+    ty: Option<VoxelType>,
+    /// Dimensions of a raw input file whose name does not give them (WxHxD).
+    #[arg(long, requires = "source_type", value_parser = parse_dims)]
+    dims: Option<[u32; 3]>,
+    /// Voxel type of a raw input file whose name does not give it (render's --type).
+    #[arg(long, value_name = "TYPE", requires = "dims", value_parser = parse_type)]
+    source_type: Option<VoxelType>,
+}
+
+pub fn run(args: &ExportArgs) -> Result<ExitCode> {
+    // The output's folder is checked before a (possibly long) load.
+    check_raw_out(&args.out)?;
+    let volume = load_volume(&args.volume, args.dims, args.source_type)?;
+    let written = write_raw(&volume, &args.out, args.ty)?;
+    println!("{}", written.path.display());
+    let [sx, sy, sz] = volume.spacing;
+    if volume.spacing != [1.0; 3] {
+        eprintln!(
+            "note: the spacing {sx} x {sy} x {sz} is not stored in a raw file; lacuna's raw loader has no spacing \
+             option and reads 1 x 1 x 1 (in ParaView set the reader's Data Spacing to {sx} {sy} {sz})"
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
