@@ -37,7 +37,8 @@ pub enum Dim {
 pub struct Interface {
     /// Bindings 0.. of set 0, in order.
     pub bindings: Vec<Descriptor>,
-    /// Per binding: the block size in bytes of a uniform buffer, else 0.
+    /// Per binding: the block size in bytes of a uniform buffer or of a
+    /// storage block without a runtime array, else 0.
     pub block_sizes: Vec<u32>,
     pub push_size: u32,
     pub local_size: [Dim; 3],
@@ -238,10 +239,11 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
         let binding = m
             .decoration(id, DEC_BINDING)
             .ok_or(format!("resource %{id} has no binding"))?;
-        let size = if ty == Descriptor::UniformBuffer {
-            m.size_of(pointee)?
-        } else {
-            0
+        // Storage blocks ending in a runtime array have no fixed size: 0.
+        let size = match ty {
+            Descriptor::UniformBuffer => m.size_of(pointee)?,
+            Descriptor::StorageBuffer => m.size_of(pointee).unwrap_or(0),
+            _ => 0,
         };
         slots.push((binding, ty, size));
     }

@@ -81,11 +81,10 @@ def parse_args(argv):
 
 def export(args, name, spec):
     stem = os.path.join(args.work, name)
-    out = run([args.lacuna, "export", spec, stem])
-    for line in out.splitlines():
-        if line.startswith("wrote "):
-            return line[len("wrote "):].strip()
-    raise Failure(f"lacuna export {spec} did not say what it wrote:\n{out}")
+    lines = run([args.lacuna, "export", spec, stem]).strip().splitlines()
+    if not lines or not os.path.exists(lines[-1]):
+        raise Failure(f"lacuna export {spec} did not say what it wrote")
+    return lines[-1]
 
 
 def lacuna_bench(args, name, raw, tf, ert):
@@ -116,22 +115,30 @@ def lacuna_bench(args, name, raw, tf, ert):
         return json.load(f)
 
 
-def coverage_of_png(path):
-    """Fraction of pixels brighter than 1/255 (as vtk.py measures)."""
+def flatten_png(path):
+    """lacuna's PNG has straight alpha; VTK's is RGB over black. Rewrites
+    lacuna's over black, as VTK's, and returns its coverage: the fraction of
+    pixels with alpha above 1/255 (vtk.py's test on the same view)."""
     import vtk
+    from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 
     r = vtk.vtkPNGReader()
     r.SetFileName(path)
     r.Update()
     img = r.GetOutput()
-    from vtk.util.numpy_support import vtk_to_numpy
-
-    a = vtk_to_numpy(img.GetPointData().GetScalars())
-    a = a.reshape(-1, img.GetNumberOfScalarComponents())
-    visible = a[:, :3].max(axis=1) > 1
-    if a.shape[1] == 4:
-        visible |= a[:, 3] > 1
-    return float(visible.mean())
+    n = img.GetNumberOfScalarComponents()
+    if n != 4:
+        raise Failure(f"{path}: expected RGBA from lacuna render, got {n} channels")
+    a = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(-1, 4).astype("float64")
+    rgb = (a[:, :3] * a[:, 3:4] / 255.0 + 0.5).clip(0, 255).astype("uint8")
+    out = vtk.vtkImageData()
+    out.SetDimensions(img.GetDimensions())
+    out.GetPointData().SetScalars(numpy_to_vtk(rgb, deep=True))
+    w = vtk.vtkPNGWriter()
+    w.SetFileName(path)
+    w.SetInputData(out)
+    w.Write()
+    return float((a[:, 3] > 1).mean())
 
 
 def lacuna_png(args, raw, tf, ert, path):
@@ -188,7 +195,7 @@ def main(argv):
                         f["median_ms"], r["speedup"])
                 png = os.path.join(images, f"{name}-lacuna{'-ert' if ert else ''}.png")
                 lacuna_png(args, raw, tf, ert, png)
-                cov = coverage_of_png(png)
+                cov = flatten_png(png)
                 vpng = os.path.join(images, f"{name}-vtk{'-ert' if ert else ''}.png")
                 peer = vtk_peer(args, raw, tf, ert, vpng, cov)
                 for kind, label in (("cpu", "VTK CPU (fixed point)"), ("gpu", "VTK GPU (llvmpipe)")):

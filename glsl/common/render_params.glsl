@@ -1,9 +1,13 @@
-// Per-frame render parameters (std140 uniform block), written by
-// src/render/params.rs::RenderParams; keep both in the same order.
+// Per-frame render parameters, written by src/render/params.rs::RenderParams;
+// keep both in the same order. A read-only storage block, not a uniform
+// block: lavapipe inlines uniform-block values used in branches into the
+// shader and compiles a new variant whenever they change, i.e. every frame
+// the camera moves (a ~50 ms stall per frame without Mesa's disk cache).
+// Every member is a vec4, so std430 and std140 lay it out alike.
 #ifndef LACUNA_RENDER_PARAMS_GLSL
 #define LACUNA_RENDER_PARAMS_GLSL
 
-layout(std140, set = 0, binding = PARAMS_BINDING) uniform RenderParamsBlock {
+layout(std430, set = 0, binding = PARAMS_BINDING) readonly buffer RenderParamsBlock {
     // Pixel (x, y) maps to the point base + (x + 0.5) * du + (y + 0.5) * dv,
     // all in voxel space (box [0, N] per axis, voxel i centred at i + 0.5).
     vec4 base;

@@ -62,7 +62,7 @@ impl RenderTarget {
             ctx,
             "render params",
             std::mem::size_of::<RenderParams>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
         let readback = Buffer::new(
@@ -209,9 +209,9 @@ impl Renderer {
         record::barrier(device, cmd, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(params)) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_UNIFORM_READ);
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
         let mut bindings = vec![
-            Binding::Uniform(&target.params),
+            Binding::Storage(&target.params),
             Binding::Sampled(volume.image.view, volume.sampler),
             Binding::Storage(&tf.lut),
             Binding::Storage(&target.frame),
