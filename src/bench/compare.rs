@@ -12,6 +12,9 @@ pub struct Row {
     pub structure: String,
     pub a_ms: f64,
     pub b_ms: f64,
+    /// Speed-up over naive in each run.
+    pub a_speedup: f64,
+    pub b_speedup: f64,
 }
 
 impl Row {
@@ -19,12 +22,37 @@ impl Row {
     pub fn change(&self) -> f64 {
         (self.b_ms - self.a_ms).abs() / self.a_ms
     }
+
+    /// |b - a| / a of the speed-ups: free of drift that slows every
+    /// structure of a run alike.
+    pub fn speedup_change(&self) -> f64 {
+        (self.b_speedup - self.a_speedup).abs() / self.a_speedup
+    }
+}
+
+pub struct Fastest {
+    pub dataset: String,
+    pub a: String,
+    pub b: String,
+    /// B's median of A's fastest over B's fastest: 1 when they agree.
+    pub b_ratio: f64,
+}
+
+/// Two structures within this fraction of each other are tied: a run
+/// cannot rank them.
+pub const TIE: f64 = 0.05;
+
+impl Fastest {
+    /// The same structure, or A's fastest within `TIE` of B's in B.
+    pub fn agrees(&self) -> bool {
+        self.a == self.b || self.b_ratio <= 1.0 + TIE
+    }
 }
 
 pub struct Comparison {
     pub rows: Vec<Row>,
-    /// Per data set: (data set, fastest in A, fastest in B).
-    pub fastest: Vec<(String, String, String)>,
+    /// Per data set, the fastest structure of each run.
+    pub fastest: Vec<Fastest>,
     /// Records in only one of the runs.
     pub unmatched: usize,
 }
@@ -41,6 +69,8 @@ impl Comparison {
                     structure: ra.structure.clone(),
                     a_ms: ra.frame.median_ms,
                     b_ms: rb.frame.median_ms,
+                    a_speedup: ra.speedup,
+                    b_speedup: rb.speedup,
                 })
             })
             .collect();
@@ -50,7 +80,13 @@ impl Comparison {
             .into_iter()
             .filter_map(|ra| {
                 let rb = fb.iter().find(|rb| rb.dataset == ra.dataset)?;
-                Some((ra.dataset.clone(), ra.structure.clone(), rb.structure.clone()))
+                let a_in_b = b.iter().find(|r| key(r) == key(ra))?;
+                Some(Fastest {
+                    dataset: ra.dataset.clone(),
+                    a: ra.structure.clone(),
+                    b: rb.structure.clone(),
+                    b_ratio: a_in_b.frame.median_ms / rb.frame.median_ms,
+                })
             })
             .collect();
         Comparison {
@@ -65,31 +101,50 @@ impl Comparison {
         self.rows.iter().map(Row::change).fold(0.0, f64::max)
     }
 
+    /// The largest relative change of a speed-up over naive.
+    pub fn worst_speedup(&self) -> f64 {
+        self.rows.iter().map(Row::speedup_change).fold(0.0, f64::max)
+    }
+
     pub fn same_fastest(&self) -> bool {
-        self.fastest.iter().all(|(_, a, b)| a == b)
+        self.fastest.iter().all(Fastest::agrees)
     }
 
     /// Markdown: one row per record, then the fastest per data set.
     pub fn markdown(&self, a: &str, b: &str) -> String {
-        let mut out = String::from("| data set | structure | A ms | B ms | B / A |\n|---|---|---|---|---|\n");
+        let mut out = String::from(
+            "| data set | structure | A ms | B ms | B / A | A speed-up | B speed-up |\n|---|---|---|---|---|---|---|\n",
+        );
         for r in &self.rows {
             out += &format!(
-                "| {} | {} | {:.2} | {:.2} | {:.3} |\n",
+                "| {} | {} | {:.2} | {:.2} | {:.3} | {:.2}x | {:.2}x |\n",
                 r.dataset,
                 r.structure,
                 r.a_ms,
                 r.b_ms,
-                r.b_ms / r.a_ms
+                r.b_ms / r.a_ms,
+                r.a_speedup,
+                r.b_speedup
             );
         }
-        out += "\n| data set | fastest in A | fastest in B |\n|---|---|---|\n";
-        for (d, fa, fb) in &self.fastest {
-            out += &format!("| {d} | {fa} | {fb} |\n");
+        out += "\n| data set | fastest in A | fastest in B | A's fastest in B |\n|---|---|---|---|\n";
+        for f in &self.fastest {
+            let verdict = if f.a == f.b {
+                "the same".to_string()
+            } else if f.agrees() {
+                format!("{:.1} % slower: tied", 100.0 * (f.b_ratio - 1.0))
+            } else {
+                format!("{:.1} % slower", 100.0 * (f.b_ratio - 1.0))
+            };
+            out += &format!("| {} | {} | {} | {verdict} |\n", f.dataset, f.a, f.b);
         }
         out + &format!(
-            "\nA = {a}, B = {b}: largest change of a median {:.1} %, fastest structure the same on {} of {} data sets{}\n",
+            "\nA = {a}, B = {b}: largest change of a median {:.1} %, of a speed-up over naive {:.1} %; \
+             fastest structure the same or tied (within {:.0} %) on {} of {} data sets{}\n",
             100.0 * self.worst(),
-            self.fastest.iter().filter(|(_, x, y)| x == y).count(),
+            100.0 * self.worst_speedup(),
+            100.0 * TIE,
+            self.fastest.iter().filter(|f| f.agrees()).count(),
             self.fastest.len(),
             if self.unmatched > 0 {
                 format!(", {} records in only one run", self.unmatched)

@@ -204,7 +204,7 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
     println!("{}", c.markdown(&a.display().to_string(), &b.display().to_string()));
     let ok = c.worst() <= tolerance && c.same_fastest();
     println!(
-        "{}: every median within {:.0} % and the same fastest structure",
+        "{}: every median within {:.0} % and the same (or a tied) fastest structure per data set",
         if ok { "PASS" } else { "FAIL" },
         100.0 * tolerance
     );
