@@ -119,10 +119,12 @@ def flatten_png(path):
     """lacuna's PNG has straight alpha; VTK's is RGB over black. Rewrites
     lacuna's over black, as VTK's, and returns its coverage: the fraction of
     pixels with alpha above 1/255 (vtk.py's test on the same view)."""
-    import vtk
-    from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    # vtkmodules, not `vtk`: this folder's vtk.py would shadow it.
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkPNGReader, vtkPNGWriter
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 
-    r = vtk.vtkPNGReader()
+    r = vtkPNGReader()
     r.SetFileName(path)
     r.Update()
     img = r.GetOutput()
@@ -131,10 +133,10 @@ def flatten_png(path):
         raise Failure(f"{path}: expected RGBA from lacuna render, got {n} channels")
     a = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(-1, 4).astype("float64")
     rgb = (a[:, :3] * a[:, 3:4] / 255.0 + 0.5).clip(0, 255).astype("uint8")
-    out = vtk.vtkImageData()
+    out = vtkImageData()
     out.SetDimensions(img.GetDimensions())
     out.GetPointData().SetScalars(numpy_to_vtk(rgb, deep=True))
-    w = vtk.vtkPNGWriter()
+    w = vtkPNGWriter()
     w.SetFileName(path)
     w.SetInputData(out)
     w.Write()
@@ -164,9 +166,9 @@ def main(argv):
     args = parse_args(argv)
     try:
         import numpy  # noqa: F401
-        import vtk  # noqa: F401
+        import vtkmodules.vtkIOImage  # noqa: F401
     except ImportError as e:
-        print(f"error: {e.name} is missing; install with: pip install vtk numpy; apt install libosmesa6",
+        print(f"error: {e.name.split('.')[0]} is missing; install with: pip install vtk numpy; apt install libosmesa6",
               file=sys.stderr)
         return 2
     if not os.access(args.lacuna, os.X_OK):
