@@ -191,13 +191,15 @@ fn grouped_bars<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, bars: &Bars) -
                         top_of_bar = top_of_bar.max(hi);
                     }
                     if let (Some(tag), true) = (tag, top_of_bar.is_finite() && top_of_bar > 0.0) {
-                        let style =
-                            TextStyle::from((FONT, 10).into_font()).pos(plotters::style::text_anchor::Pos::new(
-                                plotters::style::text_anchor::HPos::Center,
-                                plotters::style::text_anchor::VPos::Bottom,
+                        // Vertical, so neighbouring bars' tags do not overlap.
+                        let style = TextStyle::from((FONT, 10).into_font())
+                            .transform(FontTransform::Rotate270)
+                            .pos(plotters::style::text_anchor::Pos::new(
+                                plotters::style::text_anchor::HPos::Left,
+                                plotters::style::text_anchor::VPos::Center,
                             ));
-                        chart
-                            .draw_series(std::iter::once(Text::new(tag(r), (x, top_of_bar), style)))
+                        let (px, py) = chart.backend_coord(&(x, top_of_bar));
+                        root.draw(&Text::new(tag(r), (px, py - 3), style))
                             .map_err(|e| err(path, e))?;
                     }
                 }
