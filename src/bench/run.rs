@@ -278,8 +278,10 @@ struct Run {
     warmup: Warmup,
     /// Frame times by view, then round.
     times: Vec<Vec<f64>>,
-    first: Option<Frame>,
+    /// Frame 0 against naive's frame 0.
     error: Option<ImageError>,
+    /// Frame 0, kept when asked for.
+    first: Option<Frame>,
 }
 
 pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<BenchOutput> {
@@ -397,8 +399,8 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     capped: warmed.capped,
                 },
                 times: vec![Vec::new(); config.frames as usize],
-                first: None,
                 error: None,
+                first: None,
             });
         }
         progress.at(&format!("{} - timed builds", loaded.spec));
@@ -425,34 +427,31 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             run.warmup.capped |= warmed.capped;
         }
         progress.at(&format!("{} - timed frames", loaded.spec));
+        // Naive comes first in every round, so its frame 0 is read back
+        // before any other structure's and is the reference for them all.
+        let mut naive0: Option<Frame> = None;
         for slot in schedule(config.frames, config.rounds, structures.len()) {
             let first = slot.view == 0 && slot.round == 0;
             let run = &mut runs[slot.structure];
             let (ms, frame) = frames.frame(&run.structure, &gv, &lut, &settings(slot.view), first)?;
             run.times[slot.view as usize].push(ms);
             if let Some(frame) = frame {
-                run.first = Some(frame);
+                let reference = naive0.get_or_insert_with(|| frame.clone());
+                run.error = Some(ImageError::from(diff(reference, &frame)?));
+                run.first = options.keep_frames.then_some(frame);
             }
             progress.step(1);
         }
-        // Naive is first in the order, so its frame 0 is the reference.
-        let naive0 = runs[0].first.take().ok_or_else(|| missing("naive frame 0"))?;
-        for run in &mut runs {
-            if let Some(f) = &run.first {
-                run.error = Some(ImageError::from(diff(&naive0, f)?));
-            }
-        }
-        runs[0].error = Some(ImageError::from(diff(&naive0, &naive0)?));
-        runs[0].first = Some(naive0);
 
-        let naive_times = runs[0].times.clone();
-        for (s, run) in structures.iter().zip(runs) {
+        let naive = runs.first().ok_or_else(|| missing("naive frames"))?;
+        for (s, run) in structures.iter().zip(&runs) {
             let r = &ranges[&s.options.cell].0;
             let ranges_ms = r.ms(s.accel.method().ranges())?;
             let totals: Vec<f64> = run.builds.iter().map(Timings::total).collect();
             let build = FrameTimes::of(totals.clone());
             let phases = Timings::median(&run.builds);
-            let ratios: Vec<f64> = naive_times
+            let ratios: Vec<f64> = naive
+                .times
                 .iter()
                 .flatten()
                 .zip(run.times.iter().flatten())
@@ -479,7 +478,6 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 ));
             }
             let stats = run.structure.stats()?.unwrap_or_default();
-            let first = run.first.ok_or_else(|| missing("frame 0"))?;
             out.records.push(Record {
                 setup: setup.clone(),
                 dataset: loaded.spec.clone(),
@@ -506,10 +504,10 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 build_spread,
                 unstable,
                 warmed_up: run.warmup,
-                error_vs_naive: run.error.ok_or_else(|| missing("image error"))?,
+                error_vs_naive: run.error.clone().ok_or_else(|| missing("frame 0"))?,
             });
-            if options.keep_frames {
-                out.frames.push((format!("{}-{}", loaded.spec, s.label), first));
+            if let Some(first) = &run.first {
+                out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));
             }
         }
         // Speed against error, on the volume and ranges already uploaded.
