@@ -3,6 +3,20 @@
 use std::fmt;
 use std::time::Instant;
 
+/// The median of `v` (the mean of the middle two for an even count; NaN
+/// when empty).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Timings {
     /// (phase name, milliseconds), in the order the phases ran.
@@ -53,14 +67,7 @@ impl Timings {
         let mut out = Timings::default();
         let Some(first) = runs.first() else { return out };
         for (name, _) in &first.phases {
-            let mut v: Vec<f64> = runs.iter().filter_map(|r| r.get(name)).collect();
-            v.sort_by(f64::total_cmp);
-            let m = if v.len() % 2 == 1 {
-                v[v.len() / 2]
-            } else {
-                (v[v.len() / 2 - 1] + v[v.len() / 2]) / 2.0
-            };
-            out.push(name.clone(), m);
+            out.push(name.clone(), median(runs.iter().filter_map(|r| r.get(name)).collect()));
         }
         out
     }

@@ -1,6 +1,7 @@
 //! One record per benchmark run (a data set x structure), and one per point
 //! of the speed-against-error sweep: what `results.json` and `error.json` hold.
 
+use crate::timings::median;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -30,19 +31,6 @@ pub struct FrameTimes {
     pub max_ms: f64,
     /// Timed frames behind the figures.
     pub samples: u32,
-}
-
-/// The median of `v` (NaN when empty).
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
 }
 
 impl FrameTimes {

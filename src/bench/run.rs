@@ -9,14 +9,14 @@
 
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
-use super::record::{median, ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
+use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::{Context, Timer};
 use crate::render::{Camera, Projection, RenderSettings, RenderTarget, Renderer};
 use crate::tf::{GpuTransferFunction, TransferFunction};
-use crate::timings::Timings;
+use crate::timings::{median, Timings};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
 use crate::Volume;
 use std::collections::{BTreeMap, HashMap};
