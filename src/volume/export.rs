@@ -45,11 +45,7 @@ pub struct SourceValues<'a> {
 
 impl<'a> SourceValues<'a> {
     pub fn new(volume: &'a Volume) -> Self {
-        let (smin, smax) = match &volume.data {
-            VoxelData::U8(v) => super::minmax(v.iter().map(|&x| x as f64)),
-            VoxelData::U16(v) => super::minmax(v.iter().map(|&x| x as f64)),
-            VoxelData::F32(v) => super::minmax(v.iter().map(|&x| x as f64)),
-        };
+        let (smin, smax) = volume.data.stored_range();
         let [lo, hi] = volume.value_range;
         let scale = if smax > smin { (hi - lo) / (smax - smin) } else { 0.0 };
         // Float data hold the source values to f32 precision: half an ulp of

@@ -44,6 +44,15 @@ impl VoxelData {
         self.len() == 0
     }
 
+    /// Least and greatest stored value (not normalised; infinities when empty).
+    pub fn stored_range(&self) -> (f64, f64) {
+        match self {
+            VoxelData::U8(v) => minmax(v.iter().map(|&x| x as f64)),
+            VoxelData::U16(v) => minmax(v.iter().map(|&x| x as f64)),
+            VoxelData::F32(v) => minmax(v.iter().map(|&x| x as f64)),
+        }
+    }
+
     /// The texel value the GPU reads at index `i` (UNORM for integers).
     #[inline]
     pub fn texel(&self, i: usize) -> f32 {
@@ -121,11 +130,7 @@ impl Volume {
                 "every spacing must be finite and > 0",
             ));
         }
-        let (lo, hi) = match &data {
-            VoxelData::U8(v) => minmax(v.iter().map(|&x| x as f64)),
-            VoxelData::U16(v) => minmax(v.iter().map(|&x| x as f64)),
-            VoxelData::F32(v) => minmax(v.iter().map(|&x| x as f64)),
-        };
+        let (lo, hi) = data.stored_range();
         let full = match &data {
             VoxelData::U8(_) => 255.0,
             VoxelData::U16(_) => 65535.0,
