@@ -35,11 +35,6 @@ impl Access {
             vk::AccessFlags2::SHADER_READ.as_raw() | vk::AccessFlags2::SHADER_WRITE.as_raw(),
         ),
     };
-    /// Uniform reads in compute (a parameter block written by `vkCmdUpdateBuffer`).
-    pub const COMPUTE_UNIFORM_READ: Access = Access {
-        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
-        access: vk::AccessFlags2::UNIFORM_READ,
-    };
     /// Any transfer write. The source stage is ALL_TRANSFER rather than CLEAR or
     /// COPY: Debian's validation layer 1.3.239 reports a false hazard after
     /// `vkCmdFillBuffer` when the source stage is CLEAR.
