@@ -66,24 +66,27 @@ void composite(inout March m, vec4 c, float w) {
     }
 }
 
+// Takes lattice sample k (t_k < t_exit, not done) and moves to k + 1; ends
+// the march at the box exit or on early termination. Each sample stands for
+// [t_k, t_k + dt) clipped to the box, so the last one of the ray is weighted
+// by its remaining length.
+void march_sample(inout March m) {
+    float t = lattice_t(m, m.k);
+    precise float w = min(m.dt, m.t_exit - t);
+    precise vec3 p = m.ray.org + t * m.ray.dir;
+    vec4 c = tf_lookup(sample_volume(p));
+    composite(m, c, w);
+    m.k += 1;
+    if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {
+        m.done = true;
+    }
+}
+
 // Marches every lattice sample with t_k < t_end (and < t_exit), front to back.
-// Each sample stands for [t_k, t_k + dt) clipped to the box, so the last one
-// of the ray is weighted by its remaining length.
 void march_span(inout March m, float t_end) {
     float stop = min(t_end, m.t_exit);
-    while (!m.done) {
-        float t = lattice_t(m, m.k);
-        if (!(t < stop)) {
-            break;
-        }
-        precise float w = min(m.dt, m.t_exit - t);
-        precise vec3 p = m.ray.org + t * m.ray.dir;
-        vec4 c = tf_lookup(sample_volume(p));
-        composite(m, c, w);
-        m.k += 1;
-        if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {
-            m.done = true;
-        }
+    while (!m.done && lattice_t(m, m.k) < stop) {
+        march_sample(m);
     }
 }
 

@@ -6,6 +6,7 @@
 
 pub mod bricks;
 pub mod classify;
+pub mod distance;
 pub mod grid;
 pub mod hybrid;
 pub mod kd;

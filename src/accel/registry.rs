@@ -6,7 +6,7 @@ use super::bricks::{self, GpuBricks};
 use super::classify::Classify;
 use super::stats::Stats;
 use super::tree::GpuTree;
-use super::{grid, hybrid, kd, lbvh, naive, octree};
+use super::{distance, grid, hybrid, kd, lbvh, naive, octree};
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Binding, Context, Shader, Timer};
 use crate::prims::BrickMinMax;
@@ -23,6 +23,8 @@ pub const TABLE: &[Accel] = &[
     Accel(&naive::Naive),
     Accel(&lbvh::LbvhMethod),
     Accel(&grid::GridMethod),
+    Accel(&distance::DistanceMethod { octants: false }),
+    Accel(&distance::DistanceMethod { octants: true }),
     Accel(&kd::cpu::KdCpu),
     Accel(&kd::gpu::KdGpu),
     Accel(&hybrid::HybridMethod),
@@ -127,6 +129,11 @@ pub trait Method: Sync {
     fn description(&self) -> &'static str;
     /// The per-volume ranges its build reads.
     fn ranges(&self) -> RangeKind;
+    /// Its macro-cell edge when `--cell` is not given (structures that read
+    /// cell ranges).
+    fn default_cell(&self) -> u32 {
+        grid::CELL
+    }
     /// The parameters it reads from `options`, as (name, value) for
     /// printouts, EXR metadata and bench records.
     fn params(&self, options: &BuildOptions) -> Vec<(&'static str, String)>;

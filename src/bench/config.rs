@@ -128,7 +128,7 @@ impl StructureConfig {
             self.max_leaf.unwrap_or(d.max_leaf),
             self.bins.unwrap_or(d.bins),
         )?;
-        let cell = self.cell.unwrap_or(crate::accel::grid::CELL);
+        let cell = self.cell.unwrap_or(accel.method().default_cell());
         crate::accel::grid::check_cell(cell)?;
         Ok(StructureSpec {
             label: self.label.clone(),

@@ -293,9 +293,14 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
             .map(|view| render(&Structure::naive(), view))
             .collect::<Result<_>>()?;
         let baseline = ctx.take_validation_messages().len();
-        let (ranges, _) = builder.ranges(&gv, BuildOptions::default().cell)?;
+        // Ranges per cell edge the variants use, computed once each.
+        let mut ranges = std::collections::HashMap::new();
         for (label, accel, options) in structures() {
-            let (s, _) = builder.build(accel, &scene, &ranges, &options)?;
+            let cell_ranges = match ranges.entry(options.cell) {
+                std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+                std::collections::hash_map::Entry::Vacant(e) => e.insert(builder.ranges(&gv, options.cell)?.0),
+            };
+            let (s, _) = builder.build(accel, &scene, cell_ranges, &options)?;
             let (mut identical, mut finite, mut detail) = (true, true, String::new());
             for (i, view) in case.views.iter().enumerate() {
                 let f = render(&s, view)?;

@@ -19,7 +19,7 @@ pub struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<TransferFunction>,
-    /// Empty space skipping structure: naive, lbvh, grid, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
+    /// Empty space skipping structure: naive, lbvh, grid, distance, distance-octant, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
     #[arg(long, default_value = "naive")]
     accel: Accel,
     /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
@@ -37,9 +37,9 @@ pub struct RenderArgs {
     /// GPU k-d tree: candidate bins per node.
     #[arg(long, default_value_t = 4)]
     bins: u32,
-    /// Macro-cell edge of the grid and the hybrid (a power of two).
-    #[arg(long, default_value_t = 16)]
-    cell: u32,
+    /// Macro-cell edge in voxels, a power of two (default: the structure's; grid and hybrid 16, distance maps 8).
+    #[arg(long)]
+    cell: Option<u32>,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
     size: (u32, u32),
@@ -78,7 +78,7 @@ impl RenderArgs {
         let options = BuildOptions {
             classify: Classify::parse(&self.classify, &self.apron)?,
             kd: KdParams::parse(&self.kd, self.max_leaf, self.bins)?,
-            cell: self.cell,
+            cell: self.cell.unwrap_or(self.accel.method().default_cell()),
         };
         options.validate()?;
         let projection = match self.perspective {

@@ -1,0 +1,66 @@
+#version 460
+// What `--accel auto` reads from a distance map, reduced on the GPU: active
+// cells, faces between an active and an empty cell (fragmentation), and the
+// sum of empty cells' distances to an active cell (octant maps: of all
+// eight, the host divides)
+// as a 64-bit count in two words.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+layout(constant_id = 0) const uint OCTANTS = 0u;
+#include "dispatch.glsl"
+#include "distance_map.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Flags { uint flags[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Distances { uint distances[]; };
+// active, faces, distance sum low word, high word.
+layout(std430, set = 0, binding = 2) buffer Summary { uint summary[4]; };
+layout(push_constant) uniform Push { uvec4 counts; uint groups_x; uint pad0; uint pad1; uint pad2; } pc;
+
+shared uvec3 partial[64];
+
+bool active_at(ivec3 c) {
+    return flags[uint(c.x) + pc.counts.x * (uint(c.y) + pc.counts.y * uint(c.z))] != 0u;
+}
+
+void main() {
+    uint i = linear_index(pc.groups_x);
+    uvec3 mine = uvec3(0u);
+    if (i < pc.counts.w) {
+        ivec3 n = ivec3(pc.counts.xyz);
+        ivec3 c = ivec3(i % pc.counts.x, (i / pc.counts.x) % pc.counts.y, i / (pc.counts.x * pc.counts.y));
+        if (flags[i] != 0u) {
+            mine.x = 1u;
+            for (int a = 0; a < 3; ++a) {
+                for (int s = -1; s <= 1; s += 2) {
+                    ivec3 q = c;
+                    q[a] += s;
+                    if (q[a] >= 0 && q[a] < n[a] && !active_at(q)) {
+                        mine.y += 1u;
+                    }
+                }
+            }
+        } else {
+            for (uint ch = 0u; ch < DISTANCE_CHANNELS / 2u; ++ch) {
+                mine.z += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+            }
+        }
+    }
+    uint l = gl_LocalInvocationID.x;
+    partial[l] = mine;
+    barrier();
+    for (uint s = 32u; s > 0u; s >>= 1u) {
+        if (l < s) {
+            partial[l] += partial[l + s];
+        }
+        barrier();
+    }
+    if (l == 0u) {
+        atomicAdd(summary[0], partial[0].x);
+        atomicAdd(summary[1], partial[0].y);
+        uint old = atomicAdd(summary[2], partial[0].z);
+        if (old + partial[0].z < old) {
+            atomicAdd(summary[3], 1u);
+        }
+    }
+}

@@ -1,0 +1,435 @@
+//! Chebyshev distance-map skipping (Deakin & Knackstedt, Computational
+//! Visual Media 2020). Per cell of the macro-cell grid, the L-infinity
+//! distance in cells to the nearest active cell, rebuilt on the GPU on every
+//! transfer-function change: the range classification (O(cells)) and a
+//! separable distance transform (three 1-D passes, `distance_pass.comp`),
+//! with no host round trip. `glsl/march/distance.comp` then takes one O(1)
+//! step per empty region.
+//!
+//! Every cell stores its distance to the nearest cell of the other kind, so
+//! a ray crosses a cube of empty cells (skipped) or of active cells (marched
+//! as one span) in one step. Two maps: `distance` stores one distance of
+//! each kind per cell (the cube of half-width d-1 around the cell, 4 bytes a
+//! cell); `distance-octant` stores one per ray direction octant (the cells
+//! up to d-1 ahead of the ray, so jumps are longer, for 16 bytes a cell).
+
+use super::bricks::GpuBricks;
+use super::classify::{Classifier, Classify};
+use super::grid::GridPush;
+use super::registry::{BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges};
+use super::stats::Stats;
+use super::tree::STORAGE_XFER;
+use crate::error::{Error, Result};
+use crate::gpu::record::{self, Access};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::prims::entry_barrier;
+use crate::tf::GpuTransferFunction;
+use crate::volume::GpuVolume;
+
+/// Default cell edge in voxels: the 8^3 brick grid.
+pub const CELL: u32 = 8;
+
+/// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
+pub const CAP: u32 = 255;
+
+/// Push block of `distance_pass.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PassPush {
+    /// xyz: cells per axis; w: total.
+    counts: [u32; 4],
+    axis: u32,
+    /// 1: the source holds the active flags.
+    first: u32,
+    groups_x: u32,
+    pad: u32,
+}
+check_push!(PassPush, shaders::BUILD_DISTANCE_PASS);
+
+/// Push block of `distance_summary.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SummaryPush {
+    counts: [u32; 4],
+    groups_x: u32,
+    pad: [u32; 3],
+}
+check_push!(SummaryPush, shaders::BUILD_DISTANCE_SUMMARY);
+check_push!(GridPush, shaders::MARCH_DISTANCE);
+
+/// The distance-transform and summary kernels, one of each per map kind
+/// (specialization constant 0: octant maps).
+pub struct DistanceKernels {
+    pass: [Kernel; 2],
+    summary: [Kernel; 2],
+}
+
+impl KernelSet for DistanceKernels {
+    fn new(ctx: &Context) -> Result<Self> {
+        let pass = |o| Kernel::with_constants::<PassPush>(ctx, &shaders::BUILD_DISTANCE_PASS, &[o]);
+        let summary = |o| Kernel::with_constants::<SummaryPush>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
+        Ok(DistanceKernels {
+            pass: [pass(0)?, pass(1)?],
+            summary: [summary(0)?, summary(1)?],
+        })
+    }
+}
+
+/// A built distance map.
+pub struct DistanceMap {
+    pub cell: u32,
+    pub counts: [u32; 3],
+    pub octants: bool,
+    /// u32 per cell, 1 = active (the classification).
+    pub flags: Buffer,
+    /// Per cell: [`channels`] byte distances packed in words.
+    pub distances: Buffer,
+    /// The transform's intermediate pass; kept until the build has run.
+    _scratch: Buffer,
+    total: u64,
+    active: std::sync::OnceLock<u64>,
+}
+
+/// What `--accel auto` reads from a map (see `distance_summary.comp`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Summary {
+    pub cells: u64,
+    pub active: u64,
+    /// Faces between an active and an empty cell.
+    pub faces: u64,
+    /// Mean distance of the empty cells, in cells (octant maps: over the octants).
+    pub mean_distance: f64,
+}
+
+impl Summary {
+    /// Active cells over all cells.
+    pub fn active_fraction(&self) -> f64 {
+        self.active as f64 / self.cells.max(1) as f64
+    }
+}
+
+/// Byte distances per cell: to the nearest active cell, then to the nearest
+/// empty cell, one each (cube maps) or one per octant each (`distance_map.glsl`).
+pub fn channels(octants: bool) -> usize {
+    if octants {
+        16
+    } else {
+        2
+    }
+}
+
+fn words_per_cell(octants: bool) -> u64 {
+    channels(octants).div_ceil(4) as u64
+}
+
+/// Records the classification of `cells` for a TF ("classify") and the
+/// three transform passes ("distance x", "distance y", "distance z") into
+/// `cmd`. Follows the `prims` barrier convention; ends with compute writes.
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    ctx: &Context,
+    kernels: &DistanceKernels,
+    classifier: &Classifier,
+    cmd: vk::CommandBuffer,
+    timer: &mut Timer,
+    volume: &GpuVolume,
+    cells: &GpuBricks,
+    tf: &GpuTransferFunction,
+    octants: bool,
+) -> Result<DistanceMap> {
+    let info = ctx.info();
+    let bytes = cells.total * 4 * words_per_cell(octants);
+    info.check(
+        format!("distance map of {} cells ({bytes} bytes)", cells.total),
+        "maxStorageBufferRange",
+        bytes,
+        info.max_storage_buffer_range,
+    )?;
+    let kernel = &kernels.pass[octants as usize];
+    let groups = record::groups_linear(info, "distance map", cells.total, kernel.local_size()[0])?;
+    let flags = Buffer::new(
+        ctx,
+        "distance cell flags",
+        cells.total * 4,
+        STORAGE_XFER,
+        MemoryLocation::GpuOnly,
+    )?;
+    let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
+    let scratch = Buffer::new(ctx, "distance scratch", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
+
+    let pass = timer.begin(cmd, "classify")?;
+    classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
+    timer.end(cmd, pass);
+    // x: flags -> distances, y: distances -> scratch, z: scratch -> distances.
+    let c = cells.counts;
+    for (axis, (src, dst)) in [(&flags, &distances), (&distances, &scratch), (&scratch, &distances)]
+        .into_iter()
+        .enumerate()
+    {
+        let pass = timer.begin(cmd, ["distance x", "distance y", "distance z"][axis])?;
+        if axis == 0 {
+            entry_barrier(ctx.device(), cmd);
+        } else {
+            record::compute_to_compute(ctx.device(), cmd);
+        }
+        let push = PassPush {
+            counts: [c[0], c[1], c[2], cells.total as u32],
+            axis: axis as u32,
+            first: (axis == 0) as u32,
+            groups_x: groups[0],
+            pad: 0,
+        };
+        kernel.dispatch(
+            cmd,
+            &[Binding::Storage(src), Binding::Storage(dst)],
+            bytemuck::bytes_of(&push),
+            groups,
+        )?;
+        timer.end(cmd, pass);
+    }
+    Ok(DistanceMap {
+        cell: cells.brick,
+        counts: cells.counts,
+        octants,
+        flags,
+        distances,
+        _scratch: scratch,
+        total: cells.total,
+        active: std::sync::OnceLock::new(),
+    })
+}
+
+impl DistanceMap {
+    /// Records the reduction `--accel auto` reads into `out` (16 bytes,
+    /// host visible; see [`DistanceMap::read_summary`]), after a `record`
+    /// in the same command buffer ("summary"). Ends with a barrier to host reads.
+    pub fn record_summary(
+        &self,
+        ctx: &Context,
+        kernels: &DistanceKernels,
+        cmd: vk::CommandBuffer,
+        timer: &mut Timer,
+        out: &Buffer,
+    ) -> Result<()> {
+        let kernel = &kernels.summary[self.octants as usize];
+        let groups = record::groups_linear(ctx.info(), "distance summary", self.total, kernel.local_size()[0])?;
+        let device = ctx.device();
+        let pass = timer.begin(cmd, "summary")?;
+        unsafe { device.cmd_fill_buffer(cmd, out.raw, 0, vk::WHOLE_SIZE, 0) };
+        record::barrier(
+            device,
+            cmd,
+            Access {
+                stage: Access::COMPUTE_WRITE.stage | Access::TRANSFER_WRITE.stage,
+                access: Access::COMPUTE_WRITE.access | Access::TRANSFER_WRITE.access,
+            },
+            Access::COMPUTE_READ_WRITE,
+        );
+        let c = self.counts;
+        let push = SummaryPush {
+            counts: [c[0], c[1], c[2], self.total as u32],
+            groups_x: groups[0],
+            pad: [0; 3],
+        };
+        kernel.dispatch(
+            cmd,
+            &[
+                Binding::Storage(&self.flags),
+                Binding::Storage(&self.distances),
+                Binding::Storage(out),
+            ],
+            bytemuck::bytes_of(&push),
+            groups,
+        )?;
+        timer.end(cmd, pass);
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        Ok(())
+    }
+
+    /// A host-visible buffer for [`DistanceMap::record_summary`].
+    pub fn summary_buffer(ctx: &Context) -> Result<Buffer> {
+        Buffer::new(
+            ctx,
+            "distance summary",
+            16,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )
+    }
+
+    /// Reads the summary recorded into `out`, after the submission completed.
+    pub fn read_summary(&self, out: &Buffer) -> Result<Summary> {
+        let bytes = out.mapped().ok_or_else(|| {
+            Error::invalid(
+                "summary buffer",
+                out.name(),
+                "must be host visible (DistanceMap::summary_buffer)",
+            )
+        })?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..16]);
+        let empty = self.total - words[0] as u64;
+        let sum = words[2] as u64 | (words[3] as u64) << 32;
+        let per = if self.octants { 8.0 } else { 1.0 };
+        Ok(Summary {
+            cells: self.total,
+            active: words[0] as u64,
+            faces: words[1] as u64,
+            mean_distance: if empty == 0 {
+                0.0
+            } else {
+                sum as f64 / (per * empty as f64)
+            },
+        })
+    }
+
+    /// The distances on the host: [`channels`] per cell, in channel order.
+    pub fn download(&self) -> Result<Vec<u32>> {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.distances.download(0, self.distances.size())?);
+        let per = words_per_cell(self.octants) as usize;
+        let n = channels(self.octants);
+        Ok(words
+            .chunks(per)
+            .take(self.total as usize)
+            .flat_map(|cell| (0..n).map(move |ch| (cell[ch / 4] >> (8 * (ch % 4))) & 0xff))
+            .collect())
+    }
+
+    pub fn stats(&self) -> Result<Stats> {
+        let active = match self.active.get() {
+            Some(a) => *a,
+            None => {
+                let host: Vec<u32> = bytemuck::pod_collect_to_vec(&self.flags.download(0, self.total * 4)?);
+                let a = host.iter().filter(|&&f| f != 0).count() as u64;
+                *self.active.get_or_init(|| a)
+            }
+        };
+        Ok(Stats {
+            unit: if self.cell == 8 { "8^3 cells" } else { "cells" },
+            total_bricks: self.total,
+            active_bricks: active,
+            nodes: self.total,
+            leaves: active,
+            height: 1,
+            bytes: self.total * 4 * words_per_cell(self.octants),
+        })
+    }
+}
+
+/// The distance map on the host, for tests: per cell, [`channels`] distances
+/// in channel order, each the Chebyshev distance in cells to the nearest
+/// cell of the kind sought (`octants`: only cells ahead of that octant),
+/// capped at [`CAP`]. Brute force: O(cells^2).
+pub fn reference(counts: [u32; 3], active: &[bool], octants: bool) -> Vec<u32> {
+    let [nx, ny, nz] = counts.map(|n| n as i64);
+    let cells: Vec<[i64; 3]> = (0..nz)
+        .flat_map(|z| (0..ny).flat_map(move |y| (0..nx).map(move |x| [x, y, z])))
+        .collect();
+    let half = channels(octants) / 2;
+    let mut out = Vec::with_capacity(cells.len() * 2 * half);
+    for c in &cells {
+        for ch in 0..2 * half {
+            let (seek_active, octant) = (ch < half, ch % half);
+            let mut best = CAP as i64;
+            for (o, other) in cells.iter().enumerate() {
+                let off = [0, 1, 2].map(|k| other[k] - c[k]);
+                let ahead = !octants || (0..3).all(|k| if octant >> k & 1 == 1 { off[k] <= 0 } else { off[k] >= 0 });
+                if active[o] == seek_active && ahead {
+                    best = best.min(off.iter().map(|v| v.abs()).max().unwrap_or(0));
+                }
+            }
+            out.push(best as u32);
+        }
+    }
+    out
+}
+
+/// `--accel distance` (one distance per cell) and `--accel distance-octant`
+/// (one per ray direction octant).
+pub struct DistanceMethod {
+    pub octants: bool,
+}
+
+impl Method for DistanceMethod {
+    fn name(&self) -> &'static str {
+        if self.octants {
+            "distance-octant"
+        } else {
+            "distance"
+        }
+    }
+    fn description(&self) -> &'static str {
+        if self.octants {
+            "Chebyshev distance map per direction octant (Deakin & Knackstedt), one O(1) jump per empty region"
+        } else {
+            "Chebyshev distance map (Deakin & Knackstedt), one O(1) jump per empty region"
+        }
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::Cells
+    }
+    fn default_cell(&self) -> u32 {
+        CELL
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![("cell", o.cell.to_string())]
+    }
+    fn march(&self) -> March {
+        March {
+            shader: shaders::MARCH_DISTANCE,
+            constants: if self.octants { &[1] } else { &[0] },
+            push_size: std::mem::size_of::<GridPush>(),
+        }
+    }
+    fn variants(&self) -> Vec<(String, BuildOptions)> {
+        [CELL, 4, 16]
+            .into_iter()
+            .map(|cell| {
+                (
+                    format!("{} cell {cell}", self.name()),
+                    BuildOptions {
+                        cell,
+                        ..BuildOptions::default()
+                    },
+                )
+            })
+            .collect()
+    }
+    fn record_build(
+        &self,
+        builder: &Builder,
+        cmd: vk::CommandBuffer,
+        timer: &mut Timer,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<Box<dyn Built>> {
+        let map = record(
+            builder.context(),
+            &*builder.kernels::<DistanceKernels>()?,
+            &*builder.kernels::<Classifier>()?,
+            cmd,
+            timer,
+            input.gpu_volume,
+            ranges.cells(options.cell)?,
+            input.gpu_tf,
+            self.octants,
+        )?;
+        Ok(Box::new(map))
+    }
+}
+
+impl Built for DistanceMap {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        vec![Binding::Storage(&self.distances)]
+    }
+    fn push(&self) -> Vec<u8> {
+        bytemuck::bytes_of(&GridPush {
+            counts: self.counts,
+            cell: self.cell,
+        })
+        .to_vec()
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        DistanceMap::stats(self).map(Some)
+    }
+}

@@ -1,0 +1,211 @@
+//! The GPU distance maps (cube and octant) against a brute-force CPU
+//! transform, the summary `--accel auto` reads against a CPU count, and the
+//! extremes: no active cell, every cell active, one active cell.
+
+mod common;
+use common::{assert_clean, gpu};
+use lacuna::accel::distance::{self, DistanceKernels, DistanceMap, Summary};
+use lacuna::accel::{Builder, Classifier};
+use lacuna::gpu::{Context, Timer};
+use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+fn rng(seed: u64) -> impl FnMut() -> u32 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 33) as u32
+    }
+}
+
+/// A volume with a bright voxel at random positions (`per_mille` of voxels).
+fn speckles(dims: [u32; 3], per_mille: u32, seed: u64) -> Volume {
+    let mut r = rng(seed);
+    let data: Vec<u8> = (0..dims.iter().product::<u32>())
+        .map(|_| if r() % 1000 < per_mille { 255 } else { 0 })
+        .collect();
+    Volume::new("speckles", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap()
+}
+
+struct Built {
+    map: DistanceMap,
+    flags: Vec<bool>,
+    distances: Vec<u32>,
+    summary: Summary,
+    phases: Vec<String>,
+}
+
+fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool) -> Built {
+    let builder = Builder::new(ctx).unwrap();
+    let gv = GpuVolume::upload(ctx, v).unwrap();
+    let lut = tf.upload(ctx).unwrap();
+    let (ranges, _) = builder.ranges(&gv, cell).unwrap();
+    let kernels = builder.kernels::<DistanceKernels>().unwrap();
+    let classifier = builder.kernels::<Classifier>().unwrap();
+    let out = DistanceMap::summary_buffer(ctx).unwrap();
+    let mut timer = Timer::new(ctx, 8).unwrap();
+    let map = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            let map = distance::record(
+                ctx,
+                &kernels,
+                &classifier,
+                cmd,
+                &mut timer,
+                &gv,
+                ranges.cells(cell)?,
+                &lut,
+                octants,
+            )?;
+            map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+            Ok(map)
+        })
+        .unwrap();
+    let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.download(0, map.flags.size()).unwrap());
+    let total = map.counts.iter().product::<u32>() as usize;
+    let flags: Vec<bool> = flags[..total].iter().map(|&f| f != 0).collect();
+    let distances = map.download().unwrap();
+    let summary = map.read_summary(&out).unwrap();
+    let timings = timer.results().unwrap();
+    let phases = ["classify", "distance x", "distance y", "distance z", "summary"]
+        .into_iter()
+        .filter(|p| timings.get(p).is_some())
+        .map(String::from)
+        .collect();
+    assert_clean(ctx);
+    Built {
+        map,
+        flags,
+        distances,
+        summary,
+        phases,
+    }
+}
+
+/// The summary computed on the host from flags and the reference map.
+fn cpu_summary(counts: [u32; 3], flags: &[bool], reference: &[u32], octants: bool) -> Summary {
+    let [nx, ny, nz] = counts.map(|n| n as i64);
+    let at = |x: i64, y: i64, z: i64| flags[(x + nx * (y + ny * z)) as usize];
+    let (mut active, mut faces, mut sum, mut empty) = (0u64, 0u64, 0u64, 0u64);
+    let half = distance::channels(octants) / 2;
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let i = (x + nx * (y + ny * z)) as usize;
+                if at(x, y, z) {
+                    active += 1;
+                    for (dx, dy, dz) in [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)] {
+                        let (a, b, c) = (x + dx, y + dy, z + dz);
+                        if (0..nx).contains(&a) && (0..ny).contains(&b) && (0..nz).contains(&c) && !at(a, b, c) {
+                            faces += 1;
+                        }
+                    }
+                } else {
+                    empty += 1;
+                    sum += reference[i * 2 * half..i * 2 * half + half]
+                        .iter()
+                        .map(|&d| d as u64)
+                        .sum::<u64>();
+                }
+            }
+        }
+    }
+    Summary {
+        cells: flags.len() as u64,
+        active,
+        faces,
+        mean_distance: if empty == 0 {
+            0.0
+        } else {
+            sum as f64 / (half as f64 * empty as f64)
+        },
+    }
+}
+
+fn check(what: &str, b: &Built, octants: bool) {
+    let reference = distance::reference(b.map.counts, &b.flags, octants);
+    assert_eq!(b.distances.len(), reference.len(), "{what}: map size");
+    if let Some(i) = (0..reference.len()).find(|&i| b.distances[i] != reference[i]) {
+        let per = distance::channels(octants);
+        panic!(
+            "{what}: cell {} channel {}: GPU {} CPU {}",
+            i / per,
+            i % per,
+            b.distances[i],
+            reference[i]
+        );
+    }
+    assert_eq!(
+        b.summary,
+        cpu_summary(b.map.counts, &b.flags, &reference, octants),
+        "{what}: summary"
+    );
+    for phase in ["classify", "distance x", "distance y", "distance z", "summary"] {
+        assert!(b.phases.iter().any(|p| p == phase), "{what}: phase {phase} not timed");
+    }
+}
+
+#[test]
+fn maps_match_the_brute_force_transform() {
+    let ctx = gpu();
+    let tf = TransferFunction::parse("ramp:0.5:1").unwrap();
+    for (dims, per_mille, seed) in [([40, 36, 44], 1, 1), ([64, 24, 32], 4, 2), ([33, 47, 20], 20, 3)] {
+        let v = speckles(dims, per_mille, seed);
+        for cell in [2, 4, 8] {
+            for octants in [false, true] {
+                let b = build(&ctx, &v, &tf, cell, octants);
+                assert!(b.summary.active > 0, "{dims:?} cell {cell}: some cells active");
+                if cell < 8 {
+                    assert!(
+                        b.summary.active < b.summary.cells,
+                        "{dims:?} cell {cell}: some cells empty"
+                    );
+                }
+                check(&format!("{dims:?} cell {cell} octants {octants}"), &b, octants);
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_full_and_single_cell_maps() {
+    let ctx = gpu();
+    let dims = [32, 32, 32];
+    let zeros = Volume::new(
+        "zeros",
+        dims,
+        [1.0; 3],
+        VoxelType::U8,
+        VoxelData::U8(vec![0; 32 * 32 * 32]),
+    )
+    .unwrap();
+    let visible = TransferFunction::parse("ramp:0:1").unwrap();
+    let invisible = TransferFunction::parse("ramp:0.5:1").unwrap();
+    let mut one = vec![0u8; 32 * 32 * 32];
+    one[17 + 32 * (9 + 32 * 25)] = 255;
+    let one = Volume::new("one", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(one)).unwrap();
+    for octants in [false, true] {
+        // No active cell: every distance is the cap (a cap only shortens jumps).
+        let b = build(&ctx, &zeros, &invisible, 4, octants);
+        assert_eq!(b.summary.active, 0);
+        let half = distance::channels(octants) / 2;
+        assert!(b
+            .distances
+            .chunks(2 * half)
+            .all(|c| c[..half].iter().all(|&d| d == distance::CAP)));
+        check("empty", &b, octants);
+        // Every cell active: a TF visible at the volume's one value.
+        let b = build(
+            &ctx,
+            &zeros,
+            &TransferFunction::parse("band:0:0.1").unwrap(),
+            4,
+            octants,
+        );
+        assert_eq!(b.summary.active, b.summary.cells, "all active");
+        check("full", &b, octants);
+        let b = build(&ctx, &one, &visible, 8, octants);
+        check("one voxel", &b, octants);
+    }
+}
