@@ -46,6 +46,19 @@ struct PassPush {
 }
 check_push!(PassPush, shaders::BUILD_DISTANCE_PASS);
 
+/// Push block of `distance_rows.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RowsPush {
+    counts: [u32; 4],
+    axis: u32,
+    first: u32,
+    groups_x: u32,
+    /// Grid rows along the axis.
+    rows: u32,
+}
+check_push!(RowsPush, shaders::BUILD_DISTANCE_ROWS);
+
 /// Push block of `distance_summary.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -57,19 +70,21 @@ struct SummaryPush {
 check_push!(SummaryPush, shaders::BUILD_DISTANCE_SUMMARY);
 check_push!(GridPush, shaders::MARCH_DISTANCE);
 
-/// The distance-transform and summary kernels, one of each per map kind
-/// (specialization constant 0: octant maps).
+/// The distance-transform kernels (linear-time rows for cube maps, a
+/// per-cell search for octant maps) and the summary kernels of both map
+/// kinds (specialization constant 0: octant maps).
 pub struct DistanceKernels {
-    pass: [Kernel; 2],
+    rows: Kernel,
+    octant_pass: Kernel,
     summary: [Kernel; 2],
 }
 
 impl KernelSet for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
-        let pass = |o| Kernel::with_constants::<PassPush>(ctx, &shaders::BUILD_DISTANCE_PASS, &[o]);
         let summary = |o| Kernel::with_constants::<SummaryPush>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
         Ok(DistanceKernels {
-            pass: [pass(0)?, pass(1)?],
+            rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_ROWS)?,
+            octant_pass: Kernel::with_constants::<PassPush>(ctx, &shaders::BUILD_DISTANCE_PASS, &[1])?,
             summary: [summary(0)?, summary(1)?],
         })
     }
@@ -84,8 +99,8 @@ pub struct DistanceMap {
     pub flags: Buffer,
     /// Per cell: [`channels`] byte distances packed in words.
     pub distances: Buffer,
-    /// The transform's intermediate pass; kept until the build has run.
-    _scratch: Buffer,
+    /// The transform's intermediate pass and row stacks; kept until the build has run.
+    _scratch: [Buffer; 2],
     total: u64,
     active: std::sync::OnceLock<u64>,
 }
@@ -139,14 +154,18 @@ pub fn record(
 ) -> Result<DistanceMap> {
     let info = ctx.info();
     let bytes = cells.total * 4 * words_per_cell(octants);
+    // Cube maps: the rows' envelope stacks, three words per cell.
+    let stack_bytes = if octants { 4 } else { cells.total * 12 };
     info.check(
-        format!("distance map of {} cells ({bytes} bytes)", cells.total),
+        format!(
+            "distance map of {} cells ({} bytes)",
+            cells.total,
+            bytes.max(stack_bytes)
+        ),
         "maxStorageBufferRange",
-        bytes,
+        bytes.max(stack_bytes),
         info.max_storage_buffer_range,
     )?;
-    let kernel = &kernels.pass[octants as usize];
-    let groups = record::groups_linear(info, "distance map", cells.total, kernel.local_size()[0])?;
     let flags = Buffer::new(
         ctx,
         "distance cell flags",
@@ -156,12 +175,20 @@ pub fn record(
     )?;
     let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
     let scratch = Buffer::new(ctx, "distance scratch", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
+    let stack = Buffer::new(
+        ctx,
+        "distance row stacks",
+        stack_bytes,
+        STORAGE_XFER,
+        MemoryLocation::GpuOnly,
+    )?;
 
     let pass = timer.begin(cmd, "classify")?;
     classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
     timer.end(cmd, pass);
     // x: flags -> distances, y: distances -> scratch, z: scratch -> distances.
     let c = cells.counts;
+    let counts = [c[0], c[1], c[2], cells.total as u32];
     for (axis, (src, dst)) in [(&flags, &distances), (&distances, &scratch), (&scratch, &distances)]
         .into_iter()
         .enumerate()
@@ -172,19 +199,33 @@ pub fn record(
         } else {
             record::compute_to_compute(ctx.device(), cmd);
         }
-        let push = PassPush {
-            counts: [c[0], c[1], c[2], cells.total as u32],
-            axis: axis as u32,
-            first: (axis == 0) as u32,
-            groups_x: groups[0],
-            pad: 0,
-        };
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(src), Binding::Storage(dst)],
-            bytemuck::bytes_of(&push),
-            groups,
-        )?;
+        let first = (axis == 0) as u32;
+        if octants {
+            let k = &kernels.octant_pass;
+            let groups = record::groups_linear(info, "distance map", cells.total, k.local_size()[0])?;
+            let push = PassPush {
+                counts,
+                axis: axis as u32,
+                first,
+                groups_x: groups[0],
+                pad: 0,
+            };
+            let bindings = [Binding::Storage(src), Binding::Storage(dst)];
+            k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+        } else {
+            let k = &kernels.rows;
+            let rows = cells.total / c[axis] as u64;
+            let groups = record::groups_linear(info, "distance rows", rows, k.local_size()[0])?;
+            let push = RowsPush {
+                counts,
+                axis: axis as u32,
+                first,
+                groups_x: groups[0],
+                rows: rows as u32,
+            };
+            let bindings = [Binding::Storage(src), Binding::Storage(dst), Binding::Storage(&stack)];
+            k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+        }
         timer.end(cmd, pass);
     }
     Ok(DistanceMap {
@@ -193,7 +234,7 @@ pub fn record(
         octants,
         flags,
         distances,
-        _scratch: scratch,
+        _scratch: [scratch, stack],
         total: cells.total,
         active: std::sync::OnceLock::new(),
     })

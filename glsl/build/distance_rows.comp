@@ -1,0 +1,106 @@
+#version 460
+// One 1-D pass of the separable Chebyshev distance transform for cube maps,
+// in linear time: one invocation per grid row along `axis`, computing
+//   d(x) = min over i of max(|x - i|, g(i))
+// as the lower envelope of the functions max(|x - i|, g(i)) (Meijster,
+// Roerdink & Hesselink 2000, chessboard metric), for both channels (to the
+// nearest active cell, to the nearest empty cell). The first pass reads the
+// active flags: g = 0 for a cell of the kind sought, CAP otherwise; a capped
+// g only lowers results, so distances stay safe underestimates.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+#define OCTANTS 0u
+#include "dispatch.glsl"
+#include "distance_map.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Src { uint src[]; };
+layout(std430, set = 0, binding = 1) buffer Dst { uint dst[]; };
+// Per row, the envelope's entries below the top: apex, its g, its start
+// (3 words per cell).
+layout(std430, set = 0, binding = 2) buffer Stack { uint stack[]; };
+// xyz: cells per axis, w: total; axis: 0, 1, 2; first: src holds the flags.
+layout(push_constant) uniform Push { uvec4 counts; uint axis; uint first; uint groups_x; uint rows; } pc;
+
+uint cell_index(uint row, uint x) {
+    uvec3 c;
+    uint a1 = (pc.axis + 1u) % 3u;
+    uint a2 = (pc.axis + 2u) % 3u;
+    c[pc.axis] = x;
+    c[a1] = row % pc.counts[a1];
+    c[a2] = row / pc.counts[a1];
+    return c.x + pc.counts.x * (c.y + pc.counts.y * c.z);
+}
+
+int g(uint row, uint x, uint channel) {
+    uint i = cell_index(row, x);
+    if (pc.first != 0u) {
+        bool is_active = src[i] != 0u;
+        return is_active == (channel == 0u) ? 0 : int(DISTANCE_CAP);
+    }
+    return int(distance_byte(src[i], channel));
+}
+
+int f(int x, int i, int gi) {
+    return max(abs(x - i), gi);
+}
+
+// The first x from which apex u's function is below apex i's (i < u).
+int sep(int i, int u, int gi, int gu) {
+    int mid = (i + u) / 2;
+    return gi <= gu ? max(i + gu, mid) : min(u - gi, mid);
+}
+
+void main() {
+    uint row = linear_index(pc.groups_x);
+    if (row >= pc.rows) {
+        return;
+    }
+    int n = int(pc.counts[pc.axis]);
+    uint base = 3u * row * uint(n);
+    for (uint ch = 0u; ch < 2u; ++ch) {
+        // Envelope entry q: apex s, its g, and the start t of its interval.
+        int q = 0;
+        int s = 0;
+        int gs = g(row, 0u, ch);
+        int t = 0;
+        for (int u = 1; u < n; ++u) {
+            int gu = g(row, uint(u), ch);
+            while (q >= 0 && f(t, s, gs) > f(t, u, gu)) {
+                q -= 1;
+                if (q >= 0) {
+                    uint e = base + 3u * uint(q);
+                    s = int(stack[e]);
+                    gs = int(stack[e + 1u]);
+                    t = int(stack[e + 2u]);
+                }
+            }
+            int w = q < 0 ? 0 : 1 + sep(s, u, gs, gu);
+            if (q < 0 || w < n) {
+                if (q >= 0) {
+                    uint e = base + 3u * uint(q);
+                    stack[e] = uint(s);
+                    stack[e + 1u] = uint(gs);
+                    stack[e + 2u] = uint(t);
+                }
+                q += 1;
+                s = u;
+                gs = gu;
+                t = w;
+            }
+        }
+        // The top entry lives in (s, gs, t); the ones below it on the stack.
+        for (int x = n - 1; x >= 0; --x) {
+            uint d = uint(min(f(x, s, gs), int(DISTANCE_CAP)));
+            uint i = cell_index(row, uint(x));
+            dst[i] = ch == 0u ? d : (dst[i] | d << 8u);
+            if (x == t && q > 0) {
+                q -= 1;
+                uint e = base + 3u * uint(q);
+                s = int(stack[e]);
+                gs = int(stack[e + 1u]);
+                t = int(stack[e + 2u]);
+            }
+        }
+    }
+}
