@@ -87,14 +87,16 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
 fn cpu_summary(counts: [u32; 3], flags: &[bool], reference: &[u32], octants: bool) -> Summary {
     let [nx, ny, nz] = counts.map(|n| n as i64);
     let at = |x: i64, y: i64, z: i64| flags[(x + nx * (y + ny * z)) as usize];
-    let (mut active, mut faces, mut sum, mut empty) = (0u64, 0u64, 0u64, 0u64);
+    let (mut active, mut faces, mut empty_sum, mut active_sum) = (0u64, 0u64, 0u64, 0u64);
     let half = distance::channels(octants) / 2;
     for z in 0..nz {
         for y in 0..ny {
             for x in 0..nx {
                 let i = (x + nx * (y + ny * z)) as usize;
+                let cell = &reference[i * 2 * half..(i + 1) * 2 * half];
                 if at(x, y, z) {
                     active += 1;
+                    active_sum += cell[half..].iter().map(|&d| d as u64).sum::<u64>();
                     for (dx, dy, dz) in [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)] {
                         let (a, b, c) = (x + dx, y + dy, z + dz);
                         if (0..nx).contains(&a) && (0..ny).contains(&b) && (0..nz).contains(&c) && !at(a, b, c) {
@@ -102,24 +104,19 @@ fn cpu_summary(counts: [u32; 3], flags: &[bool], reference: &[u32], octants: boo
                         }
                     }
                 } else {
-                    empty += 1;
-                    sum += reference[i * 2 * half..i * 2 * half + half]
-                        .iter()
-                        .map(|&d| d as u64)
-                        .sum::<u64>();
+                    empty_sum += cell[..half].iter().map(|&d| d as u64).sum::<u64>();
                 }
             }
         }
     }
+    let cells = flags.len() as u64;
+    let mean = |sum: u64, n: u64| if n == 0 { 0.0 } else { sum as f64 / (half as f64 * n as f64) };
     Summary {
-        cells: flags.len() as u64,
+        cells,
         active,
         faces,
-        mean_distance: if empty == 0 {
-            0.0
-        } else {
-            sum as f64 / (half as f64 * empty as f64)
-        },
+        empty_distance: mean(empty_sum, cells - active),
+        active_distance: mean(active_sum, active),
     }
 }
 

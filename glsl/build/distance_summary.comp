@@ -1,8 +1,8 @@
 #version 460
 // What `--accel auto` reads from a distance map, reduced on the GPU: active
-// cells, faces between an active and an empty cell (fragmentation), and the
-// sum of empty cells' distances to an active cell (octant maps: of all
-// eight, the host divides)
+// cells, faces between an active and an empty cell (fragmentation), the sum
+// of empty cells' distances to an active cell and of active cells' distances
+// to an empty cell (octant maps: over all eight, the host divides), each sum
 // as a 64-bit count in two words.
 #extension GL_GOOGLE_include_directive : require
 
@@ -13,11 +13,11 @@ layout(constant_id = 0) const uint OCTANTS = 0u;
 
 layout(std430, set = 0, binding = 0) readonly buffer Flags { uint flags[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Distances { uint distances[]; };
-// active, faces, distance sum low word, high word.
-layout(std430, set = 0, binding = 2) buffer Summary { uint summary[4]; };
+// active, faces, empty cells' sum (low, high word), active cells' sum (low, high).
+layout(std430, set = 0, binding = 2) buffer Summary { uint summary[6]; };
 layout(push_constant) uniform Push { uvec4 counts; uint groups_x; uint pad0; uint pad1; uint pad2; } pc;
 
-shared uvec3 partial[64];
+shared uvec4 partial[64];
 
 bool active_at(ivec3 c) {
     return flags[uint(c.x) + pc.counts.x * (uint(c.y) + pc.counts.y * uint(c.z))] != 0u;
@@ -25,12 +25,15 @@ bool active_at(ivec3 c) {
 
 void main() {
     uint i = linear_index(pc.groups_x);
-    uvec3 mine = uvec3(0u);
+    uvec4 mine = uvec4(0u);
     if (i < pc.counts.w) {
         ivec3 n = ivec3(pc.counts.xyz);
         ivec3 c = ivec3(i % pc.counts.x, (i / pc.counts.x) % pc.counts.y, i / (pc.counts.x * pc.counts.y));
         if (flags[i] != 0u) {
             mine.x = 1u;
+            for (uint ch = DISTANCE_CHANNELS / 2u; ch < DISTANCE_CHANNELS; ++ch) {
+                mine.w += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+            }
             for (int a = 0; a < 3; ++a) {
                 for (int s = -1; s <= 1; s += 2) {
                     ivec3 q = c;
@@ -61,6 +64,10 @@ void main() {
         uint old = atomicAdd(summary[2], partial[0].z);
         if (old + partial[0].z < old) {
             atomicAdd(summary[3], 1u);
+        }
+        old = atomicAdd(summary[4], partial[0].w);
+        if (old + partial[0].w < old) {
+            atomicAdd(summary[5], 1u);
         }
     }
 }

@@ -32,6 +32,9 @@ pub const CELL: u32 = 8;
 /// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
 pub const CAP: u32 = 255;
 
+/// Bytes of the summary `distance_summary.comp` writes.
+const SUMMARY_BYTES: u64 = 24;
+
 /// Push block of `distance_pass.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -112,8 +115,11 @@ pub struct Summary {
     pub active: u64,
     /// Faces between an active and an empty cell.
     pub faces: u64,
-    /// Mean distance of the empty cells, in cells (octant maps: over the octants).
-    pub mean_distance: f64,
+    /// Mean distance of the empty cells to an active cell, in cells (octant
+    /// maps: over the octants); 0 without empty cells.
+    pub empty_distance: f64,
+    /// Mean distance of the active cells to an empty cell; 0 without active cells.
+    pub active_distance: f64,
 }
 
 impl Summary {
@@ -241,8 +247,8 @@ pub fn record(
 }
 
 impl DistanceMap {
-    /// Records the reduction `--accel auto` reads into `out` (16 bytes,
-    /// host visible; see [`DistanceMap::read_summary`]), after a `record`
+    /// Records the reduction `--accel auto` reads into `out` (host
+    /// visible, [`DistanceMap::summary_buffer`]), after a `record`
     /// in the same command buffer ("summary"). Ends with a barrier to host reads.
     pub fn record_summary(
         &self,
@@ -292,7 +298,7 @@ impl DistanceMap {
         Buffer::new(
             ctx,
             "distance summary",
-            16,
+            SUMMARY_BYTES,
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuToCpu,
         )
@@ -307,19 +313,17 @@ impl DistanceMap {
                 "must be host visible (DistanceMap::summary_buffer)",
             )
         })?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..16]);
-        let empty = self.total - words[0] as u64;
-        let sum = words[2] as u64 | (words[3] as u64) << 32;
-        let per = if self.octants { 8.0 } else { 1.0 };
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..SUMMARY_BYTES as usize]);
+        let active = words[0] as u64;
+        let sum = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
+        let half = (channels(self.octants) / 2) as f64;
+        let mean = |sum: u64, cells: u64| if cells == 0 { 0.0 } else { sum as f64 / (half * cells as f64) };
         Ok(Summary {
             cells: self.total,
-            active: words[0] as u64,
+            active,
             faces: words[1] as u64,
-            mean_distance: if empty == 0 {
-                0.0
-            } else {
-                sum as f64 / (per * empty as f64)
-            },
+            empty_distance: mean(sum(2), self.total - active),
+            active_distance: mean(sum(4), active),
         })
     }
 
