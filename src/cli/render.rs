@@ -178,7 +178,10 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
     let info = ctx.info();
     let params = args.accel.method().params(&options);
-    println!("device  {} ({})", info.name, info.driver);
+    println!(
+        "device  {} ({}), subTexelPrecisionBits {}",
+        info.name, info.driver, info.sub_texel_precision_bits
+    );
     println!(
         "volume  {} ({}x{}x{} {})",
         volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
