@@ -10,6 +10,33 @@ use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, Context};
 use std::path::Path;
 
+/// Opacity of a sample of alpha `a` per voxel of path standing for `w`
+/// voxels: `1 - (1 - a)^w`, with 0 and 1 exact. As `glsl/common/opacity.glsl`
+/// (up to the rounding of the device's `pow`).
+// The negated comparison mirrors the GLSL: a NaN alpha is transparent.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn opacity(a: f32, w: f32) -> f32 {
+    if !(a > 0.0) {
+        0.0
+    } else if a >= 1.0 {
+        1.0
+    } else {
+        1.0 - (1.0 - a).powf(w)
+    }
+}
+
+/// RGBA at normalised value `v` of a `LUT_SIZE`-entry table, bit-for-bit the
+/// GLSL `tf_lookup`.
+pub fn lookup_in(table: &[[f32; 4]], v: f32) -> [f32; 4] {
+    let x = v * (LUT_SIZE - 1) as f32;
+    let fl = x.floor();
+    let i = (fl as usize).min(LUT_SIZE - 1);
+    let j = (i + 1).min(LUT_SIZE - 1);
+    let f = x - fl;
+    let (a, b) = (table[i], table[j]);
+    [0, 1, 2, 3].map(|c| a[c] * (1.0 - f) + b[c] * f)
+}
+
 /// LUT entries: fine enough that a spike one LUT step wide is narrower than
 /// the gap between adjacent 8-bit values (1/255).
 pub const LUT_SIZE: usize = 1024;
@@ -257,15 +284,15 @@ impl TransferFunction {
         &self.lut
     }
 
-    /// RGBA at normalised value `v`, bit-for-bit the GLSL `tf_lookup`.
+    /// RGBA at normalised value `v`, bit-for-bit the GLSL `tf_lookup` of the raw table.
     pub fn lookup(&self, v: f32) -> [f32; 4] {
-        let x = v * (LUT_SIZE - 1) as f32;
-        let fl = x.floor();
-        let i = (fl as usize).min(LUT_SIZE - 1);
-        let j = (i + 1).min(LUT_SIZE - 1);
-        let f = x - fl;
-        let (a, b) = (self.lut[i], self.lut[j]);
-        [0, 1, 2, 3].map(|c| a[c] * (1.0 - f) + b[c] * f)
+        lookup_in(&self.lut, v)
+    }
+
+    /// The LUT with alpha corrected for a step of `dt` voxels (`opacity`),
+    /// rgb unchanged: what `glsl/build/opacity_lut.comp` writes per frame.
+    pub fn corrected_lut(&self, dt: f32) -> Vec<[f32; 4]> {
+        self.lut.iter().map(|&[r, g, b, a]| [r, g, b, opacity(a, dt)]).collect()
     }
 
     /// Max of alpha over entries `i..=j`.

@@ -176,19 +176,27 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         stdout.contains("largest change of a median 100.0 %") && stdout.contains("FAIL"),
         "{stdout}"
     );
-    // Speed against error: 2 steps x 2 thresholds, errors shrink with the step.
+    // Speed against error: 2 filters x 2 steps x 2 thresholds, errors shrink
+    // with the step under each filter.
     let points: Vec<ErrorPoint> =
         serde_json::from_str(&std::fs::read_to_string(out.join("error.json")).unwrap()).unwrap();
-    assert_eq!(points.len(), 4);
-    let rmse = |step: f32| {
-        points
-            .iter()
-            .find(|p| p.sweep_step == step && p.ert.is_none())
-            .unwrap()
-            .error
-            .rmse
-    };
-    assert!(rmse(0.25) < rmse(1.0), "a finer step should be closer to the reference");
+    assert_eq!(points.len(), 8);
+    for filter in ["manual", "hardware"] {
+        let rmse = |step: f32| {
+            points
+                .iter()
+                .find(|p| p.sweep_step == step && p.ert.is_none() && p.filter == filter)
+                .unwrap()
+                .error
+                .rmse
+        };
+        assert!(
+            rmse(0.25) < rmse(1.0),
+            "{filter}: a finer step should be closer to the reference"
+        );
+    }
+    // The timed frames use the device's faster filter: hardware for 8-bit volumes.
+    assert!(records.iter().all(|r| r.filter == "hardware"));
     for f in [
         "table1.md",
         "table2.md",
@@ -214,9 +222,12 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
 fn the_hard_case_suite_passes_for_every_structure() {
     let (code, stdout, stderr) = lacuna(&["bench", "--suite", "hard", "--quiet"]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
-    assert!(stdout.contains("| hard case | lbvh | grid |"), "{stdout}");
+    assert!(stdout.contains("| hard case | filter | lbvh | grid |"), "{stdout}");
     assert!(!stdout.contains("FAIL"), "{stdout}");
-    let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().len();
+    // Every case under both filters: the hard cases are 8-bit, and Vulkan
+    // requires linear filtering of R8 UNORM.
+    let filters = lacuna::render::Filter::ALL.len();
+    let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().len() * filters;
     assert!(
         stdout.contains(&format!("hard cases: {runs} of {runs} structure runs passed")),
         "{stdout}"
@@ -258,7 +269,18 @@ fn bad_bench_input_is_one_line() {
         "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"lbvh\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n",
     )
     .unwrap();
+    let filter = dir.path().join("filter.toml");
+    std::fs::write(
+        &filter,
+        "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n[error]\nsteps = [1.0]\nert = [0.0]\nfilters = [\"manual\", \"linear\"]\nreference_step = 0.5\nframes = 1\naccel = \"grid\"\n",
+    )
+    .unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["bench", filter.to_str().unwrap()], "expected manual or hardware"),
+        (
+            vec!["bench", "--quick", "--filter", "linear"],
+            "expected manual or hardware",
+        ),
         (vec!["bench"], "give exactly one of"),
         (vec!["bench", "--quick", "--paper"], "give exactly one of"),
         (vec!["bench", "--suite", "soft"], "expected hard"),

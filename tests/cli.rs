@@ -38,7 +38,9 @@ fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
     let frame = Frame::read_exr(&out).unwrap();
     assert_eq!((frame.width, frame.height), (40, 32));
     assert!(frame.pixels.iter().any(|p| p[3] > 0.1));
-    for key in ["volume", "tf", "accel", "camera", "step", "ert", "device", "gpu_ms"] {
+    for key in [
+        "volume", "tf", "accel", "camera", "step", "ert", "filter", "device", "gpu_ms",
+    ] {
         assert!(
             frame.metadata.contains_key(key),
             "missing metadata {key}: {:?}",
@@ -48,6 +50,9 @@ fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
     assert_eq!(frame.metadata["accel"], "naive");
     assert_eq!(frame.metadata["step"], "0.75");
     assert_eq!(frame.metadata["volume"], "menger:24x24x24");
+    // The default filter: hardware, since Vulkan requires R8 to filter linearly.
+    assert_eq!(frame.metadata["filter"], "hardware");
+    assert!(r.stdout.contains("filter hardware (device default)"), "{}", r.stdout);
     assert!(frame.metadata["gpu_ms"].parse::<f64>().unwrap() >= 0.0);
     // Only the frame is in the folder: no temporary left behind.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
@@ -428,6 +433,11 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     drop(ctx);
 
     fails(&["render", "/no/such/volume_8x8x8_uint8.raw"], &[], "No such file");
+    fails(
+        &["render", "menger:8", "--filter", "linear"],
+        &[],
+        "expected manual or hardware",
+    );
     fails(
         &["render", &p("short_4x4x4_uint8.raw")],
         &[],

@@ -1,6 +1,7 @@
 //! Every skipping structure renders exactly the naive image (DESIGN invariant
-//! 3): bit for bit, over generators, the ch2 MRI, every TF kind, orthographic
-//! and perspective cameras, and the DESIGN hard cases.
+//! 3): bit for bit, under each sample filter (naive with the same filter),
+//! over generators, the ch2 MRI, every TF kind, orthographic and perspective
+//! cameras, and the DESIGN hard cases.
 
 mod common;
 use common::assert_clean;
@@ -9,7 +10,7 @@ use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Ranges, 
 use lacuna::bench::hard::{self, lattice, View};
 use lacuna::frame::{diff, Frame};
 use lacuna::gpu::Context;
-use lacuna::render::{Projection, RenderSettings, Renderer};
+use lacuna::render::{Filter, Projection, RenderSettings, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -68,15 +69,14 @@ impl Fixture {
         self.builder.build(accel, &scene, &p.ranges, options).unwrap().0
     }
 
-    fn frame(&self, s: &Structure, p: &Prepared, view: &View) -> Frame {
-        match view {
-            View::Camera(settings) => self.renderer.render(s, &p.gv, &p.lut, settings).unwrap().0,
-            View::Params(params) => self.renderer.render_params(s, &p.gv, &p.lut, params).unwrap().0,
-        }
+    fn frame(&self, s: &Structure, p: &Prepared, view: &View, filter: Filter) -> Frame {
+        // The views carry their normalisation already (render_view sets the same).
+        hard::render_view(&self.renderer, s, p.volume, &p.gv, &p.lut, view, filter).unwrap()
     }
 
     /// Renders every view with naive and with every skipping structure under
-    /// each option set; asserts bit-identical frames. Returns the naive frames.
+    /// each option set, with each filter; asserts bit-identical frames.
+    /// Returns the naive frames of the manual filter.
     fn check_with(
         &self,
         what: &str,
@@ -86,26 +86,41 @@ impl Fixture {
         options: &[BuildOptions],
     ) -> Vec<Frame> {
         let p = self.prepare(v, tf, options[0].cell);
-        let naive: Vec<Frame> = views
+        let filters: Vec<Filter> = Filter::ALL
+            .into_iter()
+            .filter(|&f| p.gv.sampler_for(f).is_ok())
+            .collect();
+        assert!(
+            filters.contains(&Filter::Hardware) || v.texel_bytes() > 1,
+            "R8 UNORM must filter linearly (Vulkan requires it)"
+        );
+        let naive: Vec<Vec<Frame>> = filters
             .iter()
-            .map(|view| self.frame(&Structure::naive(), &p, view))
+            .map(|&filter| {
+                views
+                    .iter()
+                    .map(|view| self.frame(&Structure::naive(), &p, view, filter))
+                    .collect()
+            })
             .collect();
         for o in options {
             for accel in skipping() {
                 let s = self.build(&p, accel, o);
-                for (i, view) in views.iter().enumerate() {
-                    let f = self.frame(&s, &p, view);
-                    let d = diff(&naive[i], &f).unwrap();
-                    assert!(d.differing == 0, "{what}, view {i}, {accel} ({o:?}): {d}");
-                    assert!(
-                        f.pixels.iter().all(|px| px.iter().all(|c| c.is_finite())),
-                        "{what}: non-finite pixel"
-                    );
+                for (filter, naive) in filters.iter().zip(&naive) {
+                    for (i, view) in views.iter().enumerate() {
+                        let f = self.frame(&s, &p, view, *filter);
+                        let d = diff(&naive[i], &f).unwrap();
+                        assert!(d.differing == 0, "{what}, view {i}, {accel} ({o:?}), {filter}: {d}");
+                        assert!(
+                            f.pixels.iter().all(|px| px.iter().all(|c| c.is_finite())),
+                            "{what}: non-finite pixel"
+                        );
+                    }
                 }
             }
         }
         assert_clean(&self.ctx);
-        naive
+        naive.into_iter().next().unwrap()
     }
 
     fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[View]) -> Vec<Frame> {
@@ -462,7 +477,7 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     let t = tf("spike:0.5:0.01");
     let p = fx.prepare(&v, &t, 16);
     let view = cam(24, 90.0, 0.0, Projection::Orthographic, 0.5);
-    let naive = fx.frame(&Structure::naive(), &p, &view);
+    let naive = fx.frame(&Structure::naive(), &p, &view, Filter::Manual);
     let paper = fx.build(
         &p,
         common::accel("lbvh"),
@@ -472,7 +487,10 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
         },
     );
     assert!(
-        diff(&naive, &fx.frame(&paper, &p, &view)).unwrap().max_abs > 0.0,
+        diff(&naive, &fx.frame(&paper, &p, &view, Filter::Manual))
+            .unwrap()
+            .max_abs
+            > 0.0,
         "the paper's classification should lose the interpolated spike here"
     );
     let exact = fx.build(
@@ -483,7 +501,12 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
             ..Default::default()
         },
     );
-    assert_eq!(diff(&naive, &fx.frame(&exact, &p, &view)).unwrap().differing, 0);
+    assert_eq!(
+        diff(&naive, &fx.frame(&exact, &p, &view, Filter::Manual))
+            .unwrap()
+            .differing,
+        0
+    );
     assert_clean(&fx.ctx);
 }
 

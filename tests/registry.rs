@@ -36,9 +36,11 @@ fn every_entry_is_complete_and_covered_everywhere() {
         assert_eq!(m.name().parse::<Accel>().unwrap(), accel);
         assert!(!m.description().is_empty(), "{accel}: description");
         assert!(!m.variants().is_empty(), "{accel}: variants");
-        // Its march kernel exists and takes the four common bindings first.
-        let kernel = renderer.kernel(accel).unwrap();
-        assert!(kernel.local_size().iter().product::<u32>() > 0);
+        // Its march kernel exists for each filter and takes the four common bindings first.
+        for filter in lacuna::render::Filter::ALL {
+            let kernel = renderer.kernel(accel, filter).unwrap();
+            assert!(kernel.local_size().iter().product::<u32>() > 0);
+        }
         for c in &configs {
             assert!(
                 c.structures.iter().any(|s| s.accel == accel.name()),

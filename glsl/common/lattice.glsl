@@ -5,6 +5,8 @@
 #ifndef LACUNA_LATTICE_GLSL
 #define LACUNA_LATTICE_GLSL
 
+#include "opacity.glsl"
+
 struct March {
     Ray ray;
     float t_enter; // entry into the volume box (0 when the eye is inside)
@@ -56,14 +58,25 @@ void march_skip_to(inout March m, float t) {
     }
 }
 
-// Composites one sample of weight w voxels (opacity correction to unit length).
-void composite(inout March m, vec4 c, float w) {
+// Composites one sample whose alpha is its opacity over its path length.
+void composite(inout March m, vec4 c) {
     if (c.a > 0.0) {
-        precise float a = 1.0 - pow(1.0 - min(c.a, 1.0), w);
+        precise float a = min(c.a, 1.0);
         precise float transmit = 1.0 - m.acc.a;
         m.acc.rgb += transmit * a * c.rgb;
         m.acc.a += transmit * a;
     }
+}
+
+// The sample at value v standing for w voxels of path: full-length samples
+// read the LUT corrected for dt; only a ray's shortened last sample (w < dt)
+// corrects its interpolated raw alpha with a pow.
+vec4 shade(March m, float v, float w) {
+    if (w < m.dt) {
+        vec4 c = tf_lookup(v, TF_SIZE);
+        return vec4(c.rgb, opacity(c.a, w));
+    }
+    return tf_lookup(v, 0u);
 }
 
 // Takes lattice sample k (t_k < t_exit, not done) and moves to k + 1; ends
@@ -74,8 +87,7 @@ void march_sample(inout March m) {
     float t = lattice_t(m, m.k);
     precise float w = min(m.dt, m.t_exit - t);
     precise vec3 p = m.ray.org + t * m.ray.dir;
-    vec4 c = tf_lookup(sample_volume(p));
-    composite(m, c, w);
+    composite(m, shade(m, sample_volume(p), w));
     m.k += 1;
     if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {
         m.done = true;

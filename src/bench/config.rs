@@ -6,6 +6,7 @@
 use crate::accel::kd::KdParams;
 use crate::accel::{Accel, BuildOptions, Classify};
 use crate::error::{Error, Result};
+use crate::volume::Filter;
 use serde::Deserialize;
 use std::path::Path;
 
@@ -42,6 +43,9 @@ pub struct BenchConfig {
     pub ert: Option<f32>,
     /// Sample step in voxels.
     pub step: f32,
+    /// Sample filter of the timed frames, manual or hardware (default: the
+    /// faster the device offers for each volume, `GpuVolume::default_filter`).
+    pub filter: Option<String>,
     /// Camera elevation in degrees; the azimuth turns through 360 over the frames.
     pub elevation: f64,
     #[serde(rename = "dataset")]
@@ -100,6 +104,10 @@ pub struct ErrorConfig {
     pub steps: Vec<f32>,
     /// Early-termination thresholds; 0 means off.
     pub ert: Vec<f32>,
+    /// Sample filters (manual, hardware); default: the timed frames'. A
+    /// filter the volume's format cannot use is skipped with a note.
+    #[serde(default)]
+    pub filters: Vec<String>,
     pub reference_step: f32,
     /// Views per point (orbit as above).
     pub frames: u32,
@@ -138,7 +146,22 @@ impl StructureConfig {
     }
 }
 
+impl ErrorConfig {
+    /// The filters swept: `filters`, or the timed frames' `timed`.
+    pub fn filters(&self, timed: Filter) -> Result<Vec<Filter>> {
+        if self.filters.is_empty() {
+            return Ok(vec![timed]);
+        }
+        self.filters.iter().map(|f| Filter::parse(f)).collect()
+    }
+}
+
 impl BenchConfig {
+    /// The timed frames' filter, when the config names one.
+    pub fn timed_filter(&self) -> Result<Option<Filter>> {
+        self.filter.as_deref().map(Filter::parse).transpose()
+    }
+
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
         let c: BenchConfig = toml::from_str(text).map_err(|e| {
             Error::format(
@@ -182,6 +205,7 @@ impl BenchConfig {
         if !(self.step.is_finite() && self.step > 0.0) {
             return bad("step must be > 0");
         }
+        self.timed_filter().map_err(|e| Error::format(origin, e.to_string()))?;
         if self.datasets.is_empty() || self.structures.is_empty() {
             return bad("needs at least one [[dataset]] and one [[structure]]");
         }
@@ -204,6 +228,8 @@ impl BenchConfig {
             if e.ert.iter().any(|t| !(0.0..=1.0).contains(t)) {
                 return bad("error sweep ert thresholds must be in [0, 1] (0 = off)");
             }
+            e.filters(Filter::Manual)
+                .map_err(|err| Error::format(origin, err.to_string()))?;
             e.accel
                 .parse::<Accel>()
                 .map_err(|err| Error::format(origin, err.to_string()))?;

@@ -1,12 +1,13 @@
 //! The DESIGN hard cases as a suite: every skipping structure must render
-//! each case exactly as naive marching does (bit for bit), with no
+//! each case exactly as naive marching does with the same sample filter (bit
+//! for bit, under each filter the volume's format supports), with no
 //! validation message and no NaN or infinity in the frame.
 
 use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Structure};
 use crate::error::Result;
 use crate::frame::{diff, Frame};
 use crate::gpu::Context;
-use crate::render::{Camera, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
+use crate::render::{Camera, Filter, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
 use crate::tf::{TransferFunction, LUT_SIZE};
 use crate::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use crate::Volume;
@@ -49,6 +50,7 @@ pub fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: 
         },
         step,
         ert,
+        filter: Filter::Manual,
     })
 }
 
@@ -242,9 +244,10 @@ pub fn cases() -> Result<Vec<HardCase>> {
     ])
 }
 
-/// One case against one structure.
+/// One case against one structure under one filter.
 pub struct Outcome {
     pub case: &'static str,
+    pub filter: Filter,
     pub structure: String,
     pub identical: bool,
     pub validation_messages: usize,
@@ -258,7 +261,33 @@ impl Outcome {
     }
 }
 
-/// Runs every case for every structure on a validated context.
+/// Renders `view` of `s` sampling with `filter` (hand-laid rays get the
+/// volume's normalisation).
+#[allow(clippy::too_many_arguments)]
+pub fn render_view(
+    renderer: &Renderer,
+    s: &Structure,
+    volume: &Volume,
+    gv: &GpuVolume,
+    lut: &crate::tf::GpuTransferFunction,
+    view: &View,
+    filter: Filter,
+) -> Result<Frame> {
+    match view {
+        View::Camera(settings) => {
+            let settings = RenderSettings { filter, ..*settings };
+            Ok(renderer.render(s, gv, lut, &settings)?.0)
+        }
+        View::Params(p) => {
+            let mut p = *p;
+            p.march[2] = volume.norm[0];
+            p.march[3] = volume.norm[1];
+            Ok(renderer.render_params(s, gv, lut, &p, filter)?.0)
+        }
+    }
+}
+
+/// Runs every case for every structure and filter on a validated context.
 pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>> {
     let builder = Builder::new(ctx)?;
     let renderer = Renderer::new(ctx)?;
@@ -276,83 +305,85 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
             tf: &tf,
             gpu_tf: &lut,
         };
-        let render = |s: &Structure, view: &View| -> Result<Frame> {
-            match view {
-                View::Camera(settings) => Ok(renderer.render(s, &gv, &lut, settings)?.0),
-                View::Params(p) => {
-                    let mut p = *p;
-                    p.march[2] = v.norm[0];
-                    p.march[3] = v.norm[1];
-                    Ok(renderer.render_params(s, &gv, &lut, &p)?.0)
-                }
-            }
-        };
-        let naive: Vec<Frame> = case
-            .views
-            .iter()
-            .map(|view| render(&Structure::naive(), view))
-            .collect::<Result<_>>()?;
-        let baseline = ctx.take_validation_messages().len();
         // Ranges per cell edge the variants use, computed once each.
         let mut ranges = std::collections::HashMap::new();
+        let mut built = Vec::new();
         for (label, accel, options) in structures() {
             let cell_ranges = match ranges.entry(options.cell) {
                 std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
                 std::collections::hash_map::Entry::Vacant(e) => e.insert(builder.ranges(&gv, options.cell)?.0),
             };
-            let (s, _) = builder.build(accel, &scene, cell_ranges, &options)?;
-            let (mut identical, mut finite, mut detail) = (true, true, String::new());
-            for (i, view) in case.views.iter().enumerate() {
-                let f = render(&s, view)?;
-                let d = diff(&naive[i], &f)?;
-                if d.differing > 0 {
-                    identical = false;
-                    detail = format!("view {i}: {d}");
+            built.push((label, builder.build(accel, &scene, cell_ranges, &options)?.0));
+        }
+        let structures = built;
+        for filter in Filter::ALL.into_iter().filter(|&f| gv.sampler_for(f).is_ok()) {
+            let render = |s: &Structure, view: &View| render_view(&renderer, s, v, &gv, &lut, view, filter);
+            let naive: Vec<Frame> = case
+                .views
+                .iter()
+                .map(|view| render(&Structure::naive(), view))
+                .collect::<Result<_>>()?;
+            let baseline = ctx.take_validation_messages().len();
+            for (label, s) in &structures {
+                let (mut identical, mut finite, mut detail) = (true, true, String::new());
+                for (i, view) in case.views.iter().enumerate() {
+                    let f = render(s, view)?;
+                    let d = diff(&naive[i], &f)?;
+                    if d.differing > 0 {
+                        identical = false;
+                        detail = format!("view {i}: {d}");
+                    }
+                    finite &= f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()));
                 }
-                finite &= f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()));
+                let messages = ctx.take_validation_messages();
+                if let Some(m) = messages.first() {
+                    detail = format!("{m}");
+                }
+                out.push(Outcome {
+                    case: case.name,
+                    filter,
+                    structure: label.clone(),
+                    identical,
+                    validation_messages: messages.len() + baseline,
+                    finite,
+                    detail,
+                });
             }
-            let messages = ctx.take_validation_messages();
-            if let Some(m) = messages.first() {
-                detail = format!("{m}");
-            }
-            out.push(Outcome {
-                case: case.name,
-                structure: label,
-                identical,
-                validation_messages: messages.len() + baseline,
-                finite,
-                detail,
-            });
         }
     }
     Ok(out)
 }
 
-/// The pass/fail table: a row per case, a column per structure.
+/// The pass/fail table: a row per case and filter, a column per structure.
 pub fn table(outcomes: &[Outcome]) -> String {
     let structures = structures();
     let labels: Vec<&str> = structures.iter().map(|s| s.0.as_str()).collect();
     let mut s = format!(
-        "| hard case | {} |\n|---|{}\n",
+        "| hard case | filter | {} |\n|---|---|{}\n",
         labels.join(" | "),
         "---|".repeat(labels.len())
     );
-    let mut cases: Vec<&str> = Vec::new();
+    let mut rows: Vec<(&str, Filter)> = Vec::new();
     for o in outcomes {
-        if !cases.contains(&o.case) {
-            cases.push(o.case);
+        if !rows.contains(&(o.case, o.filter)) {
+            rows.push((o.case, o.filter));
         }
     }
-    for c in cases {
+    for (c, f) in rows {
         let cells: Vec<&str> = labels
             .iter()
-            .map(|l| match outcomes.iter().find(|o| o.case == c && o.structure == *l) {
-                Some(o) if o.passed() => "pass",
-                Some(_) => "FAIL",
-                None => "-",
+            .map(|l| {
+                match outcomes
+                    .iter()
+                    .find(|o| o.case == c && o.filter == f && o.structure == *l)
+                {
+                    Some(o) if o.passed() => "pass",
+                    Some(_) => "FAIL",
+                    None => "-",
+                }
             })
             .collect();
-        s += &format!("| {c} | {} |\n", cells.join(" | "));
+        s += &format!("| {c} | {f} | {} |\n", cells.join(" | "));
     }
     s
 }

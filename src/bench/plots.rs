@@ -337,29 +337,43 @@ fn error_plot<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, path: &Path, poi
         .label_style((FONT, 13))
         .draw()
         .map_err(|e| err(path, e))?;
-    let mut series: Vec<(String, Option<f32>)> = Vec::new();
+    // A colour per data set and ERT; the hardware filter's line thin, with crosses.
+    let mut series: Vec<(String, Option<f32>, String)> = Vec::new();
     for p in points {
-        if !series.contains(&(p.dataset.clone(), p.ert)) {
-            series.push((p.dataset.clone(), p.ert));
+        let key = (p.dataset.clone(), p.ert, p.filter.clone());
+        if !series.contains(&key) {
+            series.push(key);
         }
     }
-    for (i, (d, ert)) in series.iter().enumerate() {
+    let mut colours: Vec<(&str, Option<f32>)> = Vec::new();
+    for (d, ert, filter) in &series {
+        let i = colours
+            .iter()
+            .position(|k| *k == (d.as_str(), *ert))
+            .unwrap_or_else(|| {
+                colours.push((d.as_str(), *ert));
+                colours.len() - 1
+            });
         let c = color(i);
         let mut pts: Vec<(f64, f64)> = points
             .iter()
-            .filter(|p| &p.dataset == d && &p.ert == ert)
+            .filter(|p| &p.dataset == d && &p.ert == ert && &p.filter == filter)
             .map(|p| (p.frame.median_ms, p.error.rmse.max(1e-9)))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let label = format!("{d}, ERT {}", ert.map_or("off".into(), |e| e.to_string()));
+        let label = format!("{d}, ERT {}, {filter}", ert.map_or("off".into(), |e| e.to_string()));
+        let width = if filter == "manual" { 2 } else { 1 };
         chart
-            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(width)))
             .map_err(|e| err(path, e))?
             .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2)));
-        chart
-            .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
-            .map_err(|e| err(path, e))?;
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(width)));
+        if filter == "manual" {
+            chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+        } else {
+            chart.draw_series(pts.into_iter().map(|p| Cross::new(p, 4, c.stroke_width(1))))
+        }
+        .map_err(|e| err(path, e))?;
     }
     chart
         .configure_series_labels()
@@ -372,7 +386,7 @@ fn error_plot<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, path: &Path, poi
     root.present().map_err(|e| err(path, e))
 }
 
-/// Error against time: one line per data set and ERT threshold, over steps.
+/// Error against time: one line per data set, ERT threshold and filter, over steps.
 pub fn error_figure(points: &[ErrorPoint], stem: &Path) -> Result<()> {
     both(stem, (1000, 640), &ErrorFigure { path: stem, points })
 }

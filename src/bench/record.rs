@@ -127,6 +127,14 @@ pub struct Record {
     pub warmed_up: Warmup,
     /// Frame 0 against naive marching's frame 0 (0 for every exact structure).
     pub error_vs_naive: ImageError,
+    /// Sample filter of the timed frames (manual or hardware).
+    #[serde(default = "manual")]
+    pub filter: String,
+}
+
+/// Records written before the filter existed sampled by hand.
+fn manual() -> String {
+    "manual".into()
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -138,6 +146,9 @@ pub struct ErrorPoint {
     pub sweep_step: f32,
     /// Early termination threshold; null = off.
     pub ert: Option<f32>,
+    /// Sample filter of the point's frames; the reference samples by hand.
+    #[serde(default = "manual")]
+    pub filter: String,
     pub frame: FrameTimes,
     pub reference_step: f32,
     pub error: ImageError,

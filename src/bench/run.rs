@@ -4,8 +4,8 @@
 //! (naive, A, B, ..., naive, A, B, ...) so that machine noise falls on all
 //! alike; each record keeps min, median and max, its speed-up over naive
 //! from the same rounds, its noise spread, and its image error against
-//! naive. Then the speed-against-error sweep of step sizes and
-//! early-termination thresholds.
+//! naive. Then the speed-against-error sweep of sample filters, step sizes
+//! and early-termination thresholds, against a manually filtered reference.
 
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
@@ -14,7 +14,7 @@ use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::{Context, Timer};
-use crate::render::{Camera, Projection, RenderSettings, RenderTarget, Renderer};
+use crate::render::{Camera, Filter, Projection, RenderSettings, RenderTarget, Renderer};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::timings::{median, Timings};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
@@ -77,7 +77,7 @@ impl<'a> FrameTimer<'a> {
     }
 }
 
-fn orbit(config: &BenchConfig, view: u32, views: u32, step: f32, ert: Option<f32>) -> RenderSettings {
+fn orbit(config: &BenchConfig, view: u32, views: u32, step: f32, ert: Option<f32>, filter: Filter) -> RenderSettings {
     RenderSettings {
         width: config.size[0],
         height: config.size[1],
@@ -88,6 +88,7 @@ fn orbit(config: &BenchConfig, view: u32, views: u32, step: f32, ert: Option<f32
         },
         step,
         ert,
+        filter,
     }
 }
 
@@ -129,13 +130,14 @@ fn error_sweep(
     structure: &Structure,
     gv: &GpuVolume,
     lut: &GpuTransferFunction,
+    filters: &[Filter],
     frames: &mut FrameTimer,
     progress: &Progress,
 ) -> Result<Vec<ErrorPoint>> {
     let mut points = Vec::new();
     let mut reference = Vec::new();
     for view in 0..e.frames {
-        let settings = orbit(config, view, e.frames, e.reference_step, None);
+        let settings = orbit(config, view, e.frames, e.reference_step, None, Filter::Manual);
         reference.push(
             frames
                 .frame(&Structure::naive(), gv, lut, &settings, true)?
@@ -144,43 +146,51 @@ fn error_sweep(
         );
         progress.step(1);
     }
-    for &step in &e.steps {
-        for &ert in &e.ert {
-            let ert = (ert > 0.0).then_some(ert);
-            // A new step is a new workload: warm up again.
-            let first = orbit(config, 0, e.frames, step, ert);
-            warm_up(config.warmup, config.warmup_cap, config.stable, |_| {
-                Ok(frames.frame(structure, gv, lut, &first, false)?.0)
-            })?;
-            let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
-            for view in 0..e.frames {
-                let (ms, f) = frames.frame(structure, gv, lut, &orbit(config, view, e.frames, step, ert), true)?;
-                let d = diff(&reference[view as usize], &f.ok_or_else(|| missing("sweep frame"))?)?;
-                times.push(ms);
-                sq += d.rmse * d.rmse * d.pixels as f64;
-                pixels += d.pixels;
-                max_abs = max_abs.max(d.max_abs);
-                differing += d.differing;
-                progress.step(1);
-            }
-            let rmse = (sq / pixels.max(1) as f64).sqrt();
-            let psnr = (rmse > 0.0).then(|| 20.0 * (1.0 / rmse).log10());
-            points.push(ErrorPoint {
-                setup: setup.clone(),
-                dataset: spec.to_string(),
-                accel: structure.accel().name().into(),
-                sweep_step: step,
-                ert,
-                frame: FrameTimes::of(times),
-                reference_step: e.reference_step,
-                error: ImageError {
-                    rmse,
-                    psnr,
-                    max_abs,
-                    differing,
-                },
-            });
+    for (&filter, &step, &ert) in filters
+        .iter()
+        .flat_map(|f| e.steps.iter().flat_map(move |s| e.ert.iter().map(move |t| (f, s, t))))
+    {
+        let ert = (ert > 0.0).then_some(ert);
+        // A new step is a new workload: warm up again.
+        let first = orbit(config, 0, e.frames, step, ert, filter);
+        warm_up(config.warmup, config.warmup_cap, config.stable, |_| {
+            Ok(frames.frame(structure, gv, lut, &first, false)?.0)
+        })?;
+        let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
+        for view in 0..e.frames {
+            let (ms, f) = frames.frame(
+                structure,
+                gv,
+                lut,
+                &orbit(config, view, e.frames, step, ert, filter),
+                true,
+            )?;
+            let d = diff(&reference[view as usize], &f.ok_or_else(|| missing("sweep frame"))?)?;
+            times.push(ms);
+            sq += d.rmse * d.rmse * d.pixels as f64;
+            pixels += d.pixels;
+            max_abs = max_abs.max(d.max_abs);
+            differing += d.differing;
+            progress.step(1);
         }
+        let rmse = (sq / pixels.max(1) as f64).sqrt();
+        let psnr = (rmse > 0.0).then(|| 20.0 * (1.0 / rmse).log10());
+        points.push(ErrorPoint {
+            setup: setup.clone(),
+            dataset: spec.to_string(),
+            accel: structure.accel().name().into(),
+            sweep_step: step,
+            ert,
+            filter: filter.to_string(),
+            frame: FrameTimes::of(times),
+            reference_step: e.reference_step,
+            error: ImageError {
+                rmse,
+                psnr,
+                max_abs,
+                differing,
+            },
+        });
     }
     Ok(points)
 }
@@ -316,8 +326,10 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
     let per_structure = 2 * least + (config.builds + config.frames * config.rounds) as u64;
     let sweep = config.error.as_ref().map_or(0, |e| {
         let n = e.datasets.as_ref().map_or(config.datasets.len(), |d| d.len()) as u64;
-        n * e.frames as u64 * (1 + (e.steps.len() * e.ert.len()) as u64)
+        let filters = e.filters.len().max(1);
+        n * e.frames as u64 * (1 + (filters * e.steps.len() * e.ert.len()) as u64)
     });
+    let timed_filter = config.timed_filter()?;
     let progress = Progress::new(
         config.datasets.len() as u64 * structures.len() as u64 * per_structure + sweep,
         options.quiet,
@@ -329,7 +341,6 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         notes: Vec::new(),
     };
     let mut frames = FrameTimer::new(ctx, &renderer, config.size[0], config.size[1])?;
-    let settings = |view: u32| orbit(config, view, config.frames, config.step, config.ert);
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
@@ -347,6 +358,8 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
+        let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
+        let settings = |view: u32| orbit(config, view, config.frames, config.step, config.ert, filter);
         let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
@@ -505,6 +518,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 unstable,
                 warmed_up: run.warmup,
                 error_vs_naive: run.error.clone().ok_or_else(|| missing("frame 0"))?,
+                filter: filter.to_string(),
             });
             if let Some(first) = &run.first {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));
@@ -521,6 +535,19 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             let accel: Accel = e.accel.parse()?;
             let (r, _) = builder.ranges_for(&[accel], &gv, opts.cell)?;
             let (structure, _) = builder.build(accel, &scene, &r, &opts)?;
+            let mut filters = e.filters(filter)?;
+            filters.retain(|&f| {
+                let usable = gv.sampler_for(f).is_ok();
+                if !usable {
+                    let note = format!(
+                        "{}: error sweep skips filter {f} (the volume's format does not filter linearly here)",
+                        loaded.spec
+                    );
+                    progress.note(&note);
+                    out.notes.push(note);
+                }
+                usable
+            });
             out.errors.extend(error_sweep(
                 config,
                 e,
@@ -529,6 +556,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 &structure,
                 &gv,
                 &lut,
+                &filters,
                 &mut frames,
                 &progress,
             )?);

@@ -47,6 +47,9 @@ pub struct BenchArgs {
     /// Early ray termination threshold for the timed frames (default: the config's, usually off).
     #[arg(long)]
     ert: Option<f32>,
+    /// Sample filter of the timed frames, manual or hardware (default: the config's, else the device's faster).
+    #[arg(long)]
+    filter: Option<lacuna::render::Filter>,
     /// Write frame 0 of every run as EXR under OUT/frames.
     #[arg(long)]
     frames_out: bool,
@@ -91,8 +94,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         let failed: Vec<_> = outcomes.iter().filter(|o| !o.passed()).collect();
         for o in &failed {
             println!(
-                "FAIL {} / {}: identical {}, validation messages {}, finite {}; {}",
-                o.case, o.structure, o.identical, o.validation_messages, o.finite, o.detail
+                "FAIL {} / {} / {}: identical {}, validation messages {}, finite {}; {}",
+                o.case, o.filter, o.structure, o.identical, o.validation_messages, o.finite, o.detail
             );
         }
         println!(
@@ -130,6 +133,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if args.ert.is_some() {
         config.ert = args.ert;
     }
+    if let Some(f) = args.filter {
+        config.filter = Some(f.to_string());
+    }
     config.validate("the command line")?;
     let out_dir = args
         .out
@@ -147,7 +153,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let written = bench::write_outputs(&out_dir, &output)?;
     println!("device {} ({})", ctx.info().name, ctx.info().driver);
     println!(
-        "config {}: {}x{}, {} views x {} interleaved rounds, step {}, ERT {}, {} interleaved builds per structure, \
+        "config {}: {}x{}, {} views x {} interleaved rounds, step {}, ERT {}, filter {}, {} interleaved builds per structure, \
          warm-up until two consecutive times agree within {}% (at least {}, at most {})",
         config.name,
         config.size[0],
@@ -156,6 +162,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         config.rounds,
         config.step,
         config.ert.map_or("off".into(), |e| e.to_string()),
+        config.filter.as_deref().unwrap_or("the device's faster"),
         config.builds,
         config.stable * 100.0,
         config.warmup.max(2),

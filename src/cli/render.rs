@@ -6,7 +6,7 @@ use lacuna::accel::kd::KdParams;
 use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
 use lacuna::frame::{Frame, FrameFormat};
 use lacuna::gpu::Context;
-use lacuna::render::{self, Camera, Projection, RenderSettings, Renderer};
+use lacuna::render::{self, Camera, Filter, Projection, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
@@ -58,6 +58,9 @@ pub struct RenderArgs {
     /// Early ray termination at this accumulated alpha (default off).
     #[arg(long, allow_hyphen_values = true)]
     ert: Option<f32>,
+    /// Sample filter: manual (eight texel fetches, f32 weights) or hardware (the sampler's linear filtering; default where the volume's format supports it).
+    #[arg(long)]
+    filter: Option<Filter>,
     /// Time this many builds and frames and report per-phase medians.
     #[arg(long, default_value_t = 1)]
     repeat: u32,
@@ -98,6 +101,7 @@ impl RenderArgs {
             },
             step: self.step,
             ert: self.ert,
+            filter: self.filter.unwrap_or_default(),
         };
         settings.validate()?;
         if self.repeat == 0 {
@@ -139,7 +143,7 @@ fn build(
 }
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
-    let (options, settings, format) = args.options()?;
+    let (options, mut settings, format) = args.options()?;
     let volume = args.volume.load()?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     settings.params(volume.dims, volume.spacing, volume.norm)?;
@@ -147,6 +151,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let renderer = Renderer::new(&ctx)?;
     let gpu_volume = GpuVolume::upload(&ctx, &volume)?;
+    settings.filter = args.filter.unwrap_or_else(|| gpu_volume.default_filter());
+    gpu_volume.sampler_for(settings.filter)?;
     let lut = tf.upload(&ctx)?;
     let input = BuildInput {
         volume: &volume,
@@ -172,18 +178,23 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
     let info = ctx.info();
     let params = args.accel.method().params(&options);
-    println!("device  {} ({})", info.name, info.driver);
+    println!(
+        "device  {} ({}), subTexelPrecisionBits {}",
+        info.name, info.driver, info.sub_texel_precision_bits
+    );
     println!(
         "volume  {} ({}x{}x{} {})",
         volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
     );
     println!("tf      {}", tf.spec);
     println!(
-        "frame   {}x{}, {}, step {}, accel {}",
+        "frame   {}x{}, {}, step {}, filter {}{}, accel {}",
         settings.width,
         settings.height,
         settings.camera.describe(),
         settings.step,
+        settings.filter,
+        if args.filter.is_none() { " (device default)" } else { "" },
         args.accel
     );
     if args.repeat > 1 || args.warmup > 0 {
@@ -234,6 +245,7 @@ fn describe(
     meta.insert("camera".into(), settings.camera.describe());
     meta.insert("step".into(), settings.step.to_string());
     meta.insert("ert".into(), settings.ert.map_or("off".into(), |e| e.to_string()));
+    meta.insert("filter".into(), settings.filter.to_string());
     meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
     meta.insert("gpu_ms".into(), format!("{:.4}", timings.phase("march")?));
     Ok(())

@@ -55,6 +55,8 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     /// Largest device-local heap in bytes.
     pub device_local_bytes: u64,
+    /// Fractional bits of the sampler's filtering weights (Vulkan requires >= 4).
+    pub sub_texel_precision_bits: u32,
 }
 
 impl DeviceInfo {
@@ -263,6 +265,7 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid
         timestamp_period: l.timestamp_period,
         timestamp_valid_bits,
         device_local_bytes,
+        sub_texel_precision_bits: l.sub_texel_precision_bits,
     }
 }
 
@@ -564,6 +567,19 @@ impl Context {
 
     pub fn info(&self) -> &DeviceInfo {
         &self.inner.info
+    }
+
+    /// Whether sampled images of `format` (optimal tiling) filter linearly on
+    /// this device: `SAMPLED_IMAGE_FILTER_LINEAR` is optional for R16 and R32F.
+    pub fn filters_linearly(&self, format: vk::Format) -> bool {
+        let props = unsafe {
+            self.inner
+                .instance
+                .get_physical_device_format_properties(self.inner.physical_device, format)
+        };
+        props
+            .optimal_tiling_features
+            .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
     }
 
     /// Whether this context created (and will destroy) its instance and device.

@@ -57,6 +57,13 @@ impl Kernel {
 
     /// As `with_constants`, with the Rust side's push block size in bytes.
     pub fn create(ctx: &Context, shader: &Shader, push_size: usize, constants: &[u32]) -> Result<Self> {
+        let entries: Vec<(u32, u32)> = (0..).zip(constants.iter().copied()).collect();
+        Self::specialized(ctx, shader, push_size, &entries)
+    }
+
+    /// As `create`, with (`constant_id`, value) pairs: ids the shader does
+    /// not declare are ignored, as Vulkan specifies.
+    pub fn specialized(ctx: &Context, shader: &Shader, push_size: usize, constants: &[(u32, u32)]) -> Result<Self> {
         let name = shader.name;
         if push_size != shader.push_size as usize {
             return Err(Error::Interface(format!(
@@ -71,7 +78,7 @@ impl Kernel {
             push_size as u64,
             info.max_push_constants_size as u64,
         )?;
-        let local_size = shader.local_size_with(constants);
+        let local_size = shader.local_size_for(constants);
         let threads: u64 = local_size.iter().map(|&n| n as u64).product();
         info.check(
             format!("workgroup of kernel {name} ({local_size:?})"),
@@ -123,16 +130,18 @@ impl Kernel {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
         kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
-        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
+        let entries: Vec<vk::SpecializationMapEntry> = (0..)
+            .zip(constants)
+            .map(|(i, &(id, _))| vk::SpecializationMapEntry {
+                constant_id: id,
                 offset: i * 4,
                 size: 4,
             })
             .collect();
+        let values: Vec<u32> = constants.iter().map(|&(_, v)| v).collect();
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
-            .data(bytemuck::cast_slice(constants));
+            .data(bytemuck::cast_slice(&values));
         let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)

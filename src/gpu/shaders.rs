@@ -32,9 +32,15 @@ pub struct Shader {
 impl Shader {
     /// The workgroup size with specialization `constants` (constant_id 0, 1, ...).
     pub fn local_size_with(&self, constants: &[u32]) -> [u32; 3] {
+        let entries: Vec<(u32, u32)> = (0..).zip(constants.iter().copied()).collect();
+        self.local_size_for(&entries)
+    }
+
+    /// The workgroup size with specialization (`constant_id`, value) pairs.
+    pub fn local_size_for(&self, constants: &[(u32, u32)]) -> [u32; 3] {
         self.local_size.map(|d| match d {
             LocalDim::Fixed(n) => n,
-            LocalDim::Spec { id, default } => constants.get(id as usize).copied().unwrap_or(default),
+            LocalDim::Spec { id, default } => constants.iter().find(|c| c.0 == id).map_or(default, |c| c.1),
         })
     }
 }

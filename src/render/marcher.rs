@@ -10,24 +10,36 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
-use crate::volume::GpuVolume;
+use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
+use bytemuck::{Pod, Zeroable};
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// A march kernel: shader name and specialization constants.
-type KernelKey = (&'static str, &'static [u32]);
+/// A march kernel: shader name, the structure's specialization constants,
+/// and the sample filter.
+type KernelKey = (&'static str, &'static [u32], Filter);
+
+/// Push block of `glsl/build/opacity_lut.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct OpacityPush {
+    dt: f32,
+    n: u32,
+}
 
 /// Bindings every march kernel starts with: render parameters, volume, LUT, frame.
 const COMMON_BINDINGS: usize = 4;
 
-/// Where a frame goes: the RGBA f32 frame buffer, its parameter block, and a
-/// host-visible copy for readback.
+/// Where a frame goes: the RGBA f32 frame buffer, its parameter block, the
+/// frame's LUT (corrected for its step, then raw: `glsl/common/tf.glsl`), and
+/// a host-visible copy for readback.
 pub struct RenderTarget {
     pub width: u32,
     pub height: u32,
     pub frame: Buffer,
     pub params: Buffer,
+    pub lut: Buffer,
     readback: Buffer,
 }
 
@@ -65,6 +77,13 @@ impl RenderTarget {
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
+        let lut = Buffer::new(
+            ctx,
+            "frame LUT",
+            (2 * crate::tf::LUT_SIZE * 16) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
         let readback = Buffer::new(
             ctx,
             "frame readback",
@@ -77,6 +96,7 @@ impl RenderTarget {
             height,
             frame,
             params,
+            lut,
             readback,
         })
     }
@@ -91,11 +111,13 @@ impl RenderTarget {
     }
 }
 
-/// The march kernels, created once per context when a structure first
-/// needs them (each structure names its kernel: `Method::march`).
+/// The march kernels, created once per context and filter when a structure
+/// first needs them (each structure names its kernel: `Method::march`), and
+/// the kernel that writes each frame's LUT.
 pub struct Renderer {
     ctx: Context,
     kernels: Mutex<HashMap<KernelKey, Arc<Kernel>>>,
+    opacity: Kernel,
 }
 
 impl Renderer {
@@ -103,13 +125,14 @@ impl Renderer {
         Ok(Renderer {
             ctx: ctx.clone(),
             kernels: Mutex::new(HashMap::new()),
+            opacity: Kernel::new::<OpacityPush>(ctx, &crate::gpu::shaders::BUILD_OPACITY_LUT)?,
         })
     }
 
-    /// The march kernel of `accel`, created on first use.
-    pub fn kernel(&self, accel: Accel) -> Result<Arc<Kernel>> {
+    /// The march kernel of `accel` sampling with `filter`, created on first use.
+    pub fn kernel(&self, accel: Accel, filter: Filter) -> Result<Arc<Kernel>> {
         let march = accel.method().march();
-        let key = (march.shader.name, march.constants);
+        let key = (march.shader.name, march.constants, filter);
         let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(k) = map.get(&key) {
             return Ok(k.clone());
@@ -120,18 +143,21 @@ impl Renderer {
                 march.shader.name
             )));
         }
-        let k = Arc::new(Kernel::create(
+        let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
+        constants.push((FILTER_CONSTANT_ID, filter.constant()));
+        let k = Arc::new(Kernel::specialized(
             &self.ctx,
             &march.shader,
             march.push_size,
-            march.constants,
+            &constants,
         )?);
         map.insert(key, k.clone());
         Ok(k)
     }
 
-    /// Records one frame into `cmd`: parameter update, then the march pass of
-    /// `structure`'s kernel (timed as "march" when `timer` is given).
+    /// Records one frame into `cmd`: parameter update, then the march pass
+    /// (timed as "march" when `timer` is given): the frame's LUT corrected
+    /// for its step, then `structure`'s kernel sampling with `settings.filter`.
     ///
     /// Barriers. Before: the volume image is in SHADER_READ_ONLY_OPTIMAL and
     /// its upload and the TF buffer's are visible to compute reads (true after
@@ -140,8 +166,8 @@ impl Renderer {
     /// `Builder::build`; after `record_*` builds, a barrier from
     /// `Access::COMPUTE_WRITE` to `Access::COMPUTE_READ`). Recorded
     /// here: earlier uses of `target` in the same command buffer (compute
-    /// reads of the parameters, transfer reads of the frame) are ordered
-    /// before this frame's writes. After: the frame buffer is written in the
+    /// reads of the parameters and LUT, transfer reads of the frame) are
+    /// ordered before this frame's writes. After: the frame buffer is written in the
     /// compute stage; read it only after a barrier from `Access::COMPUTE_WRITE`
     /// (`record_readback` records one).
     #[allow(clippy::too_many_arguments)]
@@ -163,12 +189,13 @@ impl Renderer {
             ));
         }
         let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
-        self.record_params(cmd, timer, structure, target, volume, tf, &params)
+        self.record_params(cmd, timer, structure, target, volume, tf, &params, settings.filter)
     }
 
     /// As `record`, with explicit shader parameters: a camera of your own
     /// (any ray origins and directions in voxel space). `params.image` must
-    /// match the target and `params.dims` the volume.
+    /// match the target and `params.dims` the volume; hardware `filter`
+    /// needs a volume format the device filters linearly.
     #[allow(clippy::too_many_arguments)]
     pub fn record_params(
         &self,
@@ -179,6 +206,7 @@ impl Renderer {
         volume: &GpuVolume,
         tf: &GpuTransferFunction,
         params: &RenderParams,
+        filter: Filter,
     ) -> Result<()> {
         if [params.image[0], params.image[1]] != [target.width, target.height] {
             return Err(Error::invalid(
@@ -201,8 +229,12 @@ impl Renderer {
                 "must be a finite number > 0 (voxels)",
             ));
         }
-        let kernel = self.kernel(structure.accel)?;
+        let sampler = volume.sampler_for(filter)?;
+        let kernel = self.kernel(structure.accel, filter)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
+        let n = crate::tf::LUT_SIZE as u32;
+        let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
+        let lut_push = OpacityPush { dt: params.march[0], n };
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
@@ -212,19 +244,28 @@ impl Renderer {
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
         let mut bindings = vec![
             Binding::Storage(&target.params),
-            Binding::Sampled(volume.image.view, volume.sampler),
-            Binding::Storage(&tf.lut),
+            Binding::Sampled(volume.image.view, sampler),
+            Binding::Storage(&target.lut),
             Binding::Storage(&target.frame),
         ];
         bindings.extend(structure.built.bindings());
         let push = structure.built.push();
-        match timer {
-            Some(timer) => {
-                let pass = timer.begin(cmd, "march")?;
-                kernel.dispatch(cmd, &bindings, &push, groups)?;
-                timer.end(cmd, pass);
-            }
-            None => kernel.dispatch(cmd, &bindings, &push, groups)?,
+        let pass = match timer {
+            Some(timer) => Some((timer.begin(cmd, "march")?, timer)),
+            None => None,
+        };
+        // An earlier frame's march reads the LUT this one rewrites.
+        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
+        self.opacity.dispatch(
+            cmd,
+            &[Binding::Storage(&tf.lut), Binding::Storage(&target.lut)],
+            bytemuck::bytes_of(&lut_push),
+            lut_groups,
+        )?;
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+        kernel.dispatch(cmd, &bindings, &push, groups)?;
+        if let Some((pass, timer)) = pass {
+            timer.end(cmd, pass);
         }
         Ok(())
     }
@@ -254,7 +295,7 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<(Frame, Timings)> {
         let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
-        self.render_params(structure, volume, tf, &params)
+        self.render_params(structure, volume, tf, &params, settings.filter)
     }
 
     /// As `render`, with explicit shader parameters (see `record_params`).
@@ -264,12 +305,13 @@ impl Renderer {
         volume: &GpuVolume,
         tf: &GpuTransferFunction,
         params: &RenderParams,
+        filter: Filter,
     ) -> Result<(Frame, Timings)> {
         let target = RenderTarget::new(&self.ctx, params.image[0], params.image[1])?;
         let mut timer = Timer::new(&self.ctx, 4)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_params(cmd, Some(&mut timer), structure, &target, volume, tf, params)?;
+            self.record_params(cmd, Some(&mut timer), structure, &target, volume, tf, params, filter)?;
             let pass = timer.begin(cmd, "readback")?;
             self.record_readback(cmd, &target);
             timer.end(cmd, pass);

@@ -7,6 +7,7 @@ mod params;
 pub mod reference;
 mod settings;
 
+pub use crate::volume::Filter;
 pub use camera::{Camera, Projection};
 pub use marcher::{RenderTarget, Renderer};
 pub use params::{RenderParams, ERT_OFF};

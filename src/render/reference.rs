@@ -1,9 +1,11 @@
 //! CPU reference of the naive marcher: the same ray setup, lattice, trilinear
-//! sampling, LUT lookup and compositing as the GLSL, in f32, for tests.
+//! sampling, LUT lookup and compositing as the GLSL, in f32, for tests. Its
+//! sampling is the manual filter's; against `Filter::Hardware` it differs by
+//! the device's filtering precision (README, "Sample filter").
 
 use super::params::RenderParams;
 use crate::frame::Frame;
-use crate::tf::TransferFunction;
+use crate::tf::{self, TransferFunction};
 use crate::volume::Volume;
 use glam::{I64Vec3, UVec3, Vec3};
 use rayon::prelude::*;
@@ -48,10 +50,19 @@ pub fn sample(volume: &Volume, p: Vec3) -> f32 {
     volume.normalize(raw)
 }
 
-/// The premultiplied RGBA of one pixel.
+/// The premultiplied RGBA of one pixel; `corrected` is
+/// `tf.corrected_lut(p.march[0])` (full-length samples read it, the ray's
+/// shortened last sample corrects the raw LUT's alpha itself, as the GLSL).
 // Negated comparisons mirror the GLSL: a NaN bound stops the march.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y: u32) -> [f32; 4] {
+pub fn trace(
+    volume: &Volume,
+    tf: &TransferFunction,
+    corrected: &[[f32; 4]],
+    p: &RenderParams,
+    x: u32,
+    y: u32,
+) -> [f32; 4] {
     let (base, du, dv) = (
         Vec3::from_slice(&p.base),
         Vec3::from_slice(&p.du),
@@ -84,9 +95,15 @@ pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y
         }
         let w = dt.min(t_exit - t);
         let pos = org + dir * t;
-        let c = tf.lookup(sample(volume, pos));
+        let v = sample(volume, pos);
+        let c = if w < dt {
+            let c = tf.lookup(v);
+            [c[0], c[1], c[2], tf::opacity(c[3], w)]
+        } else {
+            tf::lookup_in(corrected, v)
+        };
         if c[3] > 0.0 {
-            let a = 1.0 - (1.0 - c[3].min(1.0)).powf(w);
+            let a = c[3].min(1.0);
             let transmit = 1.0 - acc[3];
             for ch in 0..3 {
                 acc[ch] += transmit * a * c[ch];
@@ -104,10 +121,12 @@ pub fn trace(volume: &Volume, tf: &TransferFunction, p: &RenderParams, x: u32, y
 /// Renders a whole frame on the CPU (parallel over rows).
 pub fn render(volume: &Volume, tf: &TransferFunction, p: &RenderParams) -> Frame {
     let (w, h) = (p.image[0], p.image[1]);
+    let corrected = tf.corrected_lut(p.march[0]);
+    let corrected = &corrected;
     let pixels: Vec<[f32; 4]> = (0..h)
         .into_par_iter()
         .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| trace(volume, tf, p, x, y))
+        .map(|(x, y)| trace(volume, tf, corrected, p, x, y))
         .collect();
     Frame::new(w, h, pixels)
 }

@@ -1,8 +1,10 @@
-//! What a frame is rendered with: size, camera, step and early termination.
+//! What a frame is rendered with: size, camera, step, early termination and
+//! the sample filter.
 
 use super::camera::Camera;
 use super::params::{RenderParams, ERT_OFF};
 use crate::error::{Error, Result};
+use crate::volume::Filter;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -13,6 +15,9 @@ pub struct RenderSettings {
     pub step: f32,
     /// Early ray termination at this accumulated alpha (None: off).
     pub ert: Option<f32>,
+    /// How samples are reconstructed between voxels. The default is manual,
+    /// exact on every device; `GpuVolume::default_filter` gives the faster.
+    pub filter: Filter,
 }
 
 impl Default for RenderSettings {
@@ -23,6 +28,7 @@ impl Default for RenderSettings {
             camera: Camera::default(),
             step: 0.5,
             ert: None,
+            filter: Filter::Manual,
         }
     }
 }

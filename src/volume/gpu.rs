@@ -1,18 +1,39 @@
 //! The volume on the GPU: a 3D image (R8/R16 UNORM kept native, else R32
-//! float) read with `texelFetch`, so the sampler only needs nearest filtering.
+//! float) with a nearest sampler (`texelFetch`: the manual filter, ranges,
+//! classification) and, where the format filters linearly, a linear one
+//! for `Filter::Hardware`.
 
+use super::filter::Filter;
 use super::{Volume, VoxelData};
-use crate::error::{Result, VkContext};
+use crate::error::{Error, Result, VkContext};
 use crate::gpu::{vk, Context, Image3d};
 
 pub struct GpuVolume {
     ctx: Context,
     pub image: Image3d,
+    /// Nearest filtering: every `texelFetch` user binds this one.
     pub sampler: vk::Sampler,
+    /// Linear filtering, clamp to edge; None where the format lacks
+    /// `SAMPLED_IMAGE_FILTER_LINEAR` on this device.
+    linear: Option<vk::Sampler>,
     pub dims: [u32; 3],
     pub spacing: [f32; 3],
     /// Texel normalisation, as `Volume::norm`.
     pub norm: [f32; 2],
+}
+
+fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
+    // Normalised coordinates: Vulkan forbids unnormalised ones on 3D images.
+    // Clamp to edge equals the manual path's clamped texel indices.
+    let info = vk::SamplerCreateInfo::default()
+        .mag_filter(filter)
+        .min_filter(filter)
+        .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .unnormalized_coordinates(false);
+    unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")
 }
 
 impl GpuVolume {
@@ -24,28 +45,52 @@ impl GpuVolume {
             VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
         };
         let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::NEAREST)
-            .min_filter(vk::Filter::NEAREST)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .unnormalized_coordinates(false);
-        let sampler = unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
-        Ok(GpuVolume {
+        let mut gv = GpuVolume {
             ctx: ctx.clone(),
             image,
-            sampler,
+            sampler: sampler(ctx, vk::Filter::NEAREST)?,
+            linear: None,
             dims: volume.dims,
             spacing: volume.spacing,
             norm: volume.norm,
-        })
+        };
+        if ctx.filters_linearly(format) {
+            gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
+        }
+        Ok(gv)
+    }
+
+    /// The sampler the march kernels bind for `filter`; hardware filtering
+    /// of a format the device cannot filter is an error naming the format.
+    pub fn sampler_for(&self, filter: Filter) -> Result<vk::Sampler> {
+        match (filter, self.linear) {
+            (Filter::Manual, _) => Ok(self.sampler),
+            (Filter::Hardware, Some(linear)) => Ok(linear),
+            (Filter::Hardware, None) => Err(Error::invalid(
+                "filter",
+                "hardware",
+                format!(
+                    "{} has no linear filtering of {:?} (SAMPLED_IMAGE_FILTER_LINEAR); use --filter manual",
+                    self.ctx.info().name,
+                    self.image.format
+                ),
+            )),
+        }
+    }
+
+    /// The faster filter this volume supports on this device (`Filter::device_default`).
+    pub fn default_filter(&self) -> Filter {
+        Filter::device_default(self.linear.is_some())
     }
 }
 
 impl Drop for GpuVolume {
     fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_sampler(self.sampler, None) };
+        unsafe {
+            self.ctx.device().destroy_sampler(self.sampler, None);
+            if let Some(linear) = self.linear {
+                self.ctx.device().destroy_sampler(linear, None);
+            }
+        }
     }
 }

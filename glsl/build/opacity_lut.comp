@@ -1,0 +1,21 @@
+#version 460
+// The march kernels' LUT for one frame (glsl/common/tf.glsl): entries
+// 0..n-1 the transfer function with alpha corrected for the frame's step dt,
+// entries n..2n-1 the raw one, for the ray's shortened last sample.
+#extension GL_GOOGLE_include_directive : require
+#include "opacity.glsl"
+
+layout(local_size_x = 64) in;
+layout(std430, set = 0, binding = 0) readonly buffer Raw { vec4 raw[]; };
+layout(std430, set = 0, binding = 1) writeonly buffer Lut { vec4 lut[]; };
+layout(push_constant) uniform Push { float dt; uint n; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.n) {
+        return;
+    }
+    vec4 c = raw[i];
+    lut[i] = vec4(c.rgb, opacity(c.a, pc.dt));
+    lut[pc.n + i] = c;
+}
