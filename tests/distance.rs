@@ -110,7 +110,13 @@ fn cpu_summary(counts: [u32; 3], flags: &[bool], reference: &[u32], octants: boo
         }
     }
     let cells = flags.len() as u64;
-    let mean = |sum: u64, n: u64| if n == 0 { 0.0 } else { sum as f64 / (half as f64 * n as f64) };
+    let mean = |sum: u64, n: u64| {
+        if n == 0 {
+            0.0
+        } else {
+            sum as f64 / (half as f64 * n as f64)
+        }
+    };
     Summary {
         cells,
         active,

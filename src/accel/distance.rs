@@ -317,7 +317,13 @@ impl DistanceMap {
         let active = words[0] as u64;
         let sum = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
         let half = (channels(self.octants) / 2) as f64;
-        let mean = |sum: u64, cells: u64| if cells == 0 { 0.0 } else { sum as f64 / (half * cells as f64) };
+        let mean = |sum: u64, cells: u64| {
+            if cells == 0 {
+                0.0
+            } else {
+                sum as f64 / (half * cells as f64)
+            }
+        };
         Ok(Summary {
             cells: self.total,
             active,

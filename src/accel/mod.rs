@@ -4,6 +4,7 @@
 //! The builder, renderer, CLI, bench and tests all iterate the table; see
 //! `docs/structures.md` for the checklist.
 
+pub mod auto;
 pub mod bricks;
 pub mod classify;
 pub mod cost;

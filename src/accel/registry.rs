@@ -7,7 +7,7 @@ use super::classify::Classify;
 use super::cost::CostModel;
 use super::stats::Stats;
 use super::tree::GpuTree;
-use super::{distance, grid, hybrid, kd, lbvh, naive, octree};
+use super::{auto, distance, grid, hybrid, kd, lbvh, naive, octree};
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Binding, Context, Shader, Timer};
 use crate::prims::BrickMinMax;
@@ -33,6 +33,7 @@ pub const TABLE: &[Accel] = &[
     Accel(&octree::OctreeMethod(Traversal::O89)),
     Accel(&octree::OctreeMethod(Traversal::O93)),
     Accel(&octree::OctreeMethod(Traversal::Rev)),
+    Accel(&auto::AutoMethod),
 ];
 
 /// Which per-volume value ranges (computed once per volume upload) a
@@ -117,6 +118,10 @@ pub trait Built {
     fn stats(&self) -> Result<Option<Stats>>;
     /// The tree, for structures in the shared tree node format.
     fn tree(&self) -> Option<&GpuTree> {
+        None
+    }
+    /// For `auto`: what it chose (the structure frames are marched with).
+    fn choice(&self) -> Option<&auto::Choice> {
         None
     }
 }
@@ -297,6 +302,11 @@ impl Structure {
     pub fn tree(&self) -> Option<&GpuTree> {
         self.built.tree()
     }
+
+    /// For `auto`: what it chose; `accel` is then the chosen structure.
+    pub fn choice(&self) -> Option<&auto::Choice> {
+        self.built.choice()
+    }
 }
 
 /// Per-volume value ranges, each with the GPU time it took (ms).
@@ -445,6 +455,8 @@ impl Builder {
     ) -> Result<(Structure, Timings)> {
         options.validate()?;
         let (built, t) = accel.method().build(self, input, ranges, options)?;
+        // `auto` is marched as the structure it chose.
+        let accel = built.choice().map_or(accel, |c| c.accel);
         Ok((Structure { accel, built }, t))
     }
 

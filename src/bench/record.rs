@@ -130,6 +130,9 @@ pub struct Record {
     /// Sample filter of the timed frames (manual or hardware).
     #[serde(default = "manual")]
     pub filter: String,
+    /// For `auto`: the structure it chose (`distance (cell 4)`, `naive`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chosen: Option<String>,
 }
 
 /// Records written before the filter existed sampled by hand.

@@ -519,6 +519,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 warmed_up: run.warmup,
                 error_vs_naive: run.error.clone().ok_or_else(|| missing("frame 0"))?,
                 filter: filter.to_string(),
+                chosen: run.structure.choice().map(|c| c.describe()),
             });
             if let Some(first) = &run.first {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));

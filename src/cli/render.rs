@@ -19,8 +19,8 @@ pub struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<TransferFunction>,
-    /// Empty space skipping structure: naive, lbvh, grid, distance, distance-octant, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
-    #[arg(long, default_value = "naive")]
+    /// Empty space skipping structure: auto (default: chosen per volume and TF), naive, lbvh, grid, distance, distance-octant, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
+    #[arg(long, default_value = "auto")]
     accel: Accel,
     /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
     #[arg(long, default_value = "range")]
@@ -210,12 +210,18 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         }
         println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
     }
+    if let Some(choice) = structure.choice() {
+        println!("auto -> {}", choice.describe());
+        println!("  {}", choice.reason());
+    }
     if let Some(stats) = structure.stats()? {
         println!("structure {stats}");
     }
     println!("render GPU time per pass:\n{timings}");
     if let (Some(out), Some(format)) = (&args.out, format) {
-        describe(&mut frame, &volume, &tf, args.accel, &params, &settings, &ctx, &timings)?;
+        describe(
+            &mut frame, &volume, &tf, &structure, args.accel, &params, &settings, &ctx, &timings,
+        )?;
         frame.write(out, format)?;
         println!("wrote {}", out.display());
     }
@@ -228,6 +234,7 @@ fn describe(
     frame: &mut Frame,
     volume: &Volume,
     tf: &TransferFunction,
+    structure: &Structure,
     accel: Accel,
     params: &[(&'static str, String)],
     settings: &RenderSettings,
@@ -239,6 +246,9 @@ fn describe(
     meta.insert("volume".into(), volume.name.clone());
     meta.insert("tf".into(), tf.spec.clone());
     meta.insert("accel".into(), accel.to_string());
+    if let Some(choice) = structure.choice() {
+        meta.insert("auto".into(), choice.describe());
+    }
     for (k, v) in params {
         meta.insert(k.to_string(), v.clone());
     }

@@ -1,0 +1,195 @@
+//! `--accel auto`: the structure for this volume and transfer function,
+//! chosen without a trial render. It builds the cube distance map (which is
+//! the candidate itself), reads its summary (active fraction, the mean
+//! distances of empty and active cells, the active-empty faces), predicts the
+//! frame time of the distance march against naive marching with the
+//! device's measured cost model, and keeps the map or drops to naive.
+//! Re-made on every build, i.e. every transfer-function change. The model is
+//! documented in `docs/structures.md`.
+
+use super::cost::{self, CostModel};
+use super::distance::{self, DistanceKernels, DistanceMap, Summary};
+use super::naive::NoData;
+use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::stats::Stats;
+use super::tree::GpuTree;
+use super::{Accel, Classifier};
+use crate::error::Result;
+use crate::gpu::{Binding, Timer};
+use crate::timings::Timings;
+
+/// The cell edge auto plans with when `--cell` is not given: the finest
+/// cell whose map rebuild stays cheap (`docs/results/distance.md`).
+pub const CELL: u32 = 4;
+
+/// Predicted distance-march time over naive time above which auto marches naively.
+pub const THRESHOLD: f64 = 1.0;
+
+/// What auto chose and why.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Choice {
+    /// The structure the frames are marched with.
+    pub accel: Accel,
+    pub cell: u32,
+    /// The distance march's predicted frame time over naive's.
+    pub predicted: f64,
+    pub summary: Summary,
+    pub model: CostModel,
+}
+
+impl Choice {
+    /// `distance (cell 4)` or `naive`.
+    pub fn describe(&self) -> String {
+        if self.accel.is_naive() {
+            "naive".into()
+        } else {
+            format!("{} (cell {})", self.accel, self.cell)
+        }
+    }
+
+    /// One line with the statistics behind the choice.
+    pub fn reason(&self) -> String {
+        let s = &self.summary;
+        format!(
+            "active cells {:.2} %, faces per active cell {:.2}, mean distance empty {:.2} active {:.2} cells; predicted distance/naive {:.3}",
+            100.0 * s.active_fraction(),
+            s.faces as f64 / s.active.max(1) as f64,
+            s.empty_distance,
+            s.active_distance,
+            self.predicted
+        )
+    }
+}
+
+/// The predicted frame time of the distance march over naive marching's, at
+/// the renderer's default step. Per cell of ray length, naive takes
+/// `cell / step` samples; the distance march takes those of the active
+/// fraction plus one walk step per box, a box spanning about its cell's
+/// distance in cells: `(1 - a) / d_empty + a / d_active` steps per cell.
+pub fn predict(s: &Summary, cell: u32, model: &CostModel) -> f64 {
+    let a = s.active_fraction();
+    let steps_per_cell = (1.0 - a) / s.empty_distance.max(1.0) + a / s.active_distance.max(1.0);
+    let samples_per_cell = cell as f64 / cost::STEP as f64;
+    // A walk step costs a traversal step and a region entry (span + skip).
+    let walk = model.step_ns + model.entry_ns;
+    a + steps_per_cell * walk / (samples_per_cell * model.sample_ns)
+}
+
+/// The built structure and the choice behind it.
+struct Chosen {
+    choice: Choice,
+    inner: Box<dyn Built>,
+}
+
+impl Built for Chosen {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        self.inner.bindings()
+    }
+    fn push(&self) -> Vec<u8> {
+        self.inner.push()
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        self.inner.stats()
+    }
+    fn tree(&self) -> Option<&GpuTree> {
+        self.inner.tree()
+    }
+    fn choice(&self) -> Option<&Choice> {
+        Some(&self.choice)
+    }
+}
+
+/// `--accel auto`.
+pub struct AutoMethod;
+
+impl Method for AutoMethod {
+    fn name(&self) -> &'static str {
+        "auto"
+    }
+    fn description(&self) -> &'static str {
+        "chooses naive or the distance map for this volume and TF from the map's statistics and the device's cost model"
+    }
+    fn ranges(&self) -> RangeKind {
+        RangeKind::Cells
+    }
+    fn default_cell(&self) -> u32 {
+        CELL
+    }
+    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
+        vec![("cell", o.cell.to_string())]
+    }
+    /// The kernel of the distance map it builds; frames use the chosen
+    /// structure's (`Structure::accel`).
+    fn march(&self) -> March {
+        distance::DistanceMethod { octants: false }.march()
+    }
+    fn variants(&self) -> Vec<(String, BuildOptions)> {
+        [CELL, 8]
+            .into_iter()
+            .map(|cell| {
+                (
+                    format!("auto cell {cell}"),
+                    BuildOptions {
+                        cell,
+                        ..BuildOptions::default()
+                    },
+                )
+            })
+            .collect()
+    }
+    /// Host-driven: the choice reads the map's summary back.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let ctx = builder.context();
+        let model = builder.cost_model()?;
+        let kernels = builder.kernels::<DistanceKernels>()?;
+        let classifier = builder.kernels::<Classifier>()?;
+        let cells = ranges.cells(options.cell)?;
+        let out = DistanceMap::summary_buffer(ctx)?;
+        let mut timer = Timer::new(ctx, 8)?;
+        let map = ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            let map = distance::record(
+                ctx,
+                &kernels,
+                &classifier,
+                cmd,
+                &mut timer,
+                input.gpu_volume,
+                cells,
+                input.gpu_tf,
+                false,
+            )?;
+            map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+            Ok(map)
+        })?;
+        let mut timings = timer.results()?;
+        let (choice, inner) = timings.cpu("choose", || -> Result<(Choice, Box<dyn Built>)> {
+            let summary = map.read_summary(&out)?;
+            let predicted = predict(&summary, options.cell, &model);
+            let distance: Accel = "distance".parse()?;
+            let (accel, inner): (Accel, Box<dyn Built>) = if predicted < THRESHOLD {
+                (distance, Box::new(map))
+            } else {
+                (Accel::naive(), Box::new(NoData))
+            };
+            let choice = Choice {
+                accel,
+                cell: options.cell,
+                predicted,
+                summary,
+                model,
+            };
+            Ok((choice, inner))
+        })?;
+        Ok((Box::new(Chosen { choice, inner }), timings))
+    }
+}
