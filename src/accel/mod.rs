@@ -6,6 +6,7 @@
 
 pub mod bricks;
 pub mod classify;
+pub mod cost;
 pub mod grid;
 pub mod hybrid;
 pub mod kd;
@@ -19,6 +20,7 @@ pub mod tree;
 
 pub use bricks::GpuBricks;
 pub use classify::{Classifier, Classify};
+pub use cost::CostModel;
 pub use registry::{
     Accel, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges, Structure, TABLE,
 };

@@ -4,6 +4,7 @@
 
 use super::bricks::{self, GpuBricks};
 use super::classify::Classify;
+use super::cost::CostModel;
 use super::stats::Stats;
 use super::tree::GpuTree;
 use super::{grid, hybrid, kd, lbvh, naive, octree};
@@ -353,6 +354,7 @@ pub trait KernelSet: Send + Sync + Sized + 'static {
 pub struct Builder {
     ctx: Context,
     kernels: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
+    cost: Mutex<Option<CostModel>>,
 }
 
 impl Builder {
@@ -360,7 +362,20 @@ impl Builder {
         Ok(Builder {
             ctx: ctx.clone(),
             kernels: Mutex::new(HashMap::new()),
+            cost: Mutex::new(None),
         })
+    }
+
+    /// The traversal cost model of this device, measured on first use (a
+    /// few small timed dispatches; see `accel::cost`) and kept.
+    pub fn cost_model(&self) -> Result<CostModel> {
+        let mut cost = self.cost.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(m) = *cost {
+            return Ok(m);
+        }
+        let m = CostModel::measure(&self.ctx)?;
+        *cost = Some(m);
+        Ok(m)
     }
 
     pub fn context(&self) -> &Context {
