@@ -214,7 +214,10 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
 fn the_hard_case_suite_passes_for_every_structure() {
     let (code, stdout, stderr) = lacuna(&["bench", "--suite", "hard", "--quiet"]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
-    assert!(stdout.contains("| hard case | lbvh | grid |"), "{stdout}");
+    assert!(
+        stdout.contains("| hard case | lbvh | lbvh collapsed | grid |"),
+        "{stdout}"
+    );
     assert!(!stdout.contains("FAIL"), "{stdout}");
     let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().len();
     assert!(
