@@ -222,7 +222,10 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
 fn the_hard_case_suite_passes_for_every_structure() {
     let (code, stdout, stderr) = lacuna(&["bench", "--suite", "hard", "--quiet"]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
-    assert!(stdout.contains("| hard case | filter | lbvh | grid |"), "{stdout}");
+    assert!(
+        stdout.contains("| hard case | filter | lbvh | lbvh collapsed | grid |"),
+        "{stdout}"
+    );
     assert!(!stdout.contains("FAIL"), "{stdout}");
     // Every case under both filters: the hard cases are 8-bit, and Vulkan
     // requires linear filtering of R8 UNORM.

@@ -21,6 +21,21 @@ fn skipping() -> impl Iterator<Item = Accel> {
     Accel::skipping()
 }
 
+/// `o`, and `o` with cost-driven leaves for the structures that read them.
+fn with_collapse(accel: Accel, o: &BuildOptions) -> Vec<(Accel, BuildOptions)> {
+    let mut sets = vec![(accel, *o)];
+    if accel.method().params(o).iter().any(|(name, _)| *name == "collapse") {
+        sets.push((
+            accel,
+            BuildOptions {
+                collapse: !o.collapse,
+                ..*o
+            },
+        ));
+    }
+    sets
+}
+
 struct Fixture {
     ctx: Context,
     renderer: Renderer,
@@ -104,8 +119,8 @@ impl Fixture {
             })
             .collect();
         for o in options {
-            for accel in skipping() {
-                let s = self.build(&p, accel, o);
+            for (accel, o) in skipping().flat_map(|a| with_collapse(a, o)) {
+                let s = self.build(&p, accel, &o);
                 for (filter, naive) in filters.iter().zip(&naive) {
                     for (i, view) in views.iter().enumerate() {
                         let f = self.frame(&s, &p, view, *filter);

@@ -6,7 +6,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::kd::occupancy::Occupancy;
-use lacuna::accel::kd::{leaf_boxes, volume, Depth, IBox, KdParams};
+use lacuna::accel::kd::{cheaper_as_leaf, leaf_boxes, volume, Depth, IBox, KdParams};
 use lacuna::accel::{BuildInput, BuildOptions, Builder};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -87,8 +87,9 @@ fn occupancy_tables_match_brute_force() {
     }
 }
 
-/// Tight, disjoint, covering leaves; deep leaves obey the size rules.
-fn check_tree(what: &str, occ: &Occupancy, leaves: &[IBox], params: &KdParams) {
+/// Tight, disjoint, covering leaves; deep leaves obey the size rules unless
+/// cost-driven leaves are on (a region cheaper as one leaf stays whole).
+fn check_tree(what: &str, occ: &Occupancy, leaves: &[IBox], params: &KdParams, collapse: bool) {
     let mut sum = 0;
     for (i, l) in leaves.iter().enumerate() {
         let n = occ.count(l);
@@ -108,7 +109,7 @@ fn check_tree(what: &str, occ: &Occupancy, leaves: &[IBox], params: &KdParams) {
                 "{what}: leaf {l:?} is not tight at its high {a} face"
             );
         }
-        if params.depth == Depth::Deep {
+        if params.depth == Depth::Deep && !collapse {
             let longest = (0..3).map(|a| l[1][a] - l[0][a]).max().unwrap();
             assert!(
                 longest <= params.max_leaf as i32 || volume(l) <= 512,
@@ -171,7 +172,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
             tf: &tf,
             gpu_tf: &lut,
         };
-        for kd in params {
+        for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {
             for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {
                 let (s, timings) = builder
                     .build(
@@ -180,14 +181,30 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
                         &ranges,
                         &BuildOptions {
                             kd,
+                            collapse,
                             ..Default::default()
                         },
                     )
                     .unwrap();
                 let tree = s.tree().unwrap();
                 let nodes = tree.read_nodes().unwrap();
-                let what = format!("{spec} {accel} {}", kd.describe());
-                check_tree(&what, &occ, &leaf_boxes(&nodes), &kd);
+                let what = format!("{spec} {accel} {} collapse {collapse}", kd.describe());
+                check_tree(&what, &occ, &leaf_boxes(&nodes), &kd, collapse);
+                if collapse {
+                    // Every split kept is one the cost model prefers.
+                    let model = builder.cost_model().unwrap();
+                    for n in nodes.iter().filter(|n| !n.is_leaf()) {
+                        let b = |i: i32| {
+                            let (lo, hi) = nodes[i as usize].bounds();
+                            [lo, hi]
+                        };
+                        let (lo, hi) = n.bounds();
+                        assert!(
+                            !cheaper_as_leaf(&model, &[lo, hi], &b(n.lo[3]), &b(n.hi[3])),
+                            "{what}: {n:?} is cheaper as a leaf"
+                        );
+                    }
+                }
                 let stats = tree.stats().unwrap();
                 assert_eq!(stats.nodes as usize, nodes.len());
                 assert_eq!(stats.leaves as usize, leaf_boxes(&nodes).len());

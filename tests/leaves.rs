@@ -4,8 +4,10 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::cost::{self, FLOOR_NS};
-use lacuna::accel::Builder;
+use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Stats};
 use lacuna::render::RenderSettings;
+use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
 
 #[test]
 fn the_cost_model_is_measured_once_with_positive_finite_constants() {
@@ -26,4 +28,72 @@ fn the_cost_model_is_measured_once_with_positive_finite_constants() {
 #[test]
 fn the_collapse_plans_for_the_renderers_default_step() {
     assert_eq!(RenderSettings::default().step, cost::STEP);
+}
+
+/// Every tree that reads `collapse`, built with it on.
+fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats)> {
+    let builder = Builder::new(ctx).unwrap();
+    let gv = GpuVolume::upload(ctx, v).unwrap();
+    let lut = tf.upload(ctx).unwrap();
+    let (ranges, _) = builder.ranges(&gv, 16).unwrap();
+    let input = BuildInput {
+        volume: v,
+        gpu_volume: &gv,
+        tf,
+        gpu_tf: &lut,
+    };
+    let on = BuildOptions {
+        collapse: true,
+        ..Default::default()
+    };
+    Accel::skipping()
+        .filter(|a| a.method().params(&on).iter().any(|(name, _)| *name == "collapse"))
+        .map(|a| {
+            let stats = |o: &BuildOptions| {
+                builder
+                    .build(a, &input, &ranges, o)
+                    .unwrap()
+                    .0
+                    .stats()
+                    .unwrap()
+                    .unwrap()
+            };
+            (a, stats(&on), stats(&BuildOptions::default()))
+        })
+        .collect()
+}
+
+#[test]
+fn a_fully_active_volume_is_one_leaf_and_a_sparse_one_keeps_its_empty_space_out() {
+    let ctx = gpu();
+    let tf = TransferFunction::parse("band:0.5:1").unwrap();
+    let dims = [72, 64, 56];
+    let n = dims.iter().product::<u32>() as usize;
+    // One dark voxel, so the stored range (which values are normalised by) is not empty.
+    let mut data = vec![200u8; n];
+    data[0] = 0;
+    let full = Volume::new("full", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let trees = collapsed_trees(&ctx, &full, &tf);
+    assert_eq!(trees.len(), 3, "lbvh, kd-cpu and kd-gpu read collapse");
+    for (accel, on, off) in trees {
+        assert_eq!((on.nodes, on.leaves, on.height), (1, 1, 1), "{accel}: {on}");
+        assert!(off.nodes >= on.nodes, "{accel}");
+    }
+    // Two bright 4^3 blobs in opposite corners: one leaf would march the
+    // whole volume's diagonal for two small targets.
+    let mut data = vec![0u8; n];
+    for (x0, y0, z0) in [(2, 2, 2), (64, 56, 48)] {
+        for z in z0..z0 + 4 {
+            for y in y0..y0 + 4 {
+                for x in x0..x0 + 4 {
+                    data[x + dims[0] as usize * (y + dims[1] as usize * z)] = 200;
+                }
+            }
+        }
+    }
+    let sparse = Volume::new("sparse", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    for (accel, on, _) in collapsed_trees(&ctx, &sparse, &tf) {
+        assert!(on.leaves >= 2, "{accel}: {on}");
+    }
+    assert_clean(&ctx);
 }

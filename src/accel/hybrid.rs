@@ -56,7 +56,7 @@ impl Method for HybridMethod {
             depth: kd::Depth::Shallow,
             ..options.kd
         };
-        let (tree, mut t) = kd::cpu::build(ctx, input.volume, input.tf, &shallow)?;
+        let (tree, mut t) = kd::cpu::build(ctx, input.volume, input.tf, &shallow, None)?;
         let classifier = builder.kernels::<Classifier>()?;
         let cells = ranges.cells(options.cell)?;
         let mut timer = Timer::new(ctx, 1)?;

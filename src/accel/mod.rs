@@ -24,6 +24,7 @@ pub use bricks::GpuBricks;
 pub use classify::{Classifier, Classify};
 pub use cost::CostModel;
 pub use registry::{
-    Accel, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges, Structure, TABLE,
+    parse_collapse, Accel, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
+    Structure, TABLE,
 };
 pub use stats::Stats;

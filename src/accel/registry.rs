@@ -85,6 +85,9 @@ pub struct BuildOptions {
     pub kd: kd::KdParams,
     /// Macro-cell edge of the grid and the hybrid (a power of two).
     pub cell: u32,
+    /// Cost-driven leaves for the trees (`accel::cost`): a subtree or
+    /// region cheaper as one leaf becomes one. Off reproduces the paper.
+    pub collapse: bool,
 }
 
 impl Default for BuildOptions {
@@ -93,6 +96,7 @@ impl Default for BuildOptions {
             classify: Classify::Range,
             kd: kd::KdParams::default(),
             cell: grid::CELL,
+            collapse: false,
         }
     }
 }
@@ -488,6 +492,20 @@ impl KernelSet for super::Classifier {
     fn new(ctx: &Context) -> Result<Self> {
         super::Classifier::new(ctx)
     }
+}
+
+/// `--collapse on|off`.
+pub fn parse_collapse(s: &str) -> Result<bool> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => Err(Error::invalid("collapse", other, "expected on or off")),
+    }
+}
+
+/// The cost-driven leaves parameter, as the trees print it.
+pub(crate) fn collapse_param(on: bool) -> (&'static str, String) {
+    ("collapse", if on { "on" } else { "off" }.to_string())
 }
 
 /// The classification parameter, as structures that classify 8^3 bricks print it.

@@ -64,20 +64,37 @@ impl Node {
 
 /// Height (nodes on the longest root-to-leaf path) of a node array.
 pub fn height(nodes: &[Node]) -> u32 {
+    shape(nodes).height
+}
+
+/// What the traversal reaches from the root: nodes, leaves and height. A
+/// collapsed subtree's nodes stay in the array but are not reached.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Shape {
+    pub nodes: u64,
+    pub leaves: u64,
+    pub height: u32,
+}
+
+/// The reachable shape of a node array (root 0).
+pub fn shape(nodes: &[Node]) -> Shape {
+    let mut s = Shape::default();
     if nodes.is_empty() {
-        return 0;
+        return s;
     }
-    let mut best = 0;
     let mut stack = vec![(0usize, 1u32)];
     while let Some((i, depth)) = stack.pop() {
-        best = best.max(depth);
+        s.nodes += 1;
+        s.height = s.height.max(depth);
         let n = nodes[i];
-        if !n.is_leaf() {
+        if n.is_leaf() {
+            s.leaves += 1;
+        } else {
             stack.push((n.lo[3] as usize, depth + 1));
             stack.push((n.hi[3] as usize, depth + 1));
         }
     }
-    best
+    s
 }
 
 /// A tree on the GPU: what the tree march kernels read.
@@ -87,11 +104,12 @@ pub struct GpuTree {
     pub count: Buffer,
     pub leaves: u32,
     pub node_count: u32,
-    /// Statistics known at build time; the height is derived on request.
+    /// Statistics known at build time; the reachable shape (nodes, leaves,
+    /// height) is derived on request.
     pub(crate) stats: Stats,
     /// Known at upload for CPU-built trees; an LBVH reads its nodes back for
     /// it only when statistics are asked for, never on the build path.
-    pub(crate) height: std::sync::OnceLock<u32>,
+    pub(crate) shape: std::sync::OnceLock<Shape>,
 }
 
 pub(crate) const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
@@ -111,8 +129,6 @@ impl GpuTree {
             Buffer::with_data(ctx, "tree nodes", bytemuck::cast_slice(nodes), STORAGE_XFER)?
         };
         let count = Buffer::with_data(ctx, "tree leaf count", bytemuck::bytes_of(&leaves), STORAGE_XFER)?;
-        stats.nodes = nodes.len() as u64;
-        stats.leaves = leaves as u64;
         stats.bytes = nodes.len() as u64 * 32;
         Ok(GpuTree {
             nodes: node_buf,
@@ -120,22 +136,25 @@ impl GpuTree {
             leaves,
             node_count: nodes.len() as u32,
             stats,
-            height: std::sync::OnceLock::from(height(nodes)),
+            shape: std::sync::OnceLock::from(shape(nodes)),
         })
     }
 
-    /// The paper's Table 1 statistics (reads the nodes back once if the
-    /// height is not known yet).
+    /// The paper's Table 1 statistics, nodes and leaves as the traversal
+    /// reaches them (reads the nodes back once if not known yet). `bytes` is
+    /// the node array's size.
     pub fn stats(&self) -> Result<Stats> {
-        let h = match self.height.get() {
-            Some(h) => *h,
+        let s = match self.shape.get() {
+            Some(s) => *s,
             None => {
-                let h = height(&self.read_nodes()?);
-                *self.height.get_or_init(|| h)
+                let s = shape(&self.read_nodes()?);
+                *self.shape.get_or_init(|| s)
             }
         };
         Ok(Stats {
-            height: h,
+            nodes: s.nodes,
+            leaves: s.leaves,
+            height: s.height,
             ..self.stats
         })
     }

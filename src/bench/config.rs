@@ -94,6 +94,8 @@ pub struct StructureConfig {
     pub max_leaf: Option<u32>,
     pub bins: Option<u32>,
     pub cell: Option<u32>,
+    /// Cost-driven leaves for the trees (default false: the paper's trees).
+    pub collapse: Option<bool>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -141,7 +143,12 @@ impl StructureConfig {
         Ok(StructureSpec {
             label: self.label.clone(),
             accel,
-            options: BuildOptions { classify, kd, cell },
+            options: BuildOptions {
+                classify,
+                kd,
+                cell,
+                collapse: self.collapse.unwrap_or(false),
+            },
         })
     }
 }

@@ -22,6 +22,10 @@ pub struct Setup {
     /// Early ray termination threshold of the timed frames; null = off.
     pub timed_ert: Option<f32>,
     pub camera: String,
+    /// The measured cost model (`accel::cost`), when a structure collapses
+    /// leaves by it; null otherwise.
+    #[serde(default)]
+    pub cost_model: Option<crate::accel::CostModel>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]

@@ -321,6 +321,11 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             "orthographic orbit, elevation {}, {} views",
             config.elevation, config.frames
         ),
+        cost_model: structures
+            .iter()
+            .any(|s| s.options.collapse)
+            .then(|| builder.cost_model())
+            .transpose()?,
     };
     let least = config.warmup.max(2) as u64;
     let per_structure = 2 * least + (config.builds + config.frames * config.rounds) as u64;

@@ -3,7 +3,7 @@
 use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::kd::KdParams;
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
+use lacuna::accel::{parse_collapse, Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
 use lacuna::frame::{Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::render::{self, Camera, Filter, Projection, RenderSettings, Renderer};
@@ -40,6 +40,9 @@ pub struct RenderArgs {
     /// Macro-cell edge in voxels, a power of two (default: the structure's; grid and hybrid 16, distance maps 8).
     #[arg(long)]
     cell: Option<u32>,
+    /// Trees (lbvh, kd-cpu, kd-gpu): cost-driven leaves, a subtree cheaper as one leaf by the measured cost model becomes one (on), or the paper's trees (off).
+    #[arg(long, default_value = "off")]
+    collapse: String,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
     size: (u32, u32),
@@ -82,6 +85,7 @@ impl RenderArgs {
             classify: Classify::parse(&self.classify, &self.apron)?,
             kd: KdParams::parse(&self.kd, self.max_leaf, self.bins)?,
             cell: self.cell.unwrap_or(self.accel.method().default_cell()),
+            collapse: parse_collapse(&self.collapse)?,
         };
         options.validate()?;
         let projection = match self.perspective {

@@ -4,10 +4,14 @@
 
 use super::occupancy::Occupancy;
 use super::{
-    choose, flatten, forced_plane, halves, longest_axis, raster_planes, volume, Candidate, IBox, KdNode, KdParams,
+    cheaper_as_leaf, choose, flatten, forced_plane, halves, longest_axis, raster_planes, volume, Candidate, IBox,
+    KdNode, KdParams,
 };
 use super::{kd_variants, Depth};
-use crate::accel::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use crate::accel::cost::CostModel;
+use crate::accel::registry::{
+    collapse_param, BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges,
+};
 use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, Node, TREE_MARCH};
 use crate::error::Result;
@@ -17,8 +21,9 @@ use crate::timings::Timings;
 use crate::volume::Volume;
 use rayon::prelude::*;
 
-/// Splits `b` (a tight box) recursively.
-pub fn split(occ: &Occupancy, b: IBox, root_vol: i64, params: &KdParams) -> KdNode {
+/// Splits `b` (a tight box) recursively; with a cost model, a region
+/// cheaper as one leaf stays one.
+pub fn split(occ: &Occupancy, b: IBox, root_vol: i64, params: &KdParams, collapse: Option<&CostModel>) -> KdNode {
     if params.halts(volume(&b), root_vol) {
         return KdNode::Leaf(b);
     }
@@ -39,29 +44,41 @@ pub fn split(occ: &Occupancy, b: IBox, root_vol: i64, params: &KdParams) -> KdNo
         }),
     };
     match chosen {
-        Some((_, Some(l), Some(r))) => {
-            let (left, right) = rayon::join(|| split(occ, l, root_vol, params), || split(occ, r, root_vol, params));
+        Some((_, Some(l), Some(r))) if !collapse.is_some_and(|m| cheaper_as_leaf(m, &b, &l, &r)) => {
+            let (left, right) = rayon::join(
+                || split(occ, l, root_vol, params, collapse),
+                || split(occ, r, root_vol, params, collapse),
+            );
             KdNode::Inner(b, Box::new(left), Box::new(right))
         }
         // A forced split with one empty side just tightens the box.
-        Some((_, Some(only), None)) | Some((_, None, Some(only))) if only != b => split(occ, only, root_vol, params),
+        Some((_, Some(only), None)) | Some((_, None, Some(only))) if only != b => {
+            split(occ, only, root_vol, params, collapse)
+        }
         _ => KdNode::Leaf(b),
     }
 }
 
-/// Builds the tree over `occ`'s active footprints.
-pub fn build_nodes(occ: &Occupancy, params: &KdParams) -> Vec<Node> {
+/// Builds the tree over `occ`'s active footprints (with cost-driven leaves
+/// when a cost model is given).
+pub fn build_nodes(occ: &Occupancy, params: &KdParams, collapse: Option<&CostModel>) -> Vec<Node> {
     let all: IBox = [[0; 3], occ.dims];
-    let root = occ.tight(&all).map(|b| split(occ, b, volume(&b), params));
+    let root = occ.tight(&all).map(|b| split(occ, b, volume(&b), params, collapse));
     flatten(root.as_ref())
 }
 
 /// Occupancy ("svt"), the tree ("tree") and its upload ("upload"), all wall
 /// time on the host.
-pub fn build(ctx: &Context, volume: &Volume, tf: &TransferFunction, params: &KdParams) -> Result<(GpuTree, Timings)> {
+pub fn build(
+    ctx: &Context,
+    volume: &Volume,
+    tf: &TransferFunction,
+    params: &KdParams,
+    collapse: Option<&CostModel>,
+) -> Result<(GpuTree, Timings)> {
     let mut t = Timings::default();
     let occ = t.cpu("svt", || Occupancy::new(volume, tf));
-    let nodes = t.cpu("tree", || build_nodes(&occ, params));
+    let nodes = t.cpu("tree", || build_nodes(&occ, params, collapse));
     let stats = Stats {
         unit: "voxel footprints",
         total_bricks: volume.voxel_count(),
@@ -88,7 +105,7 @@ impl Method for KdCpu {
         RangeKind::None
     }
     fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("kd", o.kd.describe())]
+        vec![("kd", o.kd.describe()), collapse_param(o.collapse)]
     }
     fn march(&self) -> March {
         TREE_MARCH
@@ -107,7 +124,8 @@ impl Method for KdCpu {
         _: &Ranges,
         options: &BuildOptions,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let (tree, t) = build(builder.context(), input.volume, input.tf, &options.kd)?;
+        let model = options.collapse.then(|| builder.cost_model()).transpose()?;
+        let (tree, t) = build(builder.context(), input.volume, input.tf, &options.kd, model.as_ref())?;
         Ok((Box::new(tree), t))
     }
 }

@@ -7,11 +7,15 @@
 //! paper launched kernels per plane).
 
 use super::{
-    binned_planes, choose, forced_plane, halves, longest_axis, volume, Candidate, IBox, KdNode, KdParams, RASTER,
+    binned_planes, cheaper_as_leaf, choose, forced_plane, halves, longest_axis, volume, Candidate, IBox, KdNode,
+    KdParams, RASTER,
 };
 use super::{kd_variants, Depth};
+use crate::accel::cost::CostModel;
 use crate::accel::morton::{MortonPush, MAX_BRICKS_PER_AXIS};
-use crate::accel::registry::{BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges};
+use crate::accel::registry::{
+    collapse_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
+};
 use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
@@ -142,7 +146,13 @@ impl KdGpuBuilder {
     /// Builds the tree for a TF. Phases: "bricks", "morton", "sort" and
     /// "queries" (GPU timestamps, the last summed over the levels), "host"
     /// (the recursion's wall time net of the queries) and "upload".
-    pub fn build(&self, gv: &GpuVolume, tf: &GpuTransferFunction, params: &KdParams) -> Result<(GpuTree, Timings)> {
+    pub fn build(
+        &self,
+        gv: &GpuVolume,
+        tf: &GpuTransferFunction,
+        params: &KdParams,
+        collapse: Option<&CostModel>,
+    ) -> Result<(GpuTree, Timings)> {
         let mut timings = Timings::default();
         let mut timer = Timer::new(&self.ctx, 4)?;
         let sorted = self.sorted_bricks(gv, tf, &mut timer, &mut timings)?;
@@ -199,6 +209,9 @@ impl KdGpuBuilder {
                     });
                     let chosen = choose(&b, &cands).map(|i| cands[i]).or(forced_c);
                     if let Some((_, Some(l), Some(r))) = chosen {
+                        if collapse.is_some_and(|m| cheaper_as_leaf(m, &b, &l, &r)) {
+                            continue;
+                        }
                         let (li, ri) = (arena.len(), arena.len() + 1);
                         arena.push((l, None));
                         arena.push((r, None));
@@ -359,7 +372,11 @@ impl Method for KdGpu {
         RangeKind::None
     }
     fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("kd", o.kd.describe()), ("bins", o.kd.bins.to_string())]
+        vec![
+            ("kd", o.kd.describe()),
+            ("bins", o.kd.bins.to_string()),
+            collapse_param(o.collapse),
+        ]
     }
     fn march(&self) -> March {
         TREE_MARCH
@@ -379,7 +396,8 @@ impl Method for KdGpu {
         options: &BuildOptions,
     ) -> Result<(Box<dyn Built>, Timings)> {
         let kd = builder.kernels::<KdGpuBuilder>()?;
-        let (tree, t) = kd.build(input.gpu_volume, input.gpu_tf, &options.kd)?;
+        let model = options.collapse.then(|| builder.cost_model()).transpose()?;
+        let (tree, t) = kd.build(input.gpu_volume, input.gpu_tf, &options.kd, model.as_ref())?;
         Ok((Box::new(tree), t))
     }
 }

@@ -15,6 +15,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod occupancy;
 
+use super::cost::CostModel;
 use super::tree::Node;
 use crate::error::{Error, Result};
 
@@ -175,6 +176,15 @@ pub fn choose(b: &IBox, candidates: &[Candidate]) -> Option<usize> {
     best.map(|(_, i)| i)
 }
 
+/// Cost-driven leaves (`--collapse on`): whether `b` as one leaf costs no
+/// more than split into the tight boxes `l` and `r` kept as leaves (the
+/// surface-area heuristic's termination test, with the measured constants).
+/// Either way every active footprint stays inside a leaf.
+pub fn cheaper_as_leaf(model: &CostModel, b: &IBox, l: &IBox, r: &IBox) -> bool {
+    let (leaf, s) = model.leaf(b[0], b[1]);
+    leaf <= model.inner(s, model.leaf(l[0], l[1]), model.leaf(r[0], r[1]))
+}
+
 /// A k-d tree node while building: a tight box, and children for inner nodes.
 #[derive(Clone, Debug, PartialEq)]
 pub enum KdNode {
@@ -220,9 +230,11 @@ pub fn leaf_boxes(nodes: &[Node]) -> Vec<IBox> {
         .collect()
 }
 
-/// The paper's k-d parameter sets as registry variants: (depth, max leaf).
+/// The paper's k-d parameter sets as registry variants: (depth, max leaf),
+/// then the deep set with cost-driven leaves.
 pub(crate) fn kd_variants(name: &str, sets: &[(Depth, u32)]) -> Vec<(String, crate::accel::BuildOptions)> {
-    sets.iter()
+    let mut out: Vec<(String, crate::accel::BuildOptions)> = sets
+        .iter()
         .map(|&(depth, max_leaf)| {
             let kd = KdParams {
                 depth,
@@ -241,5 +253,12 @@ pub(crate) fn kd_variants(name: &str, sets: &[(Depth, u32)]) -> Vec<(String, cra
                 },
             )
         })
-        .collect()
+        .collect();
+    if let Some((label, o)) = out.iter().find(|(_, o)| o.kd.depth == Depth::Deep).cloned() {
+        out.push((
+            format!("{label}, collapsed"),
+            crate::accel::BuildOptions { collapse: true, ..o },
+        ));
+    }
+    out
 }

@@ -2,6 +2,7 @@
 //! broken by index) and the same boxes, for testing the GPU builder.
 
 use super::Node;
+use crate::accel::cost::CostModel;
 use crate::accel::morton::morton3;
 
 fn delta(codes: &[u32], i: i64, j: i64) -> i64 {
@@ -111,4 +112,30 @@ pub fn build(active: &[u32], counts: [u32; 3], dims: [u32; 3], brick: u32) -> Ve
         fill(&mut nodes, 0);
     }
     nodes
+}
+
+/// Cost-driven leaves on a built tree, as `glsl/build/lbvh_collapse.comp`
+/// decides them: bottom up, a node whose cost as one leaf is not above its
+/// cost as an inner node becomes a leaf (`lo[3] = -1`).
+pub fn collapse(nodes: &mut [Node], model: &CostModel) {
+    // (cost, area) of node i after collapsing below it.
+    fn walk(nodes: &mut [Node], i: usize, model: &CostModel) -> (f32, f32) {
+        let (lo, hi) = nodes[i].bounds();
+        let leaf = model.leaf(lo, hi);
+        if nodes[i].is_leaf() {
+            return leaf;
+        }
+        let l = walk(nodes, nodes[i].lo[3] as usize, model);
+        let r = walk(nodes, nodes[i].hi[3] as usize, model);
+        let inner = model.inner(leaf.1, l, r);
+        if leaf.0 <= inner {
+            nodes[i].lo[3] = -1;
+            leaf
+        } else {
+            (inner, leaf.1)
+        }
+    }
+    if !nodes.is_empty() {
+        walk(nodes, 0, model);
+    }
 }

@@ -17,10 +17,12 @@ pub mod cpu;
 
 use super::bricks::GpuBricks;
 use super::classify::{Classifier, Classify};
+use super::cost::CostModel;
 use super::morton::MortonPush;
 use super::morton::MAX_BRICKS_PER_AXIS;
 use super::registry::{
-    classify_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
+    classify_param, collapse_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind,
+    Ranges,
 };
 use super::stats::Stats;
 pub use super::tree::{height, GpuTree, Node};
@@ -59,6 +61,14 @@ struct RefitPush {
 }
 check_push!(RefitPush, shaders::BUILD_LBVH_REFIT);
 
+/// Push block of `lbvh_collapse.comp`: `CostModel::gpu_constants`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CollapsePush {
+    model: [f32; 4],
+}
+check_push!(CollapsePush, shaders::BUILD_LBVH_COLLAPSE);
+
 /// Per-volume buffers of the selection phase (classify + compact).
 pub struct SelectScratch {
     pub flags: Buffer,
@@ -75,6 +85,8 @@ pub struct HierarchyScratch {
     payload: Buffer,
     parents: Buffer,
     visits: Buffer,
+    /// (cost, area) per node, for the collapse.
+    costs: Buffer,
     sort: SortScratch,
 }
 
@@ -85,6 +97,7 @@ pub struct LbvhBuilder {
     morton: Kernel,
     emit: Kernel,
     refit: Kernel,
+    collapse: Kernel,
 }
 
 impl LbvhBuilder {
@@ -96,6 +109,7 @@ impl LbvhBuilder {
             morton: Kernel::new::<MortonPush>(ctx, &shaders::BUILD_MORTON)?,
             emit: Kernel::new::<EmitPush>(ctx, &shaders::BUILD_LBVH_EMIT)?,
             refit: Kernel::new::<RefitPush>(ctx, &shaders::BUILD_LBVH_REFIT)?,
+            collapse: Kernel::new::<CollapsePush>(ctx, &shaders::BUILD_LBVH_COLLAPSE)?,
         })
     }
 
@@ -190,6 +204,7 @@ impl LbvhBuilder {
             payload: Buffer::new(c, "sorted bricks", n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
             parents: Buffer::new(c, "lbvh parents", nodes * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
             visits: Buffer::new(c, "lbvh visits", n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?,
+            costs: Buffer::new(c, "lbvh costs", nodes * 8, STORAGE_XFER, MemoryLocation::GpuOnly)?,
             sort: self.sort.scratch(n)?,
         })
     }
@@ -203,8 +218,10 @@ impl LbvhBuilder {
     }
 
     /// Records Morton codes, the sort, the emit and the refit ("morton",
-    /// "sort", "emit", "refit") for `h.n` active bricks listed in `active`.
-    /// Ends with compute writes of `nodes`.
+    /// "sort", "emit", "refit") for `h.n` active bricks listed in `active`
+    /// (`count` holds n on the GPU), then with a cost model the collapse
+    /// into cost-driven leaves ("collapse"). Ends with compute writes of
+    /// `nodes`.
     #[allow(clippy::too_many_arguments)]
     pub fn record_hierarchy(
         &self,
@@ -213,8 +230,10 @@ impl LbvhBuilder {
         volume: &GpuVolume,
         bricks: &GpuBricks,
         active: &Buffer,
+        count: &Buffer,
         h: &HierarchyScratch,
         nodes: &Buffer,
+        collapse: Option<&CostModel>,
     ) -> Result<()> {
         let n = h.n;
         if n == 0 {
@@ -270,7 +289,43 @@ impl LbvhBuilder {
             groups,
         )?;
         timer.end(cmd, pass);
+        if let Some(model) = collapse {
+            let pass = timer.begin(cmd, "collapse")?;
+            self.record_collapse(cmd, model, count, h, nodes)?;
+            timer.end(cmd, pass);
+        }
         Ok(())
+    }
+
+    /// The collapse climb after the refit (its visit counters reset first).
+    fn record_collapse(
+        &self,
+        cmd: vk::CommandBuffer,
+        model: &CostModel,
+        count: &Buffer,
+        h: &HierarchyScratch,
+        nodes: &Buffer,
+    ) -> Result<()> {
+        let device = self.ctx.device();
+        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
+        unsafe { device.cmd_fill_buffer(cmd, h.visits.raw, 0, vk::WHOLE_SIZE, 0) };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        record::compute_to_compute(device, cmd);
+        let groups = record::groups_linear(self.ctx.info(), "collapse", h.n, self.collapse.local_size()[0])?;
+        self.collapse.dispatch(
+            cmd,
+            &[
+                Binding::Storage(nodes),
+                Binding::Storage(&h.parents),
+                Binding::Storage(&h.visits),
+                Binding::Storage(&h.costs),
+                Binding::Storage(count),
+            ],
+            bytemuck::bytes_of(&CollapsePush {
+                model: model.gpu_constants(),
+            }),
+            groups,
+        )
     }
 
     fn record_emit(
@@ -318,8 +373,10 @@ impl LbvhBuilder {
     }
 
     /// Builds the LBVH for a transfer function: two submissions (selection,
-    /// then the hierarchy sized to the active count). Returns the structure
-    /// and the GPU time of each phase.
+    /// then the hierarchy sized to the active count), with cost-driven
+    /// leaves when a cost model is given. Returns the structure and the GPU
+    /// time of each phase.
+    #[allow(clippy::too_many_arguments)]
     pub fn build(
         &self,
         classifier: &Classifier,
@@ -327,6 +384,7 @@ impl LbvhBuilder {
         volume: &GpuVolume,
         bricks: &GpuBricks,
         tf: &GpuTransferFunction,
+        collapse: Option<&CostModel>,
     ) -> Result<(Lbvh, Timings)> {
         let select = self.select_scratch(bricks)?;
         let mut timer = Timer::new(&self.ctx, 8)?;
@@ -340,7 +398,17 @@ impl LbvhBuilder {
         let nodes = self.nodes_buffer(n)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_hierarchy(cmd, &mut timer, volume, bricks, &select.active, &h, &nodes)
+            self.record_hierarchy(
+                cmd,
+                &mut timer,
+                volume,
+                bricks,
+                &select.active,
+                &select.count,
+                &h,
+                &nodes,
+                collapse,
+            )
         })?;
         timings.extend(timer.results()?);
         let node_count = if n == 0 { 0 } else { 2 * n - 1 };
@@ -358,8 +426,9 @@ impl LbvhBuilder {
                 height: 0,
                 bytes: node_count * 32,
             },
-            // Derived from a node readback only when statistics are asked for.
-            height: std::sync::OnceLock::new(),
+            // Derived from a node readback only when statistics are asked
+            // for (a collapse leaves fewer reachable nodes).
+            shape: std::sync::OnceLock::new(),
         };
         Ok((lbvh, timings))
     }
@@ -385,10 +454,20 @@ impl Method for LbvhMethod {
         RangeKind::Bricks
     }
     fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![classify_param(o.classify)]
+        vec![classify_param(o.classify), collapse_param(o.collapse)]
     }
     fn march(&self) -> March {
         TREE_MARCH
+    }
+    fn variants(&self) -> Vec<(String, BuildOptions)> {
+        let collapsed = BuildOptions {
+            collapse: true,
+            ..BuildOptions::default()
+        };
+        vec![
+            (self.name().to_string(), BuildOptions::default()),
+            (format!("{} collapsed", self.name()), collapsed),
+        ]
     }
     /// Host-driven for now: the hierarchy is sized by the active count,
     /// read back between the selection and the hierarchy submissions.
@@ -404,12 +483,18 @@ impl Method for LbvhMethod {
     ) -> Result<(Box<dyn Built>, Timings)> {
         let lbvh = builder.kernels::<LbvhBuilder>()?;
         let classifier = builder.kernels::<Classifier>()?;
+        let model = if options.collapse {
+            Some(builder.cost_model()?)
+        } else {
+            None
+        };
         let (tree, t) = lbvh.build(
             &classifier,
             options.classify,
             input.gpu_volume,
             ranges.bricks()?,
             input.gpu_tf,
+            model.as_ref(),
         )?;
         Ok((Box::new(tree), t))
     }
