@@ -42,7 +42,7 @@ DATASETS = [
     ("menger", "menger:243", "ramp:0.3:1:0.2", "menger:81"),
     ("ch2", CH2, "ramp:0.3:0.6", CH2),
 ]
-STRUCTURES = [("naive", "naive"), ("kd-cpu", "kd-cpu"), ("LBVH", "lbvh"), ("grid", "grid")]
+STRUCTURES = [("naive", "naive"), ("auto", "auto"), ("kd-cpu", "kd-cpu"), ("LBVH", "lbvh"), ("grid", "grid")]
 ERT_ON = 0.99  # lacuna's threshold for "on"; VTK's are printed beside it
 
 
