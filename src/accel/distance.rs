@@ -346,14 +346,7 @@ impl DistanceMap {
     }
 
     pub fn stats(&self) -> Result<Stats> {
-        let active = match self.active.get() {
-            Some(a) => *a,
-            None => {
-                let host: Vec<u32> = bytemuck::pod_collect_to_vec(&self.flags.download(0, self.total * 4)?);
-                let a = host.iter().filter(|&&f| f != 0).count() as u64;
-                *self.active.get_or_init(|| a)
-            }
-        };
+        let active = super::grid::count_active(&self.flags, self.total, &self.active)?;
         Ok(Stats {
             unit: if self.cell == 8 { "8^3 cells" } else { "cells" },
             total_bricks: self.total,

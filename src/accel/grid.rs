@@ -28,14 +28,7 @@ pub struct Grid {
 impl Grid {
     /// The paper's Table 1 statistics (counts the active cells once).
     pub fn stats(&self) -> Result<Stats> {
-        let active = match self.active.get() {
-            Some(a) => *a,
-            None => {
-                let host: Vec<u32> = bytemuck::pod_collect_to_vec(&self.flags.download(0, self.total * 4)?);
-                let a = host.iter().filter(|&&f| f != 0).count() as u64;
-                *self.active.get_or_init(|| a)
-            }
-        };
+        let active = count_active(&self.flags, self.total, &self.active)?;
         let unit = if self.cell == 16 { "16^3 cells" } else { "cells" };
         Ok(Stats {
             unit,
@@ -55,6 +48,17 @@ impl Grid {
             cell: self.cell,
         }
     }
+}
+
+/// Active cells of a u32-per-cell flag buffer, read back once into `cache`
+/// (statistics only; builds never read back).
+pub(crate) fn count_active(flags: &Buffer, total: u64, cache: &std::sync::OnceLock<u64>) -> Result<u64> {
+    if let Some(a) = cache.get() {
+        return Ok(*a);
+    }
+    let host: Vec<u32> = bytemuck::pod_collect_to_vec(&flags.download(0, total * 4)?);
+    let a = host.iter().filter(|&&f| f != 0).count() as u64;
+    Ok(*cache.get_or_init(|| a))
 }
 
 /// Checks a `--cell` value.
