@@ -49,6 +49,16 @@ pub enum Error {
     /// A structure cannot do what was asked (e.g. record a host-driven build).
     #[error("{0}")]
     Unsupported(String),
+    /// An input asks for more host memory than is available.
+    #[error("{what} needs {bytes} bytes of host memory, over the {available} bytes available (MemAvailable)")]
+    HostMemory {
+        what: String,
+        bytes: String,
+        available: u64,
+    },
+    /// The GPU was lost (driver reset, watchdog) or ran out of memory.
+    #[error("{0}")]
+    Device(String),
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },

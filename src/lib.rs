@@ -4,12 +4,13 @@
 
 // Layers, each using only those below it: cli (the binary) -> bench ->
 // render / octree -> accel -> prims / spatial / scene -> volume / tf / frame
-// -> gpu.
+// -> gpu; limits and error are used by all.
 pub mod accel;
 pub mod bench;
 pub mod error;
 pub mod frame;
 pub mod gpu;
+pub mod limits;
 pub mod octree;
 pub mod prims;
 pub mod render;

@@ -107,8 +107,8 @@ struct Loaded {
     tf: TransferFunction,
 }
 
-fn load(spec: &str, tf: Option<&str>) -> Result<Loaded> {
-    let volume = Volume::load(spec, &LoadOptions::default())?;
+fn load(ctx: &Context, spec: &str, tf: Option<&str>) -> Result<Loaded> {
+    let volume = Volume::load_within(spec, &LoadOptions::default(), Some(ctx.info()))?;
     let tf_spec = tf
         .map(str::to_string)
         .or_else(|| volume.default_tf.clone())
@@ -349,7 +349,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
-        let loaded = match load(&ds.volume, ds.tf.as_deref()) {
+        let loaded = match load(ctx, &ds.volume, ds.tf.as_deref()) {
             Ok(l) => l,
             Err(Error::Io { path, .. }) if ds.optional => {
                 let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());

@@ -2,7 +2,7 @@
 //! readback. Each object keeps its `Context` and frees itself on drop.
 
 use super::record::{self, Access};
-use super::Context;
+use super::{Context, DeviceInfo};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -197,6 +197,36 @@ pub struct Image3d {
     pub extent: [u32; 3],
 }
 
+/// Checks a 3D image of `extent` texels of `texel_bytes` against
+/// `maxImageDimension3D`, `maxMemoryAllocationSize` and the device-local
+/// heap; returns its bytes. Loaders call it from a header, before reading voxels.
+pub fn check_image3d(info: &DeviceInfo, extent: [u32; 3], texel_bytes: u64) -> Result<u64> {
+    let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
+    let largest = extent.iter().copied().max().unwrap_or(0) as u64;
+    info.check(
+        dims.clone(),
+        "maxImageDimension3D",
+        largest,
+        info.max_image_dimension_3d as u64,
+    )?;
+    let bytes = extent.iter().fold(texel_bytes, |acc, &e| acc.saturating_mul(e as u64));
+    info.check(
+        format!("{dims} ({bytes} bytes)"),
+        "maxMemoryAllocationSize",
+        bytes,
+        info.max_memory_allocation_size,
+    )?;
+    if info.device_local_bytes > 0 {
+        info.check(
+            format!("{dims} ({bytes} bytes)"),
+            "device-local heap size",
+            bytes,
+            info.device_local_bytes,
+        )?;
+    }
+    Ok(bytes)
+}
+
 impl Image3d {
     /// Creates the image and uploads `data` (tightly packed, x fastest) in
     /// z-slabs; leaves it in `SHADER_READ_ONLY_OPTIMAL`, visible to compute.
@@ -210,28 +240,13 @@ impl Image3d {
     ) -> Result<Self> {
         let info = ctx.info();
         let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
-        let largest = *extent.iter().max().unwrap() as u64;
-        info.check(
-            dims.clone(),
-            "maxImageDimension3D",
-            largest,
-            info.max_image_dimension_3d as u64,
-        )?;
-        let bytes = extent.iter().map(|&e| e as u64).product::<u64>() * texel_bytes;
-        assert_eq!(bytes, data.len() as u64, "image data size");
-        info.check(
-            format!("{dims} ({bytes} bytes)"),
-            "maxMemoryAllocationSize",
-            bytes,
-            info.max_memory_allocation_size,
-        )?;
-        if info.device_local_bytes > 0 {
-            info.check(
-                format!("{dims} ({bytes} bytes)"),
-                "device-local heap size",
-                bytes,
-                info.device_local_bytes,
-            )?;
+        let bytes = check_image3d(info, extent, texel_bytes)?;
+        if bytes != data.len() as u64 {
+            return Err(Error::invalid(
+                "image data",
+                format!("{} bytes", data.len()),
+                format!("{dims} of {texel_bytes}-byte texels needs {bytes}"),
+            ));
         }
         let device = ctx.device();
         let create = vk::ImageCreateInfo::default()

@@ -31,6 +31,6 @@ macro_rules! check_push {
     };
 }
 pub(crate) use check_push;
-pub use memory::{Buffer, Image3d};
+pub use memory::{check_image3d, Buffer, Image3d};
 pub use timer::{Pass, Timer};
 pub use validation::ValidationMessage;
