@@ -95,6 +95,49 @@ pub(crate) trait VkContext<T> {
 
 impl<T> VkContext<T> for std::result::Result<T, ash::vk::Result> {
     fn vk(self, call: &'static str) -> Result<T> {
-        self.map_err(|result| Error::Vulkan { call, result })
+        use ash::vk::Result as R;
+        self.map_err(|result| match result {
+            R::ERROR_DEVICE_LOST => Error::Device(format!(
+                "the GPU device was lost in {call} (driver reset or watchdog; nothing was written)"
+            )),
+            R::ERROR_OUT_OF_DEVICE_MEMORY | R::ERROR_OUT_OF_HOST_MEMORY => Error::Device(format!(
+                "{call} ran out of {} memory (a smaller volume, frame or --size fits)",
+                if result == R::ERROR_OUT_OF_DEVICE_MEMORY {
+                    "device"
+                } else {
+                    "host"
+                }
+            )),
+            result => Error::Vulkan { call, result },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ash::vk;
+
+    #[test]
+    fn lost_devices_and_exhausted_memory_are_one_line_errors() {
+        let lost = Err::<(), _>(vk::Result::ERROR_DEVICE_LOST)
+            .vk("vkQueueSubmit2")
+            .unwrap_err();
+        assert!(matches!(lost, Error::Device(_)));
+        assert_eq!(
+            lost.to_string(),
+            "the GPU device was lost in vkQueueSubmit2 (driver reset or watchdog; nothing was written)"
+        );
+        let oom = Err::<(), _>(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)
+            .vk("vkAllocateMemory")
+            .unwrap_err();
+        assert!(
+            oom.to_string().contains("vkAllocateMemory ran out of device memory"),
+            "{oom}"
+        );
+        let other = Err::<(), _>(vk::Result::ERROR_INITIALIZATION_FAILED)
+            .vk("vkCreateDevice")
+            .unwrap_err();
+        assert!(matches!(other, Error::Vulkan { .. }));
     }
 }

@@ -217,7 +217,7 @@ impl TransferFunction {
     pub fn from_paraview_json_str(text: &str, origin: &Path) -> Result<Self> {
         let path = origin;
         let json: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
+            serde_json::from_str(text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
         let map = match &json {
             serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
             other => other.clone(),

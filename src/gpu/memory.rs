@@ -109,6 +109,20 @@ impl Buffer {
         self.allocation.as_mut()?.mapped_slice_mut()
     }
 
+    /// As `mapped`, an error naming the buffer when it is not host visible.
+    pub fn host(&self) -> Result<&[u8]> {
+        let name = &self.name;
+        self.mapped()
+            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
+    /// As `mapped_mut`, an error naming the buffer when it is not host visible.
+    pub fn host_mut(&mut self) -> Result<&mut [u8]> {
+        let name = self.name.clone();
+        self.mapped_mut()
+            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
     /// Copies `data` to byte `offset` through a staging buffer and waits.
     pub fn upload(&self, offset: u64, data: &[u8]) -> Result<()> {
         let mut done = 0u64;
@@ -121,8 +135,7 @@ impl Buffer {
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
-            staging.mapped_mut().expect("staging is host visible")[..n as usize]
-                .copy_from_slice(&data[done as usize..(done + n) as usize]);
+            staging.host_mut()?[..n as usize].copy_from_slice(&data[done as usize..(done + n) as usize]);
             self.ctx.submit_and_wait(|cmd| {
                 let region = [vk::BufferCopy {
                     src_offset: 0,
@@ -163,7 +176,7 @@ impl Buffer {
                 record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
-            out.extend_from_slice(&staging.mapped().expect("readback is host visible")[..n as usize]);
+            out.extend_from_slice(&staging.host()?[..n as usize]);
         }
         Ok(out)
     }
@@ -290,8 +303,9 @@ impl Image3d {
             format,
             extent,
         };
-        let a = image.allocation.as_ref().unwrap();
-        unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        if let Some(a) = image.allocation.as_ref() {
+            unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        }
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_3D)
@@ -319,7 +333,7 @@ impl Image3d {
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
-            staging.mapped_mut().expect("staging is host visible")[..len].copy_from_slice(&data[start..start + len]);
+            staging.host_mut()?[..len].copy_from_slice(&data[start..start + len]);
             let first = z == 0;
             let last = z + n == d;
             self.ctx.submit_and_wait(|cmd| {

@@ -104,6 +104,8 @@ impl RenderTarget {
     /// Reads the frame recorded by `Renderer::record_readback`, after the
     /// submission completed.
     pub fn read(&self) -> Frame {
+        // `new` allocates the readback buffer GpuToCpu, which gpu-allocator maps.
+        #[allow(clippy::expect_used)]
         let bytes = self.readback.mapped().expect("readback buffer is host visible");
         let n = self.width as usize * self.height as usize;
         let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
