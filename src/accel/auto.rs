@@ -1,6 +1,7 @@
 //! `--accel auto`: the structure for this volume and transfer function,
-//! chosen without a trial render. It builds the cube distance map (which is
-//! the candidate itself), reads its summary (active fraction, the mean
+//! chosen without a trial render. It builds a distance map (which is the
+//! candidate itself: per octant on grids of up to [`OCTANT_CELLS`] cells,
+//! the cube map above), reads its summary (active fraction, the mean
 //! distances of empty and active cells, the active-empty faces), predicts the
 //! frame time of the distance march against naive marching with the
 //! device's measured cost model, and keeps the map or drops to naive.
@@ -22,6 +23,12 @@ use crate::timings::Timings;
 /// cell whose map rebuild stays cheap (`docs/results/distance.md`).
 pub const CELL: u32 = 4;
 
+/// Grids of fewer cells than this (32^3) get octant maps, which march
+/// faster (their boxes reach further ahead) but whose transform costs
+/// several times the cube map's, growing past a quarter of a frame from
+/// here on lavapipe (`docs/results/auto.md`); larger grids get the cube map.
+pub const OCTANT_CELLS: u64 = 1 << 15;
+
 /// Predicted distance-march time over naive time above which auto marches naively.
 pub const THRESHOLD: f64 = 1.0;
 
@@ -38,7 +45,7 @@ pub struct Choice {
 }
 
 impl Choice {
-    /// `distance (cell 4)` or `naive`.
+    /// `distance-octant (cell 4)`, `distance (cell 4)` or `naive`.
     pub fn describe(&self) -> String {
         if self.accel.is_naive() {
             "naive".into()
@@ -107,7 +114,7 @@ impl Method for AutoMethod {
         "auto"
     }
     fn description(&self) -> &'static str {
-        "chooses naive or the distance map for this volume and TF from the map's statistics and the device's cost model"
+        "chooses naive or a distance map for this volume and TF from the map's statistics and the device's cost model"
     }
     fn ranges(&self) -> RangeKind {
         RangeKind::Cells
@@ -118,8 +125,8 @@ impl Method for AutoMethod {
     fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
         vec![("cell", o.cell.to_string())]
     }
-    /// The kernel of the distance map it builds; frames use the chosen
-    /// structure's (`Structure::accel`).
+    /// The kernel of the cube map; frames use the chosen structure's
+    /// (`Structure::accel`).
     fn march(&self) -> March {
         distance::DistanceMethod { octants: false }.march()
     }
@@ -153,6 +160,7 @@ impl Method for AutoMethod {
         let kernels = builder.kernels::<DistanceKernels>()?;
         let classifier = builder.kernels::<Classifier>()?;
         let cells = ranges.cells(options.cell)?;
+        let octants = cells.total < OCTANT_CELLS;
         let out = DistanceMap::summary_buffer(ctx)?;
         let mut timer = Timer::new(ctx, 8)?;
         let map = ctx.submit_and_wait(|cmd| {
@@ -166,7 +174,7 @@ impl Method for AutoMethod {
                 input.gpu_volume,
                 cells,
                 input.gpu_tf,
-                false,
+                octants,
             )?;
             map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
             Ok(map)
@@ -175,7 +183,7 @@ impl Method for AutoMethod {
         let (choice, inner) = timings.cpu("choose", || -> Result<(Choice, Box<dyn Built>)> {
             let summary = map.read_summary(&out)?;
             let predicted = predict(&summary, options.cell, &model);
-            let distance: Accel = "distance".parse()?;
+            let distance: Accel = if octants { "distance-octant" } else { "distance" }.parse()?;
             let (accel, inner): (Accel, Box<dyn Built>) = if predicted < THRESHOLD {
                 (distance, Box::new(map))
             } else {
