@@ -1,10 +1,10 @@
 //! `--accel auto`: the structure for this volume and transfer function,
-//! chosen without a trial render. It builds a distance map (which is the
-//! candidate itself: per octant on grids of up to [`OCTANT_CELLS`] cells,
-//! the cube map above), reads its summary (active fraction, the mean
+//! chosen without a trial render. It builds the cube distance map (the
+//! candidate itself), reads its summary (active fraction, the mean
 //! distances of empty and active cells, the active-empty faces), predicts the
 //! frame time of the distance march against naive marching with the
-//! device's measured cost model, and keeps the map or drops to naive.
+//! device's measured cost model, and keeps the map (replaced by the octant
+//! map on grids of fewer than [`OCTANT_CELLS`] cells) or drops to naive.
 //! Re-made on every build, i.e. every transfer-function change. The model is
 //! documented in `docs/structures.md`.
 
@@ -160,44 +160,56 @@ impl Method for AutoMethod {
         let kernels = builder.kernels::<DistanceKernels>()?;
         let classifier = builder.kernels::<Classifier>()?;
         let cells = ranges.cells(options.cell)?;
-        let octants = cells.total < OCTANT_CELLS;
         let out = DistanceMap::summary_buffer(ctx)?;
-        let mut timer = Timer::new(ctx, 8)?;
-        let map = ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            let map = distance::record(
-                ctx,
-                &kernels,
-                &classifier,
-                cmd,
-                &mut timer,
-                input.gpu_volume,
-                cells,
-                input.gpu_tf,
-                octants,
-            )?;
-            map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
-            Ok(map)
+        // Records a map, and the summary of the first one.
+        let build_map = |octants: bool, summary: bool| -> Result<(DistanceMap, Timings)> {
+            let mut timer = Timer::new(ctx, 8)?;
+            let map = ctx.submit_and_wait(|cmd| {
+                timer.reset(cmd);
+                let map = distance::record(
+                    ctx,
+                    &kernels,
+                    &classifier,
+                    cmd,
+                    &mut timer,
+                    input.gpu_volume,
+                    cells,
+                    input.gpu_tf,
+                    octants,
+                )?;
+                if summary {
+                    map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+                }
+                Ok(map)
+            })?;
+            Ok((map, timer.results()?))
+        };
+        // The model is calibrated on the cube map's statistics, so the
+        // choice reads those; the octant map, never slower to march, is
+        // built only once the map has won.
+        let (cube, mut timings) = build_map(false, true)?;
+        let (summary, predicted) = timings.cpu("choose", || -> Result<(Summary, f64)> {
+            let summary = cube.read_summary(&out)?;
+            Ok((summary, predict(&summary, options.cell, &model)))
         })?;
-        let mut timings = timer.results()?;
-        let (choice, inner) = timings.cpu("choose", || -> Result<(Choice, Box<dyn Built>)> {
-            let summary = map.read_summary(&out)?;
-            let predicted = predict(&summary, options.cell, &model);
-            let distance: Accel = if octants { "distance-octant" } else { "distance" }.parse()?;
-            let (accel, inner): (Accel, Box<dyn Built>) = if predicted < THRESHOLD {
-                (distance, Box::new(map))
-            } else {
-                (Accel::naive(), Box::new(NoData))
-            };
-            let choice = Choice {
-                accel,
-                cell: options.cell,
-                predicted,
-                summary,
-                model,
-            };
-            Ok((choice, inner))
-        })?;
+        let (accel, inner): (Accel, Box<dyn Built>) = if predicted >= THRESHOLD {
+            (Accel::naive(), Box::new(NoData))
+        } else if cells.total < OCTANT_CELLS {
+            let (octant, octant_timings) = build_map(true, false)?;
+            for (name, ms) in octant_timings.phases {
+                timings.push(format!("octant {name}"), ms);
+            }
+            ("distance-octant".parse()?, Box::new(octant))
+        } else {
+            ("distance".parse()?, Box::new(cube))
+        };
+        let choice = Choice {
+            accel,
+            cell: options.cell,
+            predicted,
+            summary,
+            model,
+        };
         Ok((Box::new(Chosen { choice, inner }), timings))
     }
 }
