@@ -75,17 +75,34 @@ impl Error {
     pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Format {
             path: path.into(),
-            message: message.into(),
+            message: one_line(message.into()),
         }
     }
 
     pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Invalid {
             what,
-            value: value.into(),
-            message: message.into(),
+            value: one_line(value.into()),
+            message: one_line(message.into()),
         }
     }
+}
+
+/// Input echoed in a message stays on its line: control characters (a
+/// newline in a spec or a header) are escaped.
+fn one_line(text: String) -> String {
+    if !text.contains(char::is_control) {
+        return text;
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// Attaches the failing Vulkan entry point to an `ash` result.

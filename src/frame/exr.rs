@@ -73,10 +73,22 @@ impl Frame {
             exr::error::Error::Io(io) => crate::Error::format(origin, format!("cannot read EXR: {io}")),
             other => crate::Error::format(origin, format!("not a readable RGBA EXR: {other}")),
         };
-        // Each layer's pixels are allocated from its header: check them first.
+        // Each layer's pixels are allocated from its header: check them
+        // first, against memory and against what the file can hold (EXR's
+        // codecs stay far below 16384 pixels per byte; ZIP of f32 RGBA ~64).
         let meta = exr::meta::MetaData::read_from_buffered(bytes, false).map_err(unreadable)?;
         for header in meta.headers.iter() {
             let [w, h] = [header.layer_size.width(), header.layer_size.height()];
+            let pixels = (w as u64).saturating_mul(h as u64);
+            if pixels > (bytes.len() as u64).saturating_mul(1 << 14) {
+                return Err(crate::Error::format(
+                    origin,
+                    format!(
+                        "EXR header claims {w}x{h} pixels, more than {} bytes can hold",
+                        bytes.len()
+                    ),
+                ));
+            }
             crate::limits::check_host(
                 format_args!("EXR frame {w}x{h} ({})", origin.display()),
                 (w as u64).saturating_mul(h as u64),

@@ -95,7 +95,10 @@ pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
             format!("{what} has a zero dimension"),
         ));
     }
-    let n = dims.iter().map(|&d| d as u64).product::<u64>();
+    let n = dims
+        .iter()
+        .try_fold(1u64, |n, &d| n.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
     if n > isize::MAX as u64 / 8 {
         return Err(Error::invalid(
             "dimensions",
