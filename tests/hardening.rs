@@ -88,6 +88,21 @@ fn sizes_are_checked_before_allocation() {
         true,
         &["frame 100000x100000", "320000000000 bytes of host memory"],
     );
+    let bench_out = d.join("bench");
+    fails(
+        d,
+        &[
+            "bench",
+            "--quick",
+            "--frames",
+            "4000000000",
+            "--out",
+            bench_out.to_str().unwrap(),
+            "--quiet",
+        ],
+        false,
+        &["4000000000 frames", "bytes of host memory"],
+    );
     // The device's limits, from the spec, before the volume is generated:
     // a volume of one image dimension's maximum squared, deep enough to
     // pass maxMemoryAllocationSize.

@@ -328,7 +328,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             .transpose()?,
     };
     let least = config.warmup.max(2) as u64;
-    let per_structure = 2 * least + (config.builds + config.frames * config.rounds) as u64;
+    let per_structure = 2 * least + config.builds as u64 + config.frames as u64 * config.rounds as u64;
     let sweep = config.error.as_ref().map_or(0, |e| {
         let n = e.datasets.as_ref().map_or(config.datasets.len(), |d| d.len()) as u64;
         let filters = e.filters.len().max(1);
