@@ -10,7 +10,7 @@ mod png;
 pub use atomic::{check_parent, write_atomically};
 pub use diff::{diff, DiffStats};
 pub use exr::Frame;
-pub use png::{srgb_encode, srgba8};
+pub use png::{srgb8_over, srgb_decode, srgb_encode, srgba8, Background};
 
 use crate::error::{Error, Result};
 use std::path::Path;
