@@ -26,7 +26,8 @@ pub const CELL: u32 = 4;
 pub const THRESHOLD: f64 = 1.0;
 
 /// What auto chose and why.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Choice {
     /// The structure the frames are marched with.
     pub accel: Accel,

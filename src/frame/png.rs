@@ -110,7 +110,7 @@ impl Frame {
     fn png_text(&self) -> Vec<(String, String)> {
         self.metadata
             .iter()
-            .map(|(k, v)| (format!("{}{k}", super::exr::PREFIX), v.clone()))
+            .map(|(k, v)| (format!("{}{k}", super::PREFIX), v.clone()))
             .collect()
     }
 
