@@ -247,7 +247,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
 /// The frame's metadata: what made it.
 #[allow(clippy::too_many_arguments)]
-fn describe(
+pub(super) fn describe(
     frame: &mut Frame,
     volume: &Volume,
     tf: &TransferFunction,
