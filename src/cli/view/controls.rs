@@ -222,9 +222,7 @@ impl Controls {
                 self.settings.step = STEPS[i];
             }
             "p" | "P" => {
-                let other = self.initial.1;
-                self.initial.1 = self.settings.camera.projection;
-                self.settings.camera.projection = other;
+                std::mem::swap(&mut self.initial.1, &mut self.settings.camera.projection);
             }
             "r" | "R" => {
                 let camera = self.initial.0.camera;
