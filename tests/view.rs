@@ -67,6 +67,16 @@ fn the_viewers_screenshot_is_renders_frame_bit_for_bit() {
         let r = lacuna_windowed(&view);
         ok(&r, &format!("{view:?}"));
         assert!(r.stdout.contains(&format!("wrote {a_str}")), "{}", r.stdout);
+        // The title's figures, printed once at the end: GPU-timed march and rebuild.
+        let summary = r
+            .stdout
+            .lines()
+            .find(|l| l.starts_with("frames 5: "))
+            .unwrap_or_else(|| panic!("{}", r.stdout));
+        assert!(
+            summary.contains(" fps, march ") && summary.contains(" ms, rebuild "),
+            "{summary}"
+        );
         let render = [&["render"], *case, &size, &["--out", b_str]].concat();
         ok(&lacuna(&render, &[]), &format!("{render:?}"));
 

@@ -342,6 +342,9 @@ impl Viewer {
                 self.write(path, FrameFormat::from_path(path)?)?;
             }
         }
+        if last {
+            println!("{}", self.summary());
+        }
         if self.shots > 0 {
             self.shots = 0;
             let stem = match &args.screenshot {
@@ -395,6 +398,18 @@ impl Viewer {
         Ok(())
     }
 
+    /// The `--frames` run's last line: what the title showed last.
+    fn summary(&self) -> String {
+        format!(
+            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({})",
+            self.drawn,
+            self.fps,
+            self.scene.march_ms(),
+            self.scene.rebuild_ms(),
+            self.scene.accel
+        )
+    }
+
     fn title(&self) -> String {
         let scene = &self.scene;
         let accel = match scene.structure.choice() {
@@ -407,8 +422,8 @@ impl Viewer {
             scene.volume.name,
             scene.tf.spec,
             self.fps,
-            scene.march.get("march").unwrap_or(0.0),
-            scene.build.total(),
+            scene.march_ms(),
+            scene.rebuild_ms(),
             settings.step,
             settings.ert.map_or("off".to_string(), |e| e.to_string()),
         )

@@ -30,8 +30,8 @@ pub struct Scene {
     target: Option<RenderTarget>,
     timer: Timer,
     /// The last build's phases (empty for naive) and frame's passes.
-    pub build: Timings,
-    pub march: Timings,
+    build: Timings,
+    march: Timings,
 }
 
 impl Scene {
@@ -197,6 +197,17 @@ impl Scene {
             self.renderer.record_readback(cmd, target);
         }
         Ok(())
+    }
+
+    /// The last build's time, ms (0 for naive).
+    pub fn rebuild_ms(&self) -> f64 {
+        // A fold from +0: an empty sum of f64 is -0.
+        self.build.phases.iter().fold(0.0, |sum, (_, ms)| sum + ms)
+    }
+
+    /// The last frame's march time, ms.
+    pub fn march_ms(&self) -> f64 {
+        self.march.get("march").unwrap_or(0.0)
     }
 
     /// After the recorded frame completed: its GPU pass times.
