@@ -7,10 +7,14 @@ mod common;
 use common::{lacuna, Run};
 use lacuna::frame::Frame;
 use std::process::Command;
+use std::sync::Mutex;
 
 /// Runs `lacuna ARGS` where a window can open: on $DISPLAY when it is set,
 /// else under `xvfb-run -a`. Neither is a failure, not a skip.
 fn lacuna_windowed(args: &[&str]) -> Run {
+    // One at a time: concurrent `xvfb-run -a` can pick the same display number.
+    static ONE_WINDOW: Mutex<()> = Mutex::new(());
+    let _one = ONE_WINDOW.lock().unwrap_or_else(|p| p.into_inner());
     let exe = env!("CARGO_BIN_EXE_lacuna");
     let display = std::env::var("DISPLAY").is_ok_and(|d| !d.is_empty());
     let mut cmd = if display {
@@ -94,6 +98,63 @@ fn the_viewers_screenshot_is_renders_frame_bit_for_bit() {
         assert_eq!(diff.code, 0, "case {i}: {}{}", diff.stdout, diff.stderr);
         assert!(diff.stdout.contains("differing 0 of 7680"), "{}", diff.stdout);
     }
+}
+
+#[test]
+fn keys_rebuild_for_the_new_tf_and_structure_and_match_render() {
+    // T: the next preset (ramp:0.3:1 after the generator's TF); Right: move it
+    // by 0.02; Tab twice: two structures down the table from naive; E: ERT on.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("keys.exr"), dir.path().join("render.exr"));
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let common = ["menger:27", "--size", "64x48", "--camera", "10,30", "--validate"];
+    let keys = "t,ArrowRight,Tab,Tab,e";
+    let view = [
+        &["view"],
+        &common[..],
+        &[
+            "--accel",
+            "naive",
+            "--keys",
+            keys,
+            "--frames",
+            "2",
+            "--screenshot",
+            a_str,
+        ],
+    ]
+    .concat();
+    let r = lacuna_windowed(&view);
+    ok(&r, &format!("{view:?}"));
+    let accel = lacuna::accel::TABLE[2].name();
+    let summary = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("frames 2: "))
+        .unwrap_or_default();
+    assert!(summary.ends_with(&format!("({accel})")), "{}", r.stdout);
+    let frame = Frame::read_exr(&a).unwrap();
+    assert_eq!(frame.metadata["tf"], "ramp:0.32:1.02");
+    assert_eq!(frame.metadata["accel"], accel);
+    assert_eq!(frame.metadata["ert"], "0.99");
+    let render = [
+        &["render"],
+        &common[..],
+        &[
+            "--tf",
+            "ramp:0.32:1.02",
+            "--accel",
+            accel,
+            "--ert",
+            "0.99",
+            "--out",
+            b_str,
+        ],
+    ]
+    .concat();
+    ok(&lacuna(&render, &[]), &format!("{render:?}"));
+    let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
 }
 
 #[test]

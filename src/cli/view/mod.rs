@@ -63,6 +63,9 @@ pub struct ViewArgs {
     /// With --frames: write the last frame here (.exr: linear RGBA f32 as rendered; .png). The S key writes NAME.exr and NAME.png.
     #[arg(long)]
     screenshot: Option<PathBuf>,
+    /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, ...), for scripts and tests.
+    #[arg(long, value_delimiter = ',')]
+    keys: Vec<String>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
     validate: bool,
@@ -208,6 +211,14 @@ impl App<'_> {
             buttons: (false, false),
             key_result: None,
         });
+        if let Some(viewer) = self.viewer.as_mut() {
+            for key in &self.args.keys {
+                viewer.key(key);
+                if let Some(e) = viewer.key_result.take() {
+                    return Err(e);
+                }
+            }
+        }
         Ok(())
     }
 
