@@ -163,7 +163,11 @@ fn bad_view_input_is_one_line_before_any_window() {
     let shot = dir.path().join("shot.tiff");
     let missing = dir.path().join("no/such/dir/shot.exr");
     let json = dir.path().join("missing.json");
-    let cases: [(Vec<&str>, &str); 5] = [
+    let cases: [(Vec<&str>, &str); 6] = [
+        (
+            vec!["view", "nbody:16", "--keys", "t,Teleport"],
+            "invalid key 'Teleport'",
+        ),
         (
             vec![
                 "view",

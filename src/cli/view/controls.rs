@@ -14,6 +14,31 @@ const TF_NUDGE: f32 = 0.02;
 /// The ERT threshold the `E` key switches on.
 const ERT: f32 = 0.99;
 
+/// The key names `Controls::key` acts on (either case for letters).
+pub const KEYS: &[&str] = &[
+    "ArrowLeft",
+    "ArrowRight",
+    "ArrowUp",
+    "ArrowDown",
+    "t",
+    "j",
+    "Tab",
+    "e",
+    "[",
+    "]",
+    "p",
+    "r",
+    "s",
+    "q",
+    "Escape",
+];
+
+/// Whether `Controls::key` acts on `name`.
+pub fn known_key(name: &str) -> bool {
+    KEYS.iter()
+        .any(|k| *k == name || (k.len() == 1 && k.eq_ignore_ascii_case(name)))
+}
+
 /// A transfer function the keys can reshape, or one they cannot (a JSON file).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
@@ -297,6 +322,21 @@ mod tests {
         assert_eq!(c.tf_spec(), "cool.json");
         assert!(!c.key("ArrowLeft", false).tf, "a JSON TF has no window to move");
         assert_eq!(c.tf_spec(), "cool.json");
+    }
+
+    #[test]
+    fn every_known_key_does_something_and_others_are_unknown() {
+        for key in KEYS {
+            let mut c = controls("ramp:0.3:1");
+            let before = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
+            c.zoom = 2.0;
+            let change = c.key(key, false);
+            let after = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
+            let acted = change != Change::default() || after != (before.0.clone(), before.1, before.2, 2.0);
+            assert!(acted, "{key} did nothing");
+            assert!(known_key(key) && (key.len() > 1 || known_key(&key.to_uppercase())));
+        }
+        assert!(!known_key("x") && !known_key("Arrowleft") && !known_key(""));
     }
 
     #[test]

@@ -129,6 +129,13 @@ impl ViewArgs {
         if let Some(json) = &self.json {
             TransferFunction::from_paraview_json(json)?;
         }
+        if let Some(key) = self.keys.iter().find(|k| !controls::known_key(k)) {
+            return Err(Error::invalid(
+                "key",
+                key.clone(),
+                format!("expected one of: {}", controls::KEYS.join(", ")),
+            ));
+        }
         Ok(settings)
     }
 }
