@@ -6,6 +6,7 @@
 // render / octree -> accel -> prims / spatial / scene -> volume / tf / frame
 // -> gpu.
 pub mod accel;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod error;
 pub mod frame;

@@ -205,6 +205,17 @@ impl TransferFunction {
     /// sharpness are ignored (linear segments). The x range of `RGBPoints` is
     /// mapped onto the volume's normalised [0, 1] ("rescale to data range").
     /// Without `Points` opacity ramps linearly from 0 to 1 over that range.
+    /// (Feature `loaders`; without it, an error saying so.)
+    #[cfg(not(feature = "loaders"))]
+    pub fn from_paraview_json(path: &Path) -> Result<Self> {
+        Err(Error::format(
+            path,
+            "ParaView JSON transfer functions need lacuna's `loaders` cargo feature",
+        ))
+    }
+
+    /// A ParaView colormap export (feature `loaders`).
+    #[cfg(feature = "loaders")]
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let json: serde_json::Value =

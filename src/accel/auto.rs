@@ -33,7 +33,8 @@ pub const OCTANT_CELLS: u64 = 1 << 15;
 pub const THRESHOLD: f64 = 1.0;
 
 /// What auto chose and why.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Choice {
     /// The structure the frames are marched with.
     pub accel: Accel,

@@ -97,7 +97,8 @@ pub struct DistanceMap {
 }
 
 /// What `--accel auto` reads from a map (see `distance_summary.comp`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Summary {
     pub cells: u64,
     pub active: u64,

@@ -79,7 +79,8 @@ pub struct BuildInput<'a> {
 
 /// Parameters of every structure (the paper's columns); each structure reads
 /// the ones [`Method::params`] names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct BuildOptions {
     pub classify: Classify,
     pub kd: kd::KdParams,
@@ -267,6 +268,7 @@ impl std::str::FromStr for Accel {
     }
 }
 
+#[cfg(feature = "serde")]
 impl serde::Serialize for Accel {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         s.serialize_str(self.name())

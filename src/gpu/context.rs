@@ -305,6 +305,13 @@ pub fn list_devices() -> Result<Vec<DeviceSummary>> {
     result
 }
 
+/// The physical device lacuna would choose on `instance` (a host's too):
+/// `selector` (an index or a name substring, as `LACUNA_DEVICE`), else the
+/// first usable discrete GPU, else integrated, virtual, CPU.
+pub fn select_device(instance: &ash::Instance, selector: Option<&str>) -> Result<vk::PhysicalDevice> {
+    select(instance, selector)
+}
+
 fn select(instance: &ash::Instance, selector: Option<&str>) -> Result<vk::PhysicalDevice> {
     let all = summaries(instance)?;
     if all.is_empty() {

@@ -10,7 +10,7 @@ mod timer;
 mod validation;
 
 pub use ash::vk;
-pub use context::{list_devices, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
+pub use context::{list_devices, select_device, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
 pub use shaders::{LocalDim, Shader};

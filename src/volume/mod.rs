@@ -6,6 +6,7 @@ mod decode;
 mod export;
 mod filter;
 mod gpu;
+#[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
 pub mod procedural;

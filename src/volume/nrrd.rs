@@ -5,6 +5,7 @@ use super::decode::{decode, VoxelType};
 use super::Volume;
 use crate::error::{Error, Result};
 use std::collections::HashMap;
+#[cfg(feature = "loaders")]
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -152,6 +153,14 @@ pub fn load(path: &Path) -> Result<Volume> {
     let encoding = require("encoding")?;
     let payload = match encoding {
         "raw" => raw.get(skip..).unwrap_or_default().to_vec(),
+        #[cfg(not(feature = "loaders"))]
+        "gzip" | "gz" => {
+            return Err(Error::format(
+                path,
+                "gzip-encoded NRRD needs lacuna's `loaders` cargo feature",
+            ))
+        }
+        #[cfg(feature = "loaders")]
         "gzip" | "gz" => {
             let mut out = Vec::new();
             flate2::read::MultiGzDecoder::new(raw.as_slice())
