@@ -113,7 +113,10 @@ fn main() {
         let stem = rel.trim_end_matches(".comp");
         let (kernel, name) = match format {
             None => (stem.to_string(), stem.replace('/', "_").to_uppercase()),
-            Some(f) => (format!("{stem}@{f}"), format!("{stem}_{f}").replace('/', "_").to_uppercase()),
+            Some(f) => (
+                format!("{stem}@{f}"),
+                format!("{stem}_{f}").replace('/', "_").to_uppercase(),
+            ),
         };
         let defines = format.map(|f| [("FRAME_FORMAT", Some(f))]);
         let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -3,8 +3,8 @@
 //! perspective one. Built in physical space as view and projection matrices,
 //! whose rays `CameraMatrices` forms (the one way every camera does).
 
-use super::params::RenderParams;
 use super::matrices::{orthographic, perspective, CameraMatrices};
+use super::params::RenderParams;
 use crate::error::{Error, Result};
 use glam::{BVec3, DMat4, DVec3, DVec4, UVec3, Vec3};
 

@@ -82,9 +82,10 @@ impl Renderer {
         let mut march = accel.method().march();
         if let Some(v) = variant {
             let name = format!("{}@{v}", march.shader.name);
-            march.shader = *shaders::ALL.iter().find(|s| s.name == name).ok_or_else(|| {
-                Error::Interface(format!("kernel {name}: no such shader variant"))
-            })?;
+            march.shader = *shaders::ALL
+                .iter()
+                .find(|s| s.name == name)
+                .ok_or_else(|| Error::Interface(format!("kernel {name}: no such shader variant")))?;
         }
         let key = (march.shader.name, march.constants, filter);
         let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
@@ -279,7 +280,9 @@ impl Renderer {
                 Binding::Storage(&target.params),
                 Binding::SampledIn(d.view, self.depth_sampler, d.layout),
             ];
-            let depth_groups = self.depth_limit.groups("depth limits", [target.width, target.height, 1])?;
+            let depth_groups = self
+                .depth_limit
+                .groups("depth limits", [target.width, target.height, 1])?;
             self.depth_limit.dispatch(cmd, &limits, &[], depth_groups)?;
         }
         // An earlier frame's march reads the LUT this one rewrites.
@@ -332,7 +335,13 @@ impl Renderer {
 
     /// As `render`, with a `View` (a host's camera matrices, say).
     pub fn render_view(&self, scene: Scene, view: &View) -> Result<(Frame, Timings)> {
-        self.render_params(scene.structure, scene.volume, scene.tf, view.params(), view.sample_filter())
+        self.render_params(
+            scene.structure,
+            scene.volume,
+            scene.tf,
+            view.params(),
+            view.sample_filter(),
+        )
     }
 
     /// As `render`, with explicit shader parameters (see `record_params`).

@@ -137,11 +137,19 @@ impl CameraMatrices {
         // World to voxel space (the model's inverse skipped when it is the
         // identity, so exact zeros stay exact).
         let to_voxel_point = |p: DVec3| {
-            let p = if identity { p } else { world_to_model.transform_point3(p) };
+            let p = if identity {
+                p
+            } else {
+                world_to_model.transform_point3(p)
+            };
             (p / spacing).as_vec3()
         };
         let to_voxel_vector = |v: DVec3| {
-            let v = if identity { v } else { world_to_model.transform_vector3(v) };
+            let v = if identity {
+                v
+            } else {
+                world_to_model.transform_vector3(v)
+            };
             (v / spacing).as_vec3()
         };
         let unproject = |ndc: DVec2, z: f64| {
