@@ -10,7 +10,10 @@ mod timer;
 mod validation;
 
 pub use ash::vk;
-pub use context::{list_devices, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
+pub use context::{
+    list_devices, required_features, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary, EnabledFeatures,
+    REQUIRED_EXTENSIONS,
+};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
 pub use shaders::{LocalDim, Shader};
