@@ -35,5 +35,5 @@ macro_rules! check_push {
 }
 pub(crate) use check_push;
 pub use memory::{Buffer, Image3d};
-pub use timer::{Pass, Timer};
+pub use timer::{OptionalTimer, Pass, Timer};
 pub use validation::ValidationMessage;

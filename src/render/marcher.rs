@@ -9,7 +9,7 @@ use crate::accel::{Accel, Structure};
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Context, Kernel, Timer};
+use crate::gpu::{shaders, vk, Binding, Context, Kernel, OptionalTimer, Timer};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
@@ -271,10 +271,8 @@ impl Renderer {
         ];
         bindings.extend(structure.built.bindings());
         let push = structure.built.push();
-        let pass = match timer {
-            Some(timer) => Some((timer.begin(cmd, "march")?, timer)),
-            None => None,
-        };
+        let mut timer = timer;
+        let pass = timer.begin(cmd, "march")?;
         if let Some(d) = depth {
             let limits = [
                 Binding::Storage(&target.params),
@@ -296,9 +294,7 @@ impl Renderer {
         // The LUT and the depth limits, written above, are read by the march.
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
         kernel.dispatch(cmd, &bindings, &push, groups)?;
-        if let Some((pass, timer)) = pass {
-            timer.end(cmd, pass);
-        }
+        timer.end(cmd, pass);
         Ok(())
     }
 
