@@ -162,13 +162,13 @@ impl Method for AutoMethod {
                 &kernels,
                 &classifier,
                 cmd,
-                &mut timer,
+                Some(&mut timer),
                 input.gpu_volume,
                 cells,
                 input.gpu_tf,
                 false,
             )?;
-            map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+            map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
             Ok(map)
         })?;
         let mut timings = timer.results()?;

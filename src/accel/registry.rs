@@ -169,7 +169,7 @@ pub trait Method: Sync {
         &self,
         builder: &Builder,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,
@@ -194,7 +194,7 @@ pub trait Method: Sync {
         let mut timer = Timer::new(ctx, 16)?;
         let built = ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_build(builder, cmd, &mut timer, input, ranges, options)
+            self.record_build(builder, cmd, Some(&mut timer), input, ranges, options)
         })?;
         Ok((built, timer.results()?))
     }
@@ -471,7 +471,7 @@ impl Builder {
         &self,
         accel: Accel,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,
