@@ -1,10 +1,11 @@
-//! `--accel auto`: the distance map on sparse data, naive marching on dense
-//! data, the choice re-made on a TF change, and the image of either choice
-//! equal to naive's (the identity tests cover auto with every other entry).
+//! `--accel auto`: a distance map on sparse data (octant maps on small
+//! grids, the cube map on large ones), naive marching on dense data, the
+//! choice re-made on a TF change, and the image of every choice equal to
+//! naive's (the identity tests cover auto with every other entry).
 
 mod common;
 use common::{assert_clean, gpu};
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Structure};
+use lacuna::accel::{auto, Accel, BuildInput, BuildOptions, Builder, Structure};
 use lacuna::frame::diff;
 use lacuna::render::{RenderSettings, Renderer};
 use lacuna::volume::{GpuVolume, LoadOptions};
@@ -14,10 +15,10 @@ fn load(spec: &str) -> Volume {
     Volume::load(spec, &LoadOptions::default()).unwrap()
 }
 
-fn build(builder: &Builder, v: &Volume, gv: &GpuVolume, tf: &TransferFunction) -> Structure {
+fn build(builder: &Builder, v: &Volume, gv: &GpuVolume, tf: &TransferFunction, cell: u32) -> Structure {
     let lut = tf.upload(builder.context()).unwrap();
     let options = BuildOptions {
-        cell: 4,
+        cell,
         ..Default::default()
     };
     let (ranges, _) = builder.ranges(gv, options.cell).unwrap();
@@ -48,8 +49,18 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
     let sparse = TransferFunction::parse("ramp:0.3:1").unwrap();
     // Every voxel visible: no empty cell, nothing to skip.
     let dense = TransferFunction::parse("band:0:1").unwrap();
-    for (tf, expect) in [(&sparse, "distance"), (&dense, "naive"), (&sparse, "distance")] {
-        let s = build(&builder, &v, &gv, tf);
+    // nbody:64 has 16^3 cells of 4 voxels (octant maps) and 32^3 of 2 (the
+    // cube map: auto::OCTANT_CELLS).
+    assert!(16u64.pow(3) < auto::OCTANT_CELLS && 32u64.pow(3) >= auto::OCTANT_CELLS);
+    let cases = [
+        (&sparse, 4, "distance-octant"),
+        (&dense, 4, "naive"),
+        (&sparse, 4, "distance-octant"),
+        (&sparse, 2, "distance"),
+        (&dense, 2, "naive"),
+    ];
+    for (tf, cell, expect) in cases {
+        let s = build(&builder, &v, &gv, tf, cell);
         let choice = s.choice().expect("auto reports its choice");
         assert_eq!(s.accel().name(), expect, "{}: {}", tf.spec, choice.reason());
         assert_eq!(choice.accel, s.accel());
@@ -59,7 +70,7 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
             assert!(choice.predicted >= 1.0);
         } else {
             assert!(choice.summary.active_fraction() < 0.5, "{}", choice.reason());
-            assert!(choice.describe().starts_with("distance (cell 4)"));
+            assert_eq!(choice.describe(), format!("{expect} (cell {cell})"));
         }
         let lut = tf.upload(&ctx).unwrap();
         let (frame, _) = renderer.render(&s, &gv, &lut, &settings).unwrap();

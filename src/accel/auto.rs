@@ -1,9 +1,10 @@
 //! `--accel auto`: the structure for this volume and transfer function,
-//! chosen without a trial render. It builds the cube distance map (which is
-//! the candidate itself), reads its summary (active fraction, the mean
+//! chosen without a trial render. It builds the cube distance map (the
+//! candidate itself), reads its summary (active fraction, the mean
 //! distances of empty and active cells, the active-empty faces), predicts the
 //! frame time of the distance march against naive marching with the
-//! device's measured cost model, and keeps the map or drops to naive.
+//! device's measured cost model, and keeps the map (replaced by the octant
+//! map on grids of fewer than [`OCTANT_CELLS`] cells) or drops to naive.
 //! Re-made on every build, i.e. every transfer-function change. The model is
 //! documented in `docs/structures.md`.
 
@@ -22,6 +23,12 @@ use crate::timings::Timings;
 /// cell whose map rebuild stays cheap (`docs/results/distance.md`).
 pub const CELL: u32 = 4;
 
+/// Grids of fewer cells than this (32^3) get octant maps, which march
+/// faster (their boxes reach further ahead) but whose transform costs
+/// several times the cube map's, growing past a quarter of a frame from
+/// here on lavapipe (`docs/results/auto.md`); larger grids get the cube map.
+pub const OCTANT_CELLS: u64 = 1 << 15;
+
 /// Predicted distance-march time over naive time above which auto marches naively.
 pub const THRESHOLD: f64 = 1.0;
 
@@ -38,7 +45,7 @@ pub struct Choice {
 }
 
 impl Choice {
-    /// `distance (cell 4)` or `naive`.
+    /// `distance-octant (cell 4)`, `distance (cell 4)` or `naive`.
     pub fn describe(&self) -> String {
         if self.accel.is_naive() {
             "naive".into()
@@ -107,7 +114,7 @@ impl Method for AutoMethod {
         "auto"
     }
     fn description(&self) -> &'static str {
-        "chooses naive or the distance map for this volume and TF from the map's statistics and the device's cost model"
+        "chooses naive or a distance map for this volume and TF from the map's statistics and the device's cost model"
     }
     fn ranges(&self) -> RangeKind {
         RangeKind::Cells
@@ -118,8 +125,8 @@ impl Method for AutoMethod {
     fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
         vec![("cell", o.cell.to_string())]
     }
-    /// The kernel of the distance map it builds; frames use the chosen
-    /// structure's (`Structure::accel`).
+    /// The kernel of the cube map; frames use the chosen structure's
+    /// (`Structure::accel`).
     fn march(&self) -> March {
         distance::DistanceMethod { octants: false }.march()
     }
@@ -154,42 +161,55 @@ impl Method for AutoMethod {
         let classifier = builder.kernels::<Classifier>()?;
         let cells = ranges.cells(options.cell)?;
         let out = DistanceMap::summary_buffer(ctx)?;
-        let mut timer = Timer::new(ctx, 8)?;
-        let map = ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            let map = distance::record(
-                ctx,
-                &kernels,
-                &classifier,
-                cmd,
-                Some(&mut timer),
-                input.gpu_volume,
-                cells,
-                input.gpu_tf,
-                false,
-            )?;
-            map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
-            Ok(map)
+        // Records a map, and the summary of the first one.
+        let build_map = |octants: bool, summary: bool| -> Result<(DistanceMap, Timings)> {
+            let mut timer = Timer::new(ctx, 8)?;
+            let map = ctx.submit_and_wait(|cmd| {
+                timer.reset(cmd);
+                let map = distance::record(
+                    ctx,
+                    &kernels,
+                    &classifier,
+                    cmd,
+                    Some(&mut timer),
+                    input.gpu_volume,
+                    cells,
+                    input.gpu_tf,
+                    octants,
+                )?;
+                if summary {
+                    map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
+                }
+                Ok(map)
+            })?;
+            Ok((map, timer.results()?))
+        };
+        // The model is calibrated on the cube map's statistics, so the
+        // choice reads those; the octant map, never slower to march, is
+        // built only once the map has won.
+        let (cube, mut timings) = build_map(false, true)?;
+        let (summary, predicted) = timings.cpu("choose", || -> Result<(Summary, f64)> {
+            let summary = cube.read_summary(&out)?;
+            Ok((summary, predict(&summary, options.cell, &model)))
         })?;
-        let mut timings = timer.results()?;
-        let (choice, inner) = timings.cpu("choose", || -> Result<(Choice, Box<dyn Built>)> {
-            let summary = map.read_summary(&out)?;
-            let predicted = predict(&summary, options.cell, &model);
-            let distance: Accel = "distance".parse()?;
-            let (accel, inner): (Accel, Box<dyn Built>) = if predicted < THRESHOLD {
-                (distance, Box::new(map))
-            } else {
-                (Accel::naive(), Box::new(NoData))
-            };
-            let choice = Choice {
-                accel,
-                cell: options.cell,
-                predicted,
-                summary,
-                model,
-            };
-            Ok((choice, inner))
-        })?;
+        let (accel, inner): (Accel, Box<dyn Built>) = if predicted >= THRESHOLD {
+            (Accel::naive(), Box::new(NoData))
+        } else if cells.total < OCTANT_CELLS {
+            let (octant, octant_timings) = build_map(true, false)?;
+            for (name, ms) in octant_timings.phases {
+                timings.push(format!("octant {name}"), ms);
+            }
+            ("distance-octant".parse()?, Box::new(octant))
+        } else {
+            ("distance".parse()?, Box::new(cube))
+        };
+        let choice = Choice {
+            accel,
+            cell: options.cell,
+            predicted,
+            summary,
+            model,
+        };
         Ok((Box::new(Chosen { choice, inner }), timings))
     }
 }

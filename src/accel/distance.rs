@@ -2,7 +2,8 @@
 //! Visual Media 2020). Per cell of the macro-cell grid, the L-infinity
 //! distance in cells to the nearest active cell, rebuilt on the GPU on every
 //! transfer-function change: the range classification (O(cells)) and a
-//! separable distance transform (three 1-D passes, `distance_pass.comp`),
+//! separable distance transform (three linear-time 1-D passes,
+//! `distance_rows.comp`, one-sided for octants in `distance_octant_rows.comp`),
 //! with no host round trip. `glsl/march/distance.comp` then takes one O(1)
 //! step per empty region.
 //!
@@ -35,20 +36,6 @@ pub const CAP: u32 = 255;
 /// Bytes of the summary `distance_summary.comp` writes.
 const SUMMARY_BYTES: u64 = 24;
 
-/// Push block of `distance_pass.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct PassPush {
-    /// xyz: cells per axis; w: total.
-    counts: [u32; 4],
-    axis: u32,
-    /// 1: the source holds the active flags.
-    first: u32,
-    groups_x: u32,
-    pad: u32,
-}
-check_push!(PassPush, shaders::BUILD_DISTANCE_PASS);
-
 /// Push block of `distance_rows.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -61,6 +48,7 @@ struct RowsPush {
     rows: u32,
 }
 check_push!(RowsPush, shaders::BUILD_DISTANCE_ROWS);
+check_push!(RowsPush, shaders::BUILD_DISTANCE_OCTANT_ROWS);
 
 /// Push block of `distance_summary.comp`.
 #[repr(C)]
@@ -73,12 +61,12 @@ struct SummaryPush {
 check_push!(SummaryPush, shaders::BUILD_DISTANCE_SUMMARY);
 check_push!(GridPush, shaders::MARCH_DISTANCE);
 
-/// The distance-transform kernels (linear-time rows for cube maps, a
-/// per-cell search for octant maps) and the summary kernels of both map
+/// The linear-time distance-transform kernels (two-sided rows for cube
+/// maps, one-sided rows for octant maps) and the summary kernels of both map
 /// kinds (specialization constant 0: octant maps).
 pub struct DistanceKernels {
     rows: Kernel,
-    octant_pass: Kernel,
+    octant_rows: Kernel,
     summary: [Kernel; 2],
 }
 
@@ -87,7 +75,7 @@ impl KernelSet for DistanceKernels {
         let summary = |o| Kernel::with_constants::<SummaryPush>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
         Ok(DistanceKernels {
             rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_ROWS)?,
-            octant_pass: Kernel::with_constants::<PassPush>(ctx, &shaders::BUILD_DISTANCE_PASS, &[1])?,
+            octant_rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
             summary: [summary(0)?, summary(1)?],
         })
     }
@@ -160,8 +148,9 @@ pub fn record(
 ) -> Result<DistanceMap> {
     let info = ctx.info();
     let bytes = cells.total * 4 * words_per_cell(octants);
-    // Cube maps: the rows' envelope stacks, three words per cell.
-    let stack_bytes = if octants { 4 } else { cells.total * 12 };
+    // The rows' envelope stacks: three words per cell (cube maps), or a
+    // deque word per cell and map word (octant maps).
+    let stack_bytes = cells.total * if octants { 4 * words_per_cell(true) } else { 12 };
     info.check(
         format!(
             "distance map of {} cells ({} bytes)",
@@ -206,32 +195,24 @@ pub fn record(
             record::compute_to_compute(ctx.device(), cmd);
         }
         let first = (axis == 0) as u32;
-        if octants {
-            let k = &kernels.octant_pass;
-            let groups = record::groups_linear(info, "distance map", cells.total, k.local_size()[0])?;
-            let push = PassPush {
-                counts,
-                axis: axis as u32,
-                first,
-                groups_x: groups[0],
-                pad: 0,
-            };
-            let bindings = [Binding::Storage(src), Binding::Storage(dst)];
-            k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+        // One invocation per row (cube maps) or per row and computed map
+        // word (octant maps: two along x and y, four along z).
+        let (k, per_row) = if octants {
+            (&kernels.octant_rows, if axis == 2 { 4 } else { 2 })
         } else {
-            let k = &kernels.rows;
-            let rows = cells.total / c[axis] as u64;
-            let groups = record::groups_linear(info, "distance rows", rows, k.local_size()[0])?;
-            let push = RowsPush {
-                counts,
-                axis: axis as u32,
-                first,
-                groups_x: groups[0],
-                rows: rows as u32,
-            };
-            let bindings = [Binding::Storage(src), Binding::Storage(dst), Binding::Storage(&stack)];
-            k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
-        }
+            (&kernels.rows, 1)
+        };
+        let rows = cells.total / c[axis] as u64;
+        let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
+        let push = RowsPush {
+            counts,
+            axis: axis as u32,
+            first,
+            groups_x: groups[0],
+            rows: rows as u32,
+        };
+        let bindings = [Binding::Storage(src), Binding::Storage(dst), Binding::Storage(&stack)];
+        k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
         timer.end(cmd, pass);
     }
     Ok(DistanceMap {

@@ -1,0 +1,105 @@
+#version 460
+// One 1-D pass of the separable one-sided Chebyshev distance transform for
+// octant maps, in linear time. An octant channel counts only cells ahead of
+// its ray octant, so along `axis` it needs, per row,
+//   d(x) = min over i ahead of x (i >= x, or i <= x for a negative octant)
+//          of max(|x - i|, g(i)),
+// and min-of-max separates over the axes like the two-sided transform. The
+// row is swept from its far end towards the ray: candidates live in a deque
+// ordered by distance, the nearest at the front. A new cell evicts the
+// front entries whose g is not smaller (it is nearer and no worse, for good),
+// and the back entry leaves once the one before it is as good: from then on
+// the back's value grows by one a cell and its neighbour's by at most one.
+// So the back holds the minimum and every cell enters and leaves once.
+// After the pass along x a channel depends only on its octant's x sign, and
+// after y only on the x and y signs: passes x and y compute those channels
+// once and copy them to the octants that differ only in later signs. One
+// invocation per row and computed map word.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 64) in;
+#define OCTANTS 1u
+#include "dispatch.glsl"
+#include "distance_map.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Src { uint src[]; };
+layout(std430, set = 0, binding = 1) buffer Dst { uint dst[]; };
+// Per (row, word): the deque, one entry per cell of the row (position << 8 | g).
+layout(std430, set = 0, binding = 2) buffer Deque { uint deque[]; };
+// xyz: cells per axis, w: total; axis: 0, 1, 2; first: src holds the flags.
+layout(push_constant) uniform Push { uvec4 counts; uint axis; uint first; uint groups_x; uint rows; } pc;
+
+uint cell_index(uint row, uint x) {
+    uvec3 c;
+    uint a1 = (pc.axis + 1u) % 3u;
+    uint a2 = (pc.axis + 2u) % 3u;
+    c[pc.axis] = x;
+    c[a1] = row % pc.counts[a1];
+    c[a2] = row / pc.counts[a1];
+    return c.x + pc.counts.x * (c.y + pc.counts.y * c.z);
+}
+
+uint g(uint i, uint channel) {
+    if (pc.first != 0u) {
+        bool is_active = src[i] != 0u;
+        bool seeks_active = channel < DISTANCE_CHANNELS / 2u;
+        return is_active == seeks_active ? 0u : DISTANCE_CAP;
+    }
+    return distance_byte(src[DISTANCE_WORDS * i + (channel >> 2u)], channel);
+}
+
+// An entry's value seen from x: max(distance, g).
+uint value(uint entry, int x) {
+    return max(uint(abs(int(entry >> 8u) - x)), entry & 255u);
+}
+
+void main() {
+    // Words 1 and 3 differ from words 0 and 2 only in the z sign.
+    uint words = pc.axis == 2u ? 4u : 2u;
+    uint id = linear_index(pc.groups_x);
+    if (id >= pc.rows * words) {
+        return;
+    }
+    uint row = id / words;
+    uint word = pc.axis == 2u ? id % words : 2u * (id % words);
+    // Within a word, channels 2 and 3 differ from 0 and 1 only in the y sign.
+    uint lanes = pc.axis == 0u ? 2u : 4u;
+    int n = int(pc.counts[pc.axis]);
+    uint base = id * uint(n);
+    for (uint j = 0u; j < lanes; ++j) {
+        uint ch = 4u * word + j;
+        uint octant = ch % (DISTANCE_CHANNELS / 2u);
+        // A ray of a negative octant looks towards lower x: sweep upwards.
+        bool negative = ((octant >> pc.axis) & 1u) != 0u;
+        int step = negative ? 1 : -1;
+        int x = negative ? 0 : n - 1;
+        uint back = 0u;
+        uint front = 0u; // one past the front entry
+        for (int s = 0; s < n; ++s, x += step) {
+            uint i = cell_index(row, uint(x));
+            uint gx = g(i, ch);
+            while (front > back && (deque[base + front - 1u] & 255u) >= gx) {
+                front -= 1u;
+            }
+            deque[base + front] = uint(x) << 8u | gx;
+            front += 1u;
+            uint best = value(deque[base + back], x);
+            while (front - back >= 2u) {
+                uint next = value(deque[base + back + 1u], x);
+                if (next > best) {
+                    break;
+                }
+                back += 1u;
+                best = next;
+            }
+            uint d = min(best, DISTANCE_CAP);
+            uint bytes = d << (8u * j) | (lanes == 2u ? d << (8u * (j + 2u)) : 0u);
+            uint at = DISTANCE_WORDS * i + word;
+            uint packed = j == 0u ? bytes : (dst[at] | bytes);
+            dst[at] = packed;
+            if (words == 2u) {
+                dst[at + 1u] = packed;
+            }
+        }
+    }
+}
