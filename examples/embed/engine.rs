@@ -1,16 +1,20 @@
 //! A small host engine: its own instance, device, queue and command pool; it
 //! rasterizes an opaque cube with a depth buffer, then records lacuna's
-//! structure build and volume render into the SAME command buffer, the volume
+//! uploads, ranges, structure build and volume render into the SAME command
+//! buffer (lacuna submits nothing), the volume
 //! written to the engine's storage image and its rays ended at the cube's
 //! depth. The engine composites the volume over the cube on the CPU.
 
 use super::host::{HostBuffer, Image2d};
 use ash::vk;
 use glam::{DVec3, Vec4};
-use lacuna::accel::{BuildInput, BuildOptions, Builder};
+use lacuna::accel::{BuildInput, BuildOptions, Builder, Ranges, Structure};
 use lacuna::frame::Frame;
-use lacuna::gpu::{record, required_features, AdoptInfo, Context, EnabledFeatures, Timer, REQUIRED_EXTENSIONS};
+use lacuna::gpu::{
+    record, required_features, AdoptInfo, Context, EnabledFeatures, Staging, Timer, REQUIRED_EXTENSIONS,
+};
 use lacuna::render::{Camera, HostDepth, HostImage, Output, Projection, RenderTarget, Renderer, Scene, View};
+use lacuna::tf::GpuTransferFunction;
 use lacuna::timings::Timings;
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -253,9 +257,9 @@ pub fn run(settings: &Settings) -> Result<Rendered, String> {
 fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
     let (instance, pd, device) = (&host.instance, host.pd, &host.device);
     let size = settings.size;
-    // SAFETY: the handles were created above with what `enabled` says, outlive
-    // the context (dropped at the end of this function), and the engine does
-    // not use the queue while lacuna's convenience uploads below submit on it.
+    // SAFETY: the handles were created above with what `enabled` says and
+    // outlive the context (dropped at the end of this function); lacuna only
+    // records here, so it never submits on the engine's queue.
     let ctx = unsafe {
         Context::adopt(AdoptInfo {
             entry: settings.validate.then(|| host.entry.clone()),
@@ -276,19 +280,18 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         .or(volume.default_tf.clone())
         .unwrap_or_else(|| "ramp:0.3:1".into());
     let tf = TransferFunction::parse(&tf_spec).map_err(err)?;
-    let gv = GpuVolume::upload(&ctx, &volume).map_err(err)?;
-    let lut = tf.upload(&ctx).map_err(err)?;
     let builder = Builder::new(&ctx).map_err(err)?;
     let options = BuildOptions::default();
     let accel = settings.accel.parse().map_err(err)?;
-    let (ranges, _) = builder.ranges_for(&[accel], &gv, options.cell).map_err(err)?;
     let renderer = Renderer::new(&ctx).map_err(err)?;
     let target = RenderTarget::for_images(&ctx, size, size).map_err(err)?;
     let mut timer = Timer::new(&ctx, 16).map_err(err)?;
 
     // The camera: lacuna's orbit camera as the engine's view and projection.
-    let m = settings.camera.matrices(gv.dims, gv.spacing, size, size).map_err(err)?;
-    let view = View::new(&gv, &m, size, size).map_err(err)?.step(0.5).map_err(err)?;
+    let m = settings
+        .camera
+        .matrices(volume.dims, volume.spacing, size, size)
+        .map_err(err)?;
     let clip_from_world = (m.projection * m.view).as_mat4();
     // The cube: between the eye and the volume, off to the right of centre.
     let extent = DVec3::from(volume.extent().map(f64::from));
@@ -358,7 +361,15 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         .level(vk::CommandBufferLevel::PRIMARY)
         .command_buffer_count(1);
     let cmd = unsafe { device.allocate_command_buffers(&alloc) }.map_err(|e| e.to_string())?[0];
-    let recorded = (|| -> Result<lacuna::accel::Structure, lacuna::Error> {
+    // Everything the command buffer uses, kept until its submission completed.
+    struct Recorded {
+        _staging: Staging,
+        _volume: GpuVolume,
+        _lut: GpuTransferFunction,
+        _ranges: Ranges,
+        _structure: Structure,
+    }
+    let recorded = (|| -> Result<Recorded, lacuna::Error> {
         unsafe { device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()) }.unwrap();
         // 1. The engine's raster pass: the cube into colour and depth.
         let colour_write = (
@@ -444,8 +455,12 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             sampled,
         );
         layer.transition(device, cmd, undefined, general, NOTHING, storage);
-        // 3. lacuna: the structure's build for this TF, then the march.
+        // 3. lacuna, recorded only: the uploads (once per volume / TF), the
+        // per-volume ranges, the structure's build for this TF, the march.
         timer.reset(cmd);
+        let (gv, volume_staging) = GpuVolume::record_upload(&ctx, cmd, &volume)?;
+        let (lut, tf_staging) = tf.record_upload(&ctx, cmd)?;
+        let ranges = builder.record_ranges_for(cmd, Some(&mut timer), &[accel], &gv, options.cell)?;
         let input = BuildInput {
             volume: &volume,
             gpu_volume: &gv,
@@ -459,6 +474,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             volume: &gv,
             tf: &lut,
         };
+        let view = View::new(&gv, &m, size, size)?.step(0.5)?;
         let out = HostImage {
             view: layer.view,
             format: COLOUR,
@@ -497,9 +513,15 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         depth.record_copy_out(device, cmd, depth_out.buffer);
         layer.record_copy_out(device, cmd, layer_out.buffer);
         unsafe { device.end_command_buffer(cmd) }.unwrap();
-        Ok(structure)
+        Ok(Recorded {
+            _staging: volume_staging.join(tf_staging),
+            _volume: gv,
+            _lut: lut,
+            _ranges: ranges,
+            _structure: structure,
+        })
     })();
-    let submitted = recorded.map_err(err).and_then(|structure| {
+    let submitted = recorded.map_err(err).and_then(|recorded| {
         unsafe {
             let fence = device.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
             let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
@@ -510,7 +532,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             device.destroy_fence(fence, None);
             done.map_err(|e| format!("submit: {e}"))?;
         }
-        drop(structure);
+        drop(recorded);
         Ok(())
     });
     let frame_of = |b: &HostBuffer| Frame::new(size, size, bytemuck::pod_collect_to_vec(b.bytes()));
