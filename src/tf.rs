@@ -7,7 +7,7 @@
 //! `spike:CENTER:WIDTH[:ALPHA]`, or a ParaView-exported JSON colormap file.
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Buffer, Context};
+use crate::gpu::{vk, Buffer, Context, Staging};
 use std::path::Path;
 
 /// Opacity of a sample of alpha `a` per voxel of path standing for `w`
@@ -338,7 +338,19 @@ impl TransferFunction {
         flat
     }
 
-    /// Uploads the LUT (`vec4` per entry) and the max-alpha table.
+    /// As `upload`, recorded into `cmd`: copies from staging, then a barrier
+    /// to compute-shader reads. Keep the returned `Staging` until the
+    /// submission completed.
+    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<(GpuTransferFunction, Staging)> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let (lut, a) = Buffer::record_with_data(ctx, cmd, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
+        let table = self.max_table_flat();
+        let name = "transfer function max table";
+        let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&table), usage)?;
+        Ok((GpuTransferFunction { lut, max_table }, a.join(b)))
+    }
+
+    /// Uploads the LUT (`vec4` per entry) and the max-alpha table and waits.
     pub fn upload(&self, ctx: &Context) -> Result<GpuTransferFunction> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;

@@ -172,14 +172,14 @@ impl Method for AutoMethod {
                     &kernels,
                     &classifier,
                     cmd,
-                    &mut timer,
+                    Some(&mut timer),
                     input.gpu_volume,
                     cells,
                     input.gpu_tf,
                     octants,
                 )?;
                 if summary {
-                    map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+                    map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
                 }
                 Ok(map)
             })?;

@@ -8,7 +8,7 @@
 //! readback are ready when `frame` returns.
 
 use lacuna::gpu::record::{self, Access};
-use lacuna::gpu::{vk, AdoptInfo, Context};
+use lacuna::gpu::{required_features, vk, AdoptInfo, Context, EnabledFeatures};
 use lacuna::{Error, Result};
 use std::ffi::CStr;
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -24,6 +24,9 @@ fn vk_err(call: &'static str) -> impl Fn(vk::Result) -> Error {
 }
 
 /// The host's image the scene renders into each frame.
+/// The device extensions the viewer enables: lacuna's and the swapchain.
+const DEVICE_EXTENSIONS: [&CStr; 2] = [ash::khr::push_descriptor::NAME, ash::khr::swapchain::NAME];
+
 pub struct Canvas {
     pub image: vk::Image,
     memory: vk::DeviceMemory,
@@ -191,16 +194,9 @@ impl Host {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
             .queue_priorities(&priorities)];
-        let extensions = [
-            ash::khr::push_descriptor::NAME.as_ptr(),
-            ash::khr::swapchain::NAME.as_ptr(),
-        ];
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
-            .synchronization2(true)
-            .maintenance4(true);
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
-            .vulkan_memory_model(true)
-            .vulkan_memory_model_device_scope(true);
+        let extensions = DEVICE_EXTENSIONS.map(CStr::as_ptr);
+        // Exactly what lacuna needs (and what adopt is told was enabled).
+        let (mut v12, mut v13) = required_features();
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_extension_names(&extensions)
@@ -208,6 +204,17 @@ impl Host {
             .push_next(&mut v12);
         let device = unsafe { instance.create_device(pd, &info, None) }.map_err(vk_err("vkCreateDevice"))?;
         Ok((pd, device, family))
+    }
+
+    /// What `create_device` enabled, for `Context::adopt` to check.
+    fn enabled() -> EnabledFeatures {
+        let (vulkan12, vulkan13) = required_features();
+        EnabledFeatures {
+            api_version: vk::API_VERSION_1_3,
+            extensions: DEVICE_EXTENSIONS.iter().map(|&e| e.into()).collect(),
+            vulkan12,
+            vulkan13,
+        }
     }
 
     /// lacuna on the host's device: it owns none of these handles. With
@@ -221,6 +228,7 @@ impl Host {
                 device: self.device.clone(),
                 queue: self.queue,
                 queue_family: self.family,
+                enabled: Self::enabled(),
             })
         }
     }

@@ -376,7 +376,7 @@ impl Viewer {
     }
 
     fn write(&self, path: &Path, format: FrameFormat) -> Result<()> {
-        let Some(mut frame): Option<Frame> = self.scene.frame() else {
+        let Some(mut frame): Option<Frame> = self.scene.frame()? else {
             return Ok(());
         };
         let mut settings = self.controls.settings;

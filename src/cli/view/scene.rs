@@ -12,7 +12,7 @@ use lacuna::gpu::{vk, Context, Timer};
 use lacuna::render::{Filter, RenderParams, RenderSettings, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
-use lacuna::{Result, Timings, TransferFunction, Volume};
+use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 
 pub struct Scene {
     ctx: Context,
@@ -146,6 +146,11 @@ impl Scene {
             filter,
         )?;
         let device = self.ctx.device();
+        let frame_buffer = target
+            .frame
+            .as_ref()
+            .ok_or_else(|| Error::Unsupported("the viewer's render target has no frame buffer".into()))?
+            .raw;
         // The previous frame's blit read the canvas; the whole frame is
         // written, so its old contents are discarded.
         record::image_barrier(
@@ -178,7 +183,7 @@ impl Scene {
         unsafe {
             device.cmd_copy_buffer_to_image(
                 cmd,
-                target.frame.raw,
+                frame_buffer,
                 canvas.image,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &region,
@@ -194,7 +199,7 @@ impl Scene {
             Access::TRANSFER_READ,
         );
         if readback {
-            self.renderer.record_readback(cmd, target);
+            self.renderer.record_readback(cmd, target)?;
         }
         Ok(())
     }
@@ -217,8 +222,8 @@ impl Scene {
     }
 
     /// The frame a `record` with `readback` produced, as the renderer wrote it.
-    pub fn frame(&self) -> Option<Frame> {
-        self.target.as_ref().map(RenderTarget::read)
+    pub fn frame(&self) -> Result<Option<Frame>> {
+        self.target.as_ref().map(RenderTarget::read).transpose()
     }
 
     /// The settings' description for frame metadata, with this scene's state.
