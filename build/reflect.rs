@@ -37,8 +37,9 @@ pub enum Dim {
 pub struct Interface {
     /// Bindings 0.. of set 0, in order.
     pub bindings: Vec<Descriptor>,
-    /// Per binding: the block size in bytes of a uniform buffer or of a
-    /// storage block without a runtime array, else 0.
+    /// Per binding: the block size in bytes of a uniform or storage buffer
+    /// (of a storage block ending in a runtime array, the part before it),
+    /// else 0.
     pub block_sizes: Vec<u32>,
     pub push_size: u32,
     pub local_size: [Dim; 3],
@@ -191,6 +192,20 @@ impl Module {
         }
     }
 
+    /// The offset of a struct's trailing runtime array (the fixed part's size).
+    fn fixed_part(&self, ty: u32) -> Result<u32, String> {
+        match self.types.get(&ty) {
+            Some(Ty::Struct(members)) => {
+                let k = members.len().checked_sub(1).ok_or("empty struct")?;
+                match self.types.get(&members[k]) {
+                    Some(Ty::RuntimeArray) => Ok(self.member_offsets.get(&(ty, k as u32)).copied().unwrap_or(0)),
+                    other => Err(format!("no size for type {other:?}")),
+                }
+            }
+            other => Err(format!("no size for type {other:?}")),
+        }
+    }
+
     fn dim(&self, id: u32) -> Result<Dim, String> {
         let value = *self.constants.get(&id).ok_or("workgroup size is not a constant")?;
         Ok(match self.spec_ids.get(&id) {
@@ -239,10 +254,11 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
         let binding = m
             .decoration(id, DEC_BINDING)
             .ok_or(format!("resource %{id} has no binding"))?;
-        // Storage blocks ending in a runtime array have no fixed size: 0.
+        // Storage blocks ending in a runtime array: the size of the part
+        // before it (0 for a bare array).
         let size = match ty {
             Descriptor::UniformBuffer => m.size_of(pointee)?,
-            Descriptor::StorageBuffer => m.size_of(pointee).unwrap_or(0),
+            Descriptor::StorageBuffer => m.size_of(pointee).or_else(|_| m.fixed_part(pointee)).unwrap_or(0),
             _ => 0,
         };
         slots.push((binding, ty, size));

@@ -9,6 +9,7 @@
 // render / octree -> accel -> prims / spatial / scene -> volume / tf / frame
 // -> gpu; limits and error are used by all.
 pub mod accel;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod error;
 pub mod frame;

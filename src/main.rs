@@ -35,6 +35,9 @@ enum Command {
     Scene(cli::scene::SceneArgs),
     /// Havran's octree comparison on the SPD scenes: build, trace (Whitted), print his statistics.
     Octree(Box<cli::octree::OctreeArgs>),
+    /// Look at a volume in a window: orbit, zoom, pan; change the TF, structure, ERT, step.
+    #[cfg(feature = "view")]
+    View(Box<cli::view::ViewArgs>),
 }
 
 /// Output to a closed pipe (`lacuna info ... | head`) ends the process
@@ -90,6 +93,8 @@ fn main() -> ExitCode {
         Command::Bench(a) => cli::bench::run(a),
         Command::Scene(a) => cli::scene::run(a),
         Command::Octree(a) => cli::octree::run(a),
+        #[cfg(feature = "view")]
+        Command::View(a) => cli::view::run(a),
     };
     match result {
         Ok(code) => code,

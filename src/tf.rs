@@ -7,7 +7,7 @@
 //! `spike:CENTER:WIDTH[:ALPHA]`, or a ParaView-exported JSON colormap file.
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Buffer, Context};
+use crate::gpu::{vk, Buffer, Context, Staging};
 use std::path::Path;
 
 /// Opacity of a sample of alpha `a` per voxel of path standing for `w`
@@ -205,6 +205,17 @@ impl TransferFunction {
     /// sharpness are ignored (linear segments). The x range of `RGBPoints` is
     /// mapped onto the volume's normalised [0, 1] ("rescale to data range").
     /// Without `Points` opacity ramps linearly from 0 to 1 over that range.
+    /// (Feature `loaders`; without it, an error saying so.)
+    #[cfg(not(feature = "loaders"))]
+    pub fn from_paraview_json(path: &Path) -> Result<Self> {
+        Err(Error::format(
+            path,
+            "ParaView JSON transfer functions need lacuna's `loaders` cargo feature",
+        ))
+    }
+
+    /// A ParaView colormap export (feature `loaders`).
+    #[cfg(feature = "loaders")]
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
         // serde_json's values take a few times the text: check before reading.
         let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
@@ -214,6 +225,7 @@ impl TransferFunction {
     }
 
     /// A ParaView colormap export held in memory; `origin` names it in errors.
+    #[cfg(feature = "loaders")]
     pub fn from_paraview_json_str(text: &str, origin: &Path) -> Result<Self> {
         let path = origin;
         let json: serde_json::Value =
@@ -336,7 +348,19 @@ impl TransferFunction {
         flat
     }
 
-    /// Uploads the LUT (`vec4` per entry) and the max-alpha table.
+    /// As `upload`, recorded into `cmd`: copies from staging, then a barrier
+    /// to compute-shader reads. Keep the returned `Staging` until the
+    /// submission completed.
+    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<(GpuTransferFunction, Staging)> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let (lut, a) = Buffer::record_with_data(ctx, cmd, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
+        let table = self.max_table_flat();
+        let name = "transfer function max table";
+        let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&table), usage)?;
+        Ok((GpuTransferFunction { lut, max_table }, a.join(b)))
+    }
+
+    /// Uploads the LUT (`vec4` per entry) and the max-alpha table and waits.
     pub fn upload(&self, ctx: &Context) -> Result<GpuTransferFunction> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;

@@ -17,7 +17,8 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Timings {
     /// (phase name, milliseconds), in the order the phases ran.
     pub phases: Vec<(String, f64)>,

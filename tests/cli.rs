@@ -137,10 +137,99 @@ fn render_to_png_matches_the_exr_in_8_bit_srgb_with_straight_alpha() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 }
 
+/// The sRGB decoding of an 8-bit value, from IEC 61966-2-1.
+fn srgb_decode(encoded: u8) -> f64 {
+    let v = encoded as f64 / 255.0;
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[test]
+fn render_to_png_over_a_background_is_the_exr_composited_in_linear_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let (exr, png) = (dir.path().join("frame.exr"), dir.path().join("frame.png"));
+    let args = ["--camera", "-20,35", "--tf", "ramp:0.2:1:0.3"];
+    render_ok("menger:27", &exr, &args);
+    render_ok("menger:27", &png, &[&args[..], &["--background", "#3366cc"]].concat());
+    let frame = Frame::read_exr(&exr).unwrap();
+
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let info = reader.info();
+    assert_eq!((info.width, info.height), (40, 32));
+    assert_eq!(
+        (info.color_type, info.bit_depth),
+        (png::ColorType::Rgb, png::BitDepth::Eight)
+    );
+    let mut rgb = vec![0u8; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut rgb).unwrap();
+    let background = [0x33, 0x66, 0xcc].map(srgb_decode);
+    let (mut bare, mut mixed) = (0, 0);
+    for (i, p) in frame.pixels.iter().enumerate() {
+        let a = (p[3] as f64).clamp(0.0, 1.0);
+        for c in 0..3 {
+            let want = (srgb((p[c] as f64 + (1.0 - a) * background[c]).clamp(0.0, 1.0)) * 255.0).round();
+            let got = rgb[3 * i + c] as f64;
+            assert!(
+                (got - want).abs() <= 1.0,
+                "pixel {i} channel {c}: {got} vs {want} from {p:?}"
+            );
+        }
+        bare += (a == 0.0 && rgb[3 * i..3 * i + 3] == [0x33, 0x66, 0xcc]) as u32;
+        mixed += (a > 0.05 && a < 0.95) as u32;
+    }
+    assert!(
+        bare > 0 && mixed > 50,
+        "{bare} background pixels, {mixed} partly covered"
+    );
+}
+
+#[test]
+fn a_background_is_refused_for_an_exr_frame_or_when_malformed() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, colour, message) in [
+        (
+            "frame.exr",
+            "102030",
+            "invalid background '102030': only a .png frame is composited",
+        ),
+        (
+            "frame.png",
+            "12345",
+            "invalid background '12345': expected an sRGB colour",
+        ),
+    ] {
+        let out = dir.path().join(name);
+        let r = lacuna(
+            &[
+                "render",
+                "menger:8",
+                "--out",
+                out.to_str().unwrap(),
+                "--background",
+                colour,
+            ],
+            &[],
+        );
+        assert_eq!(r.code, 2, "{name}: {}{}", r.stdout, r.stderr);
+        let lines: Vec<&str> = r.stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{name}: {}", r.stderr);
+        assert!(
+            lines[0].starts_with("error: ") && lines[0].contains(message),
+            "{name}: {}",
+            lines[0]
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
 #[test]
 fn a_frame_name_that_is_not_exr_or_png_fails_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
-    for name in ["frame.jpg", "frame", "frame.exr.tmp"] {
+    for name in ["frame.tiff", "frame.jpg", "frame", "frame.exr.tmp"] {
         let out = dir.path().join(name);
         // A missing volume and no Vulkan driver: the name is refused first.
         let r = lacuna(

@@ -52,13 +52,13 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
                 &kernels,
                 &classifier,
                 cmd,
-                &mut timer,
+                Some(&mut timer),
                 &gv,
                 ranges.cells(cell)?,
                 &lut,
                 octants,
             )?;
-            map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+            map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
             Ok(map)
         })
         .unwrap();

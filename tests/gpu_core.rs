@@ -4,7 +4,10 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::gpu::record;
-use lacuna::gpu::{shaders, vk, AdoptInfo, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use lacuna::gpu::{
+    required_features, shaders, vk, AdoptInfo, Binding, Buffer, Context, EnabledFeatures, Kernel, MemoryLocation,
+    Timer, REQUIRED_EXTENSIONS,
+};
 use lacuna::Error;
 
 fn copy_kernel(ctx: &Context) -> Kernel {
@@ -169,18 +172,33 @@ fn timer_reports_named_passes_in_order() {
     assert_clean(&ctx);
 }
 
-#[test]
-fn adopted_device_is_used_but_not_destroyed() {
+/// A host's validated instance and a device created with `exts`, `v12` and
+/// `v13`, and what it enabled.
+struct HostDevice {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    pd: vk::PhysicalDevice,
+    device: ash::Device,
+    queue: vk::Queue,
+    family: u32,
+    enabled: EnabledFeatures,
+}
+
+fn host_device(
+    exts: &[&std::ffi::CStr],
+    v12: vk::PhysicalDeviceVulkan12Features<'static>,
+    v13: vk::PhysicalDeviceVulkan13Features<'static>,
+) -> HostDevice {
     let entry = unsafe { ash::Entry::load() }.unwrap();
     let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
     let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
-    let exts = [ash::ext::debug_utils::NAME.as_ptr()];
+    let inst_exts = [ash::ext::debug_utils::NAME.as_ptr()];
     let sync = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync);
     let info = vk::InstanceCreateInfo::default()
         .application_info(&app)
         .enabled_layer_names(&layers)
-        .enabled_extension_names(&exts)
+        .enabled_extension_names(&inst_exts)
         .push_next(&mut features);
     let instance = unsafe { entry.create_instance(&info, None) }.unwrap();
     let pd = unsafe { instance.enumerate_physical_devices() }.unwrap()[0];
@@ -192,34 +210,62 @@ fn adopted_device_is_used_but_not_destroyed() {
     let queues = [vk::DeviceQueueCreateInfo::default()
         .queue_family_index(family)
         .queue_priorities(&prio)];
-    let dev_exts = [ash::khr::push_descriptor::NAME.as_ptr()];
-    let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
-        .synchronization2(true)
-        .maintenance4(true);
-    let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
-        .vulkan_memory_model(true)
-        .vulkan_memory_model_device_scope(true);
+    let dev_exts: Vec<_> = exts.iter().map(|e| e.as_ptr()).collect();
+    let (mut c12, mut c13) = (v12, v13);
     let dinfo = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queues)
         .enabled_extension_names(&dev_exts)
-        .push_next(&mut v13)
-        .push_next(&mut v12);
+        .push_next(&mut c13)
+        .push_next(&mut c12);
     let device = unsafe { instance.create_device(pd, &dinfo, None) }.unwrap();
     let queue = unsafe { device.get_device_queue(family, 0) };
-
-    // SAFETY: the handles were created above with the features AdoptInfo
-    // lists, outlive the context, and nothing else uses the queue.
-    let ctx = unsafe {
-        Context::adopt(AdoptInfo {
-            entry: Some(entry.clone()),
-            instance: instance.clone(),
-            physical_device: pd,
-            device: device.clone(),
-            queue,
-            queue_family: family,
-        })
+    let enabled = EnabledFeatures {
+        api_version: vk::API_VERSION_1_3,
+        extensions: exts.iter().map(|e| (*e).to_owned()).collect(),
+        vulkan12: v12,
+        vulkan13: v13,
+    };
+    HostDevice {
+        entry,
+        instance,
+        pd,
+        device,
+        queue,
+        family,
+        enabled,
     }
-    .unwrap();
+}
+
+impl HostDevice {
+    /// SAFETY (for the tests): the handles were created above, outlive the
+    /// context, and nothing else uses the queue.
+    fn adopt(&self) -> lacuna::Result<Context> {
+        unsafe {
+            Context::adopt(AdoptInfo {
+                entry: Some(self.entry.clone()),
+                instance: self.instance.clone(),
+                physical_device: self.pd,
+                device: self.device.clone(),
+                queue: self.queue,
+                queue_family: self.family,
+                enabled: self.enabled.clone(),
+            })
+        }
+    }
+
+    fn destroy(self) {
+        unsafe {
+            self.device.destroy_device(None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+#[test]
+fn adopted_device_is_used_but_not_destroyed() {
+    let (v12, v13) = required_features();
+    let host = host_device(&REQUIRED_EXTENSIONS, v12, v13);
+    let ctx = host.adopt().unwrap();
     assert!(!ctx.owns_device());
     let out = chained_copies(&ctx, true);
     assert_eq!(out[1], 2654435761);
@@ -227,19 +273,58 @@ fn adopted_device_is_used_but_not_destroyed() {
     drop(ctx);
     // The host's device still works after lacuna let go of it.
     unsafe {
-        device.device_wait_idle().unwrap();
-        let pool = device
-            .create_command_pool(&vk::CommandPoolCreateInfo::default().queue_family_index(family), None)
-            .unwrap();
-        device.destroy_command_pool(pool, None);
-        device.destroy_device(None);
-        instance.destroy_instance(None);
+        host.device.device_wait_idle().unwrap();
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(host.family);
+        let pool = host.device.create_command_pool(&info, None).unwrap();
+        host.device.destroy_command_pool(pool, None);
     }
+    host.destroy();
+}
+
+#[test]
+fn adopting_a_device_without_push_descriptors_names_the_extension() {
+    let (v12, v13) = required_features();
+    let host = host_device(&[], v12, v13);
+    let err = host.adopt().err().unwrap();
+    assert!(err.to_string().contains("VK_KHR_push_descriptor"), "{err}");
+    // Listing the extension without creating the device with it is caught
+    // on the device itself.
+    let mut lying = host_device(&[], v12, v13);
+    lying.enabled.extensions = REQUIRED_EXTENSIONS.iter().map(|e| (*e).to_owned()).collect();
+    let err = lying.adopt().err().unwrap();
+    assert!(
+        err.to_string().contains("vkCmdPushDescriptorSetKHR is not loaded"),
+        "{err}"
+    );
+    host.destroy();
+    lying.destroy();
+}
+
+#[test]
+fn adopting_a_device_without_a_required_feature_names_it() {
+    let (v12, v13) = required_features();
+    let host = host_device(&REQUIRED_EXTENSIONS, v12, v13.synchronization2(false));
+    let err = host.adopt().err().unwrap();
+    assert!(err.to_string().contains("synchronization2"), "{err}");
+    host.destroy();
+    let host = host_device(&REQUIRED_EXTENSIONS, v12.vulkan_memory_model_device_scope(false), v13);
+    let err = host.adopt().err().unwrap();
+    assert!(err.to_string().contains("vulkanMemoryModelDeviceScope"), "{err}");
+    host.destroy();
+    let mut host = host_device(&REQUIRED_EXTENSIONS, v12, v13);
+    host.enabled.api_version = vk::API_VERSION_1_2;
+    let err = host.adopt().err().unwrap();
+    assert!(
+        err.to_string().contains("Vulkan 1.3 (the instance asked for 1.2)"),
+        "{err}"
+    );
+    host.destroy();
 }
 
 #[test]
 fn adopting_a_queue_family_that_does_not_exist_is_an_error() {
     let ctx = gpu();
+    let (vulkan12, vulkan13) = required_features();
     // SAFETY: the handles are the live context's; adoption fails before use.
     let err = unsafe {
         Context::adopt(AdoptInfo {
@@ -249,6 +334,12 @@ fn adopting_a_queue_family_that_does_not_exist_is_an_error() {
             device: ctx.device().clone(),
             queue: vk::Queue::null(),
             queue_family: 99,
+            enabled: EnabledFeatures {
+                api_version: vk::API_VERSION_1_3,
+                extensions: REQUIRED_EXTENSIONS.iter().map(|e| (*e).to_owned()).collect(),
+                vulkan12,
+                vulkan13,
+            },
         })
     }
     .err()

@@ -35,6 +35,19 @@ bool march_begin(Ray ray, float dt, out March m) {
     return !m.done;
 }
 
+// Sets up pixel px's march along its camera ray (camera.glsl), ending at
+// the host's opaque surface when the frame has a depth limit. The limit only
+// shortens t_exit: the lattice stays t_enter + k * dt, so every structure
+// still takes exactly naive's samples.
+bool march_pixel(uvec2 px, out March m) {
+    bool hit = march_begin(camera_ray(px), params.march.x, m);
+    if (hit && params.depth.y != 0.0) {
+        m.t_exit = min(m.t_exit, params.t_max[px.y * params.image.x + px.x]);
+        m.done = !(m.t_enter < m.t_exit);
+    }
+    return !m.done;
+}
+
 // Advances k to the first lattice point at or past t (never backwards).
 void march_skip_to(inout March m, float t) {
     if (m.done) {

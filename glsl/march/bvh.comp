@@ -19,7 +19,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "lattice.glsl"
 #include "bvh_node.glsl"
 
-layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame { vec4 frame[]; };
+#include "frame_out.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer Nodes { BvhNode nodes[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Count { uint leaf_count; };
 
@@ -32,8 +32,8 @@ void main() {
         return;
     }
     March m;
-    if (march_begin(camera_ray(px), params.march.x, m)) {
+    if (march_pixel(px, m)) {
         traverse_tree(m);
     }
-    frame[px.y * params.image.x + px.x] = m.acc;
+    frame_store(px, m.acc);
 }

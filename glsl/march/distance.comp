@@ -27,7 +27,7 @@ layout(constant_id = 0) const uint OCTANTS = 0u;
 #include "lattice.glsl"
 #include "distance_map.glsl"
 
-layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame { vec4 frame[]; };
+#include "frame_out.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer Distances { uint distances[]; };
 layout(push_constant) uniform Grid { uvec4 cells; } grid; // xyz: cells per axis; w: cell edge
 
@@ -143,8 +143,8 @@ void main() {
         return;
     }
     March m;
-    if (march_begin(camera_ray(px), params.march.x, m)) {
+    if (march_pixel(px, m)) {
         march_distance(m, region_margin(m));
     }
-    frame[px.y * params.image.x + px.x] = m.acc;
+    frame_store(px, m.acc);
 }

@@ -18,7 +18,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "tf.glsl"
 #include "lattice.glsl"
 
-layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame { vec4 frame[]; };
+#include "frame_out.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer CellFlags { uint cell_flags[]; };
 layout(push_constant) uniform Grid { uvec4 cells; } grid; // xyz: cells per axis; w: cell edge
 
@@ -32,8 +32,8 @@ void main() {
         return;
     }
     March m;
-    if (march_begin(camera_ray(px), params.march.x, m)) {
+    if (march_pixel(px, m)) {
         march_grid(m, m.t_enter, m.t_exit, region_margin(m));
     }
-    frame[px.y * params.image.x + px.x] = m.acc;
+    frame_store(px, m.acc);
 }

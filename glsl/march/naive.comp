@@ -17,9 +17,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "tf.glsl"
 #include "lattice.glsl"
 
-layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame {
-    vec4 frame[];
-};
+#include "frame_out.glsl"
 
 void main() {
     uvec2 px = gl_GlobalInvocationID.xy;
@@ -27,8 +25,8 @@ void main() {
         return;
     }
     March m;
-    if (march_begin(camera_ray(px), params.march.x, m)) {
+    if (march_pixel(px, m)) {
         march_span(m, m.t_exit);
     }
-    frame[px.y * params.image.x + px.x] = m.acc;
+    frame_store(px, m.acc);
 }

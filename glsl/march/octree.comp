@@ -21,7 +21,7 @@ layout(constant_id = 0) const uint OCTREE_KIND = 3u;
 #include "lattice.glsl"
 #include "octree_node.glsl"
 
-layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame { vec4 frame[]; };
+#include "frame_out.glsl"
 layout(std430, set = 0, binding = 4) readonly buffer Nodes { OctNode oct_nodes[]; };
 
 March g_march;
@@ -43,9 +43,9 @@ void main() {
     if (px.x >= params.image.x || px.y >= params.image.y) {
         return;
     }
-    if (march_begin(camera_ray(px), params.march.x, g_march)) {
+    if (march_pixel(px, g_march)) {
         g_eps = region_margin(g_march);
         octree_walk(OctRay(g_march.ray.org, g_march.ray.dir, g_march.t_enter, g_march.t_exit));
     }
-    frame[px.y * params.image.x + px.x] = g_march.acc;
+    frame_store(px, g_march.acc);
 }

@@ -33,7 +33,8 @@ pub const OCTANT_CELLS: u64 = 1 << 15;
 pub const THRESHOLD: f64 = 1.0;
 
 /// What auto chose and why.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Choice {
     /// The structure the frames are marched with.
     pub accel: Accel,
@@ -171,14 +172,14 @@ impl Method for AutoMethod {
                     &kernels,
                     &classifier,
                     cmd,
-                    &mut timer,
+                    Some(&mut timer),
                     input.gpu_volume,
                     cells,
                     input.gpu_tf,
                     octants,
                 )?;
                 if summary {
-                    map.record_summary(ctx, &kernels, cmd, &mut timer, &out)?;
+                    map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
                 }
                 Ok(map)
             })?;

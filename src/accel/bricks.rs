@@ -3,7 +3,7 @@
 //! change then reclassifies in O(bricks).
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer};
+use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::brick_minmax::{brick_counts, BrickMinMax};
 use crate::volume::GpuVolume;
 
@@ -19,9 +19,37 @@ pub struct GpuBricks {
 }
 
 impl GpuBricks {
-    /// Computes the ranges of `volume`'s `brick`^3 bricks; returns them and
-    /// the GPU milliseconds it took.
+    /// Computes the ranges of `volume`'s `brick`^3 bricks and waits; returns
+    /// them and the GPU milliseconds it took.
     pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume, brick: u32) -> Result<(Self, f64)> {
+        let bricks = Self::allocate(ctx, volume, brick)?;
+        let mut timer = Timer::new(ctx, 1)?;
+        ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            bricks.record(cmd, Some(&mut timer), "ranges", minmax, volume)
+        })?;
+        let ms = timer.results()?.phase("ranges")?;
+        Ok((bricks, ms))
+    }
+
+    /// Records the computation of the ranges (timed as `pass`) into `cmd`;
+    /// ends with compute writes of `ranges` (the `prims` convention).
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        mut timer: Option<&mut Timer>,
+        pass: &str,
+        minmax: &BrickMinMax,
+        volume: &GpuVolume,
+    ) -> Result<()> {
+        let p = timer.begin(cmd, pass)?;
+        minmax.record(cmd, volume, self.brick, 1, &self.ranges)?;
+        timer.end(cmd, p);
+        Ok(())
+    }
+
+    /// The ranges buffer of `volume`'s `brick`^3 bricks, not yet computed.
+    pub fn allocate(ctx: &Context, volume: &GpuVolume, brick: u32) -> Result<Self> {
         if !brick.is_power_of_two() {
             return Err(Error::invalid(
                 "brick size",
@@ -45,22 +73,11 @@ impl GpuBricks {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuOnly,
         )?;
-        let mut timer = Timer::new(ctx, 1)?;
-        ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            let pass = timer.begin(cmd, "ranges")?;
-            minmax.record(cmd, volume, brick, 1, &ranges)?;
-            timer.end(cmd, pass);
-            Ok(())
-        })?;
-        Ok((
-            GpuBricks {
-                brick,
-                counts,
-                total,
-                ranges,
-            },
-            timer.results()?.phase("ranges")?,
-        ))
+        Ok(GpuBricks {
+            brick,
+            counts,
+            total,
+            ranges,
+        })
     }
 }

@@ -17,7 +17,8 @@ use crate::prims::entry_barrier;
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Classify {
     Range,
     Voxel { apron: bool },

@@ -61,7 +61,8 @@ const SLABS: u32 = 32;
 const COLUMN_DEPTH: u32 = 10;
 
 /// GPU time per unit of traversal work, in nanoseconds.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CostModel {
     /// One marched lattice sample (volume fetch, LUT, compositing).
     pub sample_ns: f64,

@@ -22,7 +22,7 @@ use super::stats::Stats;
 use super::tree::STORAGE_XFER;
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::entry_barrier;
 use crate::tf::GpuTransferFunction;
 use crate::volume::GpuVolume;
@@ -97,7 +97,8 @@ pub struct DistanceMap {
 }
 
 /// What `--accel auto` reads from a map (see `distance_summary.comp`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Summary {
     pub cells: u64,
     pub active: u64,
@@ -140,7 +141,7 @@ pub fn record(
     kernels: &DistanceKernels,
     classifier: &Classifier,
     cmd: vk::CommandBuffer,
-    timer: &mut Timer,
+    mut timer: Option<&mut Timer>,
     volume: &GpuVolume,
     cells: &GpuBricks,
     tf: &GpuTransferFunction,
@@ -236,7 +237,7 @@ impl DistanceMap {
         ctx: &Context,
         kernels: &DistanceKernels,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        mut timer: Option<&mut Timer>,
         out: &Buffer,
     ) -> Result<()> {
         let kernel = &kernels.summary[self.octants as usize];
@@ -423,7 +424,7 @@ impl Method for DistanceMethod {
         &self,
         builder: &Builder,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,

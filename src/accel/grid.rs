@@ -8,7 +8,7 @@ use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, R
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
 use crate::error::{Error, Result};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, MemoryLocation, Timer};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, MemoryLocation, OptionalTimer, Timer};
 use crate::tf::GpuTransferFunction;
 use crate::volume::GpuVolume;
 
@@ -81,7 +81,7 @@ pub fn record(
     ctx: &Context,
     classifier: &Classifier,
     cmd: vk::CommandBuffer,
-    timer: &mut Timer,
+    mut timer: Option<&mut Timer>,
     volume: &GpuVolume,
     cells: &GpuBricks,
     tf: &GpuTransferFunction,
@@ -144,7 +144,7 @@ impl Method for GridMethod {
         &self,
         builder: &Builder,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,

@@ -62,7 +62,15 @@ impl Method for HybridMethod {
         let mut timer = Timer::new(ctx, 1)?;
         let grid = ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            grid::record(ctx, &classifier, cmd, &mut timer, input.gpu_volume, cells, input.gpu_tf)
+            grid::record(
+                ctx,
+                &classifier,
+                cmd,
+                Some(&mut timer),
+                input.gpu_volume,
+                cells,
+                input.gpu_tf,
+            )
         })?;
         t.extend(timer.results()?);
         Ok((Box::new(Hybrid { tree, grid }), t))

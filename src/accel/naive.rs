@@ -40,7 +40,7 @@ impl Method for Naive {
         &self,
         _: &Builder,
         _: vk::CommandBuffer,
-        _: &mut Timer,
+        _: Option<&mut Timer>,
         _: &BuildInput,
         _: &Ranges,
         _: &BuildOptions,

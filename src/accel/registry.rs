@@ -79,7 +79,8 @@ pub struct BuildInput<'a> {
 
 /// Parameters of every structure (the paper's columns); each structure reads
 /// the ones [`Method::params`] names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct BuildOptions {
     pub classify: Classify,
     pub kd: kd::KdParams,
@@ -169,7 +170,7 @@ pub trait Method: Sync {
         &self,
         builder: &Builder,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,
@@ -194,7 +195,7 @@ pub trait Method: Sync {
         let mut timer = Timer::new(ctx, 16)?;
         let built = ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_build(builder, cmd, &mut timer, input, ranges, options)
+            self.record_build(builder, cmd, Some(&mut timer), input, ranges, options)
         })?;
         Ok((built, timer.results()?))
     }
@@ -267,6 +268,7 @@ impl std::str::FromStr for Accel {
     }
 }
 
+#[cfg(feature = "serde")]
 impl serde::Serialize for Accel {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         s.serialize_str(self.name())
@@ -350,7 +352,8 @@ impl Ranges {
         }
     }
 
-    /// GPU milliseconds of the per-volume ranges of `kind` (0 for none).
+    /// GPU milliseconds of the per-volume ranges of `kind` (0 for none; NaN
+    /// for recorded ranges, which the caller's timer timed).
     pub fn ms(&self, kind: RangeKind) -> Result<f64> {
         Ok(match kind {
             RangeKind::None => 0.0,
@@ -443,6 +446,43 @@ impl Builder {
         Ok((ranges, t))
     }
 
+    /// As `ranges_for`, recorded into `cmd` (passes "ranges" and "cell
+    /// ranges" on `timer`): the ranges are ready after the submission, and
+    /// `Ranges::ms` is NaN for them (read the caller's timer). Ends with
+    /// compute writes: a barrier from `Access::COMPUTE_WRITE` to
+    /// `Access::COMPUTE_READ` before a build reads them (`record_build`
+    /// begins with one).
+    pub fn record_ranges_for(
+        &self,
+        cmd: vk::CommandBuffer,
+        mut timer: Option<&mut Timer>,
+        accels: &[Accel],
+        volume: &GpuVolume,
+        cell: u32,
+    ) -> Result<Ranges> {
+        grid::check_cell(cell)?;
+        let reads = |k: RangeKind| accels.iter().any(|a| a.method().ranges() == k);
+        let mut ranges = Ranges {
+            bricks: None,
+            cells: None,
+        };
+        for (kind, size, pass) in [
+            (RangeKind::Bricks, bricks::BRICK, "ranges"),
+            (RangeKind::Cells, cell, "cell ranges"),
+        ] {
+            if reads(kind) {
+                let minmax = self.kernels::<BrickMinMax>()?;
+                let b = GpuBricks::allocate(&self.ctx, volume, size)?;
+                b.record(cmd, timer.as_deref_mut(), pass, &minmax, volume)?;
+                match kind {
+                    RangeKind::Bricks => ranges.bricks = Some((b, f64::NAN)),
+                    _ => ranges.cells = Some((b, f64::NAN)),
+                }
+            }
+        }
+        Ok(ranges)
+    }
+
     /// The ranges of every registered structure.
     pub fn ranges(&self, volume: &GpuVolume, cell: u32) -> Result<(Ranges, Timings)> {
         self.ranges_for(TABLE, volume, cell)
@@ -471,7 +511,7 @@ impl Builder {
         &self,
         accel: Accel,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         options: &BuildOptions,

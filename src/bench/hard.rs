@@ -75,6 +75,7 @@ pub fn lattice(
         dims: [dims[0], dims[1], dims[2], LUT_SIZE as u32],
         image: [size, size, 0, 0],
         march: [step, ERT_OFF, 0.0, 0.0],
+        ..RenderParams::default()
     })
 }
 

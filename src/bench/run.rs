@@ -68,12 +68,13 @@ impl<'a> FrameTimer<'a> {
             timer.reset(cmd);
             renderer.record(cmd, Some(timer), s, target, v, tf, settings)?;
             if read {
-                renderer.record_readback(cmd, target);
+                renderer.record_readback(cmd, target)?;
             }
             Ok(())
         })?;
         let ms = self.timer.results()?.phase("march")?;
-        Ok((ms, read.then(|| self.target.read())))
+        let frame = if read { Some(self.target.read()?) } else { None };
+        Ok((ms, frame))
     }
 }
 

@@ -8,6 +8,8 @@ pub mod info;
 pub mod octree;
 pub mod render;
 pub mod scene;
+#[cfg(feature = "view")]
+pub mod view;
 
 use clap::Args;
 pub use lacuna::frame::check_parent;

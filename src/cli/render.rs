@@ -4,7 +4,7 @@ use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::kd::KdParams;
 use lacuna::accel::{parse_collapse, Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
-use lacuna::frame::{Frame, FrameFormat};
+use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::render::{self, Camera, Filter, Projection, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
@@ -73,6 +73,9 @@ pub struct RenderArgs {
     /// Write the frame: .exr (OpenEXR, RGBA f32, linear, premultiplied) or .png (8-bit sRGB, straight alpha).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// PNG only: composite the frame over this sRGB colour (hex RRGGBB) and write it opaque.
+    #[arg(long, requires = "out")]
+    background: Option<Background>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
     validate: bool,
@@ -112,6 +115,13 @@ impl RenderArgs {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
         }
         let format = self.out.as_deref().map(FrameFormat::from_path).transpose()?;
+        if let (Some(background), Some(FrameFormat::Exr)) = (&self.background, format) {
+            return Err(Error::invalid(
+                "background",
+                background.spec.clone(),
+                "only a .png frame is composited; an .exr frame keeps its alpha",
+            ));
+        }
         if let Some(out) = &self.out {
             check_parent(out)?;
         }
@@ -228,7 +238,10 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         describe(
             &mut frame, &volume, &tf, &structure, args.accel, &params, &settings, &ctx, &timings,
         )?;
-        frame.write(out, format)?;
+        match &args.background {
+            Some(background) => frame.write_png_over(out, background)?,
+            None => frame.write(out, format)?,
+        }
         println!("wrote {}", out.display());
     }
     Ok(validation_verdict(&ctx))
@@ -236,7 +249,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
 /// The frame's metadata: what made it.
 #[allow(clippy::too_many_arguments)]
-fn describe(
+pub(super) fn describe(
     frame: &mut Frame,
     volume: &Volume,
     tf: &TransferFunction,

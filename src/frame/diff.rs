@@ -3,9 +3,11 @@
 
 use super::Frame;
 use crate::error::{Error, Result};
+#[cfg(feature = "frames")]
 use std::path::Path;
 
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct DiffStats {
     pub rmse: f64,
     /// Peak signal 1.0; infinite for identical frames.
@@ -44,7 +46,9 @@ fn channel_diff(a: f32, b: f32) -> f64 {
     }
 }
 
-fn pixel_diff(a: [f32; 4], b: [f32; 4]) -> f64 {
+/// The largest channel difference of two pixels (infinite where a channel
+/// is non-finite in one and differs).
+pub fn pixel_diff(a: [f32; 4], b: [f32; 4]) -> f64 {
     (0..4).map(|c| channel_diff(a[c], b[c])).fold(0.0, f64::max)
 }
 
@@ -87,6 +91,7 @@ pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
 
 /// Writes a PNG of the per-pixel max abs difference: black where equal, then
 /// blue to red up to `scale` (default: the frame's max difference).
+#[cfg(feature = "frames")]
 pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> Result<()> {
     diff(a, b)?;
     let diffs: Vec<f64> = a

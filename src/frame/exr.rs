@@ -1,37 +1,12 @@
-//! `Frame`: RGBA f32, linear, premultiplied alpha, row 0 at the top; written
-//! as OpenEXR with lacuna's metadata as text attributes (`lacuna.*`).
+//! OpenEXR frames: RGBA f32 with lacuna's metadata as text attributes
+//! (`lacuna.*`).
 
-use super::write_atomically;
+use super::{write_atomically, Frame, PREFIX};
 use crate::error::Result;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-#[derive(Clone, Debug, PartialEq)]
-pub struct Frame {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<[f32; 4]>,
-    /// Attribute name (without the `lacuna.` prefix) to value.
-    pub metadata: BTreeMap<String, String>,
-}
-
-pub(super) const PREFIX: &str = "lacuna.";
-
 impl Frame {
-    pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {
-        assert_eq!(pixels.len(), width as usize * height as usize);
-        Frame {
-            width,
-            height,
-            pixels,
-            metadata: BTreeMap::new(),
-        }
-    }
-
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
-        self.pixels[(y * self.width + x) as usize]
-    }
-
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         use exr::prelude::*;
         let (w, h) = (self.width as usize, self.height as usize);

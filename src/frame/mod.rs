@@ -1,21 +1,59 @@
-//! Frames and files: the `Frame` type with its OpenEXR reading and writing
-//! and PNG writing, frame diffs, and atomic writes (a temporary name, then a rename, so no
-//! partial file is ever left). Used by render, octree, scene and bench.
+//! Frames and files: the `Frame` type, its OpenEXR reading and writing and
+//! PNG writing (feature `frames`), frame diffs, and atomic writes (a
+//! temporary name, then a rename, so no partial file is ever left). Used by
+//! render, octree, scene and bench.
 
 mod atomic;
 pub mod diff;
+#[cfg(feature = "frames")]
 mod exr;
+#[cfg(feature = "frames")]
 mod png;
 
 pub use atomic::{check_parent, write_atomically};
 pub use diff::{diff, DiffStats};
-pub use exr::Frame;
-pub use png::{srgb_encode, srgba8};
+#[cfg(feature = "frames")]
+pub use png::{srgb8_over, srgb_decode, srgb_encode, srgba8, Background};
 
+#[cfg(feature = "frames")]
 use crate::error::{Error, Result};
+use std::collections::BTreeMap;
+#[cfg(feature = "frames")]
 use std::path::Path;
 
+/// The prefix of lacuna's metadata keys in frame files.
+#[cfg(feature = "frames")]
+const PREFIX: &str = "lacuna.";
+
+/// RGBA f32, linear, premultiplied alpha, row 0 at the top, with metadata
+/// that says what made it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+    /// Attribute name (without the `lacuna.` prefix) to value.
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl Frame {
+    pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {
+        assert_eq!(pixels.len(), width as usize * height as usize);
+        Frame {
+            width,
+            height,
+            pixels,
+            metadata: BTreeMap::new(),
+        }
+    }
+
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
 /// The file formats a frame is written in, chosen by file name extension.
+#[cfg(feature = "frames")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FrameFormat {
     /// `.exr`: RGBA f32, linear, premultiplied, with metadata (`Frame::write_exr`).
@@ -24,6 +62,7 @@ pub enum FrameFormat {
     Png,
 }
 
+#[cfg(feature = "frames")]
 impl FrameFormat {
     /// The format named by `path`'s extension (`.exr` or `.png`, any case).
     pub fn from_path(path: &Path) -> Result<Self> {
@@ -40,6 +79,7 @@ impl FrameFormat {
     }
 }
 
+#[cfg(feature = "frames")]
 impl Frame {
     /// Writes the frame in `format`, atomically.
     pub fn write(&self, path: &Path, format: FrameFormat) -> Result<()> {

@@ -10,6 +10,10 @@
 //! (to 8-bit precision). Writing the premultiplied colour with alpha would
 //! darken every semi-transparent pixel; flattening over black would lose
 //! alpha. The frame's metadata goes into iTXt chunks (`lacuna.volume`, ...).
+//!
+//! With a `Background` the frame is instead composited over that colour in
+//! linear light (`c + (1 - a) * bg`, the over operator on premultiplied
+//! colour) and written opaque as 8-bit sRGB RGB.
 
 use super::{write_atomically, Frame};
 use crate::error::{Error, Result};
@@ -37,17 +41,91 @@ pub fn srgba8(pixel: [f32; 4]) -> [u8; 4] {
     [colour(pixel[0]), colour(pixel[1]), colour(pixel[2]), quantise(alpha)]
 }
 
+/// The sRGB decoding (IEC 61966-2-1) of an encoded value in [0, 1].
+pub fn srgb_decode(encoded: f32) -> f32 {
+    if encoded <= 0.040_45 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// An opaque colour to composite a frame over, given as sRGB hex
+/// (`RRGGBB`, optionally `#RRGGBB`, as in CSS) and kept linear.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Background {
+    /// The colour as given.
+    pub spec: String,
+    /// Linear RGB in [0, 1].
+    pub linear: [f32; 3],
+}
+
+impl std::str::FromStr for Background {
+    type Err = Error;
+
+    fn from_str(spec: &str) -> Result<Self> {
+        let hex = spec.strip_prefix('#').unwrap_or(spec);
+        let bad = || Error::invalid("background", spec, "expected an sRGB colour RRGGBB in hex, e.g. 1a1a1a");
+        if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(bad());
+        }
+        let channel = |i: usize| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| bad());
+        let linear = [channel(0)?, channel(1)?, channel(2)?].map(|c| srgb_decode(f32::from(c) / 255.0));
+        Ok(Background {
+            spec: spec.to_string(),
+            linear,
+        })
+    }
+}
+
+/// A linear premultiplied pixel composited over `background` (linear) and
+/// sRGB-encoded to 8 bits. Non-finite channels count as 0.
+pub fn srgb8_over(pixel: [f32; 4], background: [f32; 3]) -> [u8; 3] {
+    let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+    let alpha = finite(pixel[3]).clamp(0.0, 1.0);
+    let over = |c: usize| (finite(pixel[c]) + (1.0 - alpha) * background[c]).clamp(0.0, 1.0);
+    [0, 1, 2].map(|c| (srgb_encode(over(c)) * 255.0 + 0.5) as u8)
+}
+
 impl Frame {
+    /// Writes the frame composited over `background` as an opaque 8-bit
+    /// sRGB RGB PNG, atomically.
+    pub fn write_png_over(&self, path: &Path, background: &Background) -> Result<()> {
+        let data: Vec<u8> = self
+            .pixels
+            .iter()
+            .flat_map(|&p| srgb8_over(p, background.linear))
+            .collect();
+        write_png8(
+            path,
+            self.width,
+            self.height,
+            ::png::ColorType::Rgb,
+            &data,
+            &self.png_text(),
+        )
+    }
+
+    /// The frame's metadata as PNG text chunks.
+    fn png_text(&self) -> Vec<(String, String)> {
+        self.metadata
+            .iter()
+            .map(|(k, v)| (format!("{}{k}", super::PREFIX), v.clone()))
+            .collect()
+    }
+
     /// Writes the frame as an 8-bit sRGB RGBA PNG with straight alpha (see
     /// the module documentation), atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         let data: Vec<u8> = self.pixels.iter().flat_map(|&p| srgba8(p)).collect();
-        let text: Vec<(String, String)> = self
-            .metadata
-            .iter()
-            .map(|(k, v)| (format!("{}{k}", super::exr::PREFIX), v.clone()))
-            .collect();
-        write_png8(path, self.width, self.height, ::png::ColorType::Rgba, &data, &text)
+        write_png8(
+            path,
+            self.width,
+            self.height,
+            ::png::ColorType::Rgba,
+            &data,
+            &self.png_text(),
+        )
     }
 }
 

@@ -14,8 +14,14 @@ pub enum Binding<'a> {
     /// A byte range of a storage buffer.
     StorageRange(&'a super::Buffer, u64, u64),
     Uniform(&'a super::Buffer),
-    /// A sampled image with its sampler (`sampler3D` in GLSL).
+    /// A sampled image with its sampler (`sampler3D` in GLSL), in
+    /// SHADER_READ_ONLY_OPTIMAL.
     Sampled(vk::ImageView, vk::Sampler),
+    /// A sampled image with its sampler in the given layout (a host's depth
+    /// image in DEPTH_READ_ONLY_OPTIMAL, say).
+    SampledIn(vk::ImageView, vk::Sampler, vk::ImageLayout),
+    /// A storage image (`image2D` in GLSL) in GENERAL layout.
+    StorageImage(vk::ImageView),
 }
 
 impl Binding<'_> {
@@ -23,7 +29,8 @@ impl Binding<'_> {
         match self {
             Binding::Storage(_) | Binding::StorageRange(..) => vk::DescriptorType::STORAGE_BUFFER,
             Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
-            Binding::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::Sampled(..) | Binding::SampledIn(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
 }
@@ -204,7 +211,9 @@ impl Kernel {
                     offset,
                     range,
                 }],
-                Binding::Sampled(..) => [vk::DescriptorBufferInfo::default()],
+                Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) => {
+                    [vk::DescriptorBufferInfo::default()]
+                }
             })
             .collect();
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
@@ -214,6 +223,16 @@ impl Kernel {
                     sampler,
                     image_view: view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }],
+                Binding::SampledIn(view, sampler, image_layout) => [vk::DescriptorImageInfo {
+                    sampler,
+                    image_view: view,
+                    image_layout,
+                }],
+                Binding::StorageImage(view) => [vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: view,
+                    image_layout: vk::ImageLayout::GENERAL,
                 }],
                 _ => [vk::DescriptorImageInfo::default()],
             })
@@ -227,7 +246,9 @@ impl Kernel {
                     .dst_binding(i as u32)
                     .descriptor_type(ty);
                 match b {
-                    Binding::Sampled(..) => w.image_info(&image_infos[i]),
+                    Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) => {
+                        w.image_info(&image_infos[i])
+                    }
                     _ => w.buffer_info(&buffer_infos[i]),
                 }
             })

@@ -79,6 +79,49 @@ impl Buffer {
         })
     }
 
+    /// A host-visible staging buffer holding `data`.
+    fn staging(ctx: &Context, name: &str, data: &[u8]) -> Result<Buffer> {
+        let mut staging = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.host_mut()?[..data.len()].copy_from_slice(data);
+        Ok(staging)
+    }
+
+    /// As `with_data`, recorded into `cmd` instead of submitted: the copy
+    /// from a staging buffer, then a barrier making it visible to
+    /// compute-shader reads (`Access::TRANSFER_WRITE -> COMPUTE_READ`).
+    /// Keep the returned `Staging` until the submission completed.
+    pub fn record_with_data(
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        name: &str,
+        data: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<(Self, Staging)> {
+        let buffer = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        let staging = Buffer::staging(ctx, "staging upload", data)?;
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: data.len() as u64,
+        }];
+        let device = ctx.device();
+        unsafe { device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+        Ok((buffer, Staging(vec![staging])))
+    }
+
     /// A device-local storage buffer filled from `data` through staging.
     pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Self> {
         let buffer = Buffer::new(
@@ -128,14 +171,7 @@ impl Buffer {
         let mut done = 0u64;
         while done < data.len() as u64 {
             let n = (data.len() as u64 - done).min(STAGING_CHUNK);
-            let mut staging = Buffer::new(
-                &self.ctx,
-                "staging upload",
-                n,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::CpuToGpu,
-            )?;
-            staging.host_mut()?[..n as usize].copy_from_slice(&data[done as usize..(done + n) as usize]);
+            let staging = Buffer::staging(&self.ctx, "staging upload", &data[done as usize..(done + n) as usize])?;
             self.ctx.submit_and_wait(|cmd| {
                 let region = [vk::BufferCopy {
                     src_offset: 0,
@@ -200,6 +236,20 @@ impl Drop for Buffer {
     }
 }
 
+/// Host-visible staging buffers a recorded upload copies from: keep them
+/// until the submission that executes the copy completed (dropping them
+/// earlier frees memory the GPU still reads).
+#[must_use = "keep the staging until the submission that reads it completed"]
+pub struct Staging(Vec<Buffer>);
+
+impl Staging {
+    /// Joins the staging of several recorded uploads.
+    pub fn join(mut self, other: Staging) -> Staging {
+        self.0.extend(other.0);
+        self
+    }
+}
+
 /// A sampled 3D image (one channel) with its view.
 pub struct Image3d {
     ctx: Context,
@@ -244,6 +294,39 @@ impl Image3d {
     /// Creates the image and uploads `data` (tightly packed, x fastest) in
     /// z-slabs; leaves it in `SHADER_READ_ONLY_OPTIMAL`, visible to compute.
     pub fn with_data(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: [u32; 3],
+        texel_bytes: u64,
+        data: &[u8],
+    ) -> Result<Self> {
+        let image = Self::create(ctx, name, format, extent, texel_bytes, data)?;
+        image.upload(texel_bytes, data)?;
+        Ok(image)
+    }
+
+    /// As `with_data`, recorded into `cmd` instead of submitted: one copy from
+    /// a staging buffer, leaving the image in `SHADER_READ_ONLY_OPTIMAL` with
+    /// a barrier to compute-shader reads. Keep the returned `Staging` until
+    /// the submission completed.
+    pub fn record_with_data(
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        name: &str,
+        format: vk::Format,
+        extent: [u32; 3],
+        texel_bytes: u64,
+        data: &[u8],
+    ) -> Result<(Self, Staging)> {
+        let image = Self::create(ctx, name, format, extent, texel_bytes, data)?;
+        let staging = Buffer::staging(ctx, "staging volume", data)?;
+        image.record_copy(cmd, &staging, 0, extent[2], true, true);
+        Ok((image, Staging(vec![staging])))
+    }
+
+    /// The image and its view, after the limit checks; no contents yet.
+    fn create(
         ctx: &Context,
         name: &str,
         format: vk::Format,
@@ -312,7 +395,6 @@ impl Image3d {
             .format(format)
             .subresource_range(record::COLOR_RANGE);
         image.view = unsafe { device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
-        image.upload(texel_bytes, data)?;
         Ok(image)
     }
 
@@ -320,79 +402,66 @@ impl Image3d {
         let [w, h, d] = self.extent;
         let slice_bytes = (w as u64 * h as u64 * texel_bytes).max(1);
         let slices_per_chunk = (STAGING_CHUNK / slice_bytes).max(1) as u32;
-        let device = self.ctx.device();
         let mut z = 0u32;
         while z < d {
             let n = slices_per_chunk.min(d - z);
             let start = (z as u64 * slice_bytes) as usize;
             let len = (n as u64 * slice_bytes) as usize;
-            let mut staging = Buffer::new(
-                &self.ctx,
-                "staging volume",
-                len as u64,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::CpuToGpu,
-            )?;
-            staging.host_mut()?[..len].copy_from_slice(&data[start..start + len]);
-            let first = z == 0;
-            let last = z + n == d;
+            let staging = Buffer::staging(&self.ctx, "staging volume", &data[start..start + len])?;
             self.ctx.submit_and_wait(|cmd| {
-                let (old, src) = if first {
-                    (vk::ImageLayout::UNDEFINED, Access::NONE)
-                } else {
-                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE)
-                };
-                record::image_barrier(
-                    device,
-                    cmd,
-                    self.raw,
-                    old,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    src,
-                    Access::TRANSFER_WRITE,
-                );
-                let region = [vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_offset(vk::Offset3D {
-                        x: 0,
-                        y: 0,
-                        z: z as i32,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: n,
-                    })];
-                unsafe {
-                    device.cmd_copy_buffer_to_image(
-                        cmd,
-                        staging.raw,
-                        self.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &region,
-                    )
-                };
-                if last {
-                    record::image_barrier(
-                        device,
-                        cmd,
-                        self.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                        Access::TRANSFER_WRITE,
-                        Access::COMPUTE_READ,
-                    );
-                }
+                self.record_copy(cmd, &staging, z, n, z == 0, z + n == d);
                 Ok(())
             })?;
             z += n;
         }
         Ok(())
+    }
+}
+
+impl Image3d {
+    /// Records the copy of slices `z .. z + n` from `staging`: the transition
+    /// to TRANSFER_DST first (from UNDEFINED when `first`), and to
+    /// SHADER_READ_ONLY_OPTIMAL for compute reads after the `last`.
+    fn record_copy(&self, cmd: vk::CommandBuffer, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) {
+        let device = self.ctx.device();
+        let [w, h, _] = self.extent;
+        let (old, src) = if first {
+            (vk::ImageLayout::UNDEFINED, Access::NONE)
+        } else {
+            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE)
+        };
+        let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+        record::image_barrier(device, cmd, self.raw, old, dst, src, Access::TRANSFER_WRITE);
+        let region = [vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_offset(vk::Offset3D {
+                x: 0,
+                y: 0,
+                z: z as i32,
+            })
+            .image_extent(vk::Extent3D {
+                width: w,
+                height: h,
+                depth: n,
+            })];
+        unsafe { device.cmd_copy_buffer_to_image(cmd, staging.raw, self.raw, dst, &region) };
+        if last {
+            let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+            record::image_barrier(
+                device,
+                cmd,
+                self.raw,
+                dst,
+                read,
+                Access::TRANSFER_WRITE,
+                Access::COMPUTE_READ,
+            );
+        }
     }
 }
 

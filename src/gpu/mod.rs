@@ -10,7 +10,10 @@ mod timer;
 mod validation;
 
 pub use ash::vk;
-pub use context::{list_devices, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary};
+pub use context::{
+    list_devices, required_features, select_device, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary,
+    EnabledFeatures, REQUIRED_EXTENSIONS,
+};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
 pub use shaders::{LocalDim, Shader};
@@ -31,6 +34,6 @@ macro_rules! check_push {
     };
 }
 pub(crate) use check_push;
-pub use memory::{check_image3d, Buffer, Image3d};
-pub use timer::{Pass, Timer};
+pub use memory::{check_image3d, Buffer, Image3d, Staging};
+pub use timer::{OptionalTimer, Pass, Timer};
 pub use validation::ValidationMessage;

@@ -22,7 +22,9 @@ pub struct Shader {
     pub words: &'static [u32],
     /// Descriptor types of bindings 0.. of set 0.
     pub bindings: &'static [vk::DescriptorType],
-    /// Per binding: the block size of a uniform buffer in bytes, else 0.
+    /// Per binding: the block size in bytes of a uniform or storage buffer
+    /// (of a storage block ending in a runtime array, the part before it),
+    /// else 0.
     pub block_sizes: &'static [u32],
     /// Size in bytes of the push-constant block (0: none).
     pub push_size: u32,

@@ -120,3 +120,28 @@ impl Drop for Timer {
         unsafe { self.ctx.device().destroy_query_pool(self.pool, None) };
     }
 }
+
+/// The one timer convention of every `record_*` function: an optional
+/// `&mut Timer` (None: untimed). Passes open and close through this so the
+/// recording code reads the same either way.
+pub trait OptionalTimer {
+    /// Opens pass `name` when there is a timer.
+    fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Option<Pass>>;
+    /// Closes a pass opened by `begin`.
+    fn end(&mut self, cmd: vk::CommandBuffer, pass: Option<Pass>);
+}
+
+impl OptionalTimer for Option<&mut Timer> {
+    fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Option<Pass>> {
+        match self {
+            Some(t) => t.begin(cmd, name).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    fn end(&mut self, cmd: vk::CommandBuffer, pass: Option<Pass>) {
+        if let (Some(t), Some(p)) = (self, pass) {
+            t.end(cmd, p);
+        }
+    }
+}

@@ -1,10 +1,12 @@
 //! Orbit camera (azimuth, elevation about the volume centre; y up) with an
 //! orthographic projection fitted to the projected volume box, or a
-//! perspective one. Built in physical space, handed to shaders in voxel space.
+//! perspective one. Built in physical space as view and projection matrices,
+//! whose rays `CameraMatrices` forms (the one way every camera does).
 
+use super::matrices::{orthographic, perspective, CameraMatrices};
 use super::params::RenderParams;
 use crate::error::{Error, Result};
-use glam::{BVec3, DVec3, UVec3, Vec3};
+use glam::{BVec3, DMat4, DVec3, DVec4, UVec3, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
@@ -76,9 +78,12 @@ impl Camera {
         }
     }
 
-    /// The camera part of `RenderParams` for a volume of `dims` voxels with
-    /// `spacing`, rendered at `width` x `height`.
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+    /// The orbit camera as view and projection matrices (Vulkan clip space)
+    /// for a volume of `dims` voxels with `spacing` at `width` x `height`;
+    /// the volume's physical box `[0, dims * spacing]` is the world. `params`
+    /// forms its rays from these, so a host passing the same matrices to
+    /// [`CameraMatrices`] renders the same image bit for bit.
+    pub fn matrices(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<CameraMatrices> {
         if let Projection::Perspective { fov_deg, distance } = self.projection {
             if !(fov_deg > 0.0 && fov_deg < 180.0) {
                 return Err(Error::invalid(
@@ -95,22 +100,18 @@ impl Camera {
                 ));
             }
         }
-        let spacing = Vec3::from(spacing).as_dvec3();
-        let extent = UVec3::from(dims).as_dvec3() * spacing;
+        let extent = UVec3::from(dims).as_dvec3() * Vec3::from(spacing).as_dvec3();
         let centre = extent * 0.5;
         let radius = centre.length();
         let (sa, ca) = sincos_deg(self.azimuth_deg);
         let (se, ce) = sincos_deg(self.elevation_deg);
         let to_eye = DVec3::new(ce * sa, se, ce * ca);
-        // Times -1 as before (-to_eye would differ in a NaN's sign bit).
+        // Times -1 (-to_eye would differ in a NaN's sign bit).
         let forward = to_eye * -1.0;
         let right = DVec3::new(ca, 0.0, -sa);
         let up = right.cross(forward);
         let (w, h) = (width as f64, height as f64);
-        let to_voxel = |p: DVec3| (p / spacing).as_vec3();
-        let v4 = |p: Vec3, w: f32| p.extend(w).to_array();
-        let mut params = RenderParams::default();
-        match self.projection {
+        let (eye, projection) = match self.projection {
             Projection::Orthographic => {
                 let mut half = [0.0f64; 2];
                 for i in 0..8 {
@@ -120,32 +121,34 @@ impl Camera {
                     half[1] = half[1].max(corner.dot(up).abs());
                 }
                 let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
-                // Ray origins on a plane in front of the whole volume.
-                let plane = centre + to_eye * (radius + 1.0);
-                let base = plane + right * (-pixel * w / 2.0) + up * (pixel * h / 2.0);
-                params.base = v4(to_voxel(base), 0.0);
-                params.du = v4(to_voxel(right * pixel), 0.0);
-                params.dv = v4(to_voxel(up * -pixel), 0.0);
-                // The f32 direction normalised in f64: divided by the length
-                // (not times its reciprocal, as glam's normalize() does).
-                let d = to_voxel(forward).as_dvec3();
-                params.eye_or_dir = v4((d / d.length()).as_vec3(), 0.0);
+                // The eye plane (where orthographic rays start) in front of the volume.
+                let far = 2.0 * (radius + 1.0);
+                let p = orthographic(pixel * w / 2.0, pixel * h / 2.0, 0.0, far);
+                (centre + to_eye * (radius + 1.0), p)
             }
             Projection::Perspective { fov_deg, distance } => {
                 let half_fov = (fov_deg / 2.0).to_radians();
                 let dist = distance.map_or(radius / half_fov.sin(), |d| d * radius);
-                let eye = centre + to_eye * dist;
-                let hh = half_fov.tan();
-                let hw = hh * w / h;
-                let base = eye + forward + right * -hw + up * hh;
-                params.base = v4(to_voxel(base), 0.0);
-                params.du = v4(to_voxel(right * (2.0 * hw / w)), 0.0);
-                params.dv = v4(to_voxel(up * (-2.0 * hh / h)), 0.0);
-                params.eye_or_dir = v4(to_voxel(eye), 1.0);
+                let near = (radius * 1e-3).max(f64::MIN_POSITIVE);
+                let p = perspective(half_fov.tan(), w / h, near, dist + 2.0 * radius + 1.0);
+                (centre + to_eye * dist, p)
             }
-        }
-        params.dims = [dims[0], dims[1], dims[2], crate::tf::LUT_SIZE as u32];
-        params.image = [width, height, 0, 0];
-        Ok(params)
+        };
+        // World to view: rows right, up, back (view space is right-handed, -z ahead).
+        let view = DMat4::from_cols(
+            DVec4::new(right.x, up.x, to_eye.x, 0.0),
+            DVec4::new(right.y, up.y, to_eye.y, 0.0),
+            DVec4::new(right.z, up.z, to_eye.z, 0.0),
+            DVec4::new(-right.dot(eye), -up.dot(eye), -to_eye.dot(eye), 1.0),
+        );
+        Ok(CameraMatrices::new(view, projection))
+    }
+
+    /// The camera part of `RenderParams` for a volume of `dims` voxels with
+    /// `spacing`, rendered at `width` x `height`: [`Camera::matrices`] through
+    /// [`CameraMatrices::params`].
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+        self.matrices(dims, spacing, width, height)?
+            .params(dims, spacing, width, height)
     }
 }

@@ -1,13 +1,15 @@
-//! Marcher dispatch: one kernel per traversal style, a render target, and the
-//! `record_*` functions that only record into a caller's command buffer.
+//! Marcher dispatch: one kernel per traversal style (and output format), and
+//! the `record_*` functions that only record into a caller's command buffer.
 
 use super::params::RenderParams;
 use super::settings::RenderSettings;
+use super::target::{HostDepth, Output, RenderTarget};
+use super::view::View;
 use crate::accel::{Accel, Structure};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{shaders, vk, Binding, Context, Kernel, OptionalTimer, Timer};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
 use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
@@ -16,8 +18,8 @@ use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-/// A march kernel: shader name, the structure's specialization constants,
-/// and the sample filter.
+/// A march kernel: shader name (with its output variant), the structure's
+/// specialization constants, and the sample filter.
 type KernelKey = (&'static str, &'static [u32], Filter);
 
 /// Push block of `glsl/build/opacity_lut.comp`.
@@ -31,86 +33,12 @@ struct OpacityPush {
 /// Bindings every march kernel starts with: render parameters, volume, LUT, frame.
 const COMMON_BINDINGS: usize = 4;
 
-/// Where a frame goes: the RGBA f32 frame buffer, its parameter block, the
-/// frame's LUT (corrected for its step, then raw: `glsl/common/tf.glsl`), and
-/// a host-visible copy for readback.
-pub struct RenderTarget {
-    pub width: u32,
-    pub height: u32,
-    pub frame: Buffer,
-    pub params: Buffer,
-    pub lut: Buffer,
-    readback: Buffer,
-}
-
-impl RenderTarget {
-    /// Checks the frame against `maxStorageBufferRange` and the dispatch limits.
-    pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Self> {
-        if width == 0 || height == 0 {
-            return Err(Error::invalid(
-                "size",
-                format!("{width}x{height}"),
-                "width and height must be > 0",
-            ));
-        }
-        let info = ctx.info();
-        let bytes = width as u64 * height as u64 * 16;
-        info.check(
-            format!("frame {width}x{height} ({bytes} bytes)"),
-            "maxStorageBufferRange",
-            bytes,
-            info.max_storage_buffer_range,
-        )?;
-        let local = crate::gpu::shaders::MARCH_NAIVE.local_size_with(&[]);
-        record::groups_for(info, "frame", [width, height, 1], local)?;
-        let frame = Buffer::new(
-            ctx,
-            "frame",
-            bytes,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::GpuOnly,
-        )?;
-        let params = Buffer::new(
-            ctx,
-            "render params",
-            std::mem::size_of::<RenderParams>() as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?;
-        let lut = Buffer::new(
-            ctx,
-            "frame LUT",
-            (2 * crate::tf::LUT_SIZE * 16) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::GpuOnly,
-        )?;
-        let readback = Buffer::new(
-            ctx,
-            "frame readback",
-            bytes,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        Ok(RenderTarget {
-            width,
-            height,
-            frame,
-            params,
-            lut,
-            readback,
-        })
-    }
-
-    /// Reads the frame recorded by `Renderer::record_readback`, after the
-    /// submission completed.
-    pub fn read(&self) -> Frame {
-        // `new` allocates the readback buffer GpuToCpu, which gpu-allocator maps.
-        #[allow(clippy::expect_used)]
-        let bytes = self.readback.mapped().expect("readback buffer is host visible");
-        let n = self.width as usize * self.height as usize;
-        let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
-        Frame::new(self.width, self.height, pixels)
-    }
+/// Every input of one frame besides the target: what to march and how.
+#[derive(Clone, Copy)]
+pub struct Scene<'a> {
+    pub structure: &'a Structure,
+    pub volume: &'a GpuVolume,
+    pub tf: &'a GpuTransferFunction,
 }
 
 /// The march kernels, created once per context and filter when a structure
@@ -120,20 +48,45 @@ pub struct Renderer {
     ctx: Context,
     kernels: Mutex<HashMap<KernelKey, Arc<Kernel>>>,
     opacity: Kernel,
+    depth_limit: Kernel,
+    /// Reads host depth images (texelFetch: its filter is irrelevant).
+    depth_sampler: vk::Sampler,
 }
 
 impl Renderer {
     pub fn new(ctx: &Context) -> Result<Self> {
+        let opacity = Kernel::new::<OpacityPush>(ctx, &shaders::BUILD_OPACITY_LUT)?;
+        let depth_limit = Kernel::new::<()>(ctx, &shaders::RENDER_DEPTH_LIMIT)?;
+        let info = vk::SamplerCreateInfo::default()
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+        let depth_sampler = unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
         Ok(Renderer {
             ctx: ctx.clone(),
             kernels: Mutex::new(HashMap::new()),
-            opacity: Kernel::new::<OpacityPush>(ctx, &crate::gpu::shaders::BUILD_OPACITY_LUT)?,
+            opacity,
+            depth_limit,
+            depth_sampler,
         })
     }
 
-    /// The march kernel of `accel` sampling with `filter`, created on first use.
+    /// The march kernel of `accel` sampling with `filter` and writing the
+    /// frame buffer, created on first use.
     pub fn kernel(&self, accel: Accel, filter: Filter) -> Result<Arc<Kernel>> {
-        let march = accel.method().march();
+        self.kernel_for(accel, filter, None)
+    }
+
+    /// As `kernel`, writing a storage image of the `variant` format instead
+    /// (`march/NAME@rgba8`, ...: build.rs).
+    fn kernel_for(&self, accel: Accel, filter: Filter, variant: Option<&str>) -> Result<Arc<Kernel>> {
+        let mut march = accel.method().march();
+        if let Some(v) = variant {
+            let name = format!("{}@{v}", march.shader.name);
+            march.shader = *shaders::ALL
+                .iter()
+                .find(|s| s.name == name)
+                .ok_or_else(|| Error::Interface(format!("kernel {name}: no such shader variant")))?;
+        }
         let key = (march.shader.name, march.constants, filter);
         let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(k) = map.get(&key) {
@@ -157,21 +110,8 @@ impl Renderer {
         Ok(k)
     }
 
-    /// Records one frame into `cmd`: parameter update, then the march pass
-    /// (timed as "march" when `timer` is given): the frame's LUT corrected
-    /// for its step, then `structure`'s kernel sampling with `settings.filter`.
-    ///
-    /// Barriers. Before: the volume image is in SHADER_READ_ONLY_OPTIMAL and
-    /// its upload and the TF buffer's are visible to compute reads (true after
-    /// `GpuVolume::upload` / `TransferFunction::upload`, which wait), and the
-    /// structure's buffers are visible to compute reads (true after
-    /// `Builder::build`; after `record_*` builds, a barrier from
-    /// `Access::COMPUTE_WRITE` to `Access::COMPUTE_READ`). Recorded
-    /// here: earlier uses of `target` in the same command buffer (compute
-    /// reads of the parameters and LUT, transfer reads of the frame) are
-    /// ordered before this frame's writes. After: the frame buffer is written in the
-    /// compute stage; read it only after a barrier from `Access::COMPUTE_WRITE`
-    /// (`record_readback` records one).
+    /// Records one frame of the CLI's orbit `settings` into `target`'s frame
+    /// buffer: `record_view` with `View::orbit` and `Output::Buffer`.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -183,21 +123,80 @@ impl Renderer {
         tf: &GpuTransferFunction,
         settings: &RenderSettings,
     ) -> Result<()> {
-        if (settings.width, settings.height) != (target.width, target.height) {
+        let scene = Scene { structure, volume, tf };
+        let view = View::orbit(volume, settings)?;
+        self.record_view(cmd, timer, target, scene, &view, Output::Buffer, None)
+    }
+
+    /// Records one frame into `cmd` (timed as "march" when `timer` is given):
+    /// the parameter update, the per-pixel ray limits from `depth` when given,
+    /// the frame's LUT corrected for its step, then the structure's march
+    /// kernel writing `output`. Nothing is submitted.
+    ///
+    /// Before (the caller's barriers): the volume image is in
+    /// SHADER_READ_ONLY_OPTIMAL and it, the TF buffer and the structure's
+    /// buffers are visible to compute-shader reads (true after the
+    /// convenience uploads and `Builder::build`, which wait; after `record_*`
+    /// forms, a barrier from `Access::COMPUTE_WRITE` / `TRANSFER_WRITE` to
+    /// `Access::COMPUTE_READ`); a host image is in GENERAL with earlier
+    /// accesses ordered before COMPUTE_SHADER storage writes; a host depth
+    /// image is in its stated layout with its depth-attachment writes made
+    /// visible to COMPUTE_SHADER sampled reads (e.g. from
+    /// LATE_FRAGMENT_TESTS / DEPTH_STENCIL_ATTACHMENT_WRITE).
+    ///
+    /// Recorded here: earlier frames on `target` in the same command buffer
+    /// (their parameter and LUT reads, the frame's transfer read) are ordered
+    /// before this frame's writes.
+    ///
+    /// After: the frame (buffer or host image) is written in COMPUTE_SHADER
+    /// with SHADER_WRITE; the host orders its own use after a barrier from
+    /// `Access::COMPUTE_WRITE` (`record_readback` records one for the
+    /// buffer). State left bound: the compute pipeline, pipeline layout, push
+    /// descriptors and push constants of the last lacuna kernel; graphics
+    /// state and the host's descriptor sets are untouched, but a host
+    /// compute pipeline must be bound again.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_view(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        target: &RenderTarget,
+        scene: Scene,
+        view: &View,
+        output: Output,
+        depth: Option<&HostDepth>,
+    ) -> Result<()> {
+        let (width, height) = view.size();
+        if (width, height) != (target.width, target.height) {
             return Err(Error::invalid(
                 "size",
-                format!("{}x{}", settings.width, settings.height),
+                format!("{width}x{height}"),
                 format!("render target is {}x{}", target.width, target.height),
             ));
         }
-        let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
-        self.record_params(cmd, timer, structure, target, volume, tf, &params, settings.filter)
+        let mut params = *view.params();
+        let depth = match depth {
+            Some(d) => {
+                d.check(width, height)?;
+                params.depth[1] = 1.0;
+                Some(d)
+            }
+            None => None,
+        };
+        let output = match output {
+            Output::Buffer => (None, Binding::Storage(target.frame_buffer()?)),
+            Output::Image(image) => {
+                image.check(width, height)?;
+                (Some(image.variant()?), Binding::StorageImage(image.view))
+            }
+        };
+        self.record_frame(cmd, timer, target, scene, &params, view.sample_filter(), output, depth)
     }
 
-    /// As `record`, with explicit shader parameters: a camera of your own
-    /// (any ray origins and directions in voxel space). `params.image` must
-    /// match the target and `params.dims` the volume; hardware `filter`
-    /// needs a volume format the device filters linearly.
+    /// As `record`, with explicit shader parameters (`View` forms them; this
+    /// is for rays of your own in voxel space). `params.image` must match the
+    /// target and `params.dims` the volume; hardware `filter` needs a volume
+    /// format the device filters linearly.
     #[allow(clippy::too_many_arguments)]
     pub fn record_params(
         &self,
@@ -217,6 +216,26 @@ impl Renderer {
                 format!("render target is {}x{}", target.width, target.height),
             ));
         }
+        let mut params = *params;
+        params.depth[1] = 0.0;
+        let scene = Scene { structure, volume, tf };
+        let output = (None, Binding::Storage(target.frame_buffer()?));
+        self.record_frame(cmd, timer, target, scene, &params, filter, output, None)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        target: &RenderTarget,
+        scene: Scene,
+        params: &RenderParams,
+        filter: Filter,
+        (variant, output): (Option<&str>, Binding),
+        depth: Option<&HostDepth>,
+    ) -> Result<()> {
+        let Scene { structure, volume, tf } = scene;
         if params.dims[..3] != volume.dims || params.dims[3] != crate::tf::LUT_SIZE as u32 {
             return Err(Error::invalid(
                 "render params",
@@ -233,7 +252,7 @@ impl Renderer {
         }
         crate::limits::check_samples_per_ray(volume.dims, params.march[0])?;
         let sampler = volume.sampler_for(filter)?;
-        let kernel = self.kernel(structure.accel, filter)?;
+        let kernel = self.kernel_for(structure.accel, filter, variant)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
         let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
@@ -241,22 +260,30 @@ impl Renderer {
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
-        record::barrier(device, cmd, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
+        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(params)) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         let mut bindings = vec![
             Binding::Storage(&target.params),
             Binding::Sampled(volume.image.view, sampler),
             Binding::Storage(&target.lut),
-            Binding::Storage(&target.frame),
+            output,
         ];
         bindings.extend(structure.built.bindings());
         let push = structure.built.push();
-        let pass = match timer {
-            Some(timer) => Some((timer.begin(cmd, "march")?, timer)),
-            None => None,
-        };
+        let mut timer = timer;
+        let pass = timer.begin(cmd, "march")?;
+        if let Some(d) = depth {
+            let limits = [
+                Binding::Storage(&target.params),
+                Binding::SampledIn(d.view, self.depth_sampler, d.layout),
+            ];
+            let depth_groups = self
+                .depth_limit
+                .groups("depth limits", [target.width, target.height, 1])?;
+            self.depth_limit.dispatch(cmd, &limits, &[], depth_groups)?;
+        }
         // An earlier frame's march reads the LUT this one rewrites.
         record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
         self.opacity.dispatch(
@@ -265,27 +292,29 @@ impl Renderer {
             bytemuck::bytes_of(&lut_push),
             lut_groups,
         )?;
+        // The LUT and the depth limits, written above, are read by the march.
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
         kernel.dispatch(cmd, &bindings, &push, groups)?;
-        if let Some((pass, timer)) = pass {
-            timer.end(cmd, pass);
-        }
+        timer.end(cmd, pass);
         Ok(())
     }
 
-    /// Records the copy of the frame to the host-visible readback buffer,
-    /// with the barriers before (compute write -> transfer read) and after
-    /// (transfer write -> host read).
-    pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) {
+    /// Records the copy of the frame buffer to the target's host-visible
+    /// readback buffer, with the barriers before (compute write -> transfer
+    /// read) and after (transfer write -> host read). A target without a
+    /// readback buffer is an error.
+    pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) -> Result<()> {
+        let (frame, readback) = (target.frame_buffer()?, target.readback_buffer()?);
         let device = self.ctx.device();
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         let region = [vk::BufferCopy {
             src_offset: 0,
             dst_offset: 0,
-            size: target.frame.size(),
+            size: frame.size(),
         }];
-        unsafe { device.cmd_copy_buffer(cmd, target.frame.raw, target.readback.raw, &region) };
+        unsafe { device.cmd_copy_buffer(cmd, frame.raw, readback.raw, &region) };
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        Ok(())
     }
 
     /// Renders one frame: records, submits, waits, reads back. Returns the
@@ -299,6 +328,17 @@ impl Renderer {
     ) -> Result<(Frame, Timings)> {
         let params = settings.params(volume.dims, volume.spacing, volume.norm)?;
         self.render_params(structure, volume, tf, &params, settings.filter)
+    }
+
+    /// As `render`, with a `View` (a host's camera matrices, say).
+    pub fn render_view(&self, scene: Scene, view: &View) -> Result<(Frame, Timings)> {
+        self.render_params(
+            scene.structure,
+            scene.volume,
+            scene.tf,
+            view.params(),
+            view.sample_filter(),
+        )
     }
 
     /// As `render`, with explicit shader parameters (see `record_params`).
@@ -316,10 +356,16 @@ impl Renderer {
             timer.reset(cmd);
             self.record_params(cmd, Some(&mut timer), structure, &target, volume, tf, params, filter)?;
             let pass = timer.begin(cmd, "readback")?;
-            self.record_readback(cmd, &target);
+            self.record_readback(cmd, &target)?;
             timer.end(cmd, pass);
             Ok(())
         })?;
-        Ok((target.read(), timer.results()?))
+        Ok((target.read()?, timer.results()?))
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
     }
 }

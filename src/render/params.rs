@@ -1,4 +1,6 @@
-//! `RenderParams`: the std140 uniform block of `glsl/common/render_params.glsl`.
+//! `RenderParams`: the fixed part of the storage block of
+//! `glsl/common/render_params.glsl` (the per-pixel depth limits follow it in
+//! the same buffer). Build it with `CameraMatrices::params` / `View`, not by hand.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -18,6 +20,11 @@ pub struct RenderParams {
     pub image: [u32; 4],
     /// x: dt (voxels); y: ERT alpha (> 1 = off); z, w: texel normalisation.
     pub march: [f32; 4],
+    /// NDC (x, y, depth, 1) to homogeneous voxel space: unprojects a host depth.
+    pub ndc_to_voxel: [[f32; 4]; 4],
+    /// x: the depth of the far plane (0 or 1: no surface); y: 1 when each
+    /// ray ends at its per-pixel limit (the `t_max` array after this block).
+    pub depth: [f32; 4],
 }
 
 // Every march kernel reads the block at binding 0.

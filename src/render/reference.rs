@@ -7,7 +7,7 @@ use super::params::RenderParams;
 use crate::frame::Frame;
 use crate::tf::{self, TransferFunction};
 use crate::volume::Volume;
-use glam::{I64Vec3, UVec3, Vec3};
+use glam::{I64Vec3, Mat4, UVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// As `intersect_box` in `glsl/common/ray.glsl`.
@@ -63,6 +63,11 @@ pub fn trace(
     x: u32,
     y: u32,
 ) -> [f32; 4] {
+    trace_to(volume, tf, corrected, p, x, y, None)
+}
+
+/// The ray of pixel (x, y) in voxel space, as `camera_ray` in `glsl/common/camera.glsl`.
+pub fn camera_ray(p: &RenderParams, x: u32, y: u32) -> (Vec3, Vec3) {
     let (base, du, dv) = (
         Vec3::from_slice(&p.base),
         Vec3::from_slice(&p.du),
@@ -77,10 +82,28 @@ pub fn trace(
     };
     // Divided by the length, not glam's normalize() (times its reciprocal,
     // which rounds differently).
-    let dir = dir / dir.length();
+    (org, dir / dir.length())
+}
+
+/// As `trace`, the ray ending at `t_limit` (voxels along it) when given.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn trace_to(
+    volume: &Volume,
+    tf: &TransferFunction,
+    corrected: &[[f32; 4]],
+    p: &RenderParams,
+    x: u32,
+    y: u32,
+    t_limit: Option<f32>,
+) -> [f32; 4] {
+    let (org, dir) = camera_ray(p, x, y);
     let hi = UVec3::from(volume.dims).as_vec3();
     let (t_near, t_exit) = intersect_box(org, dir, Vec3::ZERO, hi);
     let t_enter = t_near.max(0.0);
+    let t_exit = match t_limit {
+        Some(limit) if t_enter < t_exit => t_exit.min(limit),
+        _ => t_exit,
+    };
     let dt = p.march[0];
     let ert = p.march[1];
     let mut acc = [0f32; 4];
@@ -120,13 +143,51 @@ pub fn trace(
 
 /// Renders a whole frame on the CPU (parallel over rows).
 pub fn render(volume: &Volume, tf: &TransferFunction, p: &RenderParams) -> Frame {
+    render_to(volume, tf, p, None)
+}
+
+/// As `render`, each ray ending at its pixel's limit (`depth_limits`) when given.
+pub fn render_to(volume: &Volume, tf: &TransferFunction, p: &RenderParams, limits: Option<&[f32]>) -> Frame {
     let (w, h) = (p.image[0], p.image[1]);
     let corrected = tf.corrected_lut(p.march[0]);
     let corrected = &corrected;
     let pixels: Vec<[f32; 4]> = (0..h)
         .into_par_iter()
         .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| trace(volume, tf, corrected, p, x, y))
+        .map(|(x, y)| {
+            let limit = limits.map(|l| l[(y * w + x) as usize]);
+            trace_to(volume, tf, corrected, p, x, y, limit)
+        })
         .collect();
     Frame::new(w, h, pixels)
+}
+
+/// Per-pixel ray limits (t in voxels) from a host depth image (row-major,
+/// one depth per pixel), as `glsl/render/depth_limit.comp`: the far plane's
+/// depth (`p.depth[0]`) is no limit.
+pub fn depth_limits(p: &RenderParams, depth: &[f32]) -> Vec<f32> {
+    const NO_LIMIT: f32 = 3.4e38;
+    let (w, h) = (p.image[0], p.image[1]);
+    let m = Mat4::from_cols_array_2d(&p.ndc_to_voxel);
+    (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let d = depth[(y * w + x) as usize];
+            if d == p.depth[0] {
+                return NO_LIMIT;
+            }
+            let ndc = (Vec2::new(x as f32, y as f32) + 0.5) * 2.0 / Vec2::new(w as f32, h as f32) - 1.0;
+            let q = m * Vec4::new(ndc.x, ndc.y, d, 1.0);
+            if q.w == 0.0 {
+                return NO_LIMIT;
+            }
+            let (org, dir) = camera_ray(p, x, y);
+            let t = (q.truncate() / q.w - org).dot(dir);
+            match t {
+                t if t.abs() < NO_LIMIT => t,
+                t if t < 0.0 => 0.0,
+                _ => NO_LIMIT,
+            }
+        })
+        .collect()
 }

@@ -6,7 +6,7 @@
 use super::filter::Filter;
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{vk, Context, Image3d};
+use crate::gpu::{vk, Context, Image3d, Staging};
 
 pub struct GpuVolume {
     ctx: Context,
@@ -36,15 +36,36 @@ fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
     unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")
 }
 
+/// The image format and texel bytes of a volume (R8/R16 kept native).
+fn texels(volume: &Volume) -> (vk::Format, &[u8]) {
+    match &volume.data {
+        VoxelData::U8(v) => (vk::Format::R8_UNORM, v),
+        VoxelData::U16(v) => (vk::Format::R16_UNORM, bytemuck::cast_slice(v)),
+        VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
+    }
+}
+
 impl GpuVolume {
-    /// Uploads `volume`; checks `maxImageDimension3D` and memory limits first.
+    /// Uploads `volume` and waits; checks `maxImageDimension3D` and memory
+    /// limits first.
     pub fn upload(ctx: &Context, volume: &Volume) -> Result<Self> {
-        let (format, bytes): (vk::Format, &[u8]) = match &volume.data {
-            VoxelData::U8(v) => (vk::Format::R8_UNORM, v),
-            VoxelData::U16(v) => (vk::Format::R16_UNORM, bytemuck::cast_slice(v)),
-            VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
-        };
+        let (format, bytes) = texels(volume);
         let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
+        Self::with_image(ctx, volume, image)
+    }
+
+    /// As `upload`, recorded into `cmd`: leaves the image in
+    /// SHADER_READ_ONLY_OPTIMAL behind a barrier to compute-shader reads.
+    /// Keep the returned `Staging` until the submission completed.
+    pub fn record_upload(ctx: &Context, cmd: vk::CommandBuffer, volume: &Volume) -> Result<(Self, Staging)> {
+        let (format, bytes) = texels(volume);
+        let (image, staging) =
+            Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
+        Ok((Self::with_image(ctx, volume, image)?, staging))
+    }
+
+    fn with_image(ctx: &Context, volume: &Volume, image: Image3d) -> Result<Self> {
+        let format = image.format;
         let mut gv = GpuVolume {
             ctx: ctx.clone(),
             image,

@@ -6,6 +6,7 @@ mod decode;
 mod export;
 mod filter;
 mod gpu;
+#[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
 pub mod procedural;
@@ -245,6 +246,7 @@ impl Volume {
     }
 
     /// A NIfTI-1 single-file volume (`.nii`, or `.nii.gz` when `bytes` are gzip) from memory.
+    #[cfg(feature = "loaders")]
     pub fn from_nifti_bytes(origin: &str, bytes: &[u8]) -> Result<Self> {
         nifti::from_bytes(std::path::Path::new(origin), bytes)
     }

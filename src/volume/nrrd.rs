@@ -199,12 +199,7 @@ fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>)
     };
     let inflated;
     let data: &[u8] = if gzip {
-        let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&*raw)
-            .take(wanted.saturating_add(1))
-            .read_to_end(&mut out)
-            .map_err(|e| Error::format(&source, format!("corrupt gzip data: {e}")))?;
-        inflated = out;
+        inflated = inflate(&source, &raw, wanted)?;
         &inflated
     } else {
         &raw
@@ -230,4 +225,23 @@ fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>> {
         ));
     }
     Ok(out)
+}
+
+/// Inflates gzip data, no further than `wanted` bytes and one more.
+#[cfg(feature = "loaders")]
+fn inflate(source: &Path, raw: &[u8], wanted: u64) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(raw)
+        .take(wanted.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(|e| Error::format(source, format!("corrupt gzip data: {e}")))?;
+    Ok(out)
+}
+
+#[cfg(not(feature = "loaders"))]
+fn inflate(source: &Path, _: &[u8], _: u64) -> Result<Vec<u8>> {
+    Err(Error::format(
+        source,
+        "gzip-encoded NRRD needs lacuna's `loaders` cargo feature",
+    ))
 }

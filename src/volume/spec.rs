@@ -113,7 +113,13 @@ fn load_file(path: &Path, options: &LoadOptions, device: Option<&DeviceInfo>) ->
         return super::nrrd::load(path, device);
     }
     if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+        #[cfg(feature = "loaders")]
         return super::nifti::load(path, device);
+        #[cfg(not(feature = "loaders"))]
+        return Err(Error::format(
+            path,
+            "NIfTI volumes need lacuna's `loaders` cargo feature",
+        ));
     }
     if !path.exists() {
         return Err(Error::io(

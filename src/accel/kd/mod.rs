@@ -30,7 +30,8 @@ pub fn volume(b: &IBox) -> i64 {
 pub const RASTER: i32 = 8;
 
 /// Halting rule.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Depth {
     /// Leaf when the node's volume is below 10 % of the root's (Vidal's rule).
     Shallow,
@@ -39,7 +40,8 @@ pub enum Depth {
     Deep,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct KdParams {
     pub depth: Depth,
     /// Deep trees: the longest leaf extent in voxels (the paper: 32 or 128).

@@ -29,7 +29,7 @@ pub use super::tree::{height, GpuTree, Node};
 use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::{entry_barrier, Compact, CompactScratch, RadixSort, SortScratch};
 use crate::tf::GpuTransferFunction;
 use crate::timings::Timings;
@@ -157,7 +157,7 @@ impl LbvhBuilder {
     pub fn record_select(
         &self,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        mut timer: Option<&mut Timer>,
         classifier: &Classifier,
         mode: Classify,
         volume: &GpuVolume,
@@ -226,7 +226,7 @@ impl LbvhBuilder {
     pub fn record_hierarchy(
         &self,
         cmd: vk::CommandBuffer,
-        timer: &mut Timer,
+        mut timer: Option<&mut Timer>,
         volume: &GpuVolume,
         bricks: &GpuBricks,
         active: &Buffer,
@@ -390,7 +390,7 @@ impl LbvhBuilder {
         let mut timer = Timer::new(&self.ctx, 8)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_select(cmd, &mut timer, classifier, mode, volume, bricks, tf, &select)
+            self.record_select(cmd, Some(&mut timer), classifier, mode, volume, bricks, tf, &select)
         })?;
         let mut timings = timer.results()?;
         let n = self.active_count(&select)? as u64;
@@ -400,7 +400,7 @@ impl LbvhBuilder {
             timer.reset(cmd);
             self.record_hierarchy(
                 cmd,
-                &mut timer,
+                Some(&mut timer),
                 volume,
                 bricks,
                 &select.active,

@@ -1,0 +1,23 @@
+// Where a march kernel's pixel goes: the RGBA32F frame buffer, or (compiled
+// with FRAME_FORMAT, one variant per format: build.rs) a host's storage image
+// in GENERAL layout. Premultiplied RGBA either way.
+#ifndef LACUNA_FRAME_OUT_GLSL
+#define LACUNA_FRAME_OUT_GLSL
+
+#ifdef FRAME_FORMAT
+layout(set = 0, binding = FRAME_BINDING, FRAME_FORMAT) uniform writeonly image2D frame_image;
+
+void frame_store(uvec2 px, vec4 c) {
+    imageStore(frame_image, ivec2(px), c);
+}
+#else
+layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame {
+    vec4 frame[];
+};
+
+void frame_store(uvec2 px, vec4 c) {
+    frame[px.y * params.image.x + px.x] = c;
+}
+#endif
+
+#endif

@@ -1,0 +1,388 @@
+//! What the user changes in the viewer, and how input changes it: orbit,
+//! zoom and pan (host math through glam), the transfer function's shape,
+//! the structure, early ray termination and the step. Pure state, no GPU.
+
+use glam::{DVec2, Vec3, Vec4};
+use lacuna::accel::{Accel, TABLE};
+use lacuna::render::{Projection, RenderParams, RenderSettings};
+use lacuna::{Error, Result};
+
+/// Steps the `[` and `]` keys move between, in voxels.
+const STEPS: [f32; 6] = [0.125, 0.25, 0.5, 1.0, 2.0, 4.0];
+/// How far one arrow key press moves or widens the TF window.
+const TF_NUDGE: f32 = 0.02;
+/// The ERT threshold the `E` key switches on.
+const ERT: f32 = 0.99;
+
+/// The key names `Controls::key` acts on (either case for letters).
+pub const KEYS: &[&str] = &[
+    "ArrowLeft",
+    "ArrowRight",
+    "ArrowUp",
+    "ArrowDown",
+    "t",
+    "j",
+    "Tab",
+    "e",
+    "[",
+    "]",
+    "p",
+    "r",
+    "s",
+    "q",
+    "Escape",
+];
+
+/// Whether `Controls::key` acts on `name`.
+pub fn known_key(name: &str) -> bool {
+    KEYS.iter()
+        .any(|k| *k == name || (k.len() == 1 && k.eq_ignore_ascii_case(name)))
+}
+
+/// A transfer function the keys can reshape, or one they cannot (a JSON file).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// `ramp`, `band` or `spike` with its two numbers and optional alpha.
+    Window {
+        kind: &'static str,
+        a: f32,
+        b: f32,
+        alpha: Option<f32>,
+    },
+    /// Any other spec (a ParaView JSON path): switched to, not reshaped.
+    Fixed(String),
+}
+
+impl Shape {
+    pub fn parse(spec: &str) -> Shape {
+        let parts: Vec<&str> = spec.split(':').collect();
+        let num = |i: usize| parts.get(i).and_then(|s| s.parse::<f32>().ok());
+        let kind = ["ramp", "band", "spike"].into_iter().find(|k| parts[0] == *k);
+        match (kind, num(1), num(2), parts.len()) {
+            (Some(kind), Some(a), Some(b), 3) => Shape::Window {
+                kind,
+                a,
+                b,
+                alpha: None,
+            },
+            (Some(kind), Some(a), Some(b), 4) if num(3).is_some() => Shape::Window {
+                kind,
+                a,
+                b,
+                alpha: num(3),
+            },
+            _ => Shape::Fixed(spec.to_string()),
+        }
+    }
+
+    pub fn spec(&self) -> String {
+        match self {
+            Shape::Window { kind, a, b, alpha } => {
+                let mut s = format!("{kind}:{a}:{b}");
+                if let Some(alpha) = alpha {
+                    s += &format!(":{alpha}");
+                }
+                s
+            }
+            Shape::Fixed(spec) => spec.clone(),
+        }
+    }
+
+    /// Moves the window by `d` (a spike's centre; a ramp's or band's both ends).
+    fn shift(&mut self, d: f32) {
+        if let Shape::Window { kind, a, b, .. } = self {
+            let round = |v: f32| (v * 1000.0).round() / 1000.0;
+            *a = round(*a + d);
+            if *kind != "spike" {
+                *b = round(*b + d);
+            }
+        }
+    }
+
+    /// Widens the window by `d` (a spike's width; a ramp's or band's span, about its middle).
+    fn widen(&mut self, d: f32) {
+        if let Shape::Window { kind, a, b, .. } = self {
+            let round = |v: f32| (v * 1000.0).round() / 1000.0;
+            if *kind == "spike" {
+                *b = round((*b + d).max(TF_NUDGE / 2.0));
+            } else if *b - *a + 2.0 * d > TF_NUDGE {
+                *a = round(*a - d);
+                *b = round(*b + d);
+            }
+        }
+    }
+}
+
+/// What an input changed, so the viewer redoes only that.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Change {
+    /// The transfer function: re-upload it and rebuild the structure.
+    pub tf: bool,
+    /// The structure: compute its ranges and build it.
+    pub structure: bool,
+    /// A screenshot was asked for.
+    pub screenshot: bool,
+    pub quit: bool,
+}
+
+/// The viewer's state.
+pub struct Controls {
+    pub settings: RenderSettings,
+    /// Image-plane zoom (> 1 magnifies) and pan (in viewport heights) about the
+    /// orbit camera's own framing.
+    pub zoom: f64,
+    pub pan: DVec2,
+    initial: (RenderSettings, Projection),
+    /// Transfer-function presets; `T` cycles them, the arrows reshape the current one.
+    pub presets: Vec<Shape>,
+    pub preset: usize,
+    /// A ParaView JSON file the `J` key loads (read again on every press).
+    pub json: Option<String>,
+    pub accel: Accel,
+}
+
+impl Controls {
+    pub fn new(settings: RenderSettings, tf_spec: &str, accel: Accel, json: Option<String>) -> Self {
+        let mut presets = vec![Shape::parse(tf_spec)];
+        for spec in ["ramp:0.3:1", "band:0.4:0.6:0.5", "spike:0.5:0.05"] {
+            if presets[0].spec() != spec {
+                presets.push(Shape::parse(spec));
+            }
+        }
+        let projection = match settings.camera.projection {
+            Projection::Orthographic => Projection::Perspective {
+                fov_deg: 40.0,
+                distance: None,
+            },
+            p => p,
+        };
+        Controls {
+            initial: (settings, projection),
+            settings,
+            zoom: 1.0,
+            pan: DVec2::ZERO,
+            presets,
+            preset: 0,
+            json,
+            accel,
+        }
+    }
+
+    /// The current transfer function's spec.
+    pub fn tf_spec(&self) -> String {
+        self.presets[self.preset].spec()
+    }
+
+    /// Orbits by a mouse drag of `(dx, dy)` pixels.
+    pub fn orbit(&mut self, dx: f64, dy: f64) {
+        let camera = &mut self.settings.camera;
+        camera.azimuth_deg = (camera.azimuth_deg - dx * 0.4).rem_euclid(360.0);
+        camera.elevation_deg = (camera.elevation_deg + dy * 0.4).clamp(-89.0, 89.0);
+    }
+
+    /// Pans by a mouse drag of `(dx, dy)` pixels.
+    pub fn drag_pan(&mut self, dx: f64, dy: f64) {
+        let h = self.settings.height.max(1) as f64;
+        self.pan += DVec2::new(-dx, -dy) / (h * self.zoom);
+    }
+
+    /// Zooms by `lines` mouse-wheel notches (positive: closer).
+    pub fn scroll(&mut self, lines: f64) {
+        self.zoom = (self.zoom * 1.1f64.powf(lines)).clamp(0.05, 200.0);
+    }
+
+    /// Applies a key (by its name as winit gives it: "ArrowLeft", "t", ...).
+    pub fn key(&mut self, key: &str, shift: bool) -> Change {
+        let mut change = Change::default();
+        match key {
+            "ArrowLeft" | "ArrowRight" => {
+                let d = if key == "ArrowLeft" { -TF_NUDGE } else { TF_NUDGE };
+                self.presets[self.preset].shift(d);
+                change.tf = matches!(self.presets[self.preset], Shape::Window { .. });
+            }
+            "ArrowUp" | "ArrowDown" => {
+                let d = if key == "ArrowUp" { TF_NUDGE } else { -TF_NUDGE };
+                self.presets[self.preset].widen(d);
+                change.tf = matches!(self.presets[self.preset], Shape::Window { .. });
+            }
+            "t" | "T" => {
+                self.preset = (self.preset + 1) % self.presets.len();
+                change.tf = true;
+            }
+            "j" | "J" => {
+                if let Some(path) = &self.json {
+                    let shape = Shape::Fixed(path.clone());
+                    match self.presets.iter().position(|p| *p == shape) {
+                        Some(i) => self.preset = i,
+                        None => {
+                            self.presets.push(shape);
+                            self.preset = self.presets.len() - 1;
+                        }
+                    }
+                    change.tf = true;
+                }
+            }
+            "Tab" => {
+                let i = TABLE.iter().position(|a| a.name() == self.accel.name()).unwrap_or(0);
+                let n = TABLE.len();
+                self.accel = TABLE[if shift { (i + n - 1) % n } else { (i + 1) % n }];
+                change.structure = true;
+            }
+            "e" | "E" => {
+                self.settings.ert = match self.settings.ert {
+                    Some(_) => None,
+                    None => Some(ERT),
+                };
+            }
+            "[" | "]" => {
+                let i = STEPS
+                    .iter()
+                    .position(|s| *s >= self.settings.step)
+                    .unwrap_or(STEPS.len() - 1);
+                let i = if key == "[" {
+                    i.saturating_sub(1)
+                } else {
+                    (i + 1).min(STEPS.len() - 1)
+                };
+                self.settings.step = STEPS[i];
+            }
+            "p" | "P" => {
+                std::mem::swap(&mut self.initial.1, &mut self.settings.camera.projection);
+            }
+            "r" | "R" => {
+                let camera = self.initial.0.camera;
+                self.settings.camera.azimuth_deg = camera.azimuth_deg;
+                self.settings.camera.elevation_deg = camera.elevation_deg;
+                self.zoom = 1.0;
+                self.pan = DVec2::ZERO;
+            }
+            "s" | "S" => change.screenshot = true,
+            "Escape" | "q" | "Q" => change.quit = true,
+            _ => {}
+        }
+        change
+    }
+
+    /// The shader parameters for a volume: `render`'s camera for these
+    /// settings, then zoom and pan applied to its pixel plane (about the
+    /// plane's centre), so an untouched view is `render`'s exactly.
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
+        let mut p = self.settings.params(dims, spacing, norm)?;
+        if self.zoom == 1.0 && self.pan == DVec2::ZERO {
+            return Ok(p);
+        }
+        let (w, h) = (self.settings.width as f32, self.settings.height as f32);
+        let du = Vec4::from(p.du).truncate();
+        let dv = Vec4::from(p.dv).truncate();
+        let centre = Vec4::from(p.base).truncate() + du * (w / 2.0) + dv * (h / 2.0);
+        let scale = (1.0 / self.zoom) as f32;
+        let pan = self.pan.as_vec2() * h;
+        let centre: Vec3 = centre + du * pan.x + dv * pan.y;
+        let (du, dv) = (du * scale, dv * scale);
+        let base = centre - du * (w / 2.0) - dv * (h / 2.0);
+        p.base = base.extend(0.0).to_array();
+        p.du = du.extend(0.0).to_array();
+        p.dv = dv.extend(0.0).to_array();
+        if !(p.base.iter().chain(&p.du).chain(&p.dv)).all(|v| v.is_finite()) {
+            return Err(Error::invalid(
+                "view",
+                format!("zoom {}", self.zoom),
+                "the camera is not finite",
+            ));
+        }
+        Ok(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn controls(spec: &str) -> Controls {
+        Controls::new(
+            RenderSettings::default(),
+            spec,
+            Accel::naive(),
+            Some("cool.json".into()),
+        )
+    }
+
+    #[test]
+    fn arrows_move_and_widen_a_window_and_leave_json_alone() {
+        let mut c = controls("ramp:0.3:1");
+        assert!(c.key("ArrowRight", false).tf);
+        assert_eq!(c.tf_spec(), "ramp:0.32:1.02");
+        assert!(c.key("ArrowDown", false).tf);
+        assert_eq!(c.tf_spec(), "ramp:0.34:1");
+        let mut s = controls("spike:0.5:0.05:0.8");
+        s.key("ArrowLeft", false);
+        s.key("ArrowUp", false);
+        assert_eq!(s.tf_spec(), "spike:0.48:0.07:0.8");
+        assert!(c.key("j", false).tf);
+        assert_eq!(c.tf_spec(), "cool.json");
+        assert!(!c.key("ArrowLeft", false).tf, "a JSON TF has no window to move");
+        assert_eq!(c.tf_spec(), "cool.json");
+    }
+
+    #[test]
+    fn every_known_key_does_something_and_others_are_unknown() {
+        for key in KEYS {
+            let mut c = controls("ramp:0.3:1");
+            let before = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
+            c.zoom = 2.0;
+            let change = c.key(key, false);
+            let after = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
+            let acted = change != Change::default() || after != (before.0.clone(), before.1, before.2, 2.0);
+            assert!(acted, "{key} did nothing");
+            assert!(known_key(key) && (key.len() > 1 || known_key(&key.to_uppercase())));
+        }
+        assert!(!known_key("x") && !known_key("Arrowleft") && !known_key(""));
+    }
+
+    #[test]
+    fn presets_structures_step_and_ert_cycle() {
+        let mut c = controls("band:0.4:0.6:0.5");
+        let specs: Vec<String> = (0..4).map(|_| (c.key("t", false), c.tf_spec()).1).collect();
+        assert_eq!(
+            specs,
+            ["ramp:0.3:1", "spike:0.5:0.05", "band:0.4:0.6:0.5", "ramp:0.3:1"]
+        );
+        assert!(c.key("Tab", false).structure);
+        assert_eq!(c.accel.name(), TABLE[1].name());
+        c.key("Tab", true);
+        c.key("Tab", true);
+        assert_eq!(c.accel.name(), TABLE[TABLE.len() - 1].name());
+        c.key("]", false);
+        assert_eq!(c.settings.step, 1.0);
+        for _ in 0..9 {
+            c.key("[", false);
+        }
+        assert_eq!(c.settings.step, 0.125);
+        c.key("e", false);
+        assert_eq!(c.settings.ert, Some(ERT));
+        c.key("e", false);
+        assert_eq!(c.settings.ert, None);
+    }
+
+    #[test]
+    fn an_untouched_view_is_renders_camera_and_zoom_pan_move_the_pixel_plane() {
+        let mut c = controls("ramp:0.3:1");
+        let (dims, spacing, norm) = ([40, 30, 20], [1.0, 1.0, 2.0], [1.0, 0.0]);
+        let exact = c.settings.params(dims, spacing, norm).unwrap();
+        assert_eq!(c.params(dims, spacing, norm).unwrap(), exact);
+        c.scroll(1.0);
+        let zoomed = c.params(dims, spacing, norm).unwrap();
+        let du = |p: &RenderParams| Vec4::from(p.du).truncate();
+        assert!((du(&zoomed) * 1.1 - du(&exact)).length() < 1e-5);
+        // Zoom keeps the plane's centre; a pan moves it along the plane.
+        let centre =
+            |p: &RenderParams| Vec4::from(p.base).truncate() + du(p) * 512.0 + Vec4::from(p.dv).truncate() * 512.0;
+        assert!((centre(&zoomed) - centre(&exact)).length() < 1e-3);
+        c.drag_pan(10.0, 0.0);
+        let panned = c.params(dims, spacing, norm).unwrap();
+        let moved = centre(&panned) - centre(&zoomed);
+        assert!((moved + du(&zoomed) * 10.0).length() < 1e-3, "{moved}");
+        c.key("r", false);
+        assert_eq!(c.params(dims, spacing, norm).unwrap(), exact);
+    }
+}

@@ -1,0 +1,449 @@
+//! `lacuna view`: an interactive window on a volume. The viewer is a host
+//! like any engine (`host`: its own instance, device, swapchain) that adopts
+//! its device into lacuna (`scene`: the renderer's use, in one module);
+//! `controls` turns mouse and keys into camera, TF and structure changes.
+
+mod controls;
+mod host;
+mod scene;
+
+use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
+use clap::Args;
+use controls::{Change, Controls, Shape};
+use host::Host;
+use lacuna::accel::Accel;
+use lacuna::frame::{Frame, FrameFormat};
+use lacuna::render::{self, Camera, Filter, Projection, RenderSettings};
+use lacuna::{Error, Result, TransferFunction};
+use scene::Scene;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, ModifiersState};
+use winit::window::{Window, WindowId};
+
+#[derive(Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
+    #[arg(long)]
+    tf: Option<TransferFunction>,
+    /// Empty space skipping structure to start with (Tab switches): auto, naive, lbvh, grid, ...
+    #[arg(long, default_value = "auto")]
+    accel: Accel,
+    /// A ParaView JSON colormap the J key loads (read again on every press).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Window (and frame) size WxH.
+    #[arg(long, default_value = "512x512", value_parser = render::parse_size)]
+    size: (u32, u32),
+    /// Orbit camera AZIMUTH,ELEVATION in degrees.
+    #[arg(long, default_value = "30,20", allow_hyphen_values = true, value_parser = Camera::parse_orbit)]
+    camera: (f64, f64),
+    /// Perspective projection with this vertical field of view (degrees); default orthographic.
+    #[arg(long)]
+    perspective: Option<f64>,
+    /// Sample step in voxels.
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
+    step: f32,
+    /// Early ray termination at this accumulated alpha (default off; E toggles 0.99).
+    #[arg(long, allow_hyphen_values = true)]
+    ert: Option<f32>,
+    /// Sample filter: manual or hardware (default: as render).
+    #[arg(long)]
+    filter: Option<Filter>,
+    /// Render this many frames, then exit (for tests and scripts).
+    #[arg(long)]
+    frames: Option<u32>,
+    /// With --frames: write the last frame here (.exr: linear RGBA f32 as rendered; .png). The S key writes NAME.exr and NAME.png.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, ...), for scripts and tests.
+    #[arg(long, value_delimiter = ',')]
+    keys: Vec<String>,
+    /// Enable Vulkan validation with synchronization validation; fail on any message.
+    #[arg(long)]
+    validate: bool,
+}
+
+/// Everything the window needs; dropped in field order (lacuna before the host's device, the window last).
+struct Viewer {
+    scene: Scene,
+    host: Host,
+    window: Window,
+    controls: Controls,
+    filter: Filter,
+    resize: bool,
+    drawn: u32,
+    shots: u32,
+    last: Instant,
+    fps: f64,
+    modifiers: ModifiersState,
+    cursor: Option<(f64, f64)>,
+    buttons: (bool, bool),
+    /// What the last key's rebuild failed with.
+    key_result: Option<Error>,
+}
+
+struct App<'a> {
+    args: &'a ViewArgs,
+    setup: Option<(lacuna::Volume, TransferFunction, RenderSettings)>,
+    viewer: Option<Viewer>,
+    error: Option<Error>,
+}
+
+impl ViewArgs {
+    fn settings(&self) -> Result<RenderSettings> {
+        let projection = match self.perspective {
+            Some(fov_deg) => Projection::Perspective {
+                fov_deg,
+                distance: None,
+            },
+            None => Projection::Orthographic,
+        };
+        let settings = RenderSettings {
+            width: self.size.0,
+            height: self.size.1,
+            camera: Camera {
+                azimuth_deg: self.camera.0,
+                elevation_deg: self.camera.1,
+                projection,
+            },
+            step: self.step,
+            ert: self.ert,
+            filter: self.filter.unwrap_or_default(),
+        };
+        settings.validate()?;
+        if self.frames == Some(0) {
+            return Err(Error::invalid("frames", "0", "must be at least 1"));
+        }
+        if let Some(path) = &self.screenshot {
+            FrameFormat::from_path(path)?;
+            check_parent(path)?;
+        }
+        if let Some(json) = &self.json {
+            TransferFunction::from_paraview_json(json)?;
+        }
+        if let Some(key) = self.keys.iter().find(|k| !controls::known_key(k)) {
+            return Err(Error::invalid(
+                "key",
+                key.clone(),
+                format!("expected one of: {}", controls::KEYS.join(", ")),
+            ));
+        }
+        Ok(settings)
+    }
+}
+
+pub fn run(args: &ViewArgs) -> Result<ExitCode> {
+    let settings = args.settings()?;
+    let volume = args.volume.load()?;
+    let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
+    settings.params(volume.dims, volume.spacing, volume.norm)?;
+    let event_loop = EventLoop::new().map_err(|e| {
+        Error::NoDevice(format!(
+            "cannot open a window ({e}); set DISPLAY, or run under xvfb-run"
+        ))
+    })?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App {
+        args,
+        setup: Some((volume, tf, settings)),
+        viewer: None,
+        error: None,
+    };
+    let ran = event_loop.run_app(&mut app);
+    let Some(viewer) = app.viewer.take() else {
+        return Err(app
+            .error
+            .unwrap_or_else(|| Error::NoDevice("the window closed before it opened".into())));
+    };
+    // lacuna's objects go first, then the host's window objects, while the
+    // adopted context still collects validation messages; then the device.
+    let Viewer {
+        scene,
+        mut host,
+        window,
+        ..
+    } = viewer;
+    let ctx = scene.context().clone();
+    drop(scene);
+    host.release();
+    let verdict = validation_verdict(&ctx);
+    drop(ctx);
+    drop(host);
+    drop(window);
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    ran.map_err(|e| Error::NoDevice(format!("window event loop failed: {e}")))?;
+    Ok(verdict)
+}
+
+impl App<'_> {
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let Some((volume, tf, settings)) = self.setup.take() else {
+            return Ok(());
+        };
+        let attributes = Window::default_attributes()
+            .with_title("lacuna view")
+            .with_inner_size(PhysicalSize::new(settings.width, settings.height));
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
+        let host = Host::new(&window, self.args.validate)?;
+        let ctx = host.adopt(self.args.validate)?;
+        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel)?;
+        let filter = self.args.filter.unwrap_or_else(|| scene.default_filter());
+        let json = self.args.json.as_ref().map(|p| p.display().to_string());
+        let controls = Controls::new(settings, &tf.spec, self.args.accel, json);
+        self.viewer = Some(Viewer {
+            scene,
+            host,
+            window,
+            controls,
+            filter,
+            resize: true,
+            drawn: 0,
+            shots: 0,
+            last: Instant::now(),
+            fps: 0.0,
+            modifiers: ModifiersState::empty(),
+            cursor: None,
+            buttons: (false, false),
+            key_result: None,
+        });
+        if let Some(viewer) = self.viewer.as_mut() {
+            for key in &self.args.keys {
+                viewer.key(key);
+                if let Some(e) = viewer.key_result.take() {
+                    return Err(e);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: Error) {
+        self.error.get_or_insert(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if let Err(e) = self.open(event_loop) {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let result = match event {
+            WindowEvent::CloseRequested => {
+                event_loop.exit();
+                Ok(())
+            }
+            WindowEvent::Resized(_) => {
+                viewer.resize = true;
+                Ok(())
+            }
+            WindowEvent::RedrawRequested => viewer.draw(self.args).map(|done| {
+                if done {
+                    event_loop.exit()
+                }
+            }),
+            WindowEvent::ModifiersChanged(m) => {
+                viewer.modifiers = m.state();
+                Ok(())
+            }
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                let name = match &event.logical_key {
+                    Key::Named(named) => format!("{named:?}"),
+                    Key::Character(c) => c.to_string(),
+                    _ => String::new(),
+                };
+                let quit = viewer.key(&name);
+                if quit {
+                    event_loop.exit();
+                }
+                Ok(()).and_then(|_| viewer.key_result.take().map_or(Ok(()), Err))
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let down = state == ElementState::Pressed;
+                match button {
+                    MouseButton::Left => viewer.buttons.0 = down,
+                    MouseButton::Right | MouseButton::Middle => viewer.buttons.1 = down,
+                    _ => {}
+                }
+                Ok(())
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let now = (position.x, position.y);
+                if let Some(before) = viewer.cursor {
+                    let (dx, dy) = (now.0 - before.0, now.1 - before.1);
+                    if viewer.buttons.0 {
+                        viewer.controls.orbit(dx, dy);
+                    } else if viewer.buttons.1 {
+                        viewer.controls.drag_pan(dx, dy);
+                    }
+                }
+                viewer.cursor = Some(now);
+                Ok(())
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y as f64,
+                    MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
+                };
+                viewer.controls.scroll(lines);
+                Ok(())
+            }
+            _ => Ok(()),
+        };
+        if let Err(e) = result {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(viewer) = &self.viewer {
+            viewer.window.request_redraw();
+        }
+    }
+}
+
+impl Viewer {
+    /// Draws one frame; true when `--frames` are done.
+    fn draw(&mut self, args: &ViewArgs) -> Result<bool> {
+        if self.resize {
+            let size = self.window.inner_size();
+            let extent = self.host.resize((size.width, size.height))?;
+            self.controls.settings.width = extent.width;
+            self.controls.settings.height = extent.height;
+            self.resize = false;
+        }
+        let last = args.frames.is_some_and(|n| self.drawn + 1 >= n);
+        let shot = last && args.screenshot.is_some();
+        let volume = &self.scene.volume;
+        let params = self.controls.params(volume.dims, volume.spacing, volume.norm)?;
+        let (scene, filter) = (&mut self.scene, self.filter);
+        let presented = self
+            .host
+            .frame(|cmd, canvas| scene.record(cmd, canvas, &params, filter, shot || self.shots > 0))?;
+        self.resize |= presented.stale;
+        if !presented.drawn {
+            return Ok(false);
+        }
+        self.scene.finish()?;
+        self.drawn += 1;
+        let now = Instant::now();
+        let dt = now.duration_since(self.last).as_secs_f64();
+        self.last = now;
+        if dt > 0.0 {
+            self.fps = if self.fps == 0.0 {
+                1.0 / dt
+            } else {
+                0.9 * self.fps + 0.1 / dt
+            };
+        }
+        self.window.set_title(&self.title());
+        if shot {
+            if let Some(path) = &args.screenshot {
+                self.write(path, FrameFormat::from_path(path)?)?;
+            }
+        }
+        if last {
+            println!("{}", self.summary());
+        }
+        if self.shots > 0 {
+            self.shots = 0;
+            let stem = match &args.screenshot {
+                Some(p) => p.with_extension(""),
+                None => PathBuf::from(format!("lacuna-view-{}", std::process::id())),
+            };
+            self.write(&stem.with_extension("exr"), FrameFormat::Exr)?;
+            self.write(&stem.with_extension("png"), FrameFormat::Png)?;
+        }
+        Ok(last)
+    }
+
+    fn write(&self, path: &Path, format: FrameFormat) -> Result<()> {
+        let Some(mut frame): Option<Frame> = self.scene.frame()? else {
+            return Ok(());
+        };
+        let mut settings = self.controls.settings;
+        settings.filter = self.filter;
+        self.scene.describe(&mut frame, &settings)?;
+        frame.write(path, format)?;
+        println!("wrote {}", path.display());
+        Ok(())
+    }
+
+    /// Applies a key: a new TF or structure is rebuilt now. True to quit.
+    fn key(&mut self, name: &str) -> bool {
+        let before = (self.controls.presets.clone(), self.controls.preset);
+        let change = self.controls.key(name, self.modifiers.shift_key());
+        self.key_result = self.apply(change, before).err();
+        change.quit
+    }
+
+    fn apply(&mut self, change: Change, before: (Vec<Shape>, usize)) -> Result<()> {
+        if change.tf {
+            // A TF the keys made invalid, or a JSON file that no longer
+            // reads, is reported and the current one kept.
+            match TransferFunction::parse(&self.controls.tf_spec()) {
+                Ok(tf) => self.scene.set_tf(tf)?,
+                Err(e) => {
+                    eprintln!("note: transfer function not changed: {e}");
+                    (self.controls.presets, self.controls.preset) = before;
+                }
+            }
+        }
+        if change.structure {
+            self.scene.set_accel(self.controls.accel)?;
+        }
+        if change.screenshot {
+            self.shots += 1;
+        }
+        Ok(())
+    }
+
+    /// The `--frames` run's last line: what the title showed last.
+    fn summary(&self) -> String {
+        format!(
+            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({})",
+            self.drawn,
+            self.fps,
+            self.scene.march_ms(),
+            self.scene.rebuild_ms(),
+            self.scene.accel
+        )
+    }
+
+    fn title(&self) -> String {
+        let scene = &self.scene;
+        let accel = match scene.structure.choice() {
+            Some(choice) => format!("auto -> {}", choice.describe()),
+            None => scene.accel.to_string(),
+        };
+        let settings = &self.controls.settings;
+        format!(
+            "lacuna view · {} · {accel} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
+            scene.volume.name,
+            scene.tf.spec,
+            self.fps,
+            scene.march_ms(),
+            scene.rebuild_ms(),
+            settings.step,
+            settings.ert.map_or("off".to_string(), |e| e.to_string()),
+        )
+    }
+}

@@ -1,0 +1,244 @@
+//! The viewer's one use of lacuna's renderer: the volume on the GPU, the
+//! transfer function, the structure (rebuilt only when the TF or the
+//! structure changes), and a frame recorded into the host's command buffer
+//! and copied into the host's canvas image. Everything else in the viewer
+//! is the host.
+
+use super::host::Canvas;
+use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
+use lacuna::frame::Frame;
+use lacuna::gpu::record::{self, Access};
+use lacuna::gpu::{vk, Context, Timer};
+use lacuna::render::{Filter, RenderParams, RenderSettings, RenderTarget, Renderer};
+use lacuna::tf::GpuTransferFunction;
+use lacuna::volume::GpuVolume;
+use lacuna::{Error, Result, Timings, TransferFunction, Volume};
+
+pub struct Scene {
+    ctx: Context,
+    renderer: Renderer,
+    builder: Builder,
+    pub volume: Volume,
+    gpu_volume: GpuVolume,
+    pub tf: TransferFunction,
+    lut: GpuTransferFunction,
+    pub accel: Accel,
+    options: BuildOptions,
+    /// The per-volume ranges the structure reads (per structure and cell).
+    ranges: Option<(Accel, u32, Ranges)>,
+    pub structure: Structure,
+    target: Option<RenderTarget>,
+    timer: Timer,
+    /// The last build's phases (empty for naive) and frame's passes.
+    build: Timings,
+    march: Timings,
+}
+
+impl Scene {
+    pub fn new(ctx: &Context, volume: Volume, tf: TransferFunction, accel: Accel) -> Result<Scene> {
+        let gpu_volume = GpuVolume::upload(ctx, &volume)?;
+        let lut = tf.upload(ctx)?;
+        let mut scene = Scene {
+            ctx: ctx.clone(),
+            renderer: Renderer::new(ctx)?,
+            builder: Builder::new(ctx)?,
+            volume,
+            gpu_volume,
+            tf,
+            lut,
+            accel,
+            options: BuildOptions::default(),
+            ranges: None,
+            structure: Structure::naive(),
+            target: None,
+            timer: Timer::new(ctx, 1)?,
+            build: Timings::default(),
+            march: Timings::default(),
+        };
+        scene.set_accel(accel)?;
+        Ok(scene)
+    }
+
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// The sample filter `render` would use for this volume.
+    pub fn default_filter(&self) -> Filter {
+        self.gpu_volume.default_filter()
+    }
+
+    /// A new transfer function: upload it and rebuild the structure.
+    pub fn set_tf(&mut self, tf: TransferFunction) -> Result<()> {
+        self.lut = tf.upload(&self.ctx)?;
+        self.tf = tf;
+        self.rebuild()
+    }
+
+    /// A new structure, with `render`'s defaults for its parameters.
+    pub fn set_accel(&mut self, accel: Accel) -> Result<()> {
+        self.accel = accel;
+        self.options = BuildOptions {
+            cell: accel.method().default_cell(),
+            ..BuildOptions::default()
+        };
+        self.rebuild()
+    }
+
+    /// Builds the structure for the current TF; ranges only when the
+    /// structure or cell changed (they are per volume).
+    fn rebuild(&mut self) -> Result<()> {
+        self.build = Timings::default();
+        if self.accel.is_naive() {
+            self.structure = Structure::naive();
+            return Ok(());
+        }
+        let key = (self.accel.name(), self.options.cell);
+        if self.ranges.as_ref().map(|(a, c, _)| (a.name(), *c)) != Some(key) {
+            let (ranges, _) = self
+                .builder
+                .ranges_for(&[self.accel], &self.gpu_volume, self.options.cell)?;
+            self.ranges = Some((self.accel, self.options.cell, ranges));
+        }
+        let Some((_, _, ranges)) = &self.ranges else {
+            unreachable!("ranges were just computed")
+        };
+        let input = BuildInput {
+            volume: &self.volume,
+            gpu_volume: &self.gpu_volume,
+            tf: &self.tf,
+            gpu_tf: &self.lut,
+        };
+        let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.options)?;
+        self.structure = structure;
+        self.build = build;
+        Ok(())
+    }
+
+    /// Records one frame into the host's `cmd`: lacuna's march (timed),
+    /// then the frame buffer copied into `canvas`, left in
+    /// TRANSFER_SRC_OPTIMAL and visible to transfer reads; with `readback`,
+    /// also the copy to host memory that `frame` reads.
+    pub fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        canvas: &Canvas,
+        params: &RenderParams,
+        filter: Filter,
+        readback: bool,
+    ) -> Result<()> {
+        let (w, h) = (canvas.extent.width, canvas.extent.height);
+        if self.target.as_ref().map(|t| (t.width, t.height)) != Some((w, h)) {
+            self.target = Some(RenderTarget::new(&self.ctx, w, h)?);
+        }
+        let Some(target) = &self.target else {
+            unreachable!("target was just made")
+        };
+        self.timer.reset(cmd);
+        self.renderer.record_params(
+            cmd,
+            Some(&mut self.timer),
+            &self.structure,
+            target,
+            &self.gpu_volume,
+            &self.lut,
+            params,
+            filter,
+        )?;
+        let device = self.ctx.device();
+        let frame_buffer = target
+            .frame
+            .as_ref()
+            .ok_or_else(|| Error::Unsupported("the viewer's render target has no frame buffer".into()))?
+            .raw;
+        // The previous frame's blit read the canvas; the whole frame is
+        // written, so its old contents are discarded.
+        record::image_barrier(
+            device,
+            cmd,
+            canvas.image,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Access::TRANSFER_READ,
+            Access::TRANSFER_WRITE,
+        );
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        let region = [vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D {
+                width: w,
+                height: h,
+                depth: 1,
+            },
+        }];
+        unsafe {
+            device.cmd_copy_buffer_to_image(
+                cmd,
+                frame_buffer,
+                canvas.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            )
+        };
+        record::image_barrier(
+            device,
+            cmd,
+            canvas.image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            Access::TRANSFER_WRITE,
+            Access::TRANSFER_READ,
+        );
+        if readback {
+            self.renderer.record_readback(cmd, target)?;
+        }
+        Ok(())
+    }
+
+    /// The last build's time, ms (0 for naive).
+    pub fn rebuild_ms(&self) -> f64 {
+        // A fold from +0: an empty sum of f64 is -0.
+        self.build.phases.iter().fold(0.0, |sum, (_, ms)| sum + ms)
+    }
+
+    /// The last frame's march time, ms.
+    pub fn march_ms(&self) -> f64 {
+        self.march.get("march").unwrap_or(0.0)
+    }
+
+    /// After the recorded frame completed: its GPU pass times.
+    pub fn finish(&mut self) -> Result<()> {
+        self.march = self.timer.results()?;
+        Ok(())
+    }
+
+    /// The frame a `record` with `readback` produced, as the renderer wrote it.
+    pub fn frame(&self) -> Result<Option<Frame>> {
+        self.target.as_ref().map(RenderTarget::read).transpose()
+    }
+
+    /// The settings' description for frame metadata, with this scene's state.
+    pub fn describe(&self, frame: &mut Frame, settings: &RenderSettings) -> Result<()> {
+        let params = self.accel.method().params(&self.options);
+        super::super::render::describe(
+            frame,
+            &self.volume,
+            &self.tf,
+            &self.structure,
+            self.accel,
+            &params,
+            settings,
+            &self.ctx,
+            &self.march,
+        )
+    }
+}

@@ -1,0 +1,218 @@
+//! A camera as a host engine has it: view and projection matrices in Vulkan
+//! clip space, and where the volume sits in the world. This is the one place
+//! rays are formed; the CLI's orbit cameras come here too (`Camera::matrices`).
+//!
+//! Conventions (Vulkan): clip x right, y down, depth 0 at the near plane and 1
+//! at the far one (`reverse_z`: 1 near, 0 far); pixel (x, y) of a W x H image
+//! has its centre at NDC ((x + 0.5) 2/W - 1, (y + 0.5) 2/H - 1). World space
+//! is the volume's physical space placed by `model` (identity: the volume's
+//! box is `[0, dims * spacing]`); voxel space divides that by the spacing.
+//!
+//! Rays, computed in f64 and handed to the shaders in f32 voxel space:
+//! - perspective (the projection's last row is not (0, 0, 0, 1)): rays start at
+//!   the view-space origin (the eye) and pass through the pixel centres on the
+//!   *unit plane*, where clip w = 1 (view depth 1), not the near plane;
+//! - orthographic: rays start on the view-space plane z = 0 (the eye plane)
+//!   and run from the near towards the far plane.
+//!
+//! The volume is marched from where a ray enters it (never behind its start)
+//! to where it leaves; the near and far planes do not clip it, a depth image
+//! does (`DepthInput`).
+
+use super::params::RenderParams;
+use crate::error::{Error, Result};
+use glam::{DMat4, DVec2, DVec3, DVec4, Mat4, Vec3};
+
+/// A host's camera (see the module documentation for the conventions).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraMatrices {
+    /// World to view space.
+    pub view: DMat4,
+    /// View to Vulkan clip space.
+    pub projection: DMat4,
+    /// The volume's physical space (box `[0, dims * spacing]`) to world space.
+    pub model: DMat4,
+    /// Depth 1 at the near plane and 0 at the far one.
+    pub reverse_z: bool,
+}
+
+/// A Vulkan orthographic projection (y down, depth 0..1 from `near` to
+/// `far`) of the view-space box `[-half_w, half_w] x [-half_h, half_h]`
+/// looking down -z.
+pub fn orthographic(half_w: f64, half_h: f64, near: f64, far: f64) -> DMat4 {
+    DMat4::from_cols(
+        DVec4::new(1.0 / half_w, 0.0, 0.0, 0.0),
+        DVec4::new(0.0, -1.0 / half_h, 0.0, 0.0),
+        DVec4::new(0.0, 0.0, 1.0 / (near - far), 0.0),
+        DVec4::new(0.0, 0.0, near / (near - far), 1.0),
+    )
+}
+
+/// A Vulkan perspective projection (y down, depth 0..1 from `near` to
+/// `far`) with `tan_half_fov` the tangent of half the vertical field of view
+/// and `aspect` width / height, looking down -z.
+pub fn perspective(tan_half_fov: f64, aspect: f64, near: f64, far: f64) -> DMat4 {
+    DMat4::from_cols(
+        DVec4::new(1.0 / (tan_half_fov * aspect), 0.0, 0.0, 0.0),
+        DVec4::new(0.0, -1.0 / tan_half_fov, 0.0, 0.0),
+        DVec4::new(0.0, 0.0, far / (near - far), -1.0),
+        DVec4::new(0.0, 0.0, near * far / (near - far), 0.0),
+    )
+}
+
+fn finite(m: &DMat4) -> bool {
+    m.to_cols_array().iter().all(|v| v.is_finite())
+}
+
+impl CameraMatrices {
+    /// A camera with the volume's physical box at the world origin (`model`
+    /// identity) and standard depth (`reverse_z` false).
+    pub fn new(view: DMat4, projection: DMat4) -> Self {
+        CameraMatrices {
+            view,
+            projection,
+            model: DMat4::IDENTITY,
+            reverse_z: false,
+        }
+    }
+
+    /// As `new`, from an engine's f32 matrices.
+    pub fn from_f32(view: Mat4, projection: Mat4) -> Self {
+        Self::new(view.as_dmat4(), projection.as_dmat4())
+    }
+
+    /// Places the volume's physical box in the world.
+    pub fn with_model(mut self, model: DMat4) -> Self {
+        self.model = model;
+        self
+    }
+
+    /// Marks the projection as reverse-Z (depth 1 near, 0 far).
+    pub fn with_reverse_z(mut self, reverse_z: bool) -> Self {
+        self.reverse_z = reverse_z;
+        self
+    }
+
+    pub fn is_perspective(&self) -> bool {
+        self.projection.row(3) != DVec4::W
+    }
+
+    /// The inverses the rays need: clip to view, view to world, world to
+    /// physical volume space; an error names a singular matrix.
+    fn inverses(&self) -> Result<(DMat4, DMat4, DMat4)> {
+        let inverse = |m: &DMat4, what: &'static str| {
+            let inv = m.inverse();
+            if finite(m) && finite(&inv) && m.determinant() != 0.0 {
+                Ok(inv)
+            } else {
+                Err(Error::invalid(what, format!("{m:?}"), "must be finite and invertible"))
+            }
+        };
+        let model_inv = if self.model == DMat4::IDENTITY {
+            DMat4::IDENTITY
+        } else {
+            inverse(&self.model, "model matrix")?
+        };
+        Ok((
+            inverse(&self.projection, "projection matrix")?,
+            inverse(&self.view, "view matrix")?,
+            model_inv,
+        ))
+    }
+
+    /// The shader's camera parameters (`base`, `du`, `dv`, `eye_or_dir`, the
+    /// image size, the volume dims and the depth unprojection) for a volume
+    /// of `dims` voxels with `spacing`, rendered at `width` x `height`.
+    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+        if width == 0 || height == 0 {
+            return Err(Error::invalid(
+                "size",
+                format!("{width}x{height}"),
+                "width and height must be > 0",
+            ));
+        }
+        let (clip_to_view, view_to_world, world_to_model) = self.inverses()?;
+        let spacing = Vec3::from(spacing).as_dvec3();
+        let identity = self.model == DMat4::IDENTITY;
+        // World to voxel space (the model's inverse skipped when it is the
+        // identity, so exact zeros stay exact).
+        let to_voxel_point = |p: DVec3| {
+            let p = if identity {
+                p
+            } else {
+                world_to_model.transform_point3(p)
+            };
+            (p / spacing).as_vec3()
+        };
+        let to_voxel_vector = |v: DVec3| {
+            let v = if identity {
+                v
+            } else {
+                world_to_model.transform_vector3(v)
+            };
+            (v / spacing).as_vec3()
+        };
+        let unproject = |ndc: DVec2, z: f64| {
+            let h = clip_to_view * ndc.extend(z).extend(1.0);
+            h.truncate() / h.w
+        };
+        let (near_z, far_z) = if self.reverse_z { (1.0, 0.0) } else { (0.0, 1.0) };
+        let (w, h) = (width as f64, height as f64);
+        let corners = [DVec2::new(-1.0, -1.0), DVec2::new(1.0, -1.0), DVec2::new(-1.0, 1.0)];
+        let v4 = |p: Vec3, w: f32| p.extend(w).to_array();
+        let mut params = RenderParams::default();
+        if self.is_perspective() {
+            let w_row = self.projection.row(3).truncate();
+            // The point of the pixel's ray (through the view origin) where clip w = 1.
+            let unit = |ndc: DVec2| {
+                let a = unproject(ndc, near_z);
+                a / w_row.dot(a)
+            };
+            let [c0, c1, c2] = corners.map(unit);
+            let eye = view_to_world.transform_point3(DVec3::ZERO);
+            params.base = v4(to_voxel_point(view_to_world.transform_point3(c0)), 0.0);
+            params.du = v4(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)), 0.0);
+            params.dv = v4(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)), 0.0);
+            params.eye_or_dir = v4(to_voxel_point(eye), 1.0);
+        } else {
+            // The pixel's ray (near to far) and where it crosses view z = 0.
+            let origin = |ndc: DVec2| {
+                let a = unproject(ndc, near_z);
+                let b = unproject(ndc, far_z);
+                let d = b - a;
+                (a - d * (a.z / d.z), d)
+            };
+            let [(c0, dir), (c1, _), (c2, _)] = corners.map(origin);
+            params.base = v4(to_voxel_point(view_to_world.transform_point3(c0)), 0.0);
+            params.du = v4(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)), 0.0);
+            params.dv = v4(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)), 0.0);
+            // The f32 direction normalised in f64: divided by the length
+            // (not times its reciprocal, as glam's normalize() does).
+            let d = to_voxel_vector(view_to_world.transform_vector3(dir / dir.length())).as_dvec3();
+            params.eye_or_dir = v4((d / d.length()).as_vec3(), 0.0);
+        }
+        let finite_params = [params.base, params.du, params.dv, params.eye_or_dir]
+            .iter()
+            .flatten()
+            .all(|v| v.is_finite());
+        if !finite_params {
+            return Err(Error::invalid(
+                "camera",
+                format!("{self:?}"),
+                "forms no finite rays (degenerate matrices)",
+            ));
+        }
+        // NDC (with depth) to voxel space, for rays that end at a host depth.
+        let mut world_to_voxel = DMat4::from_scale(1.0 / spacing);
+        if !identity {
+            world_to_voxel *= world_to_model;
+        }
+        params.ndc_to_voxel = (world_to_voxel * view_to_world * clip_to_view)
+            .as_mat4()
+            .to_cols_array_2d();
+        params.depth = [far_z as f32, 0.0, 0.0, 0.0];
+        params.dims = [dims[0], dims[1], dims[2], crate::tf::LUT_SIZE as u32];
+        params.image = [width, height, 0, 0];
+        Ok(params)
+    }
+}

@@ -1,0 +1,83 @@
+//! The embedding example (`examples/embed`) as a test: a host engine with its
+//! own instance, device and queue rasterizes a cube, then records lacuna's
+//! build and render into the same command buffer. Where the cube is, the
+//! frame shows the cube and none of the volume behind it; everywhere else it
+//! equals lacuna's own render of the same camera bit for bit; validation
+//! (with synchronization validation) reports nothing.
+
+mod common;
+#[path = "../examples/embed/engine.rs"]
+mod engine;
+#[path = "../examples/embed/host.rs"]
+mod host;
+
+use common::{assert_clean, gpu};
+use lacuna::accel::{BuildInput, BuildOptions, Builder};
+use lacuna::render::{Renderer, Scene, View};
+use lacuna::volume::{GpuVolume, LoadOptions};
+use lacuna::{TransferFunction, Volume};
+
+#[test]
+fn the_engines_cube_occludes_the_volume_and_the_rest_is_lacunas_render() {
+    let settings = engine::Settings {
+        size: 96,
+        validate: true,
+        ..engine::Settings::default()
+    };
+    let r = engine::run(&settings).unwrap();
+    assert!(r.validation.is_empty(), "{}", r.validation.join("\n"));
+    assert!(r.timings.phase("march").is_ok());
+
+    // lacuna's own render (its own context, naive marching) of the same camera.
+    let ctx = gpu();
+    let volume = Volume::load(&settings.volume, &LoadOptions::default()).unwrap();
+    let tf = TransferFunction::parse(volume.default_tf.as_deref().unwrap()).unwrap();
+    let gv = GpuVolume::upload(&ctx, &volume).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let builder = Builder::new(&ctx).unwrap();
+    let options = BuildOptions::default();
+    let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+    let input = BuildInput {
+        volume: &volume,
+        gpu_volume: &gv,
+        tf: &tf,
+        gpu_tf: &lut,
+    };
+    let naive = builder
+        .build(common::accel("naive"), &input, &ranges, &options)
+        .unwrap()
+        .0;
+    let size = settings.size;
+    let m = settings.camera.matrices(gv.dims, gv.spacing, size, size).unwrap();
+    let view = View::new(&gv, &m, size, size).unwrap();
+    let scene = Scene {
+        structure: &naive,
+        volume: &gv,
+        tf: &lut,
+    };
+    let (own, _) = Renderer::new(&ctx).unwrap().render_view(scene, &view).unwrap();
+    assert_clean(&ctx);
+
+    let bits = |p: &[f32; 4]| p.map(f32::to_bits);
+    let (mut covered, mut hidden, mut open) = (0, 0, 0);
+    for i in 0..r.depth.len() {
+        let (c, own) = (&r.composite.pixels[i], &own.pixels[i]);
+        if r.depth[i] < 1.0 {
+            // The cube is drawn here: the frame shows the cube, nothing of the volume.
+            covered += 1;
+            assert_eq!(r.volume.pixels[i], [0.0; 4], "pixel {i}: volume in front of the cube");
+            assert_eq!(bits(c), bits(&r.mesh.pixels[i]), "pixel {i}");
+            assert_eq!(c[3], 1.0);
+            hidden += usize::from(own[3] > 0.1);
+        } else {
+            open += usize::from(own[3] > 0.1);
+            assert_eq!(bits(c), bits(own), "pixel {i}: not lacuna's own render");
+        }
+    }
+    // The test means something: the cube hides volume that is there, and
+    // the volume shows around it.
+    assert!(
+        covered > 200 && hidden > 100 && open > 1000,
+        "{covered} {hidden} {open}"
+    );
+}
