@@ -116,7 +116,7 @@ pub struct GpuTree {
     /// Scratch buffers a recorded build's command buffer uses, kept alive
     /// with the structure (which must outlive the submission anyway); set
     /// exactly for recorded LBVH builds.
-    pub(crate) keep: Option<Box<dyn std::any::Any>>,
+    pub(crate) keep: Option<Box<dyn std::any::Any + Send + Sync>>,
 }
 
 /// A tree's leaf count and the length of its node array.
