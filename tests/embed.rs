@@ -1,6 +1,6 @@
 //! The embedding example (`examples/embed`) as a test: a host engine with its
 //! own instance, device and queue rasterizes a cube, then records lacuna's
-//! build and render into the same command buffer. Where the cube is, the
+//! build (grid, and the LBVH) and render into the same command buffer. Where the cube is, the
 //! frame shows the cube and none of the volume behind it; everywhere else it
 //! equals lacuna's own render of the same camera bit for bit; validation
 //! (with synchronization validation) reports nothing.
@@ -19,9 +19,17 @@ use lacuna::{TransferFunction, Volume};
 
 #[test]
 fn the_engines_cube_occludes_the_volume_and_the_rest_is_lacunas_render() {
+    // The grid, and the LBVH whose recorded build has no CPU round trip.
+    for accel in ["grid", "lbvh"] {
+        occludes_with(accel);
+    }
+}
+
+fn occludes_with(accel: &str) {
     let settings = engine::Settings {
         size: 96,
         validate: true,
+        accel: accel.into(),
         ..engine::Settings::default()
     };
     let r = engine::run(&settings).unwrap();
@@ -65,19 +73,22 @@ fn the_engines_cube_occludes_the_volume_and_the_rest_is_lacunas_render() {
         if r.depth[i] < 1.0 {
             // The cube is drawn here: the frame shows the cube, nothing of the volume.
             covered += 1;
-            assert_eq!(r.volume.pixels[i], [0.0; 4], "pixel {i}: volume in front of the cube");
+            assert_eq!(
+                r.volume.pixels[i], [0.0; 4],
+                "{accel} pixel {i}: volume in front of the cube"
+            );
             assert_eq!(bits(c), bits(&r.mesh.pixels[i]), "pixel {i}");
             assert_eq!(c[3], 1.0);
             hidden += usize::from(own[3] > 0.1);
         } else {
             open += usize::from(own[3] > 0.1);
-            assert_eq!(bits(c), bits(own), "pixel {i}: not lacuna's own render");
+            assert_eq!(bits(c), bits(own), "{accel} pixel {i}: not lacuna's own render");
         }
     }
     // The test means something: the cube hides volume that is there, and
     // the volume shows around it.
     assert!(
         covered > 200 && hidden > 100 && open > 1000,
-        "{covered} {hidden} {open}"
+        "{accel}: {covered} {hidden} {open}"
     );
 }

@@ -80,10 +80,17 @@ fn gpu_lbvh_with(
     let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, options).unwrap();
     let l = s.tree().unwrap();
     for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
-        assert!(t.get(phase).is_some() || l.leaves == 0, "missing phase {phase}");
+        assert!(
+            t.get(phase).is_some() || l.leaves().unwrap() == 0,
+            "missing phase {phase}"
+        );
     }
-    assert_eq!(t.get("collapse").is_some(), options.collapse && l.leaves > 0);
-    (l.read_nodes().unwrap(), l.leaves, s.stats().unwrap().unwrap())
+    assert_eq!(t.get("collapse").is_some(), options.collapse && l.leaves().unwrap() > 0);
+    (
+        l.read_nodes().unwrap(),
+        l.leaves().unwrap(),
+        s.stats().unwrap().unwrap(),
+    )
 }
 
 #[test]
@@ -199,4 +206,131 @@ fn karras_emit_matches_the_cpu_with_duplicate_codes() {
         assert!(first_diff.is_none(), "n={n}: internal node {first_diff:?} differs");
     }
     assert_clean(&ctx);
+}
+
+/// A recorded LBVH build (no CPU round trip: capacity-sized, the kernels read
+/// the active count on the GPU) recorded with the render into one command
+/// buffer and submitted once renders bit for bit as naive and as the
+/// host-driven build, with collapse off and on, for a sparse volume, a
+/// transfer function with no active brick and a single active brick; its
+/// nodes and statistics, read lazily afterwards, equal the host build's.
+#[test]
+fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
+    use lacuna::accel::Structure;
+    use lacuna::gpu::record::{self, Access};
+    use lacuna::gpu::Timer;
+    use lacuna::render::{Camera, Output, Projection, RenderSettings, RenderTarget, Renderer, Scene, View};
+
+    let ctx = gpu();
+    let builder = Builder::new(&ctx).unwrap();
+    let renderer = Renderer::new(&ctx).unwrap();
+    // A bright 5^3 blob inside brick (2, 2, 2) (voxels 16..24): no
+    // neighbour's apron reaches it, so exactly one brick is active.
+    let mut data = vec![0u8; 40 * 40 * 40];
+    for z in 18..23 {
+        for y in 18..23 {
+            for x in 18..23 {
+                data[x + 40 * (y + 40 * z)] = 255;
+            }
+        }
+    }
+    let dot = Volume::new("dot", [40; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+    let cases = [
+        ("sparse", random_bricks([61, 35, 47], 10, 2), "band:0.5:1", None),
+        (
+            "no active brick",
+            random_bricks([40, 8, 24], 30, 4),
+            "band:0:1:0",
+            Some(0),
+        ),
+        ("one active brick", dot, "band:0.02:1:1", Some(1)),
+    ];
+    let camera = Camera {
+        azimuth_deg: 30.0,
+        elevation_deg: 20.0,
+        projection: Projection::Perspective {
+            fov_deg: 40.0,
+            distance: None,
+        },
+    };
+    let (w, h) = (40, 32);
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        camera,
+        ..RenderSettings::default()
+    };
+    let lbvh = common::accel("lbvh");
+    assert!(lbvh.method().recordable());
+    for (name, v, spec, want_leaves) in cases {
+        let tf = TransferFunction::parse(spec).unwrap();
+        let gv = GpuVolume::upload(&ctx, &v).unwrap();
+        let lut = tf.upload(&ctx).unwrap();
+        let input = BuildInput {
+            volume: &v,
+            gpu_volume: &gv,
+            tf: &tf,
+            gpu_tf: &lut,
+        };
+        let (naive, _) = renderer.render(&Structure::naive(), &gv, &lut, &settings).unwrap();
+        let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();
+        let view = View::new(&gv, &m, w, h).unwrap();
+        for collapse in [false, true] {
+            let options = BuildOptions {
+                collapse,
+                ..Default::default()
+            };
+            let what = format!("{name}, collapse {collapse}");
+            if collapse {
+                // Measured once per builder (a submission of its own), before recording.
+                builder.cost_model().unwrap();
+            }
+            let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+            let (host, _) = builder.build(lbvh, &input, &ranges, &options).unwrap();
+            let (host_frame, _) = renderer.render(&host, &gv, &lut, &settings).unwrap();
+
+            let target = RenderTarget::new(&ctx, w, h).unwrap();
+            let mut timer = Timer::new(&ctx, 16).unwrap();
+            let recorded = ctx
+                .submit_and_wait(|cmd| {
+                    timer.reset(cmd);
+                    let s = builder.record_build(lbvh, cmd, Some(&mut timer), &input, &ranges, &options)?;
+                    record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+                    let scene = Scene {
+                        structure: &s,
+                        volume: &gv,
+                        tf: &lut,
+                    };
+                    renderer.record_view(cmd, Some(&mut timer), &target, scene, &view, Output::Buffer, None)?;
+                    renderer.record_readback(cmd, &target)?;
+                    Ok(s)
+                })
+                .unwrap();
+            let frame = target.read().unwrap();
+            let t = timer.results().unwrap();
+            for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
+                assert!(t.get(phase).is_some(), "{what}: missing phase {phase}");
+            }
+            assert_eq!(t.get("collapse").is_some(), collapse, "{what}");
+            assert_clean(&ctx);
+
+            for (other, label) in [(&naive, "naive"), (&host_frame, "host-driven lbvh")] {
+                let d = lacuna::frame::diff(other, &frame).unwrap();
+                assert_eq!(d.differing, 0, "{what}: recorded vs {label}: max abs {}", d.max_abs);
+            }
+            let (ht, rt) = (host.tree().unwrap(), recorded.tree().unwrap());
+            assert_eq!(rt.leaves().unwrap(), ht.leaves().unwrap(), "{what}");
+            if let Some(n) = want_leaves {
+                assert_eq!(rt.leaves().unwrap(), n, "{what}");
+            } else {
+                assert!(rt.leaves().unwrap() > 1, "{what}");
+            }
+            assert_eq!(rt.read_nodes().unwrap(), ht.read_nodes().unwrap(), "{what}: nodes");
+            assert_eq!(recorded.stats().unwrap(), host.stats().unwrap(), "{what}: statistics");
+            if want_leaves != Some(0) {
+                assert!(frame.pixels.iter().any(|p| p[3] > 0.0), "{what}: the volume is in view");
+            }
+            assert_clean(&ctx);
+        }
+    }
 }

@@ -10,10 +10,13 @@ layout(local_size_x = 64) in;
 layout(std430, set = 0, binding = 0) readonly buffer Codes { uint codes[]; };
 layout(std430, set = 0, binding = 1) writeonly buffer Nodes { BvhNode nodes[]; };
 layout(std430, set = 0, binding = 2) writeonly buffer Parents { int parents[]; };
-layout(push_constant) uniform Push { uint n; uint groups_x; uint pad0; uint pad1; } pc;
+// The leaf count n, as the compaction wrote it: a recorded build dispatches
+// over the brick capacity and the threads past n - 1 return.
+layout(std430, set = 0, binding = 3) readonly buffer Count { uint n; };
+layout(push_constant) uniform Push { uint groups_x; uint pad0; uint pad1; uint pad2; } pc;
 
 int delta(int i, int j) {
-    if (j < 0 || j >= int(pc.n)) {
+    if (j < 0 || j >= int(n)) {
         return -1;
     }
     uint a = codes[i];
@@ -26,7 +29,7 @@ int delta(int i, int j) {
 
 void main() {
     uint id = linear_index(pc.groups_x);
-    if (pc.n < 2u || id >= pc.n - 1u) {
+    if (n < 2u || id >= n - 1u) {
         return;
     }
     int i = int(id);
@@ -53,7 +56,7 @@ void main() {
         }
     } while (t > 1);
     int split = i + s * d + min(d, 0);
-    int leaf0 = int(pc.n) - 1;
+    int leaf0 = int(n) - 1;
     int left = min(i, j) == split ? leaf0 + split : split;
     int right = max(i, j) == split + 1 ? leaf0 + split + 1 : split + 1;
     nodes[i].lo.w = left;

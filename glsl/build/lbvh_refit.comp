@@ -19,23 +19,26 @@ layout(std430, set = 0, binding = 0) readonly buffer Payload { uint payload[]; }
 layout(std430, set = 0, binding = 1) coherent buffer Nodes { BvhNode nodes[]; };
 layout(std430, set = 0, binding = 2) readonly buffer Parents { int parents[]; };
 layout(std430, set = 0, binding = 3) coherent buffer Visits { uint visits[]; };
+// The leaf count n from the compaction (a recorded build dispatches over the
+// brick capacity; threads past n return).
+layout(std430, set = 0, binding = 4) readonly buffer Count { uint n; };
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
     uvec4 counts; // xyz: bricks per axis
-    uint n;
     uint groups_x;
+    uint pad;
 } pc;
 
 void main() {
     uint i = linear_index(pc.groups_x);
-    if (i >= pc.n) {
+    if (i >= n) {
         return;
     }
     uint b = payload[i];
     uvec3 c = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     ivec3 lo = ivec3(c * pc.dims.w);
     ivec3 hi = min(lo + int(pc.dims.w), ivec3(pc.dims.xyz));
-    int node = int(pc.n) - 1 + int(i);
+    int node = int(n) - 1 + int(i);
     nodes[node].lo = ivec4(lo, -1);
     nodes[node].hi = ivec4(hi, int(b));
     while (node != 0) {

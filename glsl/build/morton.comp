@@ -18,6 +18,14 @@ void main() {
     }
     // identity = 1: code every brick (i is the brick index), not a list.
     uint b = pc.identity != 0u ? i : active_bricks[i];
+    // A list entry past the active count (a capacity-sized LBVH build fills
+    // the list with ~0 first): the largest 30-bit key, which the stable sort
+    // keeps after every active brick.
+    if (b == 0xFFFFFFFFu) {
+        codes[i] = (1u << 30) - 1u;
+        payload[i] = b;
+        return;
+    }
     uvec3 c = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     codes[i] = morton3(c);
     payload[i] = b;

@@ -102,14 +102,38 @@ pub struct GpuTree {
     pub nodes: Buffer,
     /// u32 leaf count on the GPU (0: empty tree, nothing is marched).
     pub count: Buffer,
-    pub leaves: u32,
-    pub node_count: u32,
+    /// Leaf and node counts: known at build time, except for an LBVH whose
+    /// build was recorded (its active count exists only on the GPU until the
+    /// submission completed; read from `count` on first request).
+    pub(crate) sizes: std::sync::OnceLock<Sizes>,
     /// Statistics known at build time; the reachable shape (nodes, leaves,
-    /// height) is derived on request.
+    /// height) is derived on request, and for a recorded LBVH the active
+    /// brick count and bytes too.
     pub(crate) stats: Stats,
     /// Known at upload for CPU-built trees; an LBVH reads its nodes back for
     /// it only when statistics are asked for, never on the build path.
     pub(crate) shape: std::sync::OnceLock<Shape>,
+    /// Scratch buffers a recorded build's command buffer uses, kept alive
+    /// with the structure (which must outlive the submission anyway); set
+    /// exactly for recorded LBVH builds.
+    pub(crate) keep: Option<Box<dyn std::any::Any + Send + Sync>>,
+}
+
+/// A tree's leaf count and the length of its node array.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Sizes {
+    pub leaves: u32,
+    pub node_count: u32,
+}
+
+impl Sizes {
+    /// An LBVH over n bricks: 2n - 1 nodes (none for n = 0).
+    pub fn lbvh(n: u32) -> Self {
+        Sizes {
+            leaves: n,
+            node_count: if n == 0 { 0 } else { 2 * n - 1 },
+        }
+    }
 }
 
 pub(crate) const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
@@ -133,17 +157,49 @@ impl GpuTree {
         Ok(GpuTree {
             nodes: node_buf,
             count,
-            leaves,
-            node_count: nodes.len() as u32,
+            sizes: std::sync::OnceLock::from(Sizes {
+                leaves,
+                node_count: nodes.len() as u32,
+            }),
             stats,
             shape: std::sync::OnceLock::from(shape(nodes)),
+            keep: None,
         })
+    }
+
+    fn sizes(&self) -> Result<Sizes> {
+        if let Some(s) = self.sizes.get() {
+            return Ok(*s);
+        }
+        // Only a recorded LBVH defers its sizes: read its leaf count (after
+        // the submission completed).
+        let n: u32 = bytemuck::pod_read_unaligned(&self.count.download(0, 4)?);
+        Ok(*self.sizes.get_or_init(|| Sizes::lbvh(n)))
+    }
+
+    /// The number of leaves the build produced (for an LBVH, its active
+    /// bricks; a recorded LBVH reads it back once, after its submission).
+    pub fn leaves(&self) -> Result<u32> {
+        Ok(self.sizes()?.leaves)
+    }
+
+    /// The number of nodes the build wrote (0 for an empty tree; a recorded
+    /// LBVH's node buffer is larger, sized for every brick).
+    pub fn node_count(&self) -> Result<u32> {
+        Ok(self.sizes()?.node_count)
     }
 
     /// The paper's Table 1 statistics, nodes and leaves as the traversal
     /// reaches them (reads the nodes back once if not known yet). `bytes` is
     /// the node array's size.
     pub fn stats(&self) -> Result<Stats> {
+        let sizes = self.sizes()?;
+        let mut known = self.stats;
+        if self.keep.is_some() {
+            // A recorded LBVH: what the host path knows at build time.
+            known.active_bricks = sizes.leaves as u64;
+            known.bytes = sizes.node_count as u64 * 32;
+        }
         let s = match self.shape.get() {
             Some(s) => *s,
             None => {
@@ -155,17 +211,16 @@ impl GpuTree {
             nodes: s.nodes,
             leaves: s.leaves,
             height: s.height,
-            ..self.stats
+            ..known
         })
     }
 
     /// Reads the node array back (for tests and inspection).
     pub fn read_nodes(&self) -> Result<Vec<Node>> {
-        if self.node_count == 0 {
+        let count = self.node_count()? as u64;
+        if count == 0 {
             return Ok(Vec::new());
         }
-        Ok(bytemuck::pod_collect_to_vec(
-            &self.nodes.download(0, self.node_count as u64 * 32)?,
-        ))
+        Ok(bytemuck::pod_collect_to_vec(&self.nodes.download(0, count * 32)?))
     }
 }

@@ -25,6 +25,7 @@ use super::registry::{
     Ranges,
 };
 use super::stats::Stats;
+use super::tree::Sizes;
 pub use super::tree::{height, GpuTree, Node};
 use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
@@ -42,9 +43,8 @@ pub type Lbvh = GpuTree;
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct EmitPush {
-    n: u32,
     groups_x: u32,
-    pad: [u32; 2],
+    pad: [u32; 3],
 }
 check_push!(EmitPush, shaders::BUILD_LBVH_EMIT);
 
@@ -56,8 +56,8 @@ struct RefitPush {
     dims: [u32; 4],
     /// xyz: bricks per axis.
     counts: [u32; 4],
-    n: u32,
     groups_x: u32,
+    pad: u32,
 }
 check_push!(RefitPush, shaders::BUILD_LBVH_REFIT);
 
@@ -157,7 +157,7 @@ impl LbvhBuilder {
     pub fn record_select(
         &self,
         cmd: vk::CommandBuffer,
-        mut timer: Option<&mut Timer>,
+        timer: Option<&mut Timer>,
         classifier: &Classifier,
         mode: Classify,
         volume: &GpuVolume,
@@ -165,13 +165,7 @@ impl LbvhBuilder {
         tf: &GpuTransferFunction,
         s: &SelectScratch,
     ) -> Result<()> {
-        let pass = timer.begin(cmd, "classify")?;
-        classifier.record(cmd, mode, volume, bricks, tf, &s.flags)?;
-        timer.end(cmd, pass);
-        let pass = timer.begin(cmd, "compact")?;
-        self.compact
-            .record(cmd, &s.flags, bricks.total, &s.active, &s.count, &s.compact)?;
-        timer.end(cmd, pass);
+        self.record_classify_compact(cmd, timer, classifier, mode, volume, bricks, tf, s)?;
         let device = self.ctx.device();
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         unsafe {
@@ -187,6 +181,29 @@ impl LbvhBuilder {
             )
         };
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        Ok(())
+    }
+
+    /// "classify" and "compact" of `record_select`, without the copy.
+    #[allow(clippy::too_many_arguments)]
+    fn record_classify_compact(
+        &self,
+        cmd: vk::CommandBuffer,
+        mut timer: Option<&mut Timer>,
+        classifier: &Classifier,
+        mode: Classify,
+        volume: &GpuVolume,
+        bricks: &GpuBricks,
+        tf: &GpuTransferFunction,
+        s: &SelectScratch,
+    ) -> Result<()> {
+        let pass = timer.begin(cmd, "classify")?;
+        classifier.record(cmd, mode, volume, bricks, tf, &s.flags)?;
+        timer.end(cmd, pass);
+        let pass = timer.begin(cmd, "compact")?;
+        self.compact
+            .record(cmd, &s.flags, bricks.total, &s.active, &s.count, &s.compact)?;
+        timer.end(cmd, pass);
         Ok(())
     }
 
@@ -218,10 +235,13 @@ impl LbvhBuilder {
     }
 
     /// Records Morton codes, the sort, the emit and the refit ("morton",
-    /// "sort", "emit", "refit") for `h.n` active bricks listed in `active`
-    /// (`count` holds n on the GPU), then with a cost model the collapse
-    /// into cost-driven leaves ("collapse"). Ends with compute writes of
-    /// `nodes`.
+    /// "sort", "emit", "refit") for the active bricks listed in `active`,
+    /// then with a cost model the collapse into cost-driven leaves
+    /// ("collapse"). Ends with compute writes of `nodes`. The kernels take
+    /// the active count n from `count` on the GPU; `h.n` is what the pass
+    /// is sized for: n itself (the host-driven build), or the brick
+    /// capacity when `active[n..h.n]` holds `u32::MAX` (a recorded build:
+    /// those entries sort last and the threads past n return).
     #[allow(clippy::too_many_arguments)]
     pub fn record_hierarchy(
         &self,
@@ -266,7 +286,7 @@ impl LbvhBuilder {
             device.cmd_fill_buffer(cmd, h.parents.raw, 0, 4, u32::MAX);
         }
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
-        self.record_emit(cmd, &h.codes, n, nodes, &h.parents)?;
+        self.record_emit(cmd, &h.codes, n, count, nodes, &h.parents)?;
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "refit")?;
         record::compute_to_compute(device, cmd);
@@ -279,12 +299,13 @@ impl LbvhBuilder {
                 Binding::Storage(nodes),
                 Binding::Storage(&h.parents),
                 Binding::Storage(&h.visits),
+                Binding::Storage(count),
             ],
             bytemuck::bytes_of(&RefitPush {
                 dims: [d[0], d[1], d[2], bricks.brick],
                 counts: [c[0], c[1], c[2], 0],
-                n: n as u32,
                 groups_x: groups[0],
+                pad: 0,
             }),
             groups,
         )?;
@@ -333,6 +354,7 @@ impl LbvhBuilder {
         cmd: vk::CommandBuffer,
         codes: &Buffer,
         n: u64,
+        count: &Buffer,
         nodes: &Buffer,
         parents: &Buffer,
     ) -> Result<()> {
@@ -346,11 +368,11 @@ impl LbvhBuilder {
                 Binding::Storage(codes),
                 Binding::Storage(nodes),
                 Binding::Storage(parents),
+                Binding::Storage(count),
             ],
             bytemuck::bytes_of(&EmitPush {
-                n: n as u32,
                 groups_x: groups[0],
-                pad: [0; 2],
+                pad: [0; 3],
             }),
             groups,
         )
@@ -366,8 +388,9 @@ impl LbvhBuilder {
         let c = Buffer::with_data(&self.ctx, "codes", bytemuck::cast_slice(codes), STORAGE_XFER)?;
         let nodes = self.nodes_buffer(n)?;
         let parents = Buffer::new(&self.ctx, "parents", 2 * n * 4, STORAGE_XFER, MemoryLocation::GpuOnly)?;
+        let count = Buffer::with_data(&self.ctx, "count", bytemuck::bytes_of(&(n as u32)), STORAGE_XFER)?;
         self.ctx
-            .submit_and_wait(|cmd| self.record_emit(cmd, &c, n, &nodes, &parents))?;
+            .submit_and_wait(|cmd| self.record_emit(cmd, &c, n, &count, &nodes, &parents))?;
         let nodes: Vec<Node> = bytemuck::pod_collect_to_vec(&nodes.download(0, (n - 1) * 32)?);
         Ok(nodes.iter().map(|n| [n.lo[3], n.hi[3]]).collect())
     }
@@ -415,8 +438,8 @@ impl LbvhBuilder {
         let lbvh = Lbvh {
             nodes,
             count: select.count,
-            leaves: n as u32,
-            node_count: node_count as u32,
+            sizes: std::sync::OnceLock::from(Sizes::lbvh(n as u32)),
+            keep: None,
             stats: Stats {
                 unit: "8^3 bricks",
                 total_bricks: bricks.total,
@@ -431,6 +454,69 @@ impl LbvhBuilder {
             shape: std::sync::OnceLock::new(),
         };
         Ok((lbvh, timings))
+    }
+
+    /// Records the whole build into `cmd` with no CPU round trip: the
+    /// hierarchy is sized for every brick (`bricks.total`), the active list
+    /// is filled with `u32::MAX` before the compaction so the entries past
+    /// the active count n get the largest key and sort last, and the emit,
+    /// refit and collapse read n from the compaction's count buffer. The
+    /// first 2n - 1 nodes are those of `build`, bit for bit. Phases as in
+    /// `build`; begins with the `prims` entry barrier, ends with compute
+    /// writes. The returned tree keeps the scratch buffers the command
+    /// buffer uses; its leaf and node counts and statistics are read back
+    /// on first request, after the submission completed.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_build(
+        &self,
+        cmd: vk::CommandBuffer,
+        mut timer: Option<&mut Timer>,
+        classifier: &Classifier,
+        mode: Classify,
+        volume: &GpuVolume,
+        bricks: &GpuBricks,
+        tf: &GpuTransferFunction,
+        collapse: Option<&CostModel>,
+    ) -> Result<Lbvh> {
+        let select = self.select_scratch(bricks)?;
+        let capacity = bricks.total;
+        let h = self.hierarchy_scratch(capacity)?;
+        let nodes = self.nodes_buffer(capacity)?;
+        let device = self.ctx.device();
+        // A fresh buffer: no earlier access to order. The compaction's entry
+        // barrier makes the fill visible to its writes and to the Morton pass.
+        unsafe { device.cmd_fill_buffer(cmd, select.active.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
+        self.record_classify_compact(cmd, timer.as_deref_mut(), classifier, mode, volume, bricks, tf, &select)?;
+        self.record_hierarchy(
+            cmd,
+            timer,
+            volume,
+            bricks,
+            &select.active,
+            &select.count,
+            &h,
+            &nodes,
+            collapse,
+        )?;
+        let SelectScratch {
+            flags,
+            active,
+            count,
+            count_readback,
+            compact,
+        } = select;
+        Ok(Lbvh {
+            nodes,
+            count,
+            sizes: std::sync::OnceLock::new(),
+            stats: Stats {
+                unit: "8^3 bricks",
+                total_bricks: bricks.total,
+                ..Stats::default()
+            },
+            shape: std::sync::OnceLock::new(),
+            keep: Some(Box::new((flags, active, count_readback, compact, h))),
+        })
     }
 }
 
@@ -469,10 +555,39 @@ impl Method for LbvhMethod {
             (format!("{} collapsed", self.name()), collapsed),
         ]
     }
-    /// Host-driven for now: the hierarchy is sized by the active count,
-    /// read back between the selection and the hierarchy submissions.
+    /// `record_build` sizes the hierarchy for every brick (no readback);
+    /// `build` stays host-driven, sized by the active count read back
+    /// between its two submissions.
     fn recordable(&self) -> bool {
-        false
+        true
+    }
+    fn record_build(
+        &self,
+        builder: &Builder,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        input: &BuildInput,
+        ranges: &Ranges,
+        options: &BuildOptions,
+    ) -> Result<Box<dyn Built>> {
+        let lbvh = builder.kernels::<LbvhBuilder>()?;
+        let classifier = builder.kernels::<Classifier>()?;
+        let model = if options.collapse {
+            Some(builder.cost_model()?)
+        } else {
+            None
+        };
+        let tree = lbvh.record_build(
+            cmd,
+            timer,
+            &classifier,
+            options.classify,
+            input.gpu_volume,
+            ranges.bricks()?,
+            input.gpu_tf,
+            model.as_ref(),
+        )?;
+        Ok(Box::new(tree))
     }
     fn build(
         &self,
