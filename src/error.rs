@@ -49,6 +49,16 @@ pub enum Error {
     /// A structure cannot do what was asked (e.g. record a host-driven build).
     #[error("{0}")]
     Unsupported(String),
+    /// An input asks for more host memory than is available.
+    #[error("{what} needs {bytes} bytes of host memory, over the {available} bytes available (MemAvailable)")]
+    HostMemory {
+        what: String,
+        bytes: String,
+        available: u64,
+    },
+    /// The GPU was lost (driver reset, watchdog) or ran out of memory.
+    #[error("{0}")]
+    Device(String),
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },
@@ -65,17 +75,34 @@ impl Error {
     pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Format {
             path: path.into(),
-            message: message.into(),
+            message: one_line(message.into()),
         }
     }
 
     pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Invalid {
             what,
-            value: value.into(),
-            message: message.into(),
+            value: one_line(value.into()),
+            message: one_line(message.into()),
         }
     }
+}
+
+/// Input echoed in a message stays on its line: control characters (a
+/// newline in a spec or a header) are escaped.
+fn one_line(text: String) -> String {
+    if !text.contains(char::is_control) {
+        return text;
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// Attaches the failing Vulkan entry point to an `ash` result.
@@ -85,6 +112,49 @@ pub(crate) trait VkContext<T> {
 
 impl<T> VkContext<T> for std::result::Result<T, ash::vk::Result> {
     fn vk(self, call: &'static str) -> Result<T> {
-        self.map_err(|result| Error::Vulkan { call, result })
+        use ash::vk::Result as R;
+        self.map_err(|result| match result {
+            R::ERROR_DEVICE_LOST => Error::Device(format!(
+                "the GPU device was lost in {call} (driver reset or watchdog; nothing was written)"
+            )),
+            R::ERROR_OUT_OF_DEVICE_MEMORY | R::ERROR_OUT_OF_HOST_MEMORY => Error::Device(format!(
+                "{call} ran out of {} memory (a smaller volume, frame or --size fits)",
+                if result == R::ERROR_OUT_OF_DEVICE_MEMORY {
+                    "device"
+                } else {
+                    "host"
+                }
+            )),
+            result => Error::Vulkan { call, result },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ash::vk;
+
+    #[test]
+    fn lost_devices_and_exhausted_memory_are_one_line_errors() {
+        let lost = Err::<(), _>(vk::Result::ERROR_DEVICE_LOST)
+            .vk("vkQueueSubmit2")
+            .unwrap_err();
+        assert!(matches!(lost, Error::Device(_)));
+        assert_eq!(
+            lost.to_string(),
+            "the GPU device was lost in vkQueueSubmit2 (driver reset or watchdog; nothing was written)"
+        );
+        let oom = Err::<(), _>(vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)
+            .vk("vkAllocateMemory")
+            .unwrap_err();
+        assert!(
+            oom.to_string().contains("vkAllocateMemory ran out of device memory"),
+            "{oom}"
+        );
+        let other = Err::<(), _>(vk::Result::ERROR_INITIALIZATION_FAILED)
+            .vk("vkCreateDevice")
+            .unwrap_err();
+        assert!(matches!(other, Error::Vulkan { .. }));
     }
 }

@@ -40,7 +40,19 @@ enum Command {
     View(Box<cli::view::ViewArgs>),
 }
 
+/// Output to a closed pipe (`lacuna info ... | head`) ends the process
+/// quietly, as it does for other Unix tools, instead of a panic on EPIPE.
+fn reset_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in main, before any thread exists; restores the
+    // default disposition Rust's runtime replaced with SIG_IGN.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    reset_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

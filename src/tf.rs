@@ -217,9 +217,19 @@ impl TransferFunction {
     /// A ParaView colormap export (feature `loaders`).
     #[cfg(feature = "loaders")]
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
+        // serde_json's values take a few times the text: check before reading.
+        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+        crate::limits::check_host(format_args!("ParaView JSON {}", path.display()), len, 8)?;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_paraview_json_str(&text, path)
+    }
+
+    /// A ParaView colormap export held in memory; `origin` names it in errors.
+    #[cfg(feature = "loaders")]
+    pub fn from_paraview_json_str(text: &str, origin: &Path) -> Result<Self> {
+        let path = origin;
         let json: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
+            serde_json::from_str(text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
         let map = match &json {
             serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
             other => other.clone(),

@@ -118,8 +118,7 @@ pub fn build(
         Ok(())
     })?;
     let mut t = timer.results()?;
-    let active: Vec<u32> =
-        bytemuck::pod_collect_to_vec(&flags.mapped().expect("flags are host visible")[..bricks.total as usize * 4]);
+    let active: Vec<u32> = bytemuck::pod_collect_to_vec(&flags.host()?[..bricks.total as usize * 4]);
     let tree = t.cpu("octree build", || {
         BrickOctree::build(bricks.counts, bricks.brick, &active)
     });

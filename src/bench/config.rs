@@ -197,6 +197,20 @@ impl BenchConfig {
         if self.frames == 0 || self.builds == 0 {
             return bad("frames and builds must be at least 1");
         }
+        // What a run keeps per structure: the phase timings of each build
+        // and a time per frame and round (a few hundred bytes each at most).
+        let per_structure = self.builds as u64 + self.frames as u64 * self.rounds as u64;
+        crate::limits::check_host(
+            format_args!(
+                "{origin}: {} builds and {} frames x {} rounds for {} structures",
+                self.builds,
+                self.frames,
+                self.rounds,
+                self.structures.len()
+            ),
+            per_structure.saturating_mul(self.structures.len() as u64),
+            256,
+        )?;
         if self.rounds < 2 {
             return bad("rounds must be at least 2 (the noise spread needs two rounds of each view)");
         }

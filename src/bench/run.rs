@@ -108,8 +108,8 @@ struct Loaded {
     tf: TransferFunction,
 }
 
-fn load(spec: &str, tf: Option<&str>) -> Result<Loaded> {
-    let volume = Volume::load(spec, &LoadOptions::default())?;
+fn load(ctx: &Context, spec: &str, tf: Option<&str>) -> Result<Loaded> {
+    let volume = Volume::load_within(spec, &LoadOptions::default(), Some(ctx.info()))?;
     let tf_spec = tf
         .map(str::to_string)
         .or_else(|| volume.default_tf.clone())
@@ -329,7 +329,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             .transpose()?,
     };
     let least = config.warmup.max(2) as u64;
-    let per_structure = 2 * least + (config.builds + config.frames * config.rounds) as u64;
+    let per_structure = 2 * least + config.builds as u64 + config.frames as u64 * config.rounds as u64;
     let sweep = config.error.as_ref().map_or(0, |e| {
         let n = e.datasets.as_ref().map_or(config.datasets.len(), |d| d.len()) as u64;
         let filters = e.filters.len().max(1);
@@ -350,7 +350,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
-        let loaded = match load(&ds.volume, ds.tf.as_deref()) {
+        let loaded = match load(ctx, &ds.volume, ds.tf.as_deref()) {
             Ok(l) => l,
             Err(Error::Io { path, .. }) if ds.optional => {
                 let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());

@@ -13,7 +13,7 @@ pub mod view;
 
 use clap::Args;
 pub use lacuna::frame::check_parent;
-use lacuna::gpu::{Context, ContextOptions};
+use lacuna::gpu::{Context, ContextOptions, DeviceInfo};
 use lacuna::volume::{LoadOptions, RawLayout, VoxelType};
 use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
@@ -41,17 +41,27 @@ pub fn parse_type(s: &str) -> Result<VoxelType> {
 
 impl VolumeArgs {
     pub fn load(&self) -> Result<Volume> {
-        load_volume(&self.volume, self.dims, self.voxel_type)
+        load_volume(&self.volume, self.dims, self.voxel_type, None)
+    }
+
+    /// As `load`, checking the volume's size against `ctx`'s device first.
+    pub fn load_for(&self, ctx: &Context) -> Result<Volume> {
+        load_volume(&self.volume, self.dims, self.voxel_type, Some(ctx.info()))
     }
 }
 
 /// Loads a volume spec; `dims` and `ty` (given together) are a raw file's layout.
-pub fn load_volume(spec: &str, dims: Option<[u32; 3]>, ty: Option<VoxelType>) -> Result<Volume> {
+pub fn load_volume(
+    spec: &str,
+    dims: Option<[u32; 3]>,
+    ty: Option<VoxelType>,
+    device: Option<&DeviceInfo>,
+) -> Result<Volume> {
     let raw = match (dims, ty) {
         (Some(dims), Some(ty)) => Some(RawLayout { dims, ty }),
         _ => None,
     };
-    Volume::load(spec, &LoadOptions { raw })
+    Volume::load_within(spec, &LoadOptions { raw }, device)
 }
 
 /// A headless context; `validate` adds validation with synchronization validation.

@@ -158,11 +158,13 @@ fn build(
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let (options, mut settings, format) = args.options()?;
-    let volume = args.volume.load()?;
+    // The device first: the volume's size is checked against its limits
+    // from the spec or header, before any voxel is read or made.
+    let ctx = context(args.validate)?;
+    let volume = args.volume.load_for(&ctx)?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     settings.params(volume.dims, volume.spacing, volume.norm)?;
 
-    let ctx = context(args.validate)?;
     let renderer = Renderer::new(&ctx)?;
     let gpu_volume = GpuVolume::upload(&ctx, &volume)?;
     settings.filter = args.filter.unwrap_or_else(|| gpu_volume.default_filter());

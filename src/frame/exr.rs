@@ -37,21 +37,52 @@ impl Frame {
     }
 
     pub fn read_exr(path: &Path) -> Result<Frame> {
+        let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
+        Self::read_exr_bytes(&bytes, path)
+    }
+
+    /// Reads the first RGBA layer of an EXR held in memory; `origin` names it in errors.
+    pub fn read_exr_bytes(bytes: &[u8], origin: &Path) -> Result<Frame> {
         use exr::prelude::*;
-        if let Err(e) = std::fs::metadata(path) {
-            return Err(crate::Error::io(path, e));
+        let unreadable = |e: exr::error::Error| match e {
+            exr::error::Error::Io(io) => crate::Error::format(origin, format!("cannot read EXR: {io}")),
+            other => crate::Error::format(origin, format!("not a readable RGBA EXR: {other}")),
+        };
+        // Each layer's pixels are allocated from its header: check them
+        // first, against memory and against what the file can hold (EXR's
+        // codecs stay far below 16384 pixels per byte; ZIP of f32 RGBA ~64).
+        let meta = exr::meta::MetaData::read_from_buffered(bytes, false).map_err(unreadable)?;
+        for header in meta.headers.iter() {
+            let [w, h] = [header.layer_size.width(), header.layer_size.height()];
+            let pixels = (w as u64).saturating_mul(h as u64);
+            if pixels > (bytes.len() as u64).saturating_mul(1 << 14) {
+                return Err(crate::Error::format(
+                    origin,
+                    format!(
+                        "EXR header claims {w}x{h} pixels, more than {} bytes can hold",
+                        bytes.len()
+                    ),
+                ));
+            }
+            crate::limits::check_host(
+                format_args!("EXR frame {w}x{h} ({})", origin.display()),
+                (w as u64).saturating_mul(h as u64),
+                16,
+            )?;
         }
-        let image = read_first_rgba_layer_from_file(
-            path,
-            |res: Vec2<usize>, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-            |(w, px): &mut (usize, Vec<[f32; 4]>), p: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
-                px[p.y() * *w + p.x()] = [r, g, b, a];
-            },
-        )
-        .map_err(|e| match e {
-            exr::error::Error::Io(io) => crate::Error::format(path, format!("cannot read EXR: {io}")),
-            other => crate::Error::format(path, format!("not a readable RGBA EXR: {other}")),
-        })?;
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                |res: Vec2<usize>, _: &RgbaChannels| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+                |(w, px): &mut (usize, Vec<[f32; 4]>), p: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+                    px[p.y() * *w + p.x()] = [r, g, b, a];
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .map_err(unreadable)?;
         let size = image.layer_data.size;
         let mut metadata = BTreeMap::new();
         for (k, v) in image

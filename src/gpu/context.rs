@@ -458,7 +458,8 @@ impl Context {
             };
             let selector = options.device.clone().or_else(|| std::env::var("LACUNA_DEVICE").ok());
             let pd = select(&instance, selector.as_deref())?;
-            let (family, _) = compute_family(&instance, pd).expect("selected device has a compute queue");
+            let (family, _) = compute_family(&instance, pd)
+                .ok_or_else(|| Error::NoDevice("the selected device has no compute queue".into()))?;
             let priorities = [1.0];
             let queues = [vk::DeviceQueueCreateInfo::default()
                 .queue_family_index(family)
@@ -690,7 +691,7 @@ impl Context {
         self.inner
             .messenger
             .as_ref()
-            .map(|m| m.store.lock().unwrap().clone())
+            .map(|m| m.store.lock().unwrap_or_else(|p| p.into_inner()).clone())
             .unwrap_or_default()
     }
 
@@ -699,7 +700,7 @@ impl Context {
         self.inner
             .messenger
             .as_ref()
-            .map(|m| std::mem::take(&mut *m.store.lock().unwrap()))
+            .map(|m| std::mem::take(&mut *m.store.lock().unwrap_or_else(|p| p.into_inner())))
             .unwrap_or_default()
     }
 

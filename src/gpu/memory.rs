@@ -2,7 +2,7 @@
 //! readback. Each object keeps its `Context` and frees itself on drop.
 
 use super::record::{self, Access};
-use super::Context;
+use super::{Context, DeviceInfo};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -88,7 +88,7 @@ impl Buffer {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.mapped_mut().expect("staging is host visible")[..data.len()].copy_from_slice(data);
+        staging.host_mut()?[..data.len()].copy_from_slice(data);
         Ok(staging)
     }
 
@@ -152,6 +152,20 @@ impl Buffer {
         self.allocation.as_mut()?.mapped_slice_mut()
     }
 
+    /// As `mapped`, an error naming the buffer when it is not host visible.
+    pub fn host(&self) -> Result<&[u8]> {
+        let name = &self.name;
+        self.mapped()
+            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
+    /// As `mapped_mut`, an error naming the buffer when it is not host visible.
+    pub fn host_mut(&mut self) -> Result<&mut [u8]> {
+        let name = self.name.clone();
+        self.mapped_mut()
+            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
     /// Copies `data` to byte `offset` through a staging buffer and waits.
     pub fn upload(&self, offset: u64, data: &[u8]) -> Result<()> {
         let mut done = 0u64;
@@ -198,7 +212,7 @@ impl Buffer {
                 record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
-            out.extend_from_slice(&staging.mapped().expect("readback is host visible")[..n as usize]);
+            out.extend_from_slice(&staging.host()?[..n as usize]);
         }
         Ok(out)
     }
@@ -244,6 +258,36 @@ pub struct Image3d {
     allocation: Option<Allocation>,
     pub format: vk::Format,
     pub extent: [u32; 3],
+}
+
+/// Checks a 3D image of `extent` texels of `texel_bytes` against
+/// `maxImageDimension3D`, `maxMemoryAllocationSize` and the device-local
+/// heap; returns its bytes. Loaders call it from a header, before reading voxels.
+pub fn check_image3d(info: &DeviceInfo, extent: [u32; 3], texel_bytes: u64) -> Result<u64> {
+    let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
+    let largest = extent.iter().copied().max().unwrap_or(0) as u64;
+    info.check(
+        dims.clone(),
+        "maxImageDimension3D",
+        largest,
+        info.max_image_dimension_3d as u64,
+    )?;
+    let bytes = extent.iter().fold(texel_bytes, |acc, &e| acc.saturating_mul(e as u64));
+    info.check(
+        format!("{dims} ({bytes} bytes)"),
+        "maxMemoryAllocationSize",
+        bytes,
+        info.max_memory_allocation_size,
+    )?;
+    if info.device_local_bytes > 0 {
+        info.check(
+            format!("{dims} ({bytes} bytes)"),
+            "device-local heap size",
+            bytes,
+            info.device_local_bytes,
+        )?;
+    }
+    Ok(bytes)
 }
 
 impl Image3d {
@@ -292,28 +336,13 @@ impl Image3d {
     ) -> Result<Self> {
         let info = ctx.info();
         let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
-        let largest = *extent.iter().max().unwrap() as u64;
-        info.check(
-            dims.clone(),
-            "maxImageDimension3D",
-            largest,
-            info.max_image_dimension_3d as u64,
-        )?;
-        let bytes = extent.iter().map(|&e| e as u64).product::<u64>() * texel_bytes;
-        assert_eq!(bytes, data.len() as u64, "image data size");
-        info.check(
-            format!("{dims} ({bytes} bytes)"),
-            "maxMemoryAllocationSize",
-            bytes,
-            info.max_memory_allocation_size,
-        )?;
-        if info.device_local_bytes > 0 {
-            info.check(
-                format!("{dims} ({bytes} bytes)"),
-                "device-local heap size",
-                bytes,
-                info.device_local_bytes,
-            )?;
+        let bytes = check_image3d(info, extent, texel_bytes)?;
+        if bytes != data.len() as u64 {
+            return Err(Error::invalid(
+                "image data",
+                format!("{} bytes", data.len()),
+                format!("{dims} of {texel_bytes}-byte texels needs {bytes}"),
+            ));
         }
         let device = ctx.device();
         let create = vk::ImageCreateInfo::default()
@@ -357,8 +386,9 @@ impl Image3d {
             format,
             extent,
         };
-        let a = image.allocation.as_ref().unwrap();
-        unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        if let Some(a) = image.allocation.as_ref() {
+            unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
+        }
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_3D)

@@ -45,6 +45,8 @@ impl TraceKernels {
     }
 
     fn kernel(&self, kind: Traversal) -> &Kernel {
+        // `new` creates one kernel for every `Traversal`.
+        #[allow(clippy::expect_used)]
         &self
             .kernels
             .iter()
@@ -125,7 +127,7 @@ impl<'k> GpuTracer<'k> {
         for batch in rays.chunks(BATCH) {
             // Host-visible, coherent: the submission makes these writes visible.
             let ray_bytes: &[u8] = bytemuck::cast_slice(batch);
-            self.rays.mapped_mut().expect("ray buffer is host visible")[..ray_bytes.len()].copy_from_slice(ray_bytes);
+            self.rays.host_mut()?[..ray_bytes.len()].copy_from_slice(ray_bytes);
             let groups = record::groups_linear(ctx.info(), "trace rays", batch.len() as u64, kernel.local_size()[0])?;
             let push = TracePush {
                 count: batch.len() as u32,
@@ -150,7 +152,7 @@ impl<'k> GpuTracer<'k> {
                 Ok(())
             })?;
             ms += self.timer.results()?.total();
-            let bytes = &self.results.mapped().expect("results are host visible")[..batch.len() * 32];
+            let bytes = &self.results.host()?[..batch.len() * 32];
             out.extend_from_slice(bytemuck::cast_slice(bytes));
         }
         Ok((out, ms))

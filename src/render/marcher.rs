@@ -250,6 +250,7 @@ impl Renderer {
                 "must be a finite number > 0 (voxels)",
             ));
         }
+        crate::limits::check_samples_per_ray(volume.dims, params.march[0])?;
         let sampler = volume.sampler_for(filter)?;
         let kernel = self.kernel_for(structure.accel, filter, variant)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;

@@ -61,6 +61,12 @@ impl RenderSettings {
                 "must be a finite number > 0 (voxels)",
             ));
         }
+        // The frame buffer's readback and the frame itself.
+        crate::limits::check_host(
+            format_args!("frame {}x{}", self.width, self.height),
+            self.width as u64 * self.height as u64,
+            32,
+        )?;
         if let Some(e) = self.ert {
             if !(e > 0.0 && e <= 1.0) {
                 return Err(Error::invalid("ert", e.to_string(), "must be in (0, 1]"));
@@ -72,6 +78,7 @@ impl RenderSettings {
     /// Full shader parameters for a volume.
     pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
         self.validate()?;
+        crate::limits::check_samples_per_ray(dims, self.step)?;
         let mut p = self.camera.params(dims, spacing, self.width, self.height)?;
         p.march = [self.step, self.ert.unwrap_or(ERT_OFF), norm[0], norm[1]];
         Ok(p)

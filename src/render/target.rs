@@ -224,10 +224,7 @@ impl RenderTarget {
     /// Reads the frame recorded by `Renderer::record_readback`, after the
     /// submission completed.
     pub fn read(&self) -> Result<Frame> {
-        let bytes = self
-            .readback_buffer()?
-            .mapped()
-            .expect("readback buffer is host visible");
+        let bytes = self.readback_buffer()?.host()?;
         let n = self.width as usize * self.height as usize;
         let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
         Ok(Frame::new(self.width, self.height, pixels))

@@ -279,6 +279,9 @@ impl Builder {
     }
 
     fn push(&mut self, shape: Shape) {
+        // Every generator sets a material before its first object (the
+        // generators are fixed code, not input).
+        #[allow(clippy::expect_used)]
         let material = self
             .materials
             .len()

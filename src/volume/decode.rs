@@ -65,7 +65,8 @@ impl std::fmt::Display for VoxelType {
 
 fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8; N]> + '_ {
     bytes.chunks_exact(N).map(move |c| {
-        let mut w: [u8; N] = c.try_into().unwrap();
+        let mut w = [0u8; N];
+        w.copy_from_slice(c);
         if !little {
             w.reverse();
         }

@@ -24,6 +24,7 @@ pub use raw::{parse_dims, parse_type, RawLayout};
 pub use spec::{LoadOptions, VolumeSpec};
 
 use crate::error::{Error, Result};
+use crate::gpu::DeviceInfo;
 
 /// Voxel values as stored on the GPU: u8 and u16 stay native (R8/R16 UNORM
 /// images), every other source type becomes f32 already normalised to [0, 1].
@@ -95,7 +96,10 @@ pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
             format!("{what} has a zero dimension"),
         ));
     }
-    let n = dims.iter().map(|&d| d as u64).product::<u64>();
+    let n = dims
+        .iter()
+        .try_fold(1u64, |n, &d| n.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
     if n > isize::MAX as u64 / 8 {
         return Err(Error::invalid(
             "dimensions",
@@ -104,6 +108,34 @@ pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
         ));
     }
     Ok(n)
+}
+
+/// Bytes per voxel a volume of source type `ty` is stored with (u8 and u16
+/// stay native, the rest become f32).
+pub fn stored_bytes(ty: VoxelType) -> u64 {
+    match ty {
+        VoxelType::U8 | VoxelType::I8 => 1,
+        VoxelType::U16 | VoxelType::I16 => 2,
+        _ => 4,
+    }
+}
+
+/// Checks a volume's size from its header, before its voxels are read or
+/// made: host memory for the decode's peak (source bytes, f64 staging of
+/// wider types, the stored values) and, given a device, its image limits.
+pub fn check_size(dims: [u32; 3], ty: VoxelType, what: &str, device: Option<&DeviceInfo>) -> Result<()> {
+    let n = check_dims(dims, what)?;
+    let staging = if stored_bytes(ty) == 4 { 8 } else { 0 };
+    let [w, h, d] = dims;
+    crate::limits::check_host(
+        format_args!("volume {what} ({w}x{h}x{d} {ty})"),
+        n,
+        ty.bytes() as u64 + staging + stored_bytes(ty),
+    )?;
+    if let Some(info) = device {
+        crate::gpu::check_image3d(info, dims, stored_bytes(ty))?;
+    }
+    Ok(())
 }
 
 impl Volume {
@@ -192,7 +224,31 @@ impl Volume {
 
     /// Loads a volume spec: a file path or a procedural `NAME:SIZE[:PARAM]`.
     pub fn load(spec: &str, options: &LoadOptions) -> Result<Self> {
-        VolumeSpec::parse(spec, options)?.load(options)
+        Self::load_within(spec, options, None)
+    }
+
+    /// As `load`, checking the volume's size against `device`'s limits (and
+    /// host memory) from its spec or header, before any voxel is read or made.
+    pub fn load_within(spec: &str, options: &LoadOptions, device: Option<&DeviceInfo>) -> Result<Self> {
+        VolumeSpec::parse(spec, options)?.load_within(options, device)
+    }
+
+    /// A raw volume from memory; `name` gives the layout as a file name
+    /// does (`name_WxHxD_type.raw`) unless `layout` is given.
+    pub fn from_raw_bytes(name: &str, bytes: &[u8], layout: Option<RawLayout>) -> Result<Self> {
+        raw::from_bytes(std::path::Path::new(name), bytes, layout)
+    }
+
+    /// A NRRD volume (`.nrrd` with attached data, raw or gzip) from memory;
+    /// `origin` names it in errors. Detached data files need `load`.
+    pub fn from_nrrd_bytes(origin: &str, bytes: &[u8]) -> Result<Self> {
+        nrrd::from_bytes(std::path::Path::new(origin), bytes)
+    }
+
+    /// A NIfTI-1 single-file volume (`.nii`, or `.nii.gz` when `bytes` are gzip) from memory.
+    #[cfg(feature = "loaders")]
+    pub fn from_nifti_bytes(origin: &str, bytes: &[u8]) -> Result<Self> {
+        nifti::from_bytes(std::path::Path::new(origin), bytes)
     }
 }
 

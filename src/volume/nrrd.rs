@@ -4,8 +4,9 @@
 use super::decode::{decode, VoxelType};
 use super::Volume;
 use crate::error::{Error, Result};
+use crate::gpu::DeviceInfo;
+use std::borrow::Cow;
 use std::collections::HashMap;
-#[cfg(feature = "loaders")]
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -57,8 +58,19 @@ fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
     Ok(out)
 }
 
-pub fn load(path: &Path) -> Result<Volume> {
+pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &bytes, true, device)
+}
+
+/// A NRRD with attached data from memory (detached data files are an error).
+pub fn from_bytes(origin: &Path, bytes: &[u8]) -> Result<Volume> {
+    parse(origin, bytes, false, None)
+}
+
+/// Parses the header of `bytes`, checks the volume's size, then reads its
+/// data: attached, or (when `detached` allows) from the named file.
+fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>) -> Result<Volume> {
     if !bytes.starts_with(b"NRRD000") {
         return Err(Error::format(path, "not a NRRD file (no NRRD000x magic)"));
     }
@@ -108,7 +120,17 @@ pub fn load(path: &Path) -> Result<Volume> {
             format!("NRRD has dimension {dimension}; lacuna reads 3-D scalar volumes"),
         ));
     }
-    let dims = [sizes[0] as u32, sizes[1] as u32, sizes[2] as u32];
+    let mut dims = [0u32; 3];
+    for (d, &size) in dims.iter_mut().zip(&sizes) {
+        if !(size.fract() == 0.0 && (1.0..=u32::MAX as f64).contains(&size)) {
+            return Err(Error::format(
+                path,
+                format!("NRRD size '{size}' is not a positive 32-bit integer"),
+            ));
+        }
+        *d = size as u32;
+    }
+    super::check_size(dims, ty, &path.display().to_string(), device)?;
     let little = match get("endian") {
         None | Some("little") => true,
         Some("big") => false,
@@ -126,48 +148,13 @@ pub fn load(path: &Path) -> Result<Volume> {
         _ => return Err(Error::format(path, "NRRD spacings must be three positive numbers")),
     };
 
-    let datafile = get("data file").or_else(|| get("datafile"));
-    let (source, raw): (PathBuf, Vec<u8>) = match datafile {
-        Some(name) => {
-            if name.starts_with("LIST") || name.contains('%') {
-                return Err(Error::format(
-                    path,
-                    "NRRD multi-file data ('LIST' or format patterns) is not supported",
-                ));
-            }
-            let data_path = path.parent().unwrap_or(Path::new(".")).join(name);
-            let raw = std::fs::read(&data_path).map_err(|e| Error::io(&data_path, e))?;
-            (data_path, raw)
-        }
-        None => {
-            if !ended {
-                return Err(Error::format(path, "NRRD header has no blank line before the data"));
-            }
-            (path.to_path_buf(), bytes[pos.min(bytes.len())..].to_vec())
-        }
-    };
-    let skip: usize = get("byte skip").map_or(Ok(0), |s| {
+    let skip: u64 = get("byte skip").map_or(Ok(0), |s| {
         s.parse()
             .map_err(|_| Error::format(path, "NRRD 'byte skip' must be >= 0"))
     })?;
-    let encoding = require("encoding")?;
-    let payload = match encoding {
-        "raw" => raw.get(skip..).unwrap_or_default().to_vec(),
-        #[cfg(not(feature = "loaders"))]
-        "gzip" | "gz" => {
-            return Err(Error::format(
-                path,
-                "gzip-encoded NRRD needs lacuna's `loaders` cargo feature",
-            ))
-        }
-        #[cfg(feature = "loaders")]
-        "gzip" | "gz" => {
-            let mut out = Vec::new();
-            flate2::read::MultiGzDecoder::new(raw.as_slice())
-                .read_to_end(&mut out)
-                .map_err(|e| Error::format(&source, format!("corrupt gzip data: {e}")))?;
-            out.get(skip..).unwrap_or_default().to_vec()
-        }
+    let gzip = match require("encoding")? {
+        "raw" => false,
+        "gzip" | "gz" => true,
         other => {
             return Err(Error::format(
                 path,
@@ -175,7 +162,86 @@ pub fn load(path: &Path) -> Result<Volume> {
             ))
         }
     };
-    let mut volume = decode(&source, &payload, ty, little, dims, spacing)?;
+    // The bytes the header describes: nothing reads or inflates beyond them
+    // (one more tells a longer input), so no input expands without bound.
+    let wanted = skip.saturating_add(dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64);
+    let datafile = get("data file").or_else(|| get("datafile"));
+    let (source, raw): (PathBuf, Cow<[u8]>) = match datafile {
+        Some(name) => {
+            if !detached {
+                return Err(Error::format(
+                    path,
+                    format!("NRRD data file '{name}' is detached; load the header from its path"),
+                ));
+            }
+            if name.starts_with("LIST") || name.contains('%') {
+                return Err(Error::format(
+                    path,
+                    "NRRD multi-file data ('LIST' or format patterns) is not supported",
+                ));
+            }
+            let data_path = path.parent().unwrap_or(Path::new(".")).join(name);
+            // Deflate's worst case grows data by well under 1 %.
+            let limit = if gzip {
+                wanted.saturating_mul(2).saturating_add(1 << 16)
+            } else {
+                wanted
+            };
+            let raw = read_at_most(&data_path, limit)?;
+            (data_path, Cow::Owned(raw))
+        }
+        None => {
+            if !ended {
+                return Err(Error::format(path, "NRRD header has no blank line before the data"));
+            }
+            (path.to_path_buf(), Cow::Borrowed(&bytes[pos.min(bytes.len())..]))
+        }
+    };
+    let inflated;
+    let data: &[u8] = if gzip {
+        inflated = inflate(&source, &raw, wanted)?;
+        &inflated
+    } else {
+        &raw
+    };
+    let payload = data.get(skip.min(usize::MAX as u64) as usize..).unwrap_or_default();
+    let mut volume = decode(&source, payload, ty, little, dims, spacing)?;
     volume.name = path.display().to_string();
     Ok(volume)
+}
+
+/// Reads `path`, or fails (without reading on) when it holds more than
+/// `limit` bytes; its exact length is then checked by `decode`.
+fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut out = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(|e| Error::io(path, e))?;
+    if out.len() as u64 > limit {
+        return Err(Error::format(
+            path,
+            format!("holds more than the {limit} bytes the NRRD header describes"),
+        ));
+    }
+    Ok(out)
+}
+
+/// Inflates gzip data, no further than `wanted` bytes and one more.
+#[cfg(feature = "loaders")]
+fn inflate(source: &Path, raw: &[u8], wanted: u64) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(raw)
+        .take(wanted.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(|e| Error::format(source, format!("corrupt gzip data: {e}")))?;
+    Ok(out)
+}
+
+#[cfg(not(feature = "loaders"))]
+fn inflate(source: &Path, _: &[u8], _: u64) -> Result<Vec<u8>> {
+    Err(Error::format(
+        source,
+        "gzip-encoded NRRD needs lacuna's `loaders` cargo feature",
+    ))
 }

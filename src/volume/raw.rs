@@ -4,6 +4,7 @@
 use super::decode::{decode, VoxelType};
 use super::Volume;
 use crate::error::{Error, Result};
+use crate::gpu::DeviceInfo;
 use std::path::Path;
 
 /// Dimensions and voxel type of a raw file.
@@ -68,11 +69,49 @@ pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
     Ok(RawLayout { dims, ty })
 }
 
-pub fn load(path: &Path, layout: Option<RawLayout>, spacing: Option<[f32; 3]>) -> Result<Volume> {
+pub fn load(
+    path: &Path,
+    layout: Option<RawLayout>,
+    spacing: Option<[f32; 3]>,
+    device: Option<&DeviceInfo>,
+) -> Result<Volume> {
     let layout = match layout {
         Some(l) => l,
         None => layout_from_name(path)?,
     };
+    // Sizes first: the file's length against its layout, then memory, so a
+    // wrong name or --dims is an error before gigabytes are read.
+    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    check_length(path, len, layout)?;
+    super::check_size(layout.dims, layout.ty, &path.display().to_string(), device)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     decode(path, &bytes, layout.ty, true, layout.dims, spacing.unwrap_or([1.0; 3]))
+}
+
+/// A raw volume from memory: `name` gives the layout as a file name does
+/// (`name_WxHxD_type.raw`) unless `layout` is given.
+pub fn from_bytes(name: &Path, bytes: &[u8], layout: Option<RawLayout>) -> Result<Volume> {
+    let layout = match layout {
+        Some(l) => l,
+        None => layout_from_name(name)?,
+    };
+    check_length(name, bytes.len() as u64, layout)?;
+    super::check_size(layout.dims, layout.ty, &name.display().to_string(), None)?;
+    decode(name, bytes, layout.ty, true, layout.dims, [1.0; 3])
+}
+
+fn check_length(path: &Path, len: u64, layout: RawLayout) -> Result<()> {
+    let [w, h, d] = layout.dims;
+    let expected =
+        super::check_dims(layout.dims, &path.display().to_string())?.saturating_mul(layout.ty.bytes() as u64);
+    if len != expected {
+        return Err(Error::format(
+            path,
+            format!(
+                "holds {len} bytes of voxel data but {w}x{h}x{d} {} needs {expected}",
+                layout.ty
+            ),
+        ));
+    }
+    Ok(())
 }

@@ -3,7 +3,9 @@
 use super::procedural::Generator;
 use super::raw::RawLayout;
 use super::Volume;
+use super::VoxelType;
 use crate::error::{Error, Result};
+use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
 
 /// Options that apply to file loaders.
@@ -75,14 +77,28 @@ impl VolumeSpec {
     }
 
     pub fn load(&self, options: &LoadOptions) -> Result<Volume> {
+        self.load_within(options, None)
+    }
+
+    /// As `load`, checking sizes against `device` before allocating (see `Volume::load_within`).
+    pub fn load_within(&self, options: &LoadOptions, device: Option<&DeviceInfo>) -> Result<Volume> {
         match self {
-            VolumeSpec::Procedural { generator, dims, param } => generator.generate(*dims, *param),
-            VolumeSpec::File(path) => load_file(path, options),
+            VolumeSpec::Procedural { generator, dims, param } => {
+                let [w, h, d] = dims;
+                super::check_size(
+                    *dims,
+                    VoxelType::U8,
+                    &format!("{generator:?}:{w}x{h}x{d}").to_lowercase(),
+                    device,
+                )?;
+                generator.generate(*dims, *param)
+            }
+            VolumeSpec::File(path) => load_file(path, options, device),
         }
     }
 }
 
-fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
+fn load_file(path: &Path, options: &LoadOptions, device: Option<&DeviceInfo>) -> Result<Volume> {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
     if options.raw.is_some() || name.ends_with(".raw") {
         if !path.exists() {
@@ -91,14 +107,14 @@ fn load_file(path: &Path, options: &LoadOptions) -> Result<Volume> {
                 std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
             ));
         }
-        return super::raw::load(path, options.raw, None);
+        return super::raw::load(path, options.raw, None, device);
     }
     if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
-        return super::nrrd::load(path);
+        return super::nrrd::load(path, device);
     }
     if name.ends_with(".nii") || name.ends_with(".nii.gz") {
         #[cfg(feature = "loaders")]
-        return super::nifti::load(path);
+        return super::nifti::load(path, device);
         #[cfg(not(feature = "loaders"))]
         return Err(Error::format(
             path,

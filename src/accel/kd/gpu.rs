@@ -97,7 +97,7 @@ impl KdGpuBuilder {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        qbuf.mapped_mut().expect("host visible")[..(n * 32) as usize].copy_from_slice(bytemuck::cast_slice(&words_q));
+        qbuf.host_mut()?[..(n * 32) as usize].copy_from_slice(bytemuck::cast_slice(&words_q));
         let rbuf = Buffer::new(
             &self.ctx,
             "kd query results",
@@ -139,7 +139,7 @@ impl KdGpuBuilder {
             Ok(())
         })?;
         let ms = timer.results()?.get("queries").unwrap_or(0.0);
-        let r: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&rbuf.mapped().expect("host visible")[..(n * 32) as usize]);
+        let r: Vec<[i32; 4]> = bytemuck::pod_collect_to_vec(&rbuf.host()?[..(n * 32) as usize]);
         Ok(((0..queries.len()).map(|q| decode(&r, q)).collect(), ms))
     }
 

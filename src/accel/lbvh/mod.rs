@@ -208,8 +208,8 @@ impl LbvhBuilder {
     }
 
     /// The active count copied by `record_select` (after its submission).
-    pub fn active_count(&self, s: &SelectScratch) -> u32 {
-        bytemuck::pod_read_unaligned(&s.count_readback.mapped().expect("host visible")[..4])
+    pub fn active_count(&self, s: &SelectScratch) -> Result<u32> {
+        Ok(bytemuck::pod_read_unaligned(&s.count_readback.host()?[..4]))
     }
 
     pub fn hierarchy_scratch(&self, n: u64) -> Result<HierarchyScratch> {
@@ -416,7 +416,7 @@ impl LbvhBuilder {
             self.record_select(cmd, Some(&mut timer), classifier, mode, volume, bricks, tf, &select)
         })?;
         let mut timings = timer.results()?;
-        let n = self.active_count(&select) as u64;
+        let n = self.active_count(&select)? as u64;
         let h = self.hierarchy_scratch(n)?;
         let nodes = self.nodes_buffer(n)?;
         self.ctx.submit_and_wait(|cmd| {

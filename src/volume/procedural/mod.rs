@@ -65,7 +65,11 @@ impl Generator {
     }
 
     pub fn generate(self, dims: [u32; 3], param: Option<f64>) -> Result<Volume> {
-        super::check_dims(dims, self.name())?;
+        let n = super::check_dims(dims, self.name())?;
+        // The u8 voxels, and the n-body's f32 density field beside them.
+        let peak = if self == Generator::Nbody { 5 } else { 1 };
+        let [w, h, d] = dims;
+        crate::limits::check_host(format_args!("volume {}:{w}x{h}x{d}", self.name()), n, peak)?;
         let bad = |why: &str| {
             Error::invalid(
                 "generator parameter",

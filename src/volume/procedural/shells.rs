@@ -3,7 +3,7 @@
 
 pub fn generate(dims: [u32; 3], count: u32) -> Vec<u8> {
     let centre = dims.map(|d| d as f32 / 2.0);
-    let radius = 0.45 * *dims.iter().min().unwrap() as f32;
+    let radius = 0.45 * dims.into_iter().min().unwrap_or(1) as f32;
     let half_thickness = (radius * 0.01).max(1.0);
     super::fill(dims, |x, y, z| {
         let p = [x, y, z].map(|c| c as f32 + 0.5);

@@ -35,7 +35,7 @@ fn value_noise(p: [f32; 3], seed: u64) -> f32 {
 }
 
 pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
-    let n = *dims.iter().max().unwrap() as f32;
+    let n = dims.into_iter().max().unwrap_or(1) as f32;
     super::fill(dims, |x, y, z| {
         let p = [x, y, z].map(|c| (c as f32 + 0.5) / n * 4.0);
         let (mut sum, mut amp, mut norm, mut freq) = (0.0f32, 1.0f32, 0.0f32, 1.0f32);

@@ -1,0 +1,96 @@
+//! Limits on what input may ask for: host memory checked before anything
+//! sized from input is allocated, and the cap on samples per ray that keeps
+//! every GPU submission short (a driver watchdog resets the device when one
+//! runs for seconds). The device's own limits are checked by `gpu`.
+
+use crate::error::{Error, Result};
+
+/// Most samples one ray may take (longest ray through the box / step):
+/// 2^20, a million, ~2000x the default step's count on a 1024^3 volume.
+pub const MAX_SAMPLES_PER_RAY: u64 = 1 << 20;
+
+/// Bytes of host memory available to new allocations: `MemAvailable` from
+/// `/proc/meminfo`, or unlimited where that cannot be read (the allocator
+/// then still fails with an error, not an abort, through `try_reserve`).
+pub fn available_memory() -> u64 {
+    let text = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    text.lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        .map_or(u64::MAX, |kib| kib.saturating_mul(1024))
+}
+
+/// Checks that `count` items of `item_bytes` each fit the host's available
+/// memory; returns the bytes. `what` names the input (e.g. `volume 4096x4096x4096`).
+pub fn check_host(what: impl std::fmt::Display, count: u64, item_bytes: u64) -> Result<u64> {
+    let available = available_memory();
+    match count.checked_mul(item_bytes) {
+        Some(bytes) if bytes <= available => Ok(bytes),
+        bytes => Err(Error::HostMemory {
+            what: what.to_string(),
+            bytes: bytes.map_or_else(|| format!("more than {}", u64::MAX), |b| b.to_string()),
+            available,
+        }),
+    }
+}
+
+/// A zeroed vector of `count` items, after `check_host`; an allocation the
+/// check could not foresee (memory taken meanwhile) is an error too.
+pub fn zeroed<T: Clone + Default>(what: impl std::fmt::Display, count: u64) -> Result<Vec<T>> {
+    let item = std::mem::size_of::<T>().max(1) as u64;
+    let bytes = check_host(&what, count, item)?;
+    let mut v = Vec::new();
+    v.try_reserve_exact(count as usize).map_err(|_| Error::HostMemory {
+        what: what.to_string(),
+        bytes: bytes.to_string(),
+        available: available_memory(),
+    })?;
+    v.resize(count as usize, T::default());
+    Ok(v)
+}
+
+/// Checks that rays through a `dims` box sampled every `step` voxels take
+/// at most `MAX_SAMPLES_PER_RAY` samples; returns the longest ray's count.
+pub fn check_samples_per_ray(dims: [u32; 3], step: f32) -> Result<u64> {
+    let diagonal = dims.iter().map(|&d| (d as f64).powi(2)).sum::<f64>().sqrt();
+    let samples = (diagonal / step as f64).ceil();
+    if !(samples.is_finite() && samples <= MAX_SAMPLES_PER_RAY as f64) {
+        return Err(Error::invalid(
+            "step",
+            step.to_string(),
+            format!(
+                "the longest ray through the {}x{}x{} box would take {samples:.0} samples, over the cap of {MAX_SAMPLES_PER_RAY} samples per ray (MAX_SAMPLES_PER_RAY)",
+                dims[0], dims[1], dims[2]
+            ),
+        ));
+    }
+    Ok(samples as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn host_check_names_the_bytes_and_the_limit() {
+        assert_eq!(check_host("x", 10, 4).unwrap(), 40);
+        let e = check_host("volume 100000x100000x100000", 1_000_000_000_000_000, 1).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("volume 100000x100000x100000"), "{text}");
+        assert!(text.contains("1000000000000000 bytes"), "{text}");
+        assert!(text.contains("MemAvailable"), "{text}");
+        assert!(check_host("overflow", u64::MAX, 2)
+            .unwrap_err()
+            .to_string()
+            .contains("more than"));
+        assert_eq!(zeroed::<u32>("v", 3).unwrap(), vec![0; 3]);
+    }
+
+    #[test]
+    fn samples_per_ray_cap() {
+        assert_eq!(check_samples_per_ray([3, 4, 0], 0.5).unwrap(), 10);
+        assert!(check_samples_per_ray([1024; 3], 1.0 / 512.0).is_ok());
+        let e = check_samples_per_ray([64; 3], 1e-9).unwrap_err().to_string();
+        assert!(e.contains("1048576 samples per ray"), "{e}");
+    }
+}
