@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""Naive marching's frame time from two lacuna binaries, interleaved.
+
+Measures what a change to the per-sample work bought: run the binary built
+before the change (A) and after it (B) on the same volumes, transfer
+functions, cameras and sizes, alternating A and B every round so machine
+load hits both alike, and print a Markdown table of the medians of the
+`march` phase (GPU timestamps) with the spread over rounds.
+
+Usage (from the repository root):
+    python3 bench/peers/naive_ab.py A_BINARY B_BINARY [--rounds 3]
+        [--b-args "--filter manual"] ...
+
+Each `--b-args` adds a B column run with those extra arguments.
+"""
+
+import argparse
+import re
+import statistics
+import subprocess
+import sys
+
+CH2 = "/usr/share/mricron/templates/ch2.nii.gz"
+# (volume, tf, size, ert): the quick data sets as `lacuna bench --quick`
+# frames them, and the ch2 MRI as issue 12 timed it.
+CASES = [
+    ("nbody:96", None, "256x256", None),
+    ("vessels:96", None, "256x256", None),
+    ("menger:81", None, "256x256", None),
+    ("turbulence:64", None, "256x256", None),
+    (CH2, "ramp:0.3:0.6", "512x512", "0.99"),
+]
+
+
+def march_ms(binary, volume, tf, size, ert, extra):
+    cmd = [binary, "render", volume, "--accel", "naive", "--size", size, "--repeat", "3", "--warmup", "2",
+           "--out", "/tmp/naive_ab.exr"]
+    if tf:
+        cmd += ["--tf", tf]
+    if ert:
+        cmd += ["--ert", ert]
+    cmd += extra
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed: {p.stderr.strip()}")
+    m = re.search(r"^\s*march\s+([0-9.]+) ms", p.stdout, re.M)
+    if not m:
+        sys.exit(f"no march time in the output of {' '.join(cmd)}")
+    return float(m.group(1))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("a")
+    ap.add_argument("b")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--b-args", action="append", default=[])
+    args = ap.parse_args()
+    columns = [("A", args.a, [])] + [("B", args.b, [])] + [
+        (f"B {extra}", args.b, extra.split()) for extra in args.b_args
+    ]
+    print("| volume | ERT | " + " | ".join(f"{name} ms" for name, _, _ in columns) + " | B / A |")
+    print("|---|---|" + "---|" * len(columns) + "---|")
+    for volume, tf, size, ert in CASES:
+        times = {name: [] for name, _, _ in columns}
+        for _ in range(args.rounds):
+            for name, binary, extra in columns:
+                times[name].append(march_ms(binary, volume, tf, size, ert, extra))
+        cells = []
+        for name, _, _ in columns:
+            t = times[name]
+            cells.append(f"{statistics.median(t):.1f} [{min(t):.1f}, {max(t):.1f}]")
+        ratio = statistics.median(times["B"]) / statistics.median(times["A"])
+        label = "ch2" if volume == CH2 else volume
+        print(f"| {label} {size} | {ert or 'off'} | " + " | ".join(cells) + f" | {ratio:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
