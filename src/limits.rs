@@ -9,6 +9,12 @@ use crate::error::{Error, Result};
 /// 2^20, a million, ~2000x the default step's count on a 1024^3 volume.
 pub const MAX_SAMPLES_PER_RAY: u64 = 1 << 20;
 
+/// Most samples (rays x the longest ray's samples) one submission of
+/// `Renderer::render` marches: a frame over it is marched in bands of rows,
+/// one submission each, so none runs long enough to trip a driver's watchdog
+/// (2^30 samples take well under a second on a mid-range GPU).
+pub const MAX_SAMPLES_PER_SUBMIT: u64 = 1 << 30;
+
 /// Bytes of host memory available to new allocations: `MemAvailable` from
 /// `/proc/meminfo`, or unlimited where that cannot be read (the allocator
 /// then still fails with an error, not an abort, through `try_reserve`).

@@ -282,3 +282,59 @@ fn degenerate_volumes_render() {
         check_against_reference(&v, &tf, &settings(16, 20.0, 10.0, Projection::Orthographic));
     }
 }
+
+/// A frame over the per-submission sample budget is marched in bands of
+/// rows, one submission each; the bands tile the frame exactly, so the image
+/// equals the one-submission frame bit for bit, for naive and a skipping
+/// structure alike.
+#[test]
+fn frames_split_into_bands_equal_the_whole_frame() {
+    use lacuna::accel::{BuildInput, BuildOptions, Builder};
+    use lacuna::frame::diff;
+    use lacuna::render::Renderer;
+    use lacuna::volume::{GpuVolume, LoadOptions};
+    let ctx = gpu();
+    let v = Volume::load("nbody:48", &LoadOptions::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let gv = GpuVolume::upload(&ctx, &v).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let builder = Builder::new(&ctx).unwrap();
+    let renderer = Renderer::new(&ctx).unwrap();
+    // 72 x 40: the last band of 8-row workgroups is partial.
+    let s = RenderSettings {
+        width: 72,
+        height: 40,
+        ..settings(72, 30.0, 20.0, Projection::Orthographic)
+    };
+    let params = s.params(v.dims, v.spacing, gv.norm).unwrap();
+    let per_ray = lacuna::limits::check_samples_per_ray(v.dims, s.step).unwrap();
+    for name in ["naive", "grid"] {
+        let accel: Accel = name.parse().unwrap();
+        let options = BuildOptions {
+            cell: accel.method().default_cell(),
+            ..Default::default()
+        };
+        let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+        let input = BuildInput {
+            volume: &v,
+            gpu_volume: &gv,
+            tf: &tf,
+            gpu_tf: &lut,
+        };
+        let (structure, _) = builder.build(accel, &input, &ranges, &options).unwrap();
+        let (whole, _, one) = renderer
+            .render_in_bands(&structure, &gv, &lut, &params, Filter::Manual, u64::MAX)
+            .unwrap();
+        assert_eq!(one, 1);
+        // One row of workgroups (72 x 8 rays) per band: 5 bands.
+        let budget = 72 * 8 * per_ray;
+        let (banded, timings, bands) = renderer
+            .render_in_bands(&structure, &gv, &lut, &params, Filter::Manual, budget)
+            .unwrap();
+        assert_eq!(bands, 5, "{name}");
+        assert!(timings.phase("march").unwrap() >= 0.0);
+        assert!(whole.pixels.iter().any(|p| p[3] > 0.0), "{name}: something visible");
+        assert_eq!(diff(&whole, &banded).unwrap().differing, 0, "{name}");
+    }
+    common::assert_clean(&ctx);
+}

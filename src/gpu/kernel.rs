@@ -156,7 +156,9 @@ impl Kernel {
         if !constants.is_empty() {
             stage = stage.specialization_info(&spec);
         }
+        // DISPATCH_BASE: large frames are dispatched in bands of rows.
         let create = [vk::ComputePipelineCreateInfo::default()
+            .flags(vk::PipelineCreateFlags::DISPATCH_BASE)
             .stage(stage)
             .layout(kernel.layout)];
         kernel.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
@@ -183,6 +185,19 @@ impl Kernel {
     /// that do not match the shader's (count or type) are an error naming the
     /// kernel, and nothing is recorded.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) -> Result<()> {
+        self.dispatch_base(cmd, bindings, push, [0; 3], groups)
+    }
+
+    /// As `dispatch`, for the workgroups from `base` on (`vkCmdDispatchBase`:
+    /// `gl_WorkGroupID` and `gl_GlobalInvocationID` include `base`).
+    pub fn dispatch_base(
+        &self,
+        cmd: vk::CommandBuffer,
+        bindings: &[Binding],
+        push: &[u8],
+        base: [u32; 3],
+        groups: [u32; 3],
+    ) -> Result<()> {
         if bindings.len() != self.bindings.len() || push.len() != self.push_size as usize {
             return Err(Error::Interface(format!(
                 "kernel {}: {} bindings and {} push bytes given, the shader has {} and {}",
@@ -265,7 +280,11 @@ impl Kernel {
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
-            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+            if base == [0; 3] {
+                device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+            } else {
+                device.cmd_dispatch_base(cmd, base[0], base[1], base[2], groups[0], groups[1], groups[2]);
+            }
         }
         Ok(())
     }

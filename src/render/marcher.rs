@@ -190,7 +190,17 @@ impl Renderer {
                 (Some(image.variant()?), Binding::StorageImage(image.view))
             }
         };
-        self.record_frame(cmd, timer, target, scene, &params, view.sample_filter(), output, depth)
+        self.record_frame(
+            cmd,
+            timer,
+            target,
+            scene,
+            &params,
+            view.sample_filter(),
+            output,
+            depth,
+            None,
+        )
     }
 
     /// As `record`, with explicit shader parameters (`View` forms them; this
@@ -209,6 +219,22 @@ impl Renderer {
         params: &RenderParams,
         filter: Filter,
     ) -> Result<()> {
+        let scene = Scene { structure, volume, tf };
+        self.record_band(cmd, timer, target, scene, params, filter, None)
+    }
+
+    /// `record_params` for the workgroup rows `band` (`[first, count]`) only.
+    #[allow(clippy::too_many_arguments)]
+    fn record_band(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        target: &RenderTarget,
+        scene: Scene,
+        params: &RenderParams,
+        filter: Filter,
+        band: Option<[u32; 2]>,
+    ) -> Result<()> {
         if [params.image[0], params.image[1]] != [target.width, target.height] {
             return Err(Error::invalid(
                 "render params",
@@ -218,9 +244,8 @@ impl Renderer {
         }
         let mut params = *params;
         params.depth[1] = 0.0;
-        let scene = Scene { structure, volume, tf };
         let output = (None, Binding::Storage(target.frame_buffer()?));
-        self.record_frame(cmd, timer, target, scene, &params, filter, output, None)
+        self.record_frame(cmd, timer, target, scene, &params, filter, output, None, band)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -234,6 +259,7 @@ impl Renderer {
         filter: Filter,
         (variant, output): (Option<&str>, Binding),
         depth: Option<&HostDepth>,
+        band: Option<[u32; 2]>,
     ) -> Result<()> {
         let Scene { structure, volume, tf } = scene;
         if params.dims[..3] != volume.dims || params.dims[3] != crate::tf::LUT_SIZE as u32 {
@@ -294,7 +320,10 @@ impl Renderer {
         )?;
         // The LUT and the depth limits, written above, are read by the march.
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
-        kernel.dispatch(cmd, &bindings, &push, groups)?;
+        // A band: workgroup rows [first, first + count).
+        let [first, count] = band.unwrap_or([0, groups[1]]);
+        let rows = count.min(groups[1].saturating_sub(first));
+        kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1])?;
         timer.end(cmd, pass);
         Ok(())
     }
@@ -350,17 +379,64 @@ impl Renderer {
         params: &RenderParams,
         filter: Filter,
     ) -> Result<(Frame, Timings)> {
+        let (frame, timings, _) = self.render_in_bands(
+            structure,
+            volume,
+            tf,
+            params,
+            filter,
+            crate::limits::MAX_SAMPLES_PER_SUBMIT,
+        )?;
+        Ok((frame, timings))
+    }
+
+    /// As `render_params`, in bands of rows of at most `max_samples` samples
+    /// (rays x the longest ray's samples), one submission each; phases are
+    /// summed over the bands, which are counted.
+    pub fn render_in_bands(
+        &self,
+        structure: &Structure,
+        volume: &GpuVolume,
+        tf: &GpuTransferFunction,
+        params: &RenderParams,
+        filter: Filter,
+        max_samples: u64,
+    ) -> Result<(Frame, Timings, u32)> {
         let target = RenderTarget::new(&self.ctx, params.image[0], params.image[1])?;
-        let mut timer = Timer::new(&self.ctx, 4)?;
-        self.ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            self.record_params(cmd, Some(&mut timer), structure, &target, volume, tf, params, filter)?;
-            let pass = timer.begin(cmd, "readback")?;
-            self.record_readback(cmd, &target)?;
-            timer.end(cmd, pass);
-            Ok(())
-        })?;
-        Ok((target.read()?, timer.results()?))
+        let per_ray = crate::limits::check_samples_per_ray(volume.dims, params.march[0])?;
+        let kernel = self.kernel_for(structure.accel, filter, None)?;
+        let groups = kernel.groups("frame", [target.width, target.height, 1])?;
+        // Rays in one row of workgroups; at least one row per band.
+        let row_rays = target.width as u64 * kernel.local_size()[1] as u64;
+        let rows_per_band = (max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32;
+        let mut timings = Timings::default();
+        let mut first = 0;
+        let mut bands = 0u32;
+        while first < groups[1] {
+            let last = first + rows_per_band >= groups[1];
+            let mut timer = Timer::new(&self.ctx, 4)?;
+            self.ctx.submit_and_wait(|cmd| {
+                timer.reset(cmd);
+                let scene = Scene { structure, volume, tf };
+                let band = Some([first, rows_per_band]);
+                self.record_band(cmd, Some(&mut timer), &target, scene, params, filter, band)?;
+                if last {
+                    let pass = timer.begin(cmd, "readback")?;
+                    self.record_readback(cmd, &target)?;
+                    timer.end(cmd, pass);
+                }
+                Ok(())
+            })?;
+            for (name, ms) in timer.results()?.phases {
+                match timings.phases.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, sum)) => *sum += ms,
+                    None => timings.push(name, ms),
+                }
+            }
+            first += rows_per_band;
+            bands += 1;
+        }
+        Ok((target.read()?, timings, bands))
     }
 }
 
