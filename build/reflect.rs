@@ -13,6 +13,8 @@ pub enum Descriptor {
     CombinedImageSampler,
     StorageImage,
     SampledImage,
+    /// `samplerBuffer`: a buffer read through a buffer view's format.
+    UniformTexelBuffer,
 }
 
 impl Descriptor {
@@ -23,6 +25,7 @@ impl Descriptor {
             Descriptor::CombinedImageSampler => "COMBINED_IMAGE_SAMPLER",
             Descriptor::StorageImage => "STORAGE_IMAGE",
             Descriptor::SampledImage => "SAMPLED_IMAGE",
+            Descriptor::UniformTexelBuffer => "UNIFORM_TEXEL_BUFFER",
         }
     }
 }
@@ -53,8 +56,12 @@ enum Ty {
     Array(u32, u32),
     RuntimeArray,
     Struct(Vec<u32>),
-    Image { sampled: u32 },
-    SampledImage,
+    Image {
+        dim: u32,
+        sampled: u32,
+    },
+    /// Of the image type with this id.
+    SampledImage(u32),
     Pointer(u32),
     Other,
 }
@@ -82,6 +89,8 @@ const DEC_BINDING: u32 = 33;
 const DEC_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
 const BUILTIN_WORKGROUP_SIZE: u32 = 25;
+/// OpTypeImage's Dim of a texel buffer.
+const DIM_BUFFER: u32 = 5;
 const SC_UNIFORM_CONSTANT: u32 = 0;
 const SC_UNIFORM: u32 = 2;
 const SC_PUSH_CONSTANT: u32 = 9;
@@ -116,13 +125,19 @@ impl Module {
                     m.types.insert(a[0], Ty::Matrix(a[1], a[2]));
                 }
                 25 => {
-                    m.types.insert(a[0], Ty::Image { sampled: a[6] });
+                    m.types.insert(
+                        a[0],
+                        Ty::Image {
+                            dim: a[2],
+                            sampled: a[6],
+                        },
+                    );
                 }
                 26 => {
                     m.types.insert(a[0], Ty::Other);
                 }
                 27 => {
-                    m.types.insert(a[0], Ty::SampledImage);
+                    m.types.insert(a[0], Ty::SampledImage(a[1]));
                 }
                 28 => {
                     m.types.insert(a[0], Ty::Array(a[1], a[2]));
@@ -235,8 +250,19 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
             (SC_STORAGE_BUFFER, _) => Descriptor::StorageBuffer,
             (SC_UNIFORM, _) if m.decorations.contains_key(&(pointee, DEC_BUFFER_BLOCK)) => Descriptor::StorageBuffer,
             (SC_UNIFORM, _) if m.decorations.contains_key(&(pointee, DEC_BLOCK)) => Descriptor::UniformBuffer,
-            (SC_UNIFORM_CONSTANT, Some(Ty::SampledImage)) => Descriptor::CombinedImageSampler,
-            (SC_UNIFORM_CONSTANT, Some(Ty::Image { sampled: 2 })) => Descriptor::StorageImage,
+            (SC_UNIFORM_CONSTANT, Some(Ty::SampledImage(image))) => match m.types.get(image) {
+                Some(Ty::Image { dim: DIM_BUFFER, .. }) => Descriptor::UniformTexelBuffer,
+                _ => Descriptor::CombinedImageSampler,
+            },
+            (
+                SC_UNIFORM_CONSTANT,
+                Some(Ty::Image {
+                    dim: DIM_BUFFER,
+                    sampled: 2,
+                }),
+            ) => return Err(format!("resource %{id}: storage texel buffers are not used")),
+            (SC_UNIFORM_CONSTANT, Some(Ty::Image { dim: DIM_BUFFER, .. })) => Descriptor::UniformTexelBuffer,
+            (SC_UNIFORM_CONSTANT, Some(Ty::Image { sampled: 2, .. })) => Descriptor::StorageImage,
             (SC_UNIFORM_CONSTANT, Some(Ty::Image { .. })) => Descriptor::SampledImage,
             (SC_UNIFORM_CONSTANT | SC_UNIFORM, t) => {
                 return Err(format!(

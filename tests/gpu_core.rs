@@ -387,7 +387,11 @@ fn interfaces_are_read_from_the_spirv() {
     let d = vk::DescriptorType::STORAGE_BUFFER;
     let g = shaders::MARCH_GRID;
     assert_eq!(g.name, "march/grid");
-    assert_eq!(g.bindings, &[d, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, d, d, d]);
+    let texels = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
+    assert_eq!(
+        g.bindings,
+        &[d, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, texels, d, d]
+    );
     assert_eq!(g.push_size, 16);
     assert_eq!(
         g.local_size,

@@ -13,8 +13,14 @@ struct March {
     float t_exit;  // exit from the volume box
     float dt;
     int k;         // next lattice index to sample
+    int k_end;     // the first lattice index at or past t_exit
     bool done;     // past t_exit, or terminated early
     vec4 acc;      // premultiplied RGBA, front to back
+    // Per-frame values the samples use, read from the parameters once per
+    // ray rather than once per sample.
+    VolumeRay vr;
+    float ert;     // early-termination alpha
+    uint tf_n;     // LUT entries per table
 };
 
 float lattice_t(March m, int k) {
@@ -22,16 +28,40 @@ float lattice_t(March m, int k) {
     return t;
 }
 
+// The first lattice index at or past t, no lower than m.k. t_k never
+// decreases with k, so every k below it has t_k < t: loops can count
+// indices instead of comparing each sample's t.
+int lattice_index(March m, float t) {
+    int k = max(m.k, int(ceil((t - m.t_enter) / m.dt)));
+    // ceil of a rounded quotient can be one off either way: fix it on t_k itself.
+    while (k > m.k && lattice_t(m, k - 1) >= t) {
+        k -= 1;
+    }
+    while (lattice_t(m, k) < t) {
+        k += 1;
+    }
+    return k;
+}
+
+// Ends the march at t_exit (no later than the box exit).
+void march_set_exit(inout March m, float t_exit) {
+    m.t_exit = t_exit;
+    m.done = !(m.t_enter < m.t_exit);
+    m.k_end = m.done ? 0 : lattice_index(m, m.t_exit);
+}
+
 // Sets up the march for a ray; false when the ray misses the volume box.
 bool march_begin(Ray ray, float dt, out March m) {
     vec2 hit = intersect_box(ray, vec3(0.0), vec3(params.dims.xyz));
     m.ray = ray;
     m.t_enter = max(hit.x, 0.0);
-    m.t_exit = hit.y;
     m.dt = dt;
     m.k = 0;
     m.acc = vec4(0.0);
-    m.done = !(m.t_enter < m.t_exit);
+    m.vr = volume_ray(ray.org, ray.dir);
+    m.ert = params.march.y;
+    m.tf_n = params.dims.w;
+    march_set_exit(m, hit.y);
     return !m.done;
 }
 
@@ -42,8 +72,7 @@ bool march_begin(Ray ray, float dt, out March m) {
 bool march_pixel(uvec2 px, out March m) {
     bool hit = march_begin(camera_ray(px), params.march.x, m);
     if (hit && params.depth.y != 0.0) {
-        m.t_exit = min(m.t_exit, params.t_max[px.y * params.image.x + px.x]);
-        m.done = !(m.t_enter < m.t_exit);
+        march_set_exit(m, min(m.t_exit, params.t_max[px.y * params.image.x + px.x]));
     }
     return !m.done;
 }
@@ -57,16 +86,8 @@ void march_skip_to(inout March m, float t) {
         m.done = true;
         return;
     }
-    int k = max(m.k, int(ceil((t - m.t_enter) / m.dt)));
-    // ceil of a rounded quotient can be one off either way: fix it on t_k itself.
-    while (k > m.k && lattice_t(m, k - 1) >= t) {
-        k -= 1;
-    }
-    while (lattice_t(m, k) < t) {
-        k += 1;
-    }
-    m.k = k;
-    if (!(lattice_t(m, k) < m.t_exit)) {
+    m.k = lattice_index(m, t);
+    if (m.k >= m.k_end) {
         m.done = true;
     }
 }
@@ -86,10 +107,10 @@ void composite(inout March m, vec4 c) {
 // corrects its interpolated raw alpha with a pow.
 vec4 shade(March m, float v, float w) {
     if (w < m.dt) {
-        vec4 c = tf_lookup(v, TF_SIZE);
+        vec4 c = tf_lookup(v, m.tf_n, m.tf_n);
         return vec4(c.rgb, opacity(c.a, w));
     }
-    return tf_lookup(v, 0u);
+    return tf_lookup(v, 0u, m.tf_n);
 }
 
 // Takes lattice sample k (t_k < t_exit, not done) and moves to k + 1; ends
@@ -99,18 +120,27 @@ vec4 shade(March m, float v, float w) {
 void march_sample(inout March m) {
     float t = lattice_t(m, m.k);
     precise float w = min(m.dt, m.t_exit - t);
-    precise vec3 p = m.ray.org + t * m.ray.dir;
-    composite(m, shade(m, sample_volume(p), w));
+    composite(m, shade(m, sample_volume(m.vr, t), w));
     m.k += 1;
-    if (m.acc.a >= params.march.y || !(lattice_t(m, m.k) < m.t_exit)) {
+    if (m.acc.a >= m.ert || m.k >= m.k_end) {
         m.done = true;
     }
 }
 
 // Marches every lattice sample with t_k < t_end (and < t_exit), front to back.
 void march_span(inout March m, float t_end) {
-    float stop = min(t_end, m.t_exit);
-    while (!m.done && lattice_t(m, m.k) < stop) {
+    if (m.done) {
+        return;
+    }
+    int stop = t_end < m.t_exit ? lattice_index(m, t_end) : m.k_end;
+    while (!m.done && m.k < stop) {
+        march_sample(m);
+    }
+}
+
+// Marches every remaining sample of the ray.
+void march_rest(inout March m) {
+    while (!m.done) {
         march_sample(m);
     }
 }

@@ -13,14 +13,41 @@
 layout(set = 0, binding = VOLUME_BINDING) uniform sampler3D volume_tex;
 layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
 
+// What sampling along one ray needs, loaded once per ray: a storage-buffer
+// read per sample is dear on lavapipe, and the hardware path's coordinates
+// are then one FMA per axis rather than a division.
+struct VolumeRay {
+    vec3 org;  // the ray in the filter's coordinates: voxels (manual) or
+    vec3 dir;  // normalised texture coordinates (hardware)
+    ivec3 hi;  // the last voxel per axis
+    vec2 norm; // v = (texel - norm.x) * norm.y
+};
+
+VolumeRay volume_ray(vec3 org, vec3 dir) {
+    VolumeRay v;
+    vec3 dims = vec3(params.dims.xyz);
+    if (VOLUME_FILTER == 1u) {
+        // The sampler's u * N - 0.5 puts voxel i's centre at i + 0.5, as the
+        // manual path (3D images allow no unnormalised coordinates).
+        precise vec3 o = org / dims;
+        precise vec3 d = dir / dims;
+        v.org = o;
+        v.dir = d;
+    } else {
+        v.org = org;
+        v.dir = dir;
+    }
+    v.hi = ivec3(params.dims.xyz) - 1;
+    v.norm = params.march.zw;
+    return v;
+}
+
 float volume_texel(ivec3 i, ivec3 hi) {
     return texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0).r;
 }
 
-// Normalised value in [0, 1] at voxel-space point p.
 // The stored texel value at p, trilinearly interpolated by hand.
-float sample_manual(vec3 p) {
-    ivec3 hi = ivec3(params.dims.xyz) - 1;
+float sample_manual(vec3 p, ivec3 hi) {
     // `precise` everywhere on the sampling path: every kernel that inlines this
     // must round identically (no kernel-dependent FMA contraction).
     precise vec3 q = p - 0.5;
@@ -45,18 +72,16 @@ float sample_manual(vec3 p) {
     return raw;
 }
 
-// Normalised value in [0, 1] at voxel-space point p.
-float sample_volume(vec3 p) {
+// Normalised value in [0, 1] at the ray's point t.
+float sample_volume(VolumeRay r, float t) {
+    precise vec3 p = r.org + t * r.dir;
     precise float raw;
     if (VOLUME_FILTER == 1u) {
-        // Normalised coordinates (3D images allow no others): the sampler's
-        // u * N - 0.5 puts voxel i's centre at i + 0.5, as the manual path.
-        precise vec3 uvw = p / vec3(params.dims.xyz);
-        raw = textureLod(volume_tex, uvw, 0.0).r;
+        raw = textureLod(volume_tex, p, 0.0).r;
     } else {
-        raw = sample_manual(p);
+        raw = sample_manual(p, r.hi);
     }
-    precise float v = (raw - params.march.z) * params.march.w;
+    precise float v = (raw - r.norm.x) * r.norm.y;
     return clamp(v, 0.0, 1.0);
 }
 

@@ -22,7 +22,6 @@ layout(constant_id = 0) const uint OCTANTS = 0u;
 #include "ray.glsl"
 #include "camera.glsl"
 #include "volume.glsl"
-#define TF_SIZE params.dims.w
 #include "tf.glsl"
 #include "lattice.glsl"
 #include "distance_map.glsl"
@@ -120,12 +119,13 @@ void march_distance(inout March m, float eps) {
     w.more = true;
     // Every step moves at least one cell forward on some axis.
     int guard = counts.x + counts.y + counts.z + 4;
-    vec2 span = vec2(0.0);
+    int stop = 0; // the first lattice index past the current span
     while (!m.done) {
-        if (lattice_t(m, m.k) < span.y) {
+        if (m.k < stop) {
             march_sample(m);
             continue;
         }
+        vec2 span;
         bool found = false;
         while (w.more && !found && guard-- > 0) {
             found = walk_step(w, m, octant, eps, span) && span.x < span.y;
@@ -134,6 +134,7 @@ void march_distance(inout March m, float eps) {
             break;
         }
         march_skip_to(m, span.x);
+        stop = m.done || !(span.y < m.t_exit) ? m.k_end : lattice_index(m, span.y);
     }
 }
 

@@ -14,7 +14,6 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "ray.glsl"
 #include "camera.glsl"
 #include "volume.glsl"
-#define TF_SIZE params.dims.w
 #include "tf.glsl"
 #include "lattice.glsl"
 

@@ -13,7 +13,6 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 #include "ray.glsl"
 #include "camera.glsl"
 #include "volume.glsl"
-#define TF_SIZE params.dims.w
 #include "tf.glsl"
 #include "lattice.glsl"
 
@@ -26,7 +25,7 @@ void main() {
     }
     March m;
     if (march_pixel(px, m)) {
-        march_span(m, m.t_exit);
+        march_rest(m);
     }
     frame_store(px, m.acc);
 }

@@ -16,7 +16,6 @@ layout(constant_id = 0) const uint OCTREE_KIND = 3u;
 #include "ray.glsl"
 #include "camera.glsl"
 #include "volume.glsl"
-#define TF_SIZE params.dims.w
 #include "tf.glsl"
 #include "lattice.glsl"
 #include "octree_node.glsl"

@@ -39,7 +39,7 @@ use super::tree::{GpuTree, Node};
 use super::Stats;
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, TexelBuffer, Timer};
 use crate::tf::TransferFunction;
 use crate::volume::{GpuVolume, Volume, VoxelData, VoxelType};
 
@@ -225,7 +225,8 @@ struct Probe {
     ctx: Context,
     kernel: Kernel,
     volume: GpuVolume,
-    lut: crate::tf::GpuTransferFunction,
+    /// A frame LUT (glsl/common/tf.glsl): the corrected table, then the raw one.
+    lut: TexelBuffer,
     params: Vec<Buffer>,
     frame: Buffer,
 }
@@ -237,6 +238,14 @@ impl Probe {
         let data: Vec<u8> = (0..n * n * n).map(|i| ((i * 7 + i / n * 13) % 256) as u8).collect();
         let volume = Volume::new("cost probe", [EDGE; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data))?;
         let tf = TransferFunction::parse("ramp:0:1")?;
+        let tables = [tf.corrected_lut(STEP), tf.lut().to_vec()].concat();
+        let lut = Buffer::with_data(
+            ctx,
+            "cost probe LUT",
+            bytemuck::cast_slice(&tables),
+            vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+        )?;
+        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT, 16)?;
         let shader = shaders::MARCH_BVH;
         let frame = Buffer::new(
             ctx,
@@ -260,7 +269,7 @@ impl Probe {
             ctx: ctx.clone(),
             kernel: Kernel::create(ctx, &shader, shader.push_size as usize, &[])?,
             volume: GpuVolume::upload(ctx, &volume)?,
-            lut: tf.upload(ctx)?,
+            lut,
             params,
             frame,
         })
@@ -280,7 +289,7 @@ impl Probe {
             &[
                 Binding::Storage(params),
                 Binding::Sampled(self.volume.image.view, self.volume.sampler),
-                Binding::Storage(&self.lut.lut),
+                Binding::TexelBuffer(self.lut.view),
                 Binding::Storage(&self.frame),
                 Binding::Storage(&tree.nodes),
                 Binding::Storage(&tree.count),

@@ -42,6 +42,7 @@ pub struct DeviceInfo {
     pub device_type: vk::PhysicalDeviceType,
     pub api_version: u32,
     pub max_storage_buffer_range: u64,
+    pub max_texel_buffer_elements: u32,
     pub max_image_dimension_3d: u32,
     pub max_compute_work_group_count: [u32; 3],
     pub max_compute_work_group_invocations: u32,
@@ -341,6 +342,7 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, timestamp_valid
         device_type: p.device_type,
         api_version: p.api_version,
         max_storage_buffer_range: l.max_storage_buffer_range as u64,
+        max_texel_buffer_elements: l.max_texel_buffer_elements,
         max_image_dimension_3d: l.max_image_dimension3_d,
         max_compute_work_group_count: l.max_compute_work_group_count,
         max_compute_work_group_invocations: l.max_compute_work_group_invocations,
@@ -675,6 +677,18 @@ impl Context {
         props
             .optimal_tiling_features
             .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+    }
+
+    /// Whether buffers of `format` can be read as uniform texel buffers.
+    pub fn reads_texel_buffers(&self, format: vk::Format) -> bool {
+        let props = unsafe {
+            self.inner
+                .instance
+                .get_physical_device_format_properties(self.inner.physical_device, format)
+        };
+        props
+            .buffer_features
+            .contains(vk::FormatFeatureFlags::UNIFORM_TEXEL_BUFFER)
     }
 
     /// Whether this context created (and will destroy) its instance and device.

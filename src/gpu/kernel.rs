@@ -22,6 +22,8 @@ pub enum Binding<'a> {
     SampledIn(vk::ImageView, vk::Sampler, vk::ImageLayout),
     /// A storage image (`image2D` in GLSL) in GENERAL layout.
     StorageImage(vk::ImageView),
+    /// A uniform texel buffer (`samplerBuffer` in GLSL): a buffer view.
+    TexelBuffer(vk::BufferView),
 }
 
 impl Binding<'_> {
@@ -31,6 +33,7 @@ impl Binding<'_> {
             Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::Sampled(..) | Binding::SampledIn(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Binding::TexelBuffer(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }
@@ -226,7 +229,7 @@ impl Kernel {
                     offset,
                     range,
                 }],
-                Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) => {
+                Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) | Binding::TexelBuffer(_) => {
                     [vk::DescriptorBufferInfo::default()]
                 }
             })
@@ -252,6 +255,13 @@ impl Kernel {
                 _ => [vk::DescriptorImageInfo::default()],
             })
             .collect();
+        let texel_views: Vec<[vk::BufferView; 1]> = bindings
+            .iter()
+            .map(|b| match *b {
+                Binding::TexelBuffer(view) => [view],
+                _ => [vk::BufferView::null()],
+            })
+            .collect();
         let writes: Vec<_> = bindings
             .iter()
             .enumerate()
@@ -264,6 +274,7 @@ impl Kernel {
                     Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) => {
                         w.image_info(&image_infos[i])
                     }
+                    Binding::TexelBuffer(_) => w.texel_buffer_view(&texel_views[i]),
                     _ => w.buffer_info(&buffer_infos[i]),
                 }
             })

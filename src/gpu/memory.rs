@@ -236,6 +236,50 @@ impl Drop for Buffer {
     }
 }
 
+/// A buffer that shaders read as an array of `format` texels
+/// (`samplerBuffer` in GLSL), with its view. The march kernels read the LUT
+/// this way because lavapipe fetches every lane's texel with vector loads,
+/// where it reads a storage buffer one lane at a time.
+pub struct TexelBuffer {
+    pub buffer: Buffer,
+    pub view: vk::BufferView,
+}
+
+impl TexelBuffer {
+    /// Views all of `buffer` (created with `UNIFORM_TEXEL_BUFFER` usage) as
+    /// texels of `format`, `texel_bytes` each.
+    pub fn new(ctx: &Context, buffer: Buffer, format: vk::Format, texel_bytes: u64) -> Result<Self> {
+        let texels = buffer.size / texel_bytes;
+        let what = format!("buffer '{}' as {texels} texels of {format:?}", buffer.name);
+        if !ctx.reads_texel_buffers(format) {
+            return Err(Error::Unsupported(format!(
+                "{what}: the device cannot read {format:?} uniform texel buffers"
+            )));
+        }
+        let info = ctx.info();
+        info.check(
+            what,
+            "maxTexelBufferElements",
+            texels,
+            info.max_texel_buffer_elements as u64,
+        )?;
+        let create = vk::BufferViewCreateInfo::default()
+            .buffer(buffer.raw)
+            .format(format)
+            .offset(0)
+            .range(texels * texel_bytes);
+        let view = unsafe { ctx.device().create_buffer_view(&create, None) }.vk("vkCreateBufferView")?;
+        Ok(TexelBuffer { buffer, view })
+    }
+}
+
+impl Drop for TexelBuffer {
+    fn drop(&mut self) {
+        // Before the buffer, which drops after this.
+        unsafe { self.buffer.ctx.device().destroy_buffer_view(self.view, None) };
+    }
+}
+
 /// Host-visible staging buffers a recorded upload copies from: keep them
 /// until the submission that executes the copy completed (dropping them
 /// earlier frees memory the GPU still reads).

@@ -34,6 +34,6 @@ macro_rules! check_push {
     };
 }
 pub(crate) use check_push;
-pub use memory::{check_image3d, Buffer, Image3d, Staging};
+pub use memory::{check_image3d, Buffer, Image3d, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};
 pub use validation::ValidationMessage;

@@ -6,7 +6,7 @@ use super::params::RenderParams;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::record;
-use crate::gpu::{vk, Buffer, Context, MemoryLocation};
+use crate::gpu::{vk, Buffer, Context, MemoryLocation, TexelBuffer};
 
 /// The per-frame-size buffers of a frame: its parameter block (with the
 /// per-pixel depth limits after it), the frame's LUT (corrected for its
@@ -18,7 +18,7 @@ pub struct RenderTarget {
     /// RGBA f32 premultiplied, row-major; None for a target of host images.
     pub frame: Option<Buffer>,
     pub params: Buffer,
-    pub lut: Buffer,
+    pub lut: TexelBuffer,
     readback: Option<Buffer>,
 }
 
@@ -179,9 +179,10 @@ impl RenderTarget {
         let lut = buffer(
             "frame LUT",
             (2 * crate::tf::LUT_SIZE * 16) as u64,
-            storage | vk::BufferUsageFlags::TRANSFER_SRC,
+            storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;
+        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT, 16)?;
         let readback = match readback {
             true => Some(buffer(
                 "frame readback",
