@@ -113,18 +113,51 @@ vec4 shade(March m, float v, float w) {
     return tf_lookup(v, 0u, m.tf_n);
 }
 
-// Takes lattice sample k (t_k < t_exit, not done) and moves to k + 1; ends
-// the march at the box exit or on early termination. Each sample stands for
-// [t_k, t_k + dt) clipped to the box, so the last one of the ray is weighted
-// by its remaining length.
-void march_sample(inout March m) {
+// Takes lattice sample k, which is not the ray's last (k + 1 < k_end), and
+// moves to k + 1; ends the march on early termination. Each sample stands
+// for [t_k, t_k + dt): all but the last have the full length, so they read
+// the corrected LUT with no branch (a CPU SIMD lane runs both sides of one).
+void march_full_sample(inout March m) {
+    float t = lattice_t(m, m.k);
+    composite(m, tf_lookup(sample_volume(m.vr, t), 0u, m.tf_n));
+    m.k += 1;
+    m.done = m.acc.a >= m.ert;
+}
+
+// Takes the ray's last sample (k = k_end - 1), weighted by its length up to
+// the box exit, and ends the march.
+void march_last_sample(inout March m) {
     float t = lattice_t(m, m.k);
     precise float w = min(m.dt, m.t_exit - t);
     composite(m, shade(m, sample_volume(m.vr, t), w));
     m.k += 1;
-    if (m.acc.a >= m.ert || m.k >= m.k_end) {
-        m.done = true;
+    m.done = true;
+}
+
+// Takes lattice sample k (k < k_end, not done) and moves to k + 1.
+void march_sample(inout March m) {
+    if (m.k + 1 < m.k_end) {
+        march_full_sample(m);
+    } else {
+        march_last_sample(m);
     }
+}
+
+// Marches the samples k < stop (stop <= k_end), front to back: the full
+// ones in a loop of their own, then the last one if the span reaches it.
+void march_until(inout March m, int stop) {
+    int full = min(stop, m.k_end - 1);
+    while (!m.done && m.k < full) {
+        march_full_sample(m);
+    }
+    if (!m.done && m.k < stop) {
+        march_last_sample(m);
+    }
+}
+
+// Marches every remaining sample of the ray.
+void march_rest(inout March m) {
+    march_until(m, m.k_end);
 }
 
 // Marches every lattice sample with t_k < t_end (and < t_exit), front to back.
@@ -132,17 +165,7 @@ void march_span(inout March m, float t_end) {
     if (m.done) {
         return;
     }
-    int stop = t_end < m.t_exit ? lattice_index(m, t_end) : m.k_end;
-    while (!m.done && m.k < stop) {
-        march_sample(m);
-    }
-}
-
-// Marches every remaining sample of the ray.
-void march_rest(inout March m) {
-    while (!m.done) {
-        march_sample(m);
-    }
+    march_until(m, t_end < m.t_exit ? lattice_index(m, t_end) : m.k_end);
 }
 
 // Conservative margin (voxels) by which region boxes grow before their spans

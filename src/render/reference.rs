@@ -110,13 +110,16 @@ pub fn trace_to(
     if !(t_enter < t_exit) {
         return acc;
     }
+    let lattice_t = |k: u32| t_enter + k as f32 * dt;
     let mut k = 0u32;
     loop {
-        let t = t_enter + k as f32 * dt;
+        let t = lattice_t(k);
         if !(t < t_exit) {
             break;
         }
-        let w = dt.min(t_exit - t);
+        // Only the ray's last sample is shortened (glsl/common/lattice.glsl).
+        let last = !(lattice_t(k + 1) < t_exit);
+        let w = if last { dt.min(t_exit - t) } else { dt };
         let pos = org + dir * t;
         let v = sample(volume, pos);
         let c = if w < dt {
