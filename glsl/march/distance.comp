@@ -105,9 +105,10 @@ bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
     return is_active;
 }
 
-// One loop that either takes a sample of the current active span or walks
-// to the next one: neighbouring rays of a SIMD group stay in step, where a
-// loop of spans around a loop of samples would serialise their spans.
+// Walks to each active span in turn and marches it: the samples run in a
+// loop of their own, with nothing else in it (a CPU SIMD lane executes both
+// sides of a branch, so a loop that either samples or walks pays for both
+// on every sample).
 void march_distance(inout March m, float eps) {
     float c = float(grid.cells.w);
     ivec3 counts = ivec3(grid.cells.xyz);
@@ -119,12 +120,7 @@ void march_distance(inout March m, float eps) {
     w.more = true;
     // Every step moves at least one cell forward on some axis.
     int guard = counts.x + counts.y + counts.z + 4;
-    int stop = 0; // the first lattice index past the current span
     while (!m.done) {
-        if (m.k < stop) {
-            march_sample(m);
-            continue;
-        }
         vec2 span;
         bool found = false;
         while (w.more && !found && guard-- > 0) {
@@ -133,8 +129,7 @@ void march_distance(inout March m, float eps) {
         if (!found) {
             break;
         }
-        march_skip_to(m, span.x);
-        stop = m.done || !(span.y < m.t_exit) ? m.k_end : lattice_index(m, span.y);
+        march_region(m, span);
     }
 }
 
