@@ -1,17 +1,19 @@
 #!/usr/bin/env python3
-"""Naive marching's frame time from two lacuna binaries, interleaved.
+"""Naive marching's frame time from two or more lacuna binaries, interleaved.
 
-Measures what a change to the per-sample work bought: run the binary built
-before the change (A) and after it (B) on the same volumes, transfer
-functions, cameras and sizes, alternating A and B every round so machine
-load hits both alike, and print a Markdown table of the medians of the
-`march` phase (GPU timestamps) with the spread over rounds.
+Measures what changes to the per-sample work bought: run the binaries built
+before and after them (A, B, C, ... in the order given) on the same volumes,
+transfer functions, cameras and sizes, alternating them every round so
+machine load hits all alike, and print a Markdown table of the medians of
+the `march` phase (GPU timestamps) with the spread over rounds, and the
+last binary's median over A's.
 
 Usage (from the repository root):
-    python3 bench/peers/naive_ab.py A_BINARY B_BINARY [--rounds 3]
-        [--b-args "--filter manual"] ...
+    python3 bench/peers/naive_ab.py A_BINARY B_BINARY [C_BINARY ...]
+        [--rounds 3] [--b-args "--filter manual"] ...
 
-Each `--b-args` adds a B column run with those extra arguments.
+Each `--b-args` adds a column running the last binary with those extra
+arguments.
 """
 
 import argparse
@@ -51,15 +53,18 @@ def march_ms(binary, volume, tf, size, ert, extra):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("a")
-    ap.add_argument("b")
+    ap.add_argument("binaries", nargs="+")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--b-args", action="append", default=[])
     args = ap.parse_args()
-    columns = [("A", args.a, [])] + [("B", args.b, [])] + [
-        (f"B {extra}", args.b, extra.split()) for extra in args.b_args
+    if len(args.binaries) < 2:
+        sys.exit("give at least two binaries (before and after)")
+    names = [chr(ord("A") + i) for i in range(len(args.binaries))]
+    last = names[-1]
+    columns = [(n, b, []) for n, b in zip(names, args.binaries)] + [
+        (f"{last} {extra}", args.binaries[-1], extra.split()) for extra in args.b_args
     ]
-    print("| volume | ERT | " + " | ".join(f"{name} ms" for name, _, _ in columns) + " | B / A |")
+    print("| volume | ERT | " + " | ".join(f"{name} ms" for name, _, _ in columns) + f" | {last} / A |")
     print("|---|---|" + "---|" * len(columns) + "---|")
     for volume, tf, size, ert in CASES:
         times = {name: [] for name, _, _ in columns}
@@ -70,7 +75,7 @@ def main():
         for name, _, _ in columns:
             t = times[name]
             cells.append(f"{statistics.median(t):.1f} [{min(t):.1f}, {max(t):.1f}]")
-        ratio = statistics.median(times["B"]) / statistics.median(times["A"])
+        ratio = statistics.median(times[last]) / statistics.median(times["A"])
         label = "ch2" if volume == CH2 else volume
         print(f"| {label} {size} | {ert or 'off'} | " + " | ".join(cells) + f" | {ratio:.2f} |", flush=True)
 
