@@ -30,8 +30,9 @@ fn the_collapse_plans_for_the_renderers_default_step() {
     assert_eq!(RenderSettings::default().step, cost::STEP);
 }
 
-/// Every tree that reads `collapse`, built with it on.
-fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats)> {
+/// Every tree that reads `collapse`: its statistics with collapse on and
+/// off, and whether the collapsed one is marched with the naive kernel.
+fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats, bool)> {
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
@@ -49,16 +50,12 @@ fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction
     Accel::skipping()
         .filter(|a| a.method().params(&on).iter().any(|(name, _)| *name == "collapse"))
         .map(|a| {
-            let stats = |o: &BuildOptions| {
-                builder
-                    .build(a, &input, &ranges, o)
-                    .unwrap()
-                    .0
-                    .stats()
-                    .unwrap()
-                    .unwrap()
+            let build = |o: &BuildOptions| {
+                let structure = builder.build(a, &input, &ranges, o).unwrap().0;
+                (structure.stats().unwrap().unwrap(), structure.accel.is_naive())
             };
-            (a, stats(&on), stats(&BuildOptions::default()))
+            let (collapsed, naively) = build(&on);
+            (a, collapsed, build(&BuildOptions::default()).0, naively)
         })
         .collect()
 }
@@ -75,9 +72,11 @@ fn a_fully_active_volume_is_one_leaf_and_a_sparse_one_keeps_its_empty_space_out(
     let full = Volume::new("full", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
     let trees = collapsed_trees(&ctx, &full, &tf);
     assert_eq!(trees.len(), 3, "lbvh, kd-cpu and kd-gpu read collapse");
-    for (accel, on, off) in trees {
+    for (accel, on, off, naively) in trees {
         assert_eq!((on.nodes, on.leaves, on.height), (1, 1, 1), "{accel}: {on}");
         assert!(off.nodes >= on.nodes, "{accel}");
+        // One leaf covering the volume: nothing to traverse.
+        assert!(naively, "{accel}: a whole-box leaf is marched with the naive kernel");
     }
     // Two bright 4^3 blobs in opposite corners: one leaf would march the
     // whole volume's diagonal for two small targets.
@@ -92,8 +91,9 @@ fn a_fully_active_volume_is_one_leaf_and_a_sparse_one_keeps_its_empty_space_out(
         }
     }
     let sparse = Volume::new("sparse", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
-    for (accel, on, _) in collapsed_trees(&ctx, &sparse, &tf) {
+    for (accel, on, _, naively) in collapsed_trees(&ctx, &sparse, &tf) {
         assert!(on.leaves >= 2, "{accel}: {on}");
+        assert!(!naively, "{accel}: a tree with leaves to skip between is traversed");
     }
     assert_clean(&ctx);
 }

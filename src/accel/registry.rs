@@ -275,6 +275,22 @@ impl serde::Serialize for Accel {
     }
 }
 
+/// A tree collapsed (or built) to one leaf covering the volume box, marched
+/// with the naive kernel: it keeps the tree's statistics, binds nothing.
+struct MarchedNaively(Box<dyn Built>);
+
+impl Built for MarchedNaively {
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        Vec::new()
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        self.0.stats()
+    }
+    fn tree(&self) -> Option<&GpuTree> {
+        self.0.tree()
+    }
+}
+
 /// A built structure with the registry entry that built it.
 pub struct Structure {
     pub accel: Accel,
@@ -498,9 +514,25 @@ impl Builder {
         options: &BuildOptions,
     ) -> Result<(Structure, Timings)> {
         options.validate()?;
-        let (built, t) = accel.method().build(self, input, ranges, options)?;
+        let (built, mut t) = accel.method().build(self, input, ranges, options)?;
         // `auto` is marched as the structure it chose.
         let accel = built.choice().map_or(accel, |c| c.accel);
+        let whole = match built.tree() {
+            Some(tree) => t.cpu("root check", || tree.whole_box_leaf(input.gpu_volume.dims))?,
+            None => None,
+        };
+        if whole.is_some() {
+            // One leaf that is the whole volume box: nothing to skip, so the
+            // naive kernel takes the same samples without a traversal.
+            let built = Box::new(MarchedNaively(built));
+            return Ok((
+                Structure {
+                    accel: Accel::naive(),
+                    built,
+                },
+                t,
+            ));
+        }
         Ok((Structure { accel, built }, t))
     }
 

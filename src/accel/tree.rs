@@ -177,6 +177,18 @@ impl GpuTree {
         Ok(*self.sizes.get_or_init(|| Sizes::lbvh(n)))
     }
 
+    /// The root node when it is a leaf whose box is all of `dims` (a tree
+    /// with nothing to skip), else None. Reads the root back (32 bytes)
+    /// unless the tree's shape, known at upload, rules it out.
+    pub fn whole_box_leaf(&self, dims: [u32; 3]) -> Result<Option<Node>> {
+        if self.sizes()?.node_count == 0 || self.shape.get().is_some_and(|s| s.nodes != 1) {
+            return Ok(None);
+        }
+        let root: Node = bytemuck::pod_read_unaligned(&self.nodes.download(0, 32)?);
+        let whole = (0..3).all(|a| root.lo[a] <= 0 && root.hi[a] >= dims[a] as i32);
+        Ok((root.is_leaf() && whole).then_some(root))
+    }
+
     /// The number of leaves the build produced (for an LBVH, its active
     /// bricks; a recorded LBVH reads it back once, after its submission).
     pub fn leaves(&self) -> Result<u32> {

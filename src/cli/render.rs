@@ -229,6 +229,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     if let Some(choice) = structure.choice() {
         println!("auto -> {}", choice.describe());
         println!("  {}", choice.reason());
+    } else if structure.accel.is_naive() && !args.accel.is_naive() {
+        println!("marched with the naive kernel: the tree is one leaf covering the volume");
     }
     if let Some(stats) = structure.stats()? {
         println!("structure {stats}");
