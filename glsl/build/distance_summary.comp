@@ -15,7 +15,10 @@ layout(std430, set = 0, binding = 0) readonly buffer Flags { uint flags[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Distances { uint distances[]; };
 // active, faces, empty cells' sum (low, high word), active cells' sum (low, high).
 layout(std430, set = 0, binding = 2) buffer Summary { uint summary[6]; };
-layout(push_constant) uniform Push { uvec4 counts; uint groups_x; uint pad0; uint pad1; uint pad2; } pc;
+// per_invocation: consecutive cells each invocation sums before the
+// workgroup's reduction (its barriers are dear on a CPU device, where a
+// workgroup's SIMD groups take turns at each one).
+layout(push_constant) uniform Push { uvec4 counts; uint groups_x; uint per_invocation; uint pad1; uint pad2; } pc;
 
 shared uvec4 partial[64];
 
@@ -23,31 +26,39 @@ bool active_at(ivec3 c) {
     return flags[uint(c.x) + pc.counts.x * (uint(c.y) + pc.counts.y * uint(c.z))] != 0u;
 }
 
-void main() {
-    uint i = linear_index(pc.groups_x);
-    uvec4 mine = uvec4(0u);
-    if (i < pc.counts.w) {
-        ivec3 n = ivec3(pc.counts.xyz);
-        ivec3 c = ivec3(i % pc.counts.x, (i / pc.counts.x) % pc.counts.y, i / (pc.counts.x * pc.counts.y));
-        if (flags[i] != 0u) {
-            mine.x = 1u;
-            for (uint ch = DISTANCE_CHANNELS / 2u; ch < DISTANCE_CHANNELS; ++ch) {
-                mine.w += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
-            }
-            for (int a = 0; a < 3; ++a) {
-                for (int s = -1; s <= 1; s += 2) {
-                    ivec3 q = c;
-                    q[a] += s;
-                    if (q[a] >= 0 && q[a] < n[a] && !active_at(q)) {
-                        mine.y += 1u;
-                    }
+// Cell i's terms: (active, active-empty faces, distance if empty, distance if active).
+uvec4 cell_terms(uint i) {
+    uvec4 t = uvec4(0u);
+    ivec3 n = ivec3(pc.counts.xyz);
+    ivec3 c = ivec3(i % pc.counts.x, (i / pc.counts.x) % pc.counts.y, i / (pc.counts.x * pc.counts.y));
+    if (flags[i] != 0u) {
+        t.x = 1u;
+        for (uint ch = DISTANCE_CHANNELS / 2u; ch < DISTANCE_CHANNELS; ++ch) {
+            t.w += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+        }
+        for (int a = 0; a < 3; ++a) {
+            for (int s = -1; s <= 1; s += 2) {
+                ivec3 q = c;
+                q[a] += s;
+                if (q[a] >= 0 && q[a] < n[a] && !active_at(q)) {
+                    t.y += 1u;
                 }
             }
-        } else {
-            for (uint ch = 0u; ch < DISTANCE_CHANNELS / 2u; ++ch) {
-                mine.z += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
-            }
         }
+    } else {
+        for (uint ch = 0u; ch < DISTANCE_CHANNELS / 2u; ++ch) {
+            t.z += distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+        }
+    }
+    return t;
+}
+
+void main() {
+    uint first = linear_index(pc.groups_x) * pc.per_invocation;
+    uint end = min(first + pc.per_invocation, pc.counts.w);
+    uvec4 mine = uvec4(0u);
+    for (uint i = first; i < end; ++i) {
+        mine += cell_terms(i);
     }
     uint l = gl_LocalInvocationID.x;
     partial[l] = mine;
