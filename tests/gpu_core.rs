@@ -6,7 +6,7 @@ use common::{assert_clean, gpu};
 use lacuna::gpu::record;
 use lacuna::gpu::{
     required_features, shaders, vk, AdoptInfo, Binding, Buffer, Context, EnabledFeatures, Kernel, MemoryLocation,
-    Timer, REQUIRED_EXTENSIONS,
+    TexelBuffer, Timer, REQUIRED_EXTENSIONS,
 };
 use lacuna::Error;
 
@@ -443,5 +443,23 @@ fn bindings_that_differ_from_the_shader_are_an_error_naming_the_kernel() {
     for err in [one.err().unwrap(), wrong.err().unwrap()] {
         assert!(err.to_string().contains("kernel prims/copy"), "{err}");
     }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn texel_buffers_refuse_partial_texels_and_formats_they_do_not_read() {
+    let ctx = gpu();
+    let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+    let make = |bytes: u64| Buffer::new(&ctx, "texels", bytes, usage, MemoryLocation::GpuOnly).unwrap();
+    let whole = TexelBuffer::new(&ctx, make(64), vk::Format::R32G32B32A32_SFLOAT).unwrap();
+    assert_eq!(whole.buffer().size(), 64);
+    let partial = TexelBuffer::new(&ctx, make(20), vk::Format::R32G32B32A32_SFLOAT)
+        .err()
+        .unwrap();
+    assert!(matches!(partial, Error::Interface(_)), "{partial}");
+    assert!(partial.to_string().contains("20 bytes"), "{partial}");
+    let format = TexelBuffer::new(&ctx, make(64), vk::Format::R8_UNORM).err().unwrap();
+    assert!(matches!(format, Error::Unsupported(_)), "{format}");
+    drop(whole);
     assert_clean(&ctx);
 }

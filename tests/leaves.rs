@@ -4,7 +4,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::cost::{self, FLOOR_NS};
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Stats};
+use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Stats};
 use lacuna::render::RenderSettings;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -30,9 +30,13 @@ fn the_collapse_plans_for_the_renderers_default_step() {
     assert_eq!(RenderSettings::default().step, cost::STEP);
 }
 
-/// Every tree that reads `collapse`: its statistics with collapse on and
-/// off, and whether the collapsed one is marched with the naive kernel.
-fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats, bool)> {
+/// Runs `f` with a builder, the volume and TF uploaded, and their ranges.
+fn with_input<T>(
+    ctx: &lacuna::gpu::Context,
+    v: &Volume,
+    tf: &TransferFunction,
+    f: impl FnOnce(&Builder, &BuildInput, &Ranges) -> T,
+) -> T {
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
@@ -43,21 +47,30 @@ fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction
         tf,
         gpu_tf: &lut,
     };
-    let on = BuildOptions {
-        collapse: true,
-        ..Default::default()
-    };
-    Accel::skipping()
-        .filter(|a| a.method().params(&on).iter().any(|(name, _)| *name == "collapse"))
-        .map(|a| {
-            let build = |o: &BuildOptions| {
-                let structure = builder.build(a, &input, &ranges, o).unwrap().0;
-                (structure.stats().unwrap().unwrap(), structure.accel.is_naive())
-            };
-            let (collapsed, naively) = build(&on);
-            (a, collapsed, build(&BuildOptions::default()).0, naively)
-        })
-        .collect()
+    f(&builder, &input, &ranges)
+}
+
+/// Every tree that reads `collapse`: its statistics with collapse on and
+/// off, and whether the collapsed one is marched with the naive kernel.
+fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats, bool)> {
+    with_input(ctx, v, tf, |builder, input, ranges| {
+        let on = BuildOptions {
+            collapse: true,
+            ..Default::default()
+        };
+        Accel::skipping()
+            .filter(|a| a.method().params(&on).iter().any(|(name, _)| *name == "collapse"))
+            .map(|a| {
+                let build = |o: &BuildOptions| {
+                    let structure = builder.build(a, input, ranges, o).unwrap().0;
+                    assert_eq!(structure.marched_naively(), structure.accel.is_naive(), "{a}");
+                    (structure.stats().unwrap().unwrap(), structure.marched_naively())
+                };
+                let (collapsed, naively) = build(&on);
+                (a, collapsed, build(&BuildOptions::default()).0, naively)
+            })
+            .collect()
+    })
 }
 
 #[test]
@@ -78,6 +91,12 @@ fn a_fully_active_volume_is_one_leaf_and_a_sparse_one_keeps_its_empty_space_out(
         // One leaf covering the volume: nothing to traverse.
         assert!(naively, "{accel}: a whole-box leaf is marched with the naive kernel");
     }
+    // The hybrid's one-leaf tree still walks its grid inside the leaf.
+    let hybrid = with_input(&ctx, &full, &tf, |builder, input, ranges| {
+        let accel: Accel = "hybrid".parse().unwrap();
+        builder.build(accel, input, ranges, &BuildOptions::default()).unwrap().0
+    });
+    assert!(!hybrid.marched_naively() && !hybrid.accel.is_naive());
     // Two bright 4^3 blobs in opposite corners: one leaf would march the
     // whole volume's diagonal for two small targets.
     let mut data = vec![0u8; n];

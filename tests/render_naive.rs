@@ -187,7 +187,7 @@ fn the_frame_lut_is_corrected_for_the_step_on_the_gpu() {
         ctx.submit_and_wait(|cmd| renderer.record(cmd, None, &naive, &target, &gv, &lut, &s))
             .unwrap();
         let gpu_lut: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&target.lut.buffer.download(0, target.lut.buffer.size()).unwrap());
+            bytemuck::pod_collect_to_vec(&target.lut.buffer().download(0, target.lut.buffer().size()).unwrap());
         let (corrected, raw) = gpu_lut.split_at(lacuna::tf::LUT_SIZE);
         assert_eq!(raw, tf.lut(), "the raw half");
         let expected = tf.corrected_lut(step);

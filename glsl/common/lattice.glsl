@@ -134,15 +134,6 @@ void march_last_sample(inout March m) {
     m.done = true;
 }
 
-// Takes lattice sample k (k < k_end, not done) and moves to k + 1.
-void march_sample(inout March m) {
-    if (m.k + 1 < m.k_end) {
-        march_full_sample(m);
-    } else {
-        march_last_sample(m);
-    }
-}
-
 // Marches the samples k < stop (stop <= k_end), front to back: the full
 // ones in a loop of their own, then the last one if the span reaches it.
 void march_until(inout March m, int stop) {
@@ -165,7 +156,9 @@ void march_span(inout March m, float t_end) {
     if (m.done) {
         return;
     }
-    march_until(m, t_end < m.t_exit ? lattice_index(m, t_end) : m.k_end);
+    // A NaN end marches nothing.
+    int stop = t_end < m.t_exit ? lattice_index(m, t_end) : (t_end >= m.t_exit ? m.k_end : m.k);
+    march_until(m, stop);
 }
 
 // Conservative margin (voxels) by which region boxes grow before their spans

@@ -15,7 +15,7 @@ layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
 
 // What sampling along one ray needs, loaded once per ray: a storage-buffer
 // read per sample is dear on lavapipe, and the hardware path's coordinates
-// are then one FMA per axis rather than a division.
+// are then a multiply and an add per axis rather than also a division.
 struct VolumeRay {
     vec3 org;  // the ray in the filter's coordinates: voxels (manual) or
     vec3 dir;  // normalised texture coordinates (hardware)

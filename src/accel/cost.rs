@@ -245,7 +245,7 @@ impl Probe {
             bytemuck::cast_slice(&tables),
             vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
         )?;
-        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT, 16)?;
+        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
         let shader = shaders::MARCH_BVH;
         let frame = Buffer::new(
             ctx,
@@ -289,7 +289,7 @@ impl Probe {
             &[
                 Binding::Storage(params),
                 Binding::Sampled(self.volume.image.view, self.volume.sampler),
-                Binding::TexelBuffer(self.lut.view),
+                Binding::TexelBuffer(self.lut.view()),
                 Binding::Storage(&self.frame),
                 Binding::Storage(&tree.nodes),
                 Binding::Storage(&tree.count),

@@ -119,7 +119,8 @@ pub trait Built {
         Vec::new()
     }
     /// The paper's Table 1 statistics (None for naive). May read the
-    /// structure back once; builds never do.
+    /// structure back once; builds read back only a collapsed tree's root
+    /// (`GpuTree::whole_box_leaf`).
     fn stats(&self) -> Result<Option<Stats>>;
     /// The tree, for structures in the shared tree node format.
     fn tree(&self) -> Option<&GpuTree> {
@@ -128,6 +129,11 @@ pub trait Built {
     /// For `auto`: what it chose (the structure frames are marched with).
     fn choice(&self) -> Option<&auto::Choice> {
         None
+    }
+    /// Whether this is a tree of one leaf covering the volume, which
+    /// `Builder::build` marches with the naive kernel.
+    fn marched_naively(&self) -> bool {
+        false
     }
 }
 
@@ -289,6 +295,9 @@ impl Built for MarchedNaively {
     fn tree(&self) -> Option<&GpuTree> {
         self.0.tree()
     }
+    fn marched_naively(&self) -> bool {
+        true
+    }
 }
 
 /// A built structure with the registry entry that built it.
@@ -323,6 +332,12 @@ impl Structure {
     /// The tree, for structures in the shared tree node format.
     pub fn tree(&self) -> Option<&GpuTree> {
         self.built.tree()
+    }
+
+    /// Whether this tree is one leaf covering the volume, marched with the
+    /// naive kernel (`accel` is then naive; `stats` and `tree` are the tree's).
+    pub fn marched_naively(&self) -> bool {
+        self.built.marched_naively()
     }
 
     /// For `auto`: what it chose; `accel` is then the chosen structure.
@@ -517,9 +532,14 @@ impl Builder {
         let (built, mut t) = accel.method().build(self, input, ranges, options)?;
         // `auto` is marched as the structure it chose.
         let accel = built.choice().map_or(accel, |c| c.accel);
+        // Only trees the plain tree kernel marches: the hybrid walks a grid
+        // inside its leaves, so its one-leaf tree still skips.
+        let plain_tree = accel.method().march().shader.name == super::tree::TREE_MARCH.shader.name;
         let whole = match built.tree() {
-            Some(tree) => t.cpu("root check", || tree.whole_box_leaf(input.gpu_volume.dims))?,
-            None => None,
+            Some(tree) if plain_tree => t.cpu("root check", || {
+                tree.whole_box_leaf(input.gpu_volume.dims, options.collapse)
+            })?,
+            _ => None,
         };
         if whole.is_some() {
             // One leaf that is the whole volume box: nothing to skip, so the

@@ -111,7 +111,8 @@ pub struct GpuTree {
     /// brick count and bytes too.
     pub(crate) stats: Stats,
     /// Known at upload for CPU-built trees; an LBVH reads its nodes back for
-    /// it only when statistics are asked for, never on the build path.
+    /// it only when statistics are asked for (the build path reads at most a
+    /// collapsed tree's root: `whole_box_leaf`).
     pub(crate) shape: std::sync::OnceLock<Shape>,
     /// Scratch buffers a recorded build's command buffer uses, kept alive
     /// with the structure (which must outlive the submission anyway); set
@@ -178,10 +179,17 @@ impl GpuTree {
     }
 
     /// The root node when it is a leaf whose box is all of `dims` (a tree
-    /// with nothing to skip), else None. Reads the root back (32 bytes)
-    /// unless the tree's shape, known at upload, rules it out.
-    pub fn whole_box_leaf(&self, dims: [u32; 3]) -> Result<Option<Node>> {
-        if self.sizes()?.node_count == 0 || self.shape.get().is_some_and(|s| s.nodes != 1) {
+    /// with nothing to skip), else None. Reads the root back (32 bytes) only
+    /// when its sizes cannot rule it out: a tree whose shape is known at
+    /// upload is one leaf only with one node, an uncollapsed LBVH only with
+    /// one brick.
+    pub fn whole_box_leaf(&self, dims: [u32; 3], collapsed: bool) -> Result<Option<Node>> {
+        let sizes = self.sizes()?;
+        let known_inner = match self.shape.get() {
+            Some(shape) => shape.nodes != 1,
+            None => !collapsed && sizes.leaves != 1,
+        };
+        if sizes.node_count == 0 || known_inner {
             return Ok(None);
         }
         let root: Node = bytemuck::pod_read_unaligned(&self.nodes.download(0, 32)?);

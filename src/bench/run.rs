@@ -490,6 +490,12 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     config.stable * 100.0
                 ));
             }
+            if run.structure.marched_naively() {
+                out.notes.push(format!(
+                    "{} - {}: one leaf covering the volume, marched with the naive kernel",
+                    loaded.spec, s.label
+                ));
+            }
             if unstable {
                 out.notes.push(format!(
                     "{} - {}: unstable (frame max/min over rounds {:.2}, build max/min {:.2}, above {UNSTABLE_SPREAD})",

@@ -241,21 +241,39 @@ impl Drop for Buffer {
 /// this way because lavapipe fetches every lane's texel with vector loads,
 /// where it reads a storage buffer one lane at a time.
 pub struct TexelBuffer {
-    pub buffer: Buffer,
-    pub view: vk::BufferView,
+    buffer: Buffer,
+    view: vk::BufferView,
+}
+
+/// Bytes per texel of the formats lacuna reads as texel buffers.
+fn texel_bytes(format: vk::Format) -> Option<u64> {
+    match format {
+        vk::Format::R32_UINT | vk::Format::R32_SFLOAT => Some(4),
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => Some(16),
+        _ => None,
+    }
 }
 
 impl TexelBuffer {
-    /// Views all of `buffer` (created with `UNIFORM_TEXEL_BUFFER` usage) as
-    /// texels of `format`, `texel_bytes` each.
-    pub fn new(ctx: &Context, buffer: Buffer, format: vk::Format, texel_bytes: u64) -> Result<Self> {
-        let texels = buffer.size / texel_bytes;
-        let what = format!("buffer '{}' as {texels} texels of {format:?}", buffer.name);
+    /// Views all of `buffer`, created with `UNIFORM_TEXEL_BUFFER` usage, as
+    /// texels of `format` (32-bit RGBA or single-channel formats); its size
+    /// must be a whole, non-zero number of texels.
+    pub fn new(ctx: &Context, buffer: Buffer, format: vk::Format) -> Result<Self> {
+        let what = format!("buffer '{}' as texels of {format:?}", buffer.name);
+        let bytes = texel_bytes(format)
+            .ok_or_else(|| Error::Unsupported(format!("{what}: not a texel buffer format lacuna reads")))?;
+        if buffer.size == 0 || !buffer.size.is_multiple_of(bytes) {
+            return Err(Error::Interface(format!(
+                "{what}: {} bytes is not a whole number of {bytes}-byte texels",
+                buffer.size
+            )));
+        }
         if !ctx.reads_texel_buffers(format) {
             return Err(Error::Unsupported(format!(
                 "{what}: the device cannot read {format:?} uniform texel buffers"
             )));
         }
+        let texels = buffer.size / bytes;
         let info = ctx.info();
         info.check(
             what,
@@ -267,9 +285,19 @@ impl TexelBuffer {
             .buffer(buffer.raw)
             .format(format)
             .offset(0)
-            .range(texels * texel_bytes);
+            .range(buffer.size);
         let view = unsafe { ctx.device().create_buffer_view(&create, None) }.vk("vkCreateBufferView")?;
         Ok(TexelBuffer { buffer, view })
+    }
+
+    /// The buffer (for writes as a storage buffer, copies, readback).
+    pub fn buffer(&self) -> &Buffer {
+        &self.buffer
+    }
+
+    /// The view a `samplerBuffer` binding takes.
+    pub fn view(&self) -> vk::BufferView {
+        self.view
     }
 }
 

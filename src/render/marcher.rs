@@ -293,7 +293,7 @@ impl Renderer {
         let mut bindings = vec![
             Binding::Storage(&target.params),
             Binding::Sampled(volume.image.view, sampler),
-            Binding::TexelBuffer(target.lut.view),
+            Binding::TexelBuffer(target.lut.view()),
             output,
         ];
         bindings.extend(structure.built.bindings());
@@ -314,7 +314,7 @@ impl Renderer {
         record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
         self.opacity.dispatch(
             cmd,
-            &[Binding::Storage(&tf.lut), Binding::Storage(&target.lut.buffer)],
+            &[Binding::Storage(&tf.lut), Binding::Storage(target.lut.buffer())],
             bytemuck::bytes_of(&lut_push),
             lut_groups,
         )?;

@@ -182,7 +182,7 @@ impl RenderTarget {
             storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;
-        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT, 16)?;
+        let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
         let readback = match readback {
             true => Some(buffer(
                 "frame readback",
