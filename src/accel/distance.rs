@@ -67,11 +67,17 @@ const SUMMARY_CELLS_PER_INVOCATION: u64 = 64;
 check_push!(SummaryPush, shaders::BUILD_DISTANCE_SUMMARY);
 check_push!(GridPush, shaders::MARCH_DISTANCE);
 
+/// Longest row whose envelope `distance_rows.comp` keeps in private arrays
+/// (its PRIVATE_ROW).
+const PRIVATE_ROW: u32 = 64;
+
 /// The linear-time distance-transform kernels (two-sided rows for cube
 /// maps, one-sided rows for octant maps) and the summary kernels of both map
 /// kinds (specialization constant 0: octant maps).
 pub struct DistanceKernels {
-    rows: Kernel,
+    /// Cube-map rows with the envelope in a storage buffer, then in private
+    /// arrays (rows of at most [`PRIVATE_ROW`] cells).
+    rows: [Kernel; 2],
     octant_rows: Kernel,
     summary: [Kernel; 2],
 }
@@ -79,8 +85,9 @@ pub struct DistanceKernels {
 impl KernelSet for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
         let summary = |o| Kernel::with_constants::<SummaryPush>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
+        let rows = |p| Kernel::with_constants::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
         Ok(DistanceKernels {
-            rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_ROWS)?,
+            rows: [rows(0)?, rows(1)?],
             octant_rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
             summary: [summary(0)?, summary(1)?],
         })
@@ -207,7 +214,7 @@ pub fn record(
         let (k, per_row) = if octants {
             (&kernels.octant_rows, if axis == 2 { 4 } else { 2 })
         } else {
-            (&kernels.rows, 1)
+            (&kernels.rows[usize::from(c[axis] <= PRIVATE_ROW)], 1)
         };
         let rows = cells.total / c[axis] as u64;
         let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
