@@ -1,12 +1,12 @@
 //! `lacuna render`: one frame with any structure, GPU time per pass, EXR or PNG out.
 
-use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
+use super::{check_parent, context, frame_settings, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::kd::KdParams;
 use lacuna::accel::{parse_collapse, Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
-use lacuna::render::{self, Camera, Filter, Projection, RenderSettings, Renderer};
+use lacuna::render::{self, Camera, Filter, RenderSettings, Renderer};
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
@@ -91,26 +91,15 @@ impl RenderArgs {
             collapse: parse_collapse(&self.collapse)?,
         };
         options.validate()?;
-        let projection = match self.perspective {
-            Some(fov_deg) => Projection::Perspective {
-                fov_deg,
-                distance: self.distance,
-            },
-            None => Projection::Orthographic,
-        };
-        let settings = RenderSettings {
-            width: self.size.0,
-            height: self.size.1,
-            camera: Camera {
-                azimuth_deg: self.camera.0,
-                elevation_deg: self.camera.1,
-                projection,
-            },
-            step: self.step,
-            ert: self.ert,
-            filter: self.filter.unwrap_or_default(),
-        };
-        settings.validate()?;
+        let settings = frame_settings(
+            self.size,
+            self.camera,
+            self.perspective,
+            self.distance,
+            self.step,
+            self.ert,
+            self.filter,
+        )?;
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
         }

@@ -666,27 +666,25 @@ impl Context {
         &self.inner.info
     }
 
-    /// Whether sampled images of `format` (optimal tiling) filter linearly on
-    /// this device: `SAMPLED_IMAGE_FILTER_LINEAR` is optional for R16 and R32F.
-    pub fn filters_linearly(&self, format: vk::Format) -> bool {
-        let props = unsafe {
+    fn format_properties(&self, format: vk::Format) -> vk::FormatProperties {
+        unsafe {
             self.inner
                 .instance
                 .get_physical_device_format_properties(self.inner.physical_device, format)
-        };
-        props
+        }
+    }
+
+    /// Whether sampled images of `format` (optimal tiling) filter linearly on
+    /// this device: `SAMPLED_IMAGE_FILTER_LINEAR` is optional for R16 and R32F.
+    pub fn filters_linearly(&self, format: vk::Format) -> bool {
+        self.format_properties(format)
             .optimal_tiling_features
             .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
     }
 
     /// Whether buffers of `format` can be read as uniform texel buffers.
     pub fn reads_texel_buffers(&self, format: vk::Format) -> bool {
-        let props = unsafe {
-            self.inner
-                .instance
-                .get_physical_device_format_properties(self.inner.physical_device, format)
-        };
-        props
+        self.format_properties(format)
             .buffer_features
             .contains(vk::FormatFeatureFlags::UNIFORM_TEXEL_BUFFER)
     }

@@ -103,13 +103,7 @@ impl Buffer {
         data: &[u8],
         usage: vk::BufferUsageFlags,
     ) -> Result<(Self, Staging)> {
-        let buffer = Buffer::new(
-            ctx,
-            name,
-            data.len() as u64,
-            usage | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?;
+        let buffer = Buffer::upload_target(ctx, name, data.len() as u64, usage)?;
         let staging = Buffer::staging(ctx, "staging upload", data)?;
         let region = [vk::BufferCopy {
             src_offset: 0,
@@ -122,15 +116,20 @@ impl Buffer {
         Ok((buffer, Staging(vec![staging])))
     }
 
-    /// A device-local storage buffer filled from `data` through staging.
-    pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Self> {
-        let buffer = Buffer::new(
+    /// A device-local buffer of `usage` that copies can write.
+    fn upload_target(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<Self> {
+        Buffer::new(
             ctx,
             name,
-            data.len() as u64,
+            size,
             usage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
-        )?;
+        )
+    }
+
+    /// A device-local storage buffer filled from `data` through staging.
+    pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Self> {
+        let buffer = Buffer::upload_target(ctx, name, data.len() as u64, usage)?;
         buffer.upload(0, data)?;
         Ok(buffer)
     }

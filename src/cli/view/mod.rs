@@ -7,13 +7,13 @@ mod controls;
 mod host;
 mod scene;
 
-use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
+use super::{check_parent, frame_settings, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use controls::{Change, Controls, Shape};
 use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
-use lacuna::render::{self, Camera, Filter, Projection, RenderSettings};
+use lacuna::render::{self, Camera, Filter, RenderSettings};
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
 use std::path::{Path, PathBuf};
@@ -99,26 +99,15 @@ struct App<'a> {
 
 impl ViewArgs {
     fn settings(&self) -> Result<RenderSettings> {
-        let projection = match self.perspective {
-            Some(fov_deg) => Projection::Perspective {
-                fov_deg,
-                distance: None,
-            },
-            None => Projection::Orthographic,
-        };
-        let settings = RenderSettings {
-            width: self.size.0,
-            height: self.size.1,
-            camera: Camera {
-                azimuth_deg: self.camera.0,
-                elevation_deg: self.camera.1,
-                projection,
-            },
-            step: self.step,
-            ert: self.ert,
-            filter: self.filter.unwrap_or_default(),
-        };
-        settings.validate()?;
+        let settings = frame_settings(
+            self.size,
+            self.camera,
+            self.perspective,
+            None,
+            self.step,
+            self.ert,
+            self.filter,
+        )?;
         if self.frames == Some(0) {
             return Err(Error::invalid("frames", "0", "must be at least 1"));
         }
