@@ -21,11 +21,10 @@ pub mod render;
 pub mod scene;
 pub mod spatial;
 pub mod tf;
-pub mod timings;
 pub mod volume;
 
 pub use error::{Error, Result};
-pub use timings::Timings;
+pub use gpu::Timings;
 
 pub use tf::TransferFunction;
 pub use volume::Volume;

@@ -15,8 +15,8 @@ use lacuna::gpu::{
 };
 use lacuna::render::{Camera, HostDepth, HostImage, Output, Projection, RenderTarget, Renderer, Scene, View};
 use lacuna::tf::GpuTransferFunction;
-use lacuna::timings::Timings;
 use lacuna::volume::{GpuVolume, LoadOptions};
+use lacuna::Timings;
 use lacuna::{TransferFunction, Volume};
 
 mod shaders {

@@ -16,8 +16,8 @@ use super::stats::Stats;
 use super::tree::GpuTree;
 use super::{Accel, Classifier};
 use crate::error::Result;
+use crate::gpu::timings::Timings;
 use crate::gpu::{Binding, Timer};
-use crate::timings::Timings;
 
 /// The cell edge auto plans with when `--cell` is not given: the finest
 /// cell whose map rebuild stays cheap (`docs/results/distance.md`).

@@ -146,7 +146,7 @@ impl CostModel {
         let t = timer.results()?;
         let median = |i: usize| {
             let v: Vec<f64> = (0..REPEATS).filter_map(|r| t.get(&format!("{i}/{r}"))).collect();
-            crate::timings::median(v)
+            crate::gpu::timings::median(v)
         };
         // ms per dispatch -> ns per ray.
         let per_ray = |i: usize| median(i) * 1e6 / (RAYS * RAYS) as f64;

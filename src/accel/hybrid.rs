@@ -9,8 +9,8 @@ use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, R
 use super::stats::Stats;
 use super::tree::GpuTree;
 use crate::error::Result;
+use crate::gpu::timings::Timings;
 use crate::gpu::{shaders, Binding, Timer};
-use crate::timings::Timings;
 
 pub struct Hybrid {
     pub tree: GpuTree,

@@ -18,11 +18,11 @@ use super::registry::{classify_param, BuildInput, BuildOptions, Builder, Built, 
 use super::stats::Stats;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
+use crate::gpu::timings::Timings;
 use crate::gpu::{shaders, vk, Binding, Buffer, Context, MemoryLocation, Timer};
 use crate::spatial::octree_node::{axis_bit, Node};
 use crate::spatial::{Sat3, Traversal};
 use crate::tf::GpuTransferFunction;
-use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 pub struct VolumeOctree {

@@ -1,7 +1,7 @@
 //! One record per benchmark run (a data set x structure), and one per point
 //! of the speed-against-error sweep: what `results.json` and `error.json` hold.
 
-use crate::timings::median;
+use crate::gpu::timings::median;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

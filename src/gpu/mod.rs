@@ -1,21 +1,26 @@
-//! The thin `ash` layer: context (own or adopted), memory, kernels,
-//! recording and barriers, timestamp timer, validation messenger.
+//! The thin `ash` layer: loader and instance, device selection and
+//! requirements, the context (own or adopted), memory, kernels from the
+//! reflected shaders, recording and barriers, timestamp timer and timings,
+//! validation messenger. Imports nothing of lacuna but `error`.
 
 mod context;
+mod device;
+mod instance;
 mod kernel;
 mod memory;
 pub mod record;
+mod requirements;
 pub mod shaders;
 mod timer;
+pub mod timings;
 mod validation;
 
 pub use ash::vk;
-pub use context::{
-    list_devices, required_features, select_device, AdoptInfo, Context, ContextOptions, DeviceInfo, DeviceSummary,
-    EnabledFeatures, REQUIRED_EXTENSIONS,
-};
+pub use context::{Context, ContextOptions};
+pub use device::{list_devices, select_device, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::{Binding, Kernel};
+pub use requirements::{required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 pub use shaders::{LocalDim, Shader};
 
 /// Compile-time check that a `#[repr(C)]` push-constant block has the size of
@@ -36,4 +41,5 @@ macro_rules! check_push {
 pub(crate) use check_push;
 pub use memory::{check_image3d, Buffer, Image3d, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};
+pub use timings::Timings;
 pub use validation::ValidationMessage;

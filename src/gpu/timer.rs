@@ -1,9 +1,9 @@
 //! GPU timestamps for named passes. Ticks are masked to the queue's
 //! `timestampValidBits` and scaled by `timestampPeriod` (ns per tick).
 
+use super::timings::Timings;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
-use crate::timings::Timings;
 use ash::vk;
 
 pub struct Timer {

@@ -4,9 +4,11 @@
 //! (lavapipe) pay for every workgroup barrier per invocation batch, so a
 //! narrow workgroup with long serial runs is several times faster there.
 
-use super::scan::BLOCK;
 use crate::error::{Error, Result};
 use crate::gpu::{vk, DeviceInfo};
+
+/// Elements per workgroup of the block-wise primitives.
+pub const BLOCK: u64 = 1024;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BlockLayout {

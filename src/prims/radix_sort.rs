@@ -2,7 +2,8 @@
 //! `key_bits` sets the number of passes (30-bit Morton codes need 8).
 
 use super::layout::BlockLayout;
-use super::scan::{Scan, ScanScratch, BLOCK};
+use super::layout::BLOCK;
+use super::scan::{Scan, ScanScratch};
 use super::{check_range, entry_barrier};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};

@@ -2,7 +2,7 @@
 //! 1024 are scanned in shared memory, block totals are scanned recursively,
 //! then added back.
 
-use super::layout::BlockLayout;
+use super::layout::{BlockLayout, BLOCK};
 use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self};
@@ -19,9 +19,6 @@ struct ScanPush {
 }
 check_push!(ScanPush, shaders::PRIMS_SCAN_BLOCKS);
 check_push!(ScanPush, shaders::PRIMS_SCAN_ADD);
-
-/// Elements per workgroup (see `BlockLayout`).
-pub const BLOCK: u64 = 1024;
 
 pub struct Scan {
     ctx: Context,

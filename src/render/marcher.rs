@@ -9,9 +9,9 @@ use crate::accel::{Accel, Structure};
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
+use crate::gpu::timings::Timings;
 use crate::gpu::{shaders, vk, Binding, Context, Kernel, OptionalTimer, Timer};
 use crate::tf::GpuTransferFunction;
-use crate::timings::Timings;
 use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
 use bytemuck::{Pod, Zeroable};
 

@@ -15,9 +15,9 @@ use crate::accel::registry::{
 use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, Node, TREE_MARCH};
 use crate::error::Result;
+use crate::gpu::timings::Timings;
 use crate::gpu::Context;
 use crate::tf::TransferFunction;
-use crate::timings::Timings;
 use crate::volume::Volume;
 use rayon::prelude::*;
 

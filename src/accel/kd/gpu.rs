@@ -20,10 +20,10 @@ use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self};
+use crate::gpu::timings::Timings;
 use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
 use crate::prims::{entry_barrier, RadixSort};
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
-use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 /// Push block of `brick_tight.comp`.

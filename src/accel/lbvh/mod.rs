@@ -30,10 +30,10 @@ pub use super::tree::{height, GpuTree, Node};
 use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
+use crate::gpu::timings::Timings;
 use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::{entry_barrier, Compact, CompactScratch, RadixSort, SortScratch};
 use crate::tf::GpuTransferFunction;
-use crate::timings::Timings;
 use crate::volume::GpuVolume;
 
 /// A built LBVH is a tree in the shared node format.
