@@ -64,6 +64,143 @@ fn locate(log: &str, file: &str) -> String {
         .join("\n")
 }
 
+/// Structs the host reads or writes in GPU memory, generated once into
+/// `shaders::blocks` from every shader that declares them (which must agree):
+/// the render parameter block and the node and primitive formats.
+const SHARED_STRUCTS: [&str; 5] = ["RenderParams", "BvhNode", "OctNode", "Prim", "TraceRay"];
+
+/// The bindings every march kernel has (`glsl/common/march.glsl`); the
+/// renderer binds them, the structure the rest.
+const MARCH_COMMON: [&str; 4] = ["params", "volume_tex", "tf_lut", "frame"];
+
+/// Rust keywords a GLSL name may collide with.
+fn ident(name: &str) -> String {
+    const KEYWORDS: [&str; 12] = [
+        "type", "ref", "in", "box", "loop", "match", "mod", "move", "self", "use", "where", "impl",
+    ];
+    if KEYWORDS.contains(&name) {
+        format!("r#{name}")
+    } else {
+        name.to_string()
+    }
+}
+
+/// A `#[repr(C)]` Pod struct with the shader's layout; gaps become `_padN`
+/// words so the layout is exact and every byte is initialised.
+fn rust_struct(doc: &str, name: &str, def: &reflect::Struct) -> Result<String, String> {
+    let mut out = format!(
+        "/// {doc}\n#[repr(C)]\n#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]\npub struct {name} {{\n"
+    );
+    let mut cursor = 0;
+    for (k, m) in def.members.iter().enumerate() {
+        if m.offset < cursor || (m.offset - cursor) % 4 != 0 {
+            return Err(format!(
+                "{}.{}: offset {} has no Rust layout",
+                def.name, m.name, m.offset
+            ));
+        }
+        if m.offset > cursor {
+            let _ = writeln!(out, "    pub _pad{k}: [u32; {}],", (m.offset - cursor) / 4);
+        }
+        let _ = writeln!(out, "    pub {}: {},", ident(&m.name), m.rust);
+        cursor = m.offset + m.size;
+    }
+    let _ = writeln!(
+        out,
+        "}}\nimpl Default for {name} {{\n    fn default() -> Self {{\n        bytemuck::Zeroable::zeroed()\n    }}\n}}\nconst _: () = assert!(std::mem::size_of::<{name}>() == {});\n",
+        def.size
+    );
+    Ok(out)
+}
+
+/// `pub mod <kernel>`: its push block as `Push`, and its bindings as a
+/// struct of named fields (`Bindings`; march kernels: `Own`, the bindings
+/// besides [`MARCH_COMMON`]) whose `list` gives them to `Kernel::dispatch`.
+fn interface_module(
+    stem: &str,
+    rel: &str,
+    iface: &reflect::Interface,
+    is_march: bool,
+    pushes: &mut Vec<(String, reflect::Struct)>,
+) -> Result<String, String> {
+    let module = stem.replace('/', "_");
+    let mut out = format!("/// The host side of `glsl/{rel}`'s interface, generated from its SPIR-V.\npub mod {module} {{\n    #[allow(unused_imports)]\n    use super::*;\n");
+    if let Some(push) = &iface.push {
+        let same = |d: &reflect::Struct| d.members == push.members && d.size == push.size;
+        if let Some((first, _)) = pushes.iter().find(|(_, d)| same(d)) {
+            let _ = writeln!(
+                out,
+                "    /// The push-constant block, laid out as `{first}`'s.\n    pub use super::{first}::Push;"
+            );
+        } else {
+            for line in rust_struct("The push-constant block.", "Push", push)?.lines() {
+                let _ = writeln!(out, "    {line}");
+            }
+            pushes.push((module.clone(), push.clone()));
+        }
+    }
+    let own: Vec<&reflect::Slot> = if is_march {
+        for common in MARCH_COMMON {
+            if !iface.bindings.iter().any(|b| b.name == common) {
+                return Err(format!(
+                    "a march kernel must declare the binding {common} (include march.glsl)"
+                ));
+            }
+        }
+        iface
+            .bindings
+            .iter()
+            .filter(|b| !MARCH_COMMON.contains(&b.name.as_str()))
+            .collect()
+    } else {
+        iface.bindings.iter().collect()
+    };
+    let what = if is_march { "Own" } else { "Bindings" };
+    let doc = if is_march {
+        "The kernel's own bindings (the renderer binds the common ones)."
+    } else {
+        "Every binding of the kernel, by name."
+    };
+    let _ = writeln!(out, "    /// {doc}\n    pub struct {what}<'a> {{");
+    for b in &own {
+        let _ = writeln!(out, "        pub {}: Binding<'a>,", ident(&b.name));
+    }
+    if own.is_empty() {
+        out.push_str("        pub _none: std::marker::PhantomData<&'a ()>,\n");
+    }
+    let _ = writeln!(
+        out,
+        "    }}\n    impl<'a> {what}<'a> {{\n        /// (name, resource) pairs for `Kernel::dispatch`.\n        pub fn list(self) -> Vec<(&'static str, Binding<'a>)> {{\n            vec![{}]\n        }}\n    }}\n}}\n",
+        own.iter()
+            .map(|b| format!("({:?}, self.{})", b.name, ident(&b.name)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(out)
+}
+
+/// `pub mod blocks`: the [`SHARED_STRUCTS`], each checked to be laid out
+/// alike by every shader that declares it.
+fn shared_module(shared: &[(String, reflect::Struct)]) -> Result<String, String> {
+    let mut out = String::from(
+        "/// Structs the host reads or writes in GPU memory, generated from the SPIR-V.\npub mod blocks {\n",
+    );
+    for name in SHARED_STRUCTS {
+        let mut defs = shared.iter().filter(|(_, d)| d.name == name);
+        let (first_file, first) = defs.next().ok_or(format!("no shader declares struct {name}"))?;
+        if let Some((file, _)) = defs.find(|(_, d)| d != first) {
+            return Err(format!(
+                "struct {name} is laid out differently in glsl/{first_file} and glsl/{file}"
+            ));
+        }
+        for line in rust_struct(&format!("`{name}` as the shaders lay it out."), name, first)?.lines() {
+            let _ = writeln!(out, "    {line}");
+        }
+    }
+    out.push_str("}\n");
+    Ok(out)
+}
+
 /// Storage-image formats of host frames (GLSL format qualifiers).
 const IMAGE_FORMATS: [&str; 3] = ["rgba8", "rgba16f", "rgba32f"];
 
@@ -96,6 +233,10 @@ fn main() {
     let mut generated = String::from("// Generated by build.rs from glsl/**/*.comp. Do not edit.\n\n");
     let mut names = Vec::new();
     let mut failures = Vec::new();
+    let mut shared: Vec<(String, reflect::Struct)> = Vec::new();
+    // Push blocks generated so far, by module: a kernel whose block is laid
+    // out and named exactly as an earlier kernel's shares its type.
+    let mut pushes: Vec<(String, reflect::Struct)> = Vec::new();
     // March kernels are also compiled once per host storage-image format
     // (FRAME_FORMAT: glsl/common/frame_out.glsl), named `march/NAME@FORMAT`.
     let mut jobs: Vec<(&PathBuf, Option<&str>)> = Vec::new();
@@ -151,10 +292,17 @@ fn main() {
                     let _ = writeln!(generated, "    {},", line.join(", "));
                 }
                 generated.push_str("];\n");
-                let bindings: Vec<String> = iface
+                let slots: Vec<String> = iface
                     .bindings
                     .iter()
-                    .map(|d| format!("vk::DescriptorType::{}", d.vk_name()))
+                    .map(|b| {
+                        format!(
+                            "Slot {{ name: {:?}, ty: vk::DescriptorType::{}, block_size: {} }}",
+                            b.name,
+                            b.ty.vk_name(),
+                            b.block_size
+                        )
+                    })
                     .collect();
                 let dims: Vec<String> = iface
                     .local_size
@@ -168,12 +316,23 @@ fn main() {
                     .collect();
                 let _ = writeln!(
                     generated,
-                    "/// `glsl/{rel}`: SPIR-V and its reflected interface.\npub const {name}: Shader = Shader {{\n    name: \"{kernel}\",\n    words: &{name}_WORDS,\n    bindings: &[{}],\n    block_sizes: &{:?},\n    push_size: {},\n    local_size: [{}],\n}};\n",
-                    bindings.join(", "),
-                    iface.block_sizes,
+                    "/// `glsl/{rel}`: SPIR-V and its reflected interface.\npub const {name}: Shader = Shader {{\n    name: \"{kernel}\",\n    words: &{name}_WORDS,\n    bindings: &[{}],\n    push_size: {},\n    local_size: [{}],\n}};\n",
+                    slots.join(", "),
                     iface.push_size,
                     dims.join(", ")
                 );
+                if format.is_none() {
+                    let is_march = stem.starts_with("march/");
+                    match interface_module(stem, &rel, &iface, is_march, &mut pushes) {
+                        Ok(module) => generated.push_str(&module),
+                        Err(e) => failures.push(format!("glsl/{rel}: {e}")),
+                    }
+                }
+                for def in iface.structs {
+                    if SHARED_STRUCTS.contains(&def.name.as_str()) {
+                        shared.push((rel.clone(), def));
+                    }
+                }
                 names.push((rel.clone(), name));
             }
             Err(log) => {
@@ -194,6 +353,10 @@ fn main() {
             println!("cargo:warning={}", f.replace('\n', " | "));
         }
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
+    }
+    match shared_module(&shared) {
+        Ok(module) => generated.push_str(&module),
+        Err(e) => panic!("GLSL interface types: {e}"),
     }
     generated.push_str("/// Every embedded shader.\npub static ALL: &[Shader] = &[\n");
     for (_, name) in &names {

@@ -1,7 +1,9 @@
 //! Reads a compute shader's interface from its SPIR-V words: descriptor
-//! bindings of set 0 with their types, the push-constant block's size and the
-//! workgroup size (literal or specialization constants). Only the few
-//! instructions that carry these are decoded.
+//! bindings of set 0 with their names and types, the push-constant block
+//! (its members, offsets and types), the fixed members of storage and
+//! uniform blocks and of the structs they hold, and the workgroup size
+//! (literal or specialization constants). Only the few instructions that
+//! carry these are decoded; names come from the debug names glslang emits.
 
 use std::collections::HashMap;
 
@@ -37,24 +39,57 @@ pub enum Dim {
     Spec { id: u32, default: u32 },
 }
 
+/// One binding of set 0.
+pub struct Slot {
+    /// The variable's name, or (an anonymous block) its block's name in snake_case.
+    pub name: String,
+    pub ty: Descriptor,
+    /// The block size in bytes of a uniform or storage buffer (of a storage
+    /// block ending in a runtime array, the part before it), else 0.
+    pub block_size: u32,
+}
+
+/// A struct as the shader lays it out (the fixed members of a block).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Struct {
+    pub name: String,
+    pub members: Vec<Member>,
+    /// Bytes up to the end of the last fixed member.
+    pub size: u32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Member {
+    pub name: String,
+    pub offset: u32,
+    /// The Rust type with this layout (`u32`, `[f32; 4]`, another struct's name).
+    pub rust: String,
+    pub size: u32,
+}
+
 pub struct Interface {
     /// Bindings 0.. of set 0, in order.
-    pub bindings: Vec<Descriptor>,
-    /// Per binding: the block size in bytes of a uniform or storage buffer
-    /// (of a storage block ending in a runtime array, the part before it),
-    /// else 0.
-    pub block_sizes: Vec<u32>,
+    pub bindings: Vec<Slot>,
     pub push_size: u32,
+    /// The push-constant block, if any.
+    pub push: Option<Struct>,
+    /// Every named struct reachable from a uniform or storage block (the
+    /// blocks' own types included), by name.
+    pub structs: Vec<Struct>,
     pub local_size: [Dim; 3],
 }
 
 #[derive(Clone, Debug)]
 enum Ty {
-    Scalar(u32),
+    /// Bytes, signedness.
+    Int(u32, bool),
+    /// Bytes.
+    Float(u32),
     Vector(u32, u32),
     Matrix(u32, u32),
     Array(u32, u32),
-    RuntimeArray,
+    /// Of the element type with this id.
+    RuntimeArray(u32),
     Struct(Vec<u32>),
     Image {
         dim: u32,
@@ -76,6 +111,8 @@ struct Module {
     member_offsets: HashMap<(u32, u32), u32>,
     array_strides: HashMap<u32, u32>,
     variables: Vec<(u32, u32, u32)>,
+    names: HashMap<u32, String>,
+    member_names: HashMap<(u32, u32), String>,
     local_size: Option<[u32; 3]>,
     local_size_ids: Option<[u32; 3]>,
 }
@@ -115,8 +152,18 @@ impl Module {
                 16 if a.get(1) == Some(&17) && a.len() >= 5 => m.local_size = Some([a[2], a[3], a[4]]),
                 // OpExecutionModeId %entry LocalSizeId %x %y %z
                 331 if a.get(1) == Some(&38) && a.len() >= 5 => m.local_size_ids = Some([a[2], a[3], a[4]]),
-                21 | 22 => {
-                    m.types.insert(a[0], Ty::Scalar(a[1] / 8));
+                // OpName, OpMemberName
+                5 => {
+                    m.names.insert(a[0], string(&a[1..]));
+                }
+                6 => {
+                    m.member_names.insert((a[0], a[1]), string(&a[2..]));
+                }
+                21 => {
+                    m.types.insert(a[0], Ty::Int(a[1] / 8, a[2] == 1));
+                }
+                22 => {
+                    m.types.insert(a[0], Ty::Float(a[1] / 8));
                 }
                 23 => {
                     m.types.insert(a[0], Ty::Vector(a[1], a[2]));
@@ -143,7 +190,7 @@ impl Module {
                     m.types.insert(a[0], Ty::Array(a[1], a[2]));
                 }
                 29 => {
-                    m.types.insert(a[0], Ty::RuntimeArray);
+                    m.types.insert(a[0], Ty::RuntimeArray(a[1]));
                 }
                 30 => {
                     m.types.insert(a[0], Ty::Struct(a[1..].to_vec()));
@@ -184,7 +231,7 @@ impl Module {
 
     fn size_of(&self, ty: u32) -> Result<u32, String> {
         match self.types.get(&ty) {
-            Some(Ty::Scalar(b)) => Ok(*b),
+            Some(Ty::Int(b, _) | Ty::Float(b)) => Ok(*b),
             Some(Ty::Vector(c, n)) => Ok(self.size_of(*c)? * n),
             Some(Ty::Matrix(col, n)) => Ok(self.size_of(*col)? * n),
             Some(Ty::Array(e, len)) => {
@@ -213,11 +260,92 @@ impl Module {
             Some(Ty::Struct(members)) => {
                 let k = members.len().checked_sub(1).ok_or("empty struct")?;
                 match self.types.get(&members[k]) {
-                    Some(Ty::RuntimeArray) => Ok(self.member_offsets.get(&(ty, k as u32)).copied().unwrap_or(0)),
+                    Some(Ty::RuntimeArray(_)) => Ok(self.member_offsets.get(&(ty, k as u32)).copied().unwrap_or(0)),
                     other => Err(format!("no size for type {other:?}")),
                 }
             }
             other => Err(format!("no size for type {other:?}")),
+        }
+    }
+
+    /// The Rust type with the layout of `ty` (std430/std140 members: arrays
+    /// only where their stride is their element's size).
+    fn rust_type(&self, ty: u32) -> Result<String, String> {
+        match self.types.get(&ty) {
+            Some(Ty::Int(4, true)) => Ok("i32".into()),
+            Some(Ty::Int(4, false)) => Ok("u32".into()),
+            Some(Ty::Float(4)) => Ok("f32".into()),
+            Some(Ty::Vector(c, n)) => Ok(format!("[{}; {n}]", self.rust_type(*c)?)),
+            Some(Ty::Matrix(col, n)) => Ok(format!("[{}; {n}]", self.rust_type(*col)?)),
+            Some(Ty::Array(e, len)) => {
+                let n = self.constants.get(len).ok_or("array length is not a constant")?;
+                let stride = self.array_strides.get(&ty).copied().unwrap_or(0);
+                if stride != 0 && stride != self.size_of(*e)? {
+                    return Err(format!(
+                        "an array of stride {stride} over elements of {} bytes has no Rust layout; use vec4 elements",
+                        self.size_of(*e)?
+                    ));
+                }
+                Ok(format!("[{}; {n}]", self.rust_type(*e)?))
+            }
+            Some(Ty::Struct(_)) => self.names.get(&ty).cloned().ok_or("a struct without a name".into()),
+            other => Err(format!("no Rust type for {other:?}")),
+        }
+    }
+
+    /// The fixed members of struct `ty` (a trailing runtime array left out),
+    /// with the structs they contain appended to `out`.
+    fn struct_def(&self, ty: u32, out: &mut Vec<Struct>) -> Result<Struct, String> {
+        let Some(Ty::Struct(members)) = self.types.get(&ty) else {
+            return Err(format!("type %{ty} is not a struct"));
+        };
+        let name = self.names.get(&ty).cloned().unwrap_or_default();
+        let mut def = Struct {
+            name: name.clone(),
+            members: Vec::new(),
+            size: 0,
+        };
+        for (k, &mt) in members.iter().enumerate() {
+            let mut inner = mt;
+            if matches!(self.types.get(&mt), Some(Ty::RuntimeArray(_))) {
+                break;
+            }
+            while let Some(Ty::Array(e, _)) = self.types.get(&inner) {
+                inner = *e;
+            }
+            if matches!(self.types.get(&inner), Some(Ty::Struct(_))) {
+                let nested = self.struct_def(inner, out)?;
+                if !out.contains(&nested) {
+                    out.push(nested);
+                }
+            }
+            let offset = self.member_offsets.get(&(ty, k as u32)).copied().unwrap_or(0);
+            let size = self.size_of(mt)?;
+            let member = self
+                .member_names
+                .get(&(ty, k as u32))
+                .cloned()
+                .filter(|n| !n.is_empty())
+                .ok_or_else(|| format!("member {k} of struct {name} has no name"))?;
+            def.members.push(Member {
+                name: member,
+                offset,
+                rust: self.rust_type(mt).map_err(|e| format!("{name}.{k}: {e}"))?,
+                size,
+            });
+            def.size = def.size.max(offset + size);
+        }
+        Ok(def)
+    }
+
+    /// The element struct of a block's trailing runtime array, if it is one.
+    fn runtime_element(&self, ty: u32) -> Option<u32> {
+        let Some(Ty::Struct(members)) = self.types.get(&ty) else {
+            return None;
+        };
+        match self.types.get(members.last()?) {
+            Some(Ty::RuntimeArray(e)) if matches!(self.types.get(e), Some(Ty::Struct(_))) => Some(*e),
+            _ => None,
         }
     }
 
@@ -235,8 +363,15 @@ impl Module {
 
 pub fn reflect(words: &[u32]) -> Result<Interface, String> {
     let m = Module::parse(words)?;
-    let mut slots: Vec<(u32, Descriptor, u32)> = Vec::new();
+    let mut slots: Vec<(u32, Slot)> = Vec::new();
     let mut push_size = 0;
+    let mut push = None;
+    let mut structs: Vec<Struct> = Vec::new();
+    let add = |def: Struct, structs: &mut Vec<Struct>| {
+        if !def.name.is_empty() && !structs.contains(&def) {
+            structs.push(def);
+        }
+    };
     for &(ptr, id, class) in &m.variables {
         let Some(Ty::Pointer(pointee)) = m.types.get(&ptr) else {
             continue;
@@ -244,6 +379,11 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
         let pointee = *pointee;
         if class == SC_PUSH_CONSTANT {
             push_size = m.size_of(pointee)?;
+            let mut nested = Vec::new();
+            push = Some(m.struct_def(pointee, &mut nested)?);
+            for n in nested {
+                add(n, &mut structs);
+            }
             continue;
         }
         let ty = match (class, m.types.get(&pointee)) {
@@ -287,10 +427,35 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
             Descriptor::StorageBuffer => m.size_of(pointee).or_else(|_| m.fixed_part(pointee)).unwrap_or(0),
             _ => 0,
         };
-        slots.push((binding, ty, size));
+        if matches!(ty, Descriptor::UniformBuffer | Descriptor::StorageBuffer) {
+            let mut nested = Vec::new();
+            let block = m.struct_def(pointee, &mut nested)?;
+            if let Some(e) = m.runtime_element(pointee) {
+                let element = m.struct_def(e, &mut nested)?;
+                nested.push(element);
+            }
+            for n in nested {
+                add(n, &mut structs);
+            }
+            if !block.members.is_empty() {
+                add(block, &mut structs);
+            }
+        }
+        let name = match m.names.get(&id).filter(|n| !n.is_empty()) {
+            Some(n) => n.clone(),
+            None => snake_case(m.names.get(&pointee).ok_or(format!("resource %{id} has no name"))?),
+        };
+        slots.push((
+            binding,
+            Slot {
+                name,
+                ty,
+                block_size: size,
+            },
+        ));
     }
     slots.sort_by_key(|s| s.0);
-    for (k, (b, _, _)) in slots.iter().enumerate() {
+    for (k, (b, _)) in slots.iter().enumerate() {
         if *b != k as u32 {
             return Err(format!(
                 "bindings of set 0 must be 0..{} without gaps (found binding {b} at position {k})",
@@ -317,10 +482,42 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
     } else {
         return Err("no workgroup size".into());
     };
+    let mut names: Vec<&str> = slots.iter().map(|s| s.1.name.as_str()).collect();
+    names.sort_unstable();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(format!("two bindings are named {}", w[0]));
+    }
     Ok(Interface {
-        bindings: slots.iter().map(|s| s.1).collect(),
-        block_sizes: slots.iter().map(|s| s.2).collect(),
+        bindings: slots.into_iter().map(|s| s.1).collect(),
         push_size,
+        push,
+        structs,
         local_size,
     })
+}
+
+/// A SPIR-V literal string: UTF-8, nul-terminated, packed little-endian.
+fn string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .take_while(|&b| b != 0)
+        .collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// `CellFlags` -> `cell_flags`.
+pub fn snake_case(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }

@@ -11,6 +11,7 @@
 pub mod accel;
 #[cfg(feature = "bench")]
 pub mod bench;
+pub mod desc;
 pub mod error;
 pub mod frame;
 pub mod gpu;

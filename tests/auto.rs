@@ -5,9 +5,9 @@
 
 mod common;
 use common::{assert_clean, gpu};
-use lacuna::accel::{auto, Accel, BuildInput, BuildOptions, Builder, Structure};
+use lacuna::accel::{auto, BuildInput, Builder, Structure};
 use lacuna::frame::diff;
-use lacuna::render::{RenderSettings, Renderer};
+use lacuna::render::{FrameDesc, Renderer};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -17,21 +17,16 @@ fn load(spec: &str) -> Volume {
 
 fn build(builder: &Builder, v: &Volume, gv: &GpuVolume, tf: &TransferFunction, cell: u32) -> Structure {
     let lut = tf.upload(builder.context()).unwrap();
-    let options = BuildOptions {
-        cell,
-        ..Default::default()
-    };
-    let (ranges, _) = builder.ranges(gv, options.cell).unwrap();
+    let auto = common::accel("auto");
+    let params = auto.params(&[("cell", &cell.to_string())]).unwrap();
+    let (ranges, _) = builder.ranges_for(&[(auto, &params)], gv).unwrap();
     let input = BuildInput {
         volume: v,
         gpu_volume: gv,
         tf,
         gpu_tf: &lut,
     };
-    builder
-        .build(common::accel("auto"), &input, &ranges, &options)
-        .unwrap()
-        .0
+    builder.build(auto, &input, &ranges, &params).unwrap().0
 }
 
 #[test]
@@ -39,11 +34,7 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
     let ctx = gpu();
     let builder = Builder::new(&ctx).unwrap();
     let renderer = Renderer::new(&ctx).unwrap();
-    let settings = RenderSettings {
-        width: 64,
-        height: 64,
-        ..Default::default()
-    };
+    let desc = FrameDesc::builder(64, 64).build().unwrap();
     let v = load("nbody:64");
     let gv = GpuVolume::upload(&ctx, &v).unwrap();
     let sparse = TransferFunction::parse("ramp:0.3:1").unwrap();
@@ -61,9 +52,14 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
     ];
     for (tf, cell, expect) in cases {
         let s = build(&builder, &v, &gv, tf, cell);
-        let choice = s.choice().expect("auto reports its choice");
-        assert_eq!(s.accel().name(), expect, "{}: {}", tf.spec, choice.reason());
-        assert_eq!(choice.accel, s.accel());
+        let choice = &s.built_as::<auto::Chosen>().expect("auto's build is its choice").choice;
+        // Frames are marched with the chosen structure's kernel.
+        assert_eq!(s.marched_as().name(), expect, "{}: {}", tf.spec, choice.reason());
+        assert_eq!(choice.accel, s.marched_as());
+        assert_eq!(s.march().shader.name, choice.accel.method().march().shader.name);
+        let reported = s.marched_as_reason().expect("auto says what it chose");
+        assert_eq!(reported.label, choice.describe());
+        assert_eq!(reported.reason, choice.reason());
         assert!(choice.predicted.is_finite() && choice.predicted > 0.0);
         if expect == "naive" {
             assert_eq!(choice.summary.active, choice.summary.cells);
@@ -73,8 +69,8 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
             assert_eq!(choice.describe(), format!("{expect} (cell {cell})"));
         }
         let lut = tf.upload(&ctx).unwrap();
-        let (frame, _) = renderer.render(&s, &gv, &lut, &settings).unwrap();
-        let (naive, _) = renderer.render(&Structure::naive(), &gv, &lut, &settings).unwrap();
+        let frame = common::frame(&renderer, &s, &gv, &lut, &desc);
+        let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &desc);
         assert_eq!(diff(&naive, &frame).unwrap().differing, 0, "{}", tf.spec);
         assert!(
             frame.pixels.iter().any(|p| p[3] > 0.0),
@@ -82,6 +78,5 @@ fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
             tf.spec
         );
     }
-    assert!(Accel::ALL.iter().any(|a| a.name() == "auto"));
     assert_clean(&ctx);
 }

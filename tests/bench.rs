@@ -230,7 +230,7 @@ fn the_hard_case_suite_passes_for_every_structure() {
     // Every case under both filters: the hard cases are 8-bit, and Vulkan
     // requires linear filtering of R8 UNORM.
     let filters = lacuna::render::Filter::ALL.len();
-    let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().len() * filters;
+    let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().unwrap().len() * filters;
     assert!(
         stdout.contains(&format!("hard cases: {runs} of {runs} structure runs passed")),
         "{stdout}"

@@ -5,7 +5,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::distance::{self, DistanceKernels, DistanceMap, Summary};
-use lacuna::accel::{Builder, Classifier};
+use lacuna::accel::{BuildInput, Builder, RangeKind};
 use lacuna::gpu::{Context, Timer};
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -39,25 +39,20 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let (ranges, _) = builder.ranges(&gv, cell).unwrap();
-    let kernels = builder.kernels::<DistanceKernels>().unwrap();
-    let classifier = builder.kernels::<Classifier>().unwrap();
+    let (ranges, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
+    let kernels = builder.shared::<DistanceKernels>().unwrap();
     let out = DistanceMap::summary_buffer(ctx).unwrap();
     let mut timer = Timer::new(ctx, 8).unwrap();
+    let input = BuildInput {
+        volume: v,
+        gpu_volume: &gv,
+        tf,
+        gpu_tf: &lut,
+    };
     let map = ctx
         .submit_and_wait(|cmd| {
             timer.reset(cmd);
-            let map = distance::record(
-                ctx,
-                &kernels,
-                &classifier,
-                cmd,
-                Some(&mut timer),
-                &gv,
-                ranges.cells(cell)?,
-                &lut,
-                octants,
-            )?;
+            let map = distance::record(&builder, cmd, Some(&mut timer), &input, ranges.cells(cell)?, octants)?;
             map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
             Ok(map)
         })

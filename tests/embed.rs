@@ -12,8 +12,8 @@ mod engine;
 mod host;
 
 use common::{assert_clean, gpu};
-use lacuna::accel::{BuildInput, BuildOptions, Builder};
-use lacuna::render::{Renderer, Scene, View};
+use lacuna::accel::{BuildInput, Builder};
+use lacuna::render::{Camera, Filter, FrameDesc, Renderer, Scene};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -43,27 +43,31 @@ fn occludes_with(accel: &str) {
     let gv = GpuVolume::upload(&ctx, &volume).unwrap();
     let lut = tf.upload(&ctx).unwrap();
     let builder = Builder::new(&ctx).unwrap();
-    let options = BuildOptions::default();
-    let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+    let (ranges, _) = builder.ranges(&[], &gv).unwrap();
     let input = BuildInput {
         volume: &volume,
         gpu_volume: &gv,
         tf: &tf,
         gpu_tf: &lut,
     };
+    let naive_accel = common::accel("naive");
     let naive = builder
-        .build(common::accel("naive"), &input, &ranges, &options)
+        .build(naive_accel, &input, &ranges, &naive_accel.defaults())
         .unwrap()
         .0;
     let size = settings.size;
     let m = settings.camera.matrices(gv.dims, gv.spacing, size, size).unwrap();
-    let view = View::new(&gv, &m, size, size).unwrap();
+    let view = FrameDesc::builder(size, size)
+        .camera(Camera::Matrices(m))
+        .filter(Filter::Manual)
+        .build()
+        .unwrap();
     let scene = Scene {
         structure: &naive,
         volume: &gv,
         tf: &lut,
     };
-    let (own, _) = Renderer::new(&ctx).unwrap().render_view(scene, &view).unwrap();
+    let (own, _) = Renderer::new(&ctx).unwrap().render(scene, &view).unwrap();
     assert_clean(&ctx);
 
     let bits = |p: &[f32; 4]| p.map(f32::to_bits);

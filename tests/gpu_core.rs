@@ -4,14 +4,24 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::gpu::record;
+use lacuna::gpu::shaders::prims_copy;
 use lacuna::gpu::{
-    required_features, shaders, vk, AdoptInfo, Binding, Buffer, Context, EnabledFeatures, Kernel, MemoryLocation,
-    TexelBuffer, Timer, REQUIRED_EXTENSIONS,
+    required_features, shaders, vk, AdoptInfo, Binding, Bound, Buffer, Context, EnabledFeatures, Kernel,
+    MemoryLocation, TexelBuffer, Timer, REQUIRED_EXTENSIONS,
 };
 use lacuna::Error;
 
 fn copy_kernel(ctx: &Context) -> Kernel {
-    Kernel::new::<[u32; 4]>(ctx, &shaders::PRIMS_COPY).unwrap()
+    Kernel::new::<prims_copy::Push>(ctx, &shaders::PRIMS_COPY).unwrap()
+}
+
+/// prims/copy's bindings: `src` is copied to `dst`.
+fn copy<'a>(src: &'a Buffer, dst: &'a Buffer) -> Vec<Bound<'a>> {
+    prims_copy::Bindings {
+        src: Binding::Storage(src),
+        dst: Binding::Storage(dst),
+    }
+    .list()
 }
 
 fn storage(ctx: &Context, name: &str, words: &[u32]) -> Buffer {
@@ -20,7 +30,12 @@ fn storage(ctx: &Context, name: &str, words: &[u32]) -> Buffer {
 }
 
 fn push(count: u32, groups_x: u32) -> Vec<u8> {
-    bytemuck::cast_slice(&[count, 0, 0, groups_x]).to_vec()
+    let p = prims_copy::Push {
+        count,
+        groups_x,
+        ..Default::default()
+    };
+    bytemuck::bytes_of(&p).to_vec()
 }
 
 /// Two dependent dispatches (a -> b, then b -> c); `with_barrier` decides
@@ -34,21 +49,11 @@ fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
     let kernel = copy_kernel(ctx);
     let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(&a), Binding::Storage(&b)],
-            &push(n, groups[0]),
-            groups,
-        )?;
+        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups)?;
         if with_barrier {
             record::compute_to_compute(ctx.device(), cmd);
         }
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(&b), Binding::Storage(&c)],
-            &push(n, groups[0]),
-            groups,
-        )?;
+        kernel.dispatch(cmd, &copy(&b, &c), &push(n, groups[0]), groups)?;
         Ok(())
     })
     .unwrap();
@@ -90,12 +95,7 @@ fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
     let groups_x = 3u32;
     let groups = [groups_x, n.div_ceil(64).div_ceil(groups_x), 1];
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(&a), Binding::Storage(&b)],
-            &push(n, groups_x),
-            groups,
-        )?;
+        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups_x), groups)?;
         Ok(())
     })
     .unwrap();
@@ -134,21 +134,11 @@ fn timer_reports_named_passes_in_order() {
     ctx.submit_and_wait(|cmd| {
         timer.reset(cmd);
         let p = timer.begin(cmd, "first")?;
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(&a), Binding::Storage(&b)],
-            &push(n as u32, groups[0]),
-            groups,
-        )?;
+        kernel.dispatch(cmd, &copy(&a, &b), &push(n as u32, groups[0]), groups)?;
         timer.end(cmd, p);
         record::compute_to_compute(ctx.device(), cmd);
         let p = timer.begin(cmd, "second")?;
-        kernel.dispatch(
-            cmd,
-            &[Binding::Storage(&b), Binding::Storage(&a)],
-            &push(n as u32, groups[0]),
-            groups,
-        )?;
+        kernel.dispatch(cmd, &copy(&b, &a), &push(n as u32, groups[0]), groups)?;
         timer.end(cmd, p);
         Ok(())
     })
@@ -388,23 +378,39 @@ fn interfaces_are_read_from_the_spirv() {
     let g = shaders::MARCH_GRID;
     assert_eq!(g.name, "march/grid");
     let texels = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
+    let slots: Vec<(&str, vk::DescriptorType)> = g.bindings.iter().map(|s| (s.name, s.ty)).collect();
     assert_eq!(
-        g.bindings,
-        &[d, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, texels, d, d]
+        slots,
+        [
+            ("params", d),
+            ("volume_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("tf_lut", texels),
+            ("frame", d),
+            ("cell_flags", d)
+        ]
     );
     assert_eq!(g.push_size, 16);
+    assert_eq!(std::mem::size_of::<shaders::march_grid::Push>(), 16);
     assert_eq!(
         g.local_size,
         [LocalDim::Fixed(8), LocalDim::Fixed(8), LocalDim::Fixed(1)]
     );
     // The render parameters are a fixed-size storage block (see
-    // render_params.glsl for why not a uniform block); the structure's
-    // arrays have no fixed size.
+    // render_params.glsl for why not a uniform block), generated from the
+    // SPIR-V; the structure's arrays have no fixed size.
     assert_eq!(
-        g.block_sizes[0] as usize,
+        g.bindings[0].block_size as usize,
         std::mem::size_of::<lacuna::render::RenderParams>()
     );
-    assert_eq!(&g.block_sizes[2..], &[0, 0, 0]);
+    assert!(g.bindings[2..].iter().all(|s| s.block_size == 0));
+    // Every march kernel's parameter block is the one generated struct.
+    for s in shaders::ALL.iter().filter(|s| s.name.starts_with("march/")) {
+        let (_, params) = s.slot("params").unwrap();
+        assert_eq!(
+            params.block_size as usize,
+            std::mem::size_of::<lacuna::render::RenderParams>()
+        );
+    }
     // local_size_x_id = 0: the width is specialization constant 0.
     let scan = shaders::PRIMS_SCAN_BLOCKS;
     assert!(matches!(scan.local_size[0], LocalDim::Spec { id: 0, .. }));
@@ -415,7 +421,7 @@ fn interfaces_are_read_from_the_spirv() {
 #[test]
 fn a_push_block_of_the_wrong_size_fails_at_creation_naming_the_kernel() {
     let ctx = gpu();
-    // march/grid's block is a uvec4; a Rust side of three words is refused.
+    // march/grid's block is a uvec3 and a uint; a Rust side of three words is refused.
     let err = Kernel::new::<[u32; 3]>(&ctx, &shaders::MARCH_GRID).err().unwrap();
     let text = err.to_string();
     assert!(matches!(err, Error::Interface(_)), "{text}");
@@ -423,25 +429,71 @@ fn a_push_block_of_the_wrong_size_fails_at_creation_naming_the_kernel() {
         text.contains("march/grid") && text.contains("12") && text.contains("16"),
         "{text}"
     );
-    assert!(Kernel::new::<[u32; 4]>(&ctx, &shaders::MARCH_GRID).is_ok());
+    assert!(Kernel::new::<shaders::march_grid::Push>(&ctx, &shaders::MARCH_GRID).is_ok());
     assert_clean(&ctx);
 }
 
 #[test]
-fn bindings_that_differ_from_the_shader_are_an_error_naming_the_kernel() {
+fn bindings_that_differ_from_the_shader_are_an_error_naming_the_kernel_and_binding() {
     let ctx = gpu();
     let kernel = copy_kernel(&ctx);
     let a = storage(&ctx, "a", &[1, 2, 3, 4]);
     let push = push(4, 1);
     let result = ctx.submit_and_wait(|cmd| {
-        // prims/copy reads two storage buffers: one is missing, then one is a uniform.
-        let one = kernel.dispatch(cmd, &[Binding::Storage(&a)], &push, [1, 1, 1]);
-        let wrong = kernel.dispatch(cmd, &[Binding::Storage(&a), Binding::Uniform(&a)], &push, [1, 1, 1]);
-        Ok((one, wrong))
+        // prims/copy reads two storage buffers, src and dst.
+        let attempts: [(&[Bound], &str); 4] = [
+            (&[("src", Binding::Storage(&a))], "binding dst not given"),
+            (
+                &[("src", Binding::Storage(&a)), ("dst", Binding::Uniform(&a))],
+                "binding dst is a",
+            ),
+            (
+                &[("src", Binding::Storage(&a)), ("source", Binding::Storage(&a))],
+                "no binding named source",
+            ),
+            (
+                &[("src", Binding::Storage(&a)), ("src", Binding::Storage(&a))],
+                "binding src given twice",
+            ),
+        ];
+        Ok(attempts
+            .iter()
+            .map(|(b, why)| (kernel.dispatch(cmd, b, &push, [1, 1, 1]).err(), *why))
+            .collect::<Vec<_>>())
     });
-    let (one, wrong) = result.unwrap();
-    for err in [one.err().unwrap(), wrong.err().unwrap()] {
-        assert!(err.to_string().contains("kernel prims/copy"), "{err}");
+    for (err, why) in result.unwrap() {
+        let err = err.expect(why).to_string();
+        assert!(err.contains("kernel prims/copy") && err.contains(why), "{err}");
+    }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn resources_go_to_the_binding_of_their_name_whatever_its_number() {
+    // test/copy_swapped declares dst at binding 0 and src at 1: the same
+    // named resources copy the same way through both kernels.
+    let ctx = gpu();
+    let kernel = copy_kernel(&ctx);
+    let swapped = Kernel::new::<shaders::test_copy_swapped::Push>(&ctx, &shaders::TEST_COPY_SWAPPED).unwrap();
+    assert_eq!(shaders::TEST_COPY_SWAPPED.bindings[0].name, "dst");
+    assert_eq!(shaders::PRIMS_COPY.bindings[0].name, "src");
+    let n = 300u32;
+    let input: Vec<u32> = (0..n).map(|i| i * 3 + 1).collect();
+    let a = storage(&ctx, "a", &input);
+    let (b, c) = (storage(&ctx, "b", &vec![0; 300]), storage(&ctx, "c", &vec![0; 300]));
+    let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
+    let swapped_bindings = shaders::test_copy_swapped::Bindings {
+        src: Binding::Storage(&a),
+        dst: Binding::Storage(&c),
+    };
+    ctx.submit_and_wait(|cmd| {
+        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups)?;
+        swapped.dispatch(cmd, &swapped_bindings.list(), &push(n, groups[0]), groups)
+    })
+    .unwrap();
+    for out in [&b, &c] {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&out.download(0, n as u64 * 4).unwrap());
+        assert_eq!(words, input);
     }
     assert_clean(&ctx);
 }

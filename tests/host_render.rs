@@ -11,12 +11,12 @@ mod host;
 use common::{accel, assert_clean, gpu, max_abs};
 use glam::dcamera::rh::{proj::vulkan, view::look_at_mat4};
 use glam::{DMat4, DVec3, DVec4};
-use lacuna::accel::{BuildInput, BuildOptions, Builder, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{vk, Context};
 use lacuna::render::{
-    reference, Camera, CameraMatrices, Filter, HostDepth, HostImage, Output, Projection, RenderSettings, RenderTarget,
-    Renderer, Scene, View,
+    reference, Camera, CameraMatrices, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection,
+    RenderTarget, Renderer, Scene,
 };
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions};
@@ -44,17 +44,18 @@ fn fixture(names: &[&str]) -> Fixture {
     let gv = GpuVolume::upload(&ctx, &volume).unwrap();
     let lut = tf.upload(&ctx).unwrap();
     let builder = Builder::new(&ctx).unwrap();
-    let options = BuildOptions::default();
-    let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+    let wanted: Vec<(Accel, Params)> = names.iter().map(|n| (accel(n), accel(n).defaults())).collect();
+    let reads: Vec<(Accel, &Params)> = wanted.iter().map(|(a, p)| (*a, p)).collect();
+    let (ranges, _) = builder.ranges_for(&reads, &gv).unwrap();
     let input = BuildInput {
         volume: &volume,
         gpu_volume: &gv,
         tf: &tf,
         gpu_tf: &lut,
     };
-    let structures = names
+    let structures = wanted
         .iter()
-        .map(|n| builder.build(accel(n), &input, &ranges, &options).unwrap().0)
+        .map(|(a, p)| builder.build(*a, &input, &ranges, p).unwrap().0)
         .collect();
     let renderer = Renderer::new(&ctx).unwrap();
     Fixture {
@@ -77,14 +78,13 @@ impl Fixture {
         }
     }
 
-    /// Records `view` into a fresh target's frame buffer (or `output`),
-    /// ending rays at `depth`, and reads the frame buffer back.
-    fn frame(&self, i: usize, view: &View, depth: Option<&HostDepth>) -> Frame {
+    /// Records `view` into a fresh target's frame buffer and reads it back.
+    fn frame(&self, i: usize, view: &FrameDesc) -> Frame {
         let target = RenderTarget::new(&self.ctx, SIZE, SIZE).unwrap();
         self.ctx
             .submit_and_wait(|cmd| {
                 self.renderer
-                    .record_view(cmd, None, &target, self.scene(i), view, Output::Buffer, depth)?;
+                    .record(cmd, None, &target, self.scene(i), view, Output::Buffer)?;
                 self.renderer.record_readback(cmd, &target)
             })
             .unwrap();
@@ -93,7 +93,12 @@ impl Fixture {
     }
 }
 
-fn cameras() -> Vec<Camera> {
+/// A SIZE x SIZE frame of `camera`.
+fn view(camera: Camera) -> FrameDesc {
+    FrameDesc::builder(SIZE, SIZE).camera(camera).build().unwrap()
+}
+
+fn cameras() -> Vec<Orbit> {
     let persp = |fov_deg, distance| Projection::Perspective { fov_deg, distance };
     [
         (30.0, 20.0, Projection::Orthographic),
@@ -103,7 +108,7 @@ fn cameras() -> Vec<Camera> {
         (-120.0, 60.0, persp(60.0, Some(0.5))),
     ]
     .into_iter()
-    .map(|(azimuth_deg, elevation_deg, projection)| Camera {
+    .map(|(azimuth_deg, elevation_deg, projection)| Orbit {
         azimuth_deg,
         elevation_deg,
         projection,
@@ -123,16 +128,9 @@ fn same_bits(a: &Frame, b: &Frame) -> bool {
 fn matrices_render_the_orbit_cameras_images_bit_for_bit() {
     let f = fixture(&["naive"]);
     for camera in cameras() {
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            camera,
-            ..RenderSettings::default()
-        };
-        let (orbit, _) = f.renderer.render(&f.structures[0], &f.gv, &f.lut, &settings).unwrap();
+        let (orbit, _) = f.renderer.render(f.scene(0), &view(Camera::Orbit(camera))).unwrap();
         let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
-        let view = View::new(&f.gv, &m, SIZE, SIZE).unwrap();
-        let (host, _) = f.renderer.render_view(f.scene(0), &view).unwrap();
+        let (host, _) = f.renderer.render(f.scene(0), &view(Camera::Matrices(m))).unwrap();
         assert!(
             orbit.pixels.iter().any(|p| p[3] > 0.1),
             "{camera:?}: the volume is in view"
@@ -178,22 +176,13 @@ fn glam_matrices_of_an_engine_render_the_orbit_image() {
             },
         ),
     ] {
-        let camera = Camera {
+        let camera = Orbit {
             azimuth_deg: 0.0,
             elevation_deg: 0.0,
             projection,
         };
-        let settings = RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            camera,
-            ..RenderSettings::default()
-        };
-        let (orbit, _) = f.renderer.render(&f.structures[0], &f.gv, &f.lut, &settings).unwrap();
-        let (host, _) = f
-            .renderer
-            .render_view(f.scene(0), &View::new(&f.gv, &m, SIZE, SIZE).unwrap())
-            .unwrap();
+        let (orbit, _) = f.renderer.render(f.scene(0), &view(Camera::Orbit(camera))).unwrap();
+        let (host, _) = f.renderer.render(f.scene(0), &view(Camera::Matrices(m))).unwrap();
         assert!(
             same_bits(&orbit, &host),
             "{projection:?}: max abs {}",
@@ -205,7 +194,7 @@ fn glam_matrices_of_an_engine_render_the_orbit_image() {
 
 /// Renders `view` into a host storage image of `format` and reads it back as
 /// raw bytes.
-fn render_to_image(f: &Fixture, i: usize, view: &View, format: vk::Format, texel: u64) -> Vec<u8> {
+fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, texel: u64) -> Vec<u8> {
     let (instance, pd, device) = (f.ctx.instance(), f.ctx.physical_device(), f.ctx.device());
     let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
     let image = host::Image2d::new(
@@ -248,7 +237,7 @@ fn render_to_image(f: &Fixture, i: usize, view: &View, format: vk::Format, texel
                 compute_write,
             );
             f.renderer
-                .record_view(cmd, None, &target, f.scene(i), view, Output::Image(host_image), None)?;
+                .record(cmd, None, &target, f.scene(i), view, Output::Image(host_image))?;
             image.transition(
                 device,
                 cmd,
@@ -273,8 +262,8 @@ fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
     let f = fixture(&["naive", "grid", "lbvh"]);
     let camera = cameras()[3];
     let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
-    let view = View::new(&f.gv, &m, SIZE, SIZE).unwrap().step(0.7).unwrap();
-    let frame = f.frame(0, &view, None);
+    let view = view(Camera::Matrices(m)).to_builder().step(0.7).build().unwrap();
+    let frame = f.frame(0, &view);
     let values: Vec<f32> = frame.pixels.iter().flatten().copied().collect();
     assert!(values.iter().any(|&v| v > 0.1));
     for i in 0..f.structures.len() {
@@ -305,7 +294,7 @@ fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
 fn a_host_image_of_another_format_or_size_is_refused_by_name() {
     let f = fixture(&["naive"]);
     let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
-    let view = View::new(&f.gv, &m, SIZE, SIZE).unwrap();
+    let view = view(Camera::Matrices(m));
     let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
     let image = |format, width| HostImage {
         view: vk::ImageView::null(),
@@ -322,7 +311,7 @@ fn a_host_image_of_another_format_or_size_is_refused_by_name() {
             .ctx
             .submit_and_wait(|cmd| {
                 f.renderer
-                    .record_view(cmd, None, &target, f.scene(0), &view, Output::Image(img), None)
+                    .record(cmd, None, &target, f.scene(0), &view, Output::Image(img))
             })
             .unwrap_err();
         assert!(err.to_string().contains(needle), "{err}");
@@ -330,10 +319,7 @@ fn a_host_image_of_another_format_or_size_is_refused_by_name() {
     // A target for images has no frame buffer to write or read back.
     let err = f
         .ctx
-        .submit_and_wait(|cmd| {
-            f.renderer
-                .record_view(cmd, None, &target, f.scene(0), &view, Output::Buffer, None)
-        })
+        .submit_and_wait(|cmd| f.renderer.record(cmd, None, &target, f.scene(0), &view, Output::Buffer))
         .unwrap_err();
     assert!(err.to_string().contains("no frame buffer"), "{err}");
     assert!(target.read().is_err());
@@ -409,7 +395,12 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
             m.projection = reverse * m.projection;
             m = m.with_reverse_z(true);
         }
-        let view = View::new(&f.gv, &m, SIZE, SIZE).unwrap();
+        // The CPU reference's arithmetic: the manual filter.
+        let view = FrameDesc::builder(SIZE, SIZE)
+            .camera(Camera::Matrices(m))
+            .filter(Filter::Manual)
+            .build()
+            .unwrap();
         let plane = depth_plane(&f.ctx, depth);
         let host_depth = HostDepth {
             view: plane.view,
@@ -417,20 +408,22 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
             width: SIZE,
             height: SIZE,
         };
-        let ended = f.frame(0, &view, Some(&host_depth));
-        let full = f.frame(0, &view, None);
+        let with = |d: HostDepth| view.to_builder().depth(Some(d)).build().unwrap();
+        let ended = f.frame(0, &with(host_depth));
+        let full = f.frame(0, &view);
         // The plane cuts the volume: some pixels lose much of their opacity.
         let cut = full.pixels.iter().zip(&ended.pixels).any(|(a, b)| a[3] - b[3] > 0.2);
         assert!(cut, "{camera:?}: the depth plane ends rays inside the volume");
-        let limits = reference::depth_limits(view.params(), &vec![depth; (SIZE * SIZE) as usize]);
-        let cpu = reference::render_to(&f.volume, &f.tf, view.params(), Some(&limits));
+        let params = with(host_depth).params(&f.gv).unwrap();
+        let limits = reference::depth_limits(&params, &vec![depth; (SIZE * SIZE) as usize]);
+        let cpu = reference::render_to(&f.volume, &f.tf, &params, Some(&limits));
         let err = max_abs(&cpu, &ended);
         assert!(
             err <= 1e-4,
             "{camera:?}: GPU vs CPU reference with a depth plane: {err}"
         );
         for (i, name) in names.iter().enumerate().skip(1) {
-            let other = f.frame(i, &view, Some(&host_depth));
+            let other = f.frame(i, &with(host_depth));
             assert!(
                 same_bits(&ended, &other),
                 "{name} vs naive with depth: {}",
@@ -444,26 +437,77 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
             view: far.view,
             ..host_depth
         };
-        assert!(same_bits(&full, &f.frame(0, &view, Some(&open))));
+        assert!(same_bits(&full, &f.frame(0, &with(open))));
         far.destroy(f.ctx.device());
     }
     assert_clean(&f.ctx);
 }
 
 #[test]
-fn typed_inputs_refuse_bad_values_by_name() {
+fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
     let f = fixture(&["naive"]);
     let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
-    let view = View::new(&f.gv, &m, SIZE, SIZE).unwrap();
-    assert!(view.step(0.0).unwrap_err().to_string().contains("step"));
-    assert!(view.ert(Some(1.5)).unwrap_err().to_string().contains("ert"));
-    let singular = CameraMatrices::new(DMat4::ZERO, m.projection);
-    assert!(View::new(&f.gv, &singular, SIZE, SIZE)
-        .unwrap_err()
-        .to_string()
-        .contains("view matrix"));
-    assert!(View::new(&f.gv, &m, 0, SIZE).is_err());
-    // Typed setters land where the shader reads them.
-    let v = view.step(0.25).unwrap().ert(Some(0.9)).unwrap().filter(Filter::Manual);
-    assert_eq!(v.params().march[..2], [0.25, 0.9]);
+    let frame = || FrameDesc::builder(SIZE, SIZE).camera(Camera::Matrices(m));
+    let refused = |b: lacuna::render::FrameBuilder, needle: &str| {
+        let err = b.build().unwrap_err().to_string();
+        assert!(err.contains(needle), "{needle}: {err}");
+    };
+    refused(frame().step(0.0), "step");
+    refused(frame().step(f32::NAN), "step");
+    refused(frame().ert(Some(1.5)), "ert");
+    refused(frame().size(0, SIZE), "size");
+    refused(
+        frame().camera(Camera::Matrices(CameraMatrices::new(DMat4::ZERO, m.projection))),
+        "view matrix",
+    );
+    refused(frame().orbit(f64::INFINITY, 0.0, Projection::Orthographic), "finite");
+    refused(
+        frame().orbit(
+            0.0,
+            0.0,
+            Projection::Perspective {
+                fov_deg: 180.0,
+                distance: None,
+            },
+        ),
+        "field of view",
+    );
+    let depth = HostDepth {
+        view: vk::ImageView::null(),
+        layout: vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+        width: SIZE + 1,
+        height: SIZE,
+    };
+    refused(frame().depth(Some(depth)), "host depth");
+    refused(
+        frame().depth(Some(HostDepth {
+            width: SIZE,
+            layout: vk::ImageLayout::UNDEFINED,
+            ..depth
+        })),
+        "host depth layout",
+    );
+    // Each field lands where the shader reads it; defaults are the one set.
+    let p = frame()
+        .step(0.25)
+        .ert(Some(0.9))
+        .build()
+        .unwrap()
+        .params(&f.gv)
+        .unwrap();
+    assert_eq!((p.step, p.ert, p.image, p.dims), (0.25, 0.9, [SIZE, SIZE], f.gv.dims));
+    assert_eq!(
+        (p.norm, p.lut_size, p.depth_limits),
+        (f.gv.norm, lacuna::tf::LUT_SIZE as u32, 0)
+    );
+    let d = frame().build().unwrap();
+    assert_eq!(
+        (d.step(), d.ert(), d.filter()),
+        (lacuna::render::DEFAULT_STEP, None, None)
+    );
+    assert_eq!(d.filter_for(&f.gv), f.gv.default_filter());
+    assert_eq!(d.params(&f.gv).unwrap().ert, lacuna::render::ERT_OFF);
+    // A step over the samples-per-ray cap is refused for the volume it meets.
+    let fine = frame().step(1e-6).build().unwrap();
+    assert!(fine.params(&f.gv).unwrap_err().to_string().contains("samples per ray"));
 }

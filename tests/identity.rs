@@ -5,33 +5,44 @@
 
 mod common;
 use common::assert_clean;
-use lacuna::accel::kd::{Depth, KdParams};
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Classify, Ranges, Structure};
-use lacuna::bench::hard::{self, lattice, View};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
+use lacuna::bench::hard::{self, lattice};
 use lacuna::frame::{diff, Frame};
 use lacuna::gpu::Context;
-use lacuna::render::{Filter, Projection, RenderSettings, Renderer};
+use lacuna::render::{Filter, FrameDesc, Projection, Renderer, Scene};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
-/// The skipping structures under test: every registry entry but naive
-/// (deep k-d trees with the default max leaf, the octree with each traversal).
-fn skipping() -> impl Iterator<Item = Accel> {
-    Accel::skipping()
+/// Parameter values given to every structure (each takes those of its own
+/// parameters), as `lacuna render --cell 8 --kd shallow` does.
+type Given = &'static [(&'static str, &'static str)];
+
+/// The defaults of every structure.
+const DEFAULTS: Given = &[];
+
+/// Which kernel each structure must have marched with.
+#[derive(Clone, Copy, PartialEq)]
+enum Kernels {
+    /// Its own (sparse data: every tree of the paper's has empty space to
+    /// skip; with cost-driven leaves, `Reported`); `auto` names the
+    /// structure it chose and marches with that one's kernel.
+    Own,
+    /// Its own, or another one it names with a reason (a tree that is one
+    /// leaf covering the volume is marched naively).
+    Reported,
 }
 
-/// `o`, and `o` with cost-driven leaves for the structures that read them.
-fn with_collapse(accel: Accel, o: &BuildOptions) -> Vec<(Accel, BuildOptions)> {
-    let mut sets = vec![(accel, *o)];
-    if accel.method().params(o).iter().any(|(name, _)| *name == "collapse") {
-        sets.push((
-            accel,
-            BuildOptions {
-                collapse: !o.collapse,
-                ..*o
-            },
-        ));
+/// `accel`'s parameters for `given`, and with the other setting of
+/// cost-driven leaves for the structures that have them.
+fn parameter_sets(accel: Accel, given: Given) -> Vec<Params> {
+    let p = accel.params(given).unwrap();
+    let mut sets = vec![p.clone()];
+    if let Ok(on) = p.switch("collapse") {
+        let flipped = if on { "off" } else { "on" };
+        let mut given = given.to_vec();
+        given.push(("collapse", flipped));
+        sets.push(accel.params(&given).unwrap());
     }
     sets
 }
@@ -61,10 +72,17 @@ impl Fixture {
         }
     }
 
-    fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, cell: u32) -> Prepared<'a> {
+    /// Uploads the volume and TF and computes the ranges every structure
+    /// reads with the `given` values.
+    fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, given: Given) -> Prepared<'a> {
         let gv = GpuVolume::upload(&self.ctx, volume).unwrap();
         let lut = tf.upload(&self.ctx).unwrap();
-        let (ranges, _) = self.builder.ranges(&gv, cell).unwrap();
+        let sets: Vec<(Accel, Params)> = Accel::ALL
+            .iter()
+            .flat_map(|&a| parameter_sets(a, given).into_iter().map(move |p| (a, p)))
+            .collect();
+        let reads: Vec<(Accel, &Params)> = sets.iter().map(|(a, p)| (*a, p)).collect();
+        let (ranges, _) = self.builder.ranges_for(&reads, &gv).unwrap();
         Prepared {
             volume,
             tf,
@@ -74,80 +92,137 @@ impl Fixture {
         }
     }
 
-    fn build(&self, p: &Prepared, accel: Accel, options: &BuildOptions) -> Structure {
+    fn build(&self, p: &Prepared, accel: Accel, params: &Params) -> Structure {
         let scene = BuildInput {
             volume: p.volume,
             gpu_volume: &p.gv,
             tf: p.tf,
             gpu_tf: &p.lut,
         };
-        self.builder.build(accel, &scene, &p.ranges, options).unwrap().0
+        self.builder.build(accel, &scene, &p.ranges, params).unwrap().0
     }
 
-    fn frame(&self, s: &Structure, p: &Prepared, view: &View, filter: Filter) -> Frame {
-        // The views carry their normalisation already (render_view sets the same).
-        hard::render_view(&self.renderer, s, p.volume, &p.gv, &p.lut, view, filter).unwrap()
+    fn frame(&self, s: &Structure, p: &Prepared, view: &FrameDesc, filter: Filter) -> Frame {
+        let scene = Scene {
+            structure: s,
+            volume: &p.gv,
+            tf: &p.lut,
+        };
+        hard::render_view(&self.renderer, scene, view, filter).unwrap()
     }
 
     /// Renders every view with naive and with every skipping structure under
-    /// each option set, with each filter; asserts bit-identical frames.
-    /// Returns the naive frames of the manual filter.
+    /// each set of given values (and cost-driven leaves on and off), with
+    /// each filter; asserts bit-identical frames, and that each structure
+    /// marched with the kernel `kernels` asks for. Returns the naive frames
+    /// of the manual filter.
     fn check_with(
         &self,
         what: &str,
         v: &Volume,
         tf: &TransferFunction,
-        views: &[View],
-        options: &[BuildOptions],
+        views: &[FrameDesc],
+        given: &[Given],
+        kernels: Kernels,
     ) -> Vec<Frame> {
-        let p = self.prepare(v, tf, options[0].cell);
-        let filters: Vec<Filter> = Filter::ALL
-            .into_iter()
-            .filter(|&f| p.gv.sampler_for(f).is_ok())
-            .collect();
-        assert!(
-            filters.contains(&Filter::Hardware) || v.texel_bytes() > 1,
-            "R8 UNORM must filter linearly (Vulkan requires it)"
-        );
-        let naive: Vec<Vec<Frame>> = filters
-            .iter()
-            .map(|&filter| {
-                views
+        let mut naive: Option<Vec<Vec<Frame>>> = None;
+        let mut own_kernels = 0;
+        for &g in given {
+            let p = self.prepare(v, tf, g);
+            let filters: Vec<Filter> = Filter::ALL
+                .into_iter()
+                .filter(|&f| p.gv.sampler_for(f).is_ok())
+                .collect();
+            assert!(
+                filters.contains(&Filter::Hardware) || v.texel_bytes() > 1,
+                "R8 UNORM must filter linearly (Vulkan requires it)"
+            );
+            let reference = naive.get_or_insert_with(|| {
+                filters
                     .iter()
-                    .map(|view| self.frame(&Structure::naive(), &p, view, filter))
+                    .map(|&filter| {
+                        views
+                            .iter()
+                            .map(|view| self.frame(&Structure::naive(), &p, view, filter))
+                            .collect()
+                    })
                     .collect()
-            })
-            .collect();
-        for o in options {
-            for (accel, o) in skipping().flat_map(|a| with_collapse(a, o)) {
-                let s = self.build(&p, accel, &o);
-                for (filter, naive) in filters.iter().zip(&naive) {
-                    for (i, view) in views.iter().enumerate() {
-                        let f = self.frame(&s, &p, view, *filter);
-                        let d = diff(&naive[i], &f).unwrap();
-                        assert!(d.differing == 0, "{what}, view {i}, {accel} ({o:?}), {filter}: {d}");
-                        assert!(
-                            f.pixels.iter().all(|px| px.iter().all(|c| c.is_finite())),
-                            "{what}: non-finite pixel"
-                        );
+            });
+            for accel in Accel::skipping() {
+                for params in parameter_sets(accel, g) {
+                    let s = self.build(&p, accel, &params);
+                    // Cost-driven leaves may make a tree one leaf where the
+                    // measured model prices that cheaper: it says so.
+                    let collapsed = params.switch("collapse").unwrap_or(false);
+                    own_kernels += usize::from(check_kernel(
+                        what,
+                        &s,
+                        if collapsed { Kernels::Reported } else { kernels },
+                    ));
+                    for (filter, naive) in filters.iter().zip(reference.iter()) {
+                        for (i, view) in views.iter().enumerate() {
+                            let f = self.frame(&s, &p, view, *filter);
+                            let d = diff(&naive[i], &f).unwrap();
+                            assert!(d.differing == 0, "{what}, view {i}, {accel} ({params}), {filter}: {d}");
+                            assert!(
+                                f.pixels.iter().all(|px| px.iter().all(|c| c.is_finite())),
+                                "{what}: non-finite pixel"
+                            );
+                        }
                     }
                 }
             }
         }
+        // Even where a structure may fall back, some skipping kernel ran:
+        // equality with naive would prove nothing otherwise.
+        assert!(own_kernels > 0, "{what}: no structure marched with its own kernel");
         assert_clean(&self.ctx);
-        naive.into_iter().next().unwrap()
+        naive.and_then(|n| n.into_iter().next()).unwrap()
     }
 
-    fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[View]) -> Vec<Frame> {
-        self.check_with(what, v, tf, views, &[BuildOptions::default()])
+    /// Every structure at its defaults; each marches with its own kernel.
+    fn check(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[FrameDesc]) -> Vec<Frame> {
+        self.check_with(what, v, tf, views, &[DEFAULTS], Kernels::Own)
+    }
+
+    /// As `check`, for dense or tiny data where a tree may be one leaf
+    /// covering the volume (marched naively, and saying so).
+    fn check_dense(&self, what: &str, v: &Volume, tf: &TransferFunction, views: &[FrameDesc]) -> Vec<Frame> {
+        self.check_with(what, v, tf, views, &[DEFAULTS], Kernels::Reported)
     }
 }
 
-fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32) -> View {
-    hard::cam(size, az, el, projection, step, None)
+/// What marched `s` is its own kernel, or (`Reported`) another one it names:
+/// an identity test that a naive kernel passed would prove nothing.
+/// Returns whether a structure other than `auto` marched with its own kernel.
+fn check_kernel(what: &str, s: &Structure, kernels: Kernels) -> bool {
+    let ran = s.march().shader.name;
+    match s.marched_as_reason() {
+        None => {
+            assert_eq!(ran, s.accel.method().march().shader.name, "{what}: {}", s.accel);
+            true
+        }
+        Some(m) => {
+            // `auto` always names its choice, and marches with its kernel.
+            assert_eq!(ran, m.accel.method().march().shader.name, "{what}: {}", s.accel);
+            let chosen_by_auto = s.accel.name() == "auto";
+            assert!(
+                chosen_by_auto || kernels == Kernels::Reported,
+                "{what}: {} marched as {} ({}) where its own kernel should have",
+                s.accel,
+                m.label,
+                m.reason
+            );
+            false
+        }
+    }
 }
 
-fn standard_views() -> Vec<View> {
+fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32) -> FrameDesc {
+    hard::cam(size, az, el, projection, step, None).unwrap()
+}
+
+fn standard_views() -> Vec<FrameDesc> {
     let persp = Projection::Perspective {
         fov_deg: 50.0,
         distance: None,
@@ -186,7 +261,13 @@ fn generators_with_their_default_tfs() {
     for spec in ["menger:27", "nbody:48", "vessels:44", "turbulence:32", "shells:40"] {
         let v = load(spec);
         let t = tf(v.default_tf.as_ref().unwrap());
-        let frames = fx.check(spec, &v, &t, &standard_views());
+        // The sponge and the turbulence fill their box: a k-d tree's tight
+        // box is all of it, and no split shrinks it.
+        let frames = if spec.starts_with("menger") || spec.starts_with("turbulence") {
+            fx.check_dense(spec, &v, &t, &standard_views())
+        } else {
+            fx.check(spec, &v, &t, &standard_views())
+        };
         assert!(
             frames[0].pixels.iter().any(|p| p[3] > 0.01),
             "{spec}: empty image proves nothing"
@@ -258,22 +339,25 @@ fn the_ch2_mri() {
 fn transparent_opaque_and_single_voxel_cases() {
     let fx = Fixture::new();
     let v = load("vessels:40");
-    let o = BuildOptions::default();
     // Zero active bricks: empty structures and a transparent image.
     let frames = fx.check("transparent", &v, &tf("band:0:1:0"), &standard_views()[..2]);
     assert!(frames.iter().all(|f| f.pixels.iter().all(|p| *p == [0.0; 4])));
     let clear = tf("band:0:1:0");
-    let p = fx.prepare(&v, &clear, 16);
+    let p = fx.prepare(&v, &clear, DEFAULTS);
     for accel in [
         common::accel("lbvh"),
         common::accel("kd-cpu"),
         common::accel("kd-gpu"),
         common::accel("hybrid"),
     ] {
-        assert_eq!(fx.build(&p, accel, &o).stats().unwrap().unwrap().leaves, 0, "{accel}");
+        assert_eq!(
+            fx.build(&p, accel, &accel.defaults()).stats().unwrap().unwrap().leaves,
+            0,
+            "{accel}"
+        );
     }
     assert_eq!(
-        fx.build(&p, common::accel("grid"), &o)
+        fx.build(&p, common::accel("grid"), &common::accel("grid").defaults())
             .stats()
             .unwrap()
             .unwrap()
@@ -282,9 +366,9 @@ fn transparent_opaque_and_single_voxel_cases() {
     );
     // All active.
     let opaque = tf("band:0:1:0.05");
-    let p = fx.prepare(&v, &opaque, 16);
+    let p = fx.prepare(&v, &opaque, DEFAULTS);
     assert_eq!(
-        fx.build(&p, common::accel("lbvh"), &o)
+        fx.build(&p, common::accel("lbvh"), &common::accel("lbvh").defaults())
             .stats()
             .unwrap()
             .unwrap()
@@ -292,21 +376,24 @@ fn transparent_opaque_and_single_voxel_cases() {
         125
     );
     assert_eq!(
-        fx.build(&p, common::accel("kd-cpu"), &o)
+        fx.build(&p, common::accel("kd-cpu"), &common::accel("kd-cpu").defaults())
             .stats()
             .unwrap()
             .unwrap()
             .active_bricks,
         40 * 40 * 40
     );
-    fx.check("opaque", &v, &opaque, &standard_views());
-    let ert = View::Camera(RenderSettings {
-        ert: Some(0.95),
-        width: 32,
-        height: 32,
-        ..Default::default()
-    });
-    fx.check("opaque with ERT", &v, &tf("band:0:1:1"), &[ert]);
+    // Every cell active: a k-d tree is one leaf covering the volume, marched naively.
+    fx.check_with("opaque", &v, &opaque, &standard_views(), &[DEFAULTS], Kernels::Reported);
+    let ert = FrameDesc::builder(32, 32).ert(Some(0.95)).build().unwrap();
+    fx.check_with(
+        "opaque with ERT",
+        &v,
+        &tf("band:0:1:1"),
+        &[ert],
+        &[DEFAULTS],
+        Kernels::Reported,
+    );
     // One bright voxel: its neighbours' footprints read it too.
     let mut data = vec![0u8; 40 * 40 * 40];
     data[16 + 40 * (16 + 40 * 16)] = 255;
@@ -314,13 +401,17 @@ fn transparent_opaque_and_single_voxel_cases() {
     let dot_tf = tf("band:0.02:1:1");
     let frames = fx.check("single voxel", &dot, &dot_tf, &standard_views());
     assert!(frames[1].pixels.iter().any(|p| p[3] > 0.0));
-    let p = fx.prepare(&dot, &dot_tf, 16);
+    let p = fx.prepare(&dot, &dot_tf, DEFAULTS);
     assert_eq!(
-        fx.build(&p, common::accel("lbvh"), &o).stats().unwrap().unwrap().leaves,
+        fx.build(&p, common::accel("lbvh"), &common::accel("lbvh").defaults())
+            .stats()
+            .unwrap()
+            .unwrap()
+            .leaves,
         8,
         "voxel 16 sits on the corner of 8 bricks' aprons"
     );
-    let kd = fx.build(&p, common::accel("kd-cpu"), &o);
+    let kd = fx.build(&p, common::accel("kd-cpu"), &common::accel("kd-cpu").defaults());
     assert_eq!(
         kd.stats().unwrap().unwrap().active_bricks,
         27,
@@ -340,7 +431,7 @@ fn odd_and_degenerate_dimensions() {
         "vessels:3x50x7",
     ] {
         let v = load(spec);
-        fx.check(spec, &v, &tf("ramp:0.2:1:0.6"), &standard_views());
+        fx.check_dense(spec, &v, &tf("ramp:0.2:1:0.6"), &standard_views());
     }
 }
 
@@ -348,60 +439,51 @@ fn odd_and_degenerate_dimensions() {
 fn rays_exactly_through_brick_faces_edges_and_corners_and_grazing() {
     let fx = Fixture::new();
     let mut v = load("turbulence:32");
-    // Normalisation goes into the params by hand below.
-    let norm = v.norm;
-    let with_norm = |mut view: View| {
-        if let View::Params(p) = &mut view {
-            p.march[2] = norm[0];
-            p.march[3] = norm[1];
-        }
-        view
-    };
     let views = vec![
         // Along z through x, y = 0 .. 32: faces at multiples of 8, edges where both are.
-        with_norm(lattice(
-            [32; 3],
+        lattice(
             33,
             [0.0, 0.0, -5.0],
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
             0.5,
-        )),
+        )
+        .unwrap(),
         // Along -x, grazing the y = 0 and y = 32 faces.
-        with_norm(lattice(
-            [32; 3],
+        lattice(
             33,
             [40.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
             [-1.0, 0.0, 0.0],
             1.0,
-        )),
+        )
+        .unwrap(),
         // Diagonals through brick corners (8k, 8k, 8k).
-        with_norm(lattice(
-            [32; 3],
+        lattice(
             17,
             [-4.0, -4.0, -4.0],
             [2.0, -2.0, 0.0],
             [1.0, 1.0, -2.0],
             [1.0, 1.0, 1.0],
             0.5,
-        )),
+        )
+        .unwrap(),
         // In the plane x = 8 (a brick face), diagonal in y-z.
-        with_norm(lattice(
-            [32; 3],
+        lattice(
             33,
             [8.0, -3.0, 0.0],
             [0.0, 0.0, 1.0],
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 1.0],
             0.5,
-        )),
+        )
+        .unwrap(),
     ];
     v.default_tf = None;
-    fx.check("lattice rays", &v, &tf("ramp:0.55:1:0.5"), &views);
-    fx.check("lattice rays, sparse", &v, &tf("band:0.8:1"), &views);
+    fx.check_dense("lattice rays", &v, &tf("ramp:0.55:1:0.5"), &views);
+    fx.check_dense("lattice rays, sparse", &v, &tf("band:0.8:1"), &views);
 }
 
 #[test]
@@ -434,7 +516,7 @@ fn steps_that_do_not_divide_the_box_and_a_long_volume_with_large_t() {
     let fx = Fixture::new();
     let v = load("nbody:40");
     let t = tf("ramp:0.3:1");
-    let views: Vec<View> = [0.3f32, 0.77, 1.9, 3.3]
+    let views: Vec<FrameDesc> = [0.3f32, 0.77, 1.9, 3.3]
         .iter()
         .map(|&s| cam(40, 17.0, 23.0, Projection::Orthographic, s))
         .collect();
@@ -464,24 +546,16 @@ fn steps_that_do_not_divide_the_box_and_a_long_volume_with_large_t() {
 #[test]
 fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     let fx = Fixture::new();
+    let lbvh = common::accel("lbvh");
+    let voxel = lbvh.params(&[("classify", "voxel")]).unwrap();
     for spec in ["vessels:40", "nbody:48", "turbulence:37x29x41"] {
         let v = load(spec);
         let t = tf(v.default_tf.as_ref().unwrap());
-        let p = fx.prepare(&v, &t, 16);
-        let nodes = |classify| {
-            let s = fx.build(
-                &p,
-                common::accel("lbvh"),
-                &BuildOptions {
-                    classify,
-                    ..Default::default()
-                },
-            );
-            s.tree().unwrap().read_nodes().unwrap()
-        };
+        let p = fx.prepare(&v, &t, DEFAULTS);
+        let nodes = |params: &Params| fx.build(&p, lbvh, params).tree().unwrap().read_nodes().unwrap();
         assert_eq!(
-            nodes(Classify::Range),
-            nodes(Classify::Voxel { apron: true }),
+            nodes(&lbvh.defaults()),
+            nodes(&voxel),
             "{spec}: same active bricks, same tree"
         );
     }
@@ -490,16 +564,13 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
     let data: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 8 { 255 } else { 0 }).collect();
     let v = Volume::new("edge", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
     let t = tf("spike:0.5:0.01");
-    let p = fx.prepare(&v, &t, 16);
+    let p = fx.prepare(&v, &t, DEFAULTS);
     let view = cam(24, 90.0, 0.0, Projection::Orthographic, 0.5);
     let naive = fx.frame(&Structure::naive(), &p, &view, Filter::Manual);
     let paper = fx.build(
         &p,
-        common::accel("lbvh"),
-        &BuildOptions {
-            classify: Classify::Voxel { apron: false },
-            ..Default::default()
-        },
+        lbvh,
+        &lbvh.params(&[("classify", "voxel"), ("apron", "off")]).unwrap(),
     );
     assert!(
         diff(&naive, &fx.frame(&paper, &p, &view, Filter::Manual))
@@ -508,14 +579,7 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
             > 0.0,
         "the paper's classification should lose the interpolated spike here"
     );
-    let exact = fx.build(
-        &p,
-        common::accel("lbvh"),
-        &BuildOptions {
-            classify: Classify::Voxel { apron: true },
-            ..Default::default()
-        },
-    );
+    let exact = fx.build(&p, lbvh, &voxel);
     assert_eq!(
         diff(&naive, &fx.frame(&exact, &p, &view, Filter::Manual))
             .unwrap()
@@ -528,24 +592,17 @@ fn voxel_classification_with_apron_equals_range_and_without_it_loses_samples() {
 #[test]
 fn every_structure_parameter_set_the_paper_compares() {
     let fx = Fixture::new();
-    let kd = |depth, max_leaf, bins| KdParams { depth, max_leaf, bins };
-    let options: Vec<BuildOptions> = [
-        (kd(Depth::Shallow, 32, 4), 16),
-        (kd(Depth::Deep, 128, 4), 8),
-        (kd(Depth::Deep, 32, 2), 32),
-        (kd(Depth::Deep, 8, 7), 4),
-    ]
-    .into_iter()
-    .map(|(kd, cell)| BuildOptions {
-        kd,
-        cell,
-        ..Default::default()
-    })
-    .collect();
-    for (spec, t) in [("vessels:44", "ramp:0.3:1"), ("menger:27", "ramp:0.3:1:0.2")] {
+    let sets: [Given; 4] = [
+        &[("kd", "shallow"), ("max-leaf", "32"), ("bins", "4"), ("cell", "16")],
+        &[("kd", "deep"), ("max-leaf", "128"), ("bins", "4"), ("cell", "8")],
+        &[("kd", "deep"), ("max-leaf", "32"), ("bins", "2"), ("cell", "32")],
+        &[("kd", "deep"), ("max-leaf", "8"), ("bins", "7"), ("cell", "4")],
+    ];
+    for (spec, t, kernels) in [
+        ("vessels:44", "ramp:0.3:1", Kernels::Own),
+        ("menger:27", "ramp:0.3:1:0.2", Kernels::Reported),
+    ] {
         let v = load(spec);
-        for o in &options {
-            fx.check_with(spec, &v, &tf(t), &standard_views()[..3], std::slice::from_ref(o));
-        }
+        fx.check_with(spec, &v, &tf(t), &standard_views()[..3], &sets, kernels);
     }
 }

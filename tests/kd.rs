@@ -7,7 +7,7 @@ mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::kd::occupancy::Occupancy;
 use lacuna::accel::kd::{cheaper_as_leaf, leaf_boxes, volume, Depth, IBox, KdParams};
-use lacuna::accel::{BuildInput, BuildOptions, Builder};
+use lacuna::accel::{Accel, BuildInput, Builder, Params};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -165,7 +165,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
         let occ = Occupancy::new(&v, &tf);
         let gv = GpuVolume::upload(&ctx, &v).unwrap();
         let lut = tf.upload(&ctx).unwrap();
-        let (ranges, _) = builder.ranges(&gv, 16).unwrap();
+        let (ranges, _) = builder.ranges(&[], &gv).unwrap();
         let scene = BuildInput {
             volume: &v,
             gpu_volume: &gv,
@@ -175,16 +175,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
         for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {
             for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {
                 let (s, timings) = builder
-                    .build(
-                        accel,
-                        &scene,
-                        &ranges,
-                        &BuildOptions {
-                            kd,
-                            collapse,
-                            ..Default::default()
-                        },
-                    )
+                    .build(accel, &scene, &ranges, &kd_params(accel, &kd, collapse))
                     .unwrap();
                 let tree = s.tree().unwrap();
                 let nodes = tree.read_nodes().unwrap();
@@ -227,6 +218,22 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
     assert_clean(&ctx);
 }
 
+/// A k-d structure's parameters for `kd` and `collapse`.
+fn kd_params(accel: Accel, kd: &KdParams, collapse: bool) -> Params {
+    let depth = if kd.depth == Depth::Shallow { "shallow" } else { "deep" };
+    let (max_leaf, bins) = (kd.max_leaf.to_string(), kd.bins.to_string());
+    let collapse = if collapse { "on" } else { "off" };
+    let given = [
+        ("kd", depth),
+        ("max-leaf", max_leaf.as_str()),
+        ("bins", bins.as_str()),
+        ("collapse", collapse),
+    ];
+    let p = accel.params(&given).unwrap();
+    assert_eq!(KdParams::from_params(&p).unwrap().depth, kd.depth);
+    p
+}
+
 #[test]
 fn kd_parameters_are_validated() {
     assert!(KdParams::parse("medium", 32, 4)
@@ -238,7 +245,7 @@ fn kd_parameters_are_validated() {
         .to_string()
         .contains("max-leaf"));
     assert!(KdParams::parse("deep", 32, 1).unwrap_err().to_string().contains("bins"));
-    assert!(lacuna::accel::grid::check_cell(12)
+    assert!(lacuna::accel::check_cell(12)
         .unwrap_err()
         .to_string()
         .contains("power of two"));

@@ -5,7 +5,7 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::lbvh::{cpu, Node};
-use lacuna::accel::{BuildInput, BuildOptions, Builder, Classify, Stats};
+use lacuna::accel::{BuildInput, Builder, Classify, Params, RangeKind, Stats};
 use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
 use lacuna::{TransferFunction, Volume};
 
@@ -52,32 +52,28 @@ fn active_bricks(v: &Volume, tf: &TransferFunction) -> Vec<u32> {
 }
 
 fn gpu_lbvh(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction, classify: Classify) -> (Vec<Node>, u32) {
-    let options = BuildOptions {
-        classify,
-        ..Default::default()
+    let given = match classify {
+        Classify::Range => vec![],
+        Classify::Voxel { apron } => vec![("classify", "voxel"), ("apron", if apron { "on" } else { "off" })],
     };
-    let (nodes, leaves, _) = gpu_lbvh_with(&Builder::new(ctx).unwrap(), v, tf, &options);
+    let params = common::accel("lbvh").params(&given).unwrap();
+    let (nodes, leaves, _) = gpu_lbvh_with(&Builder::new(ctx).unwrap(), v, tf, &params);
     (nodes, leaves)
 }
 
-/// The LBVH built with `options`: its nodes, its brick count and its statistics.
-fn gpu_lbvh_with(
-    builder: &Builder,
-    v: &Volume,
-    tf: &TransferFunction,
-    options: &BuildOptions,
-) -> (Vec<Node>, u32, Stats) {
+/// The LBVH built with `params`: its nodes, its brick count and its statistics.
+fn gpu_lbvh_with(builder: &Builder, v: &Volume, tf: &TransferFunction, params: &Params) -> (Vec<Node>, u32, Stats) {
     let ctx = builder.context();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let (ranges, _) = builder.ranges(&gv, 16).unwrap();
+    let (ranges, _) = builder.ranges(&[RangeKind::Bricks], &gv).unwrap();
     let scene = BuildInput {
         volume: v,
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
     };
-    let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, options).unwrap();
+    let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, params).unwrap();
     let l = s.tree().unwrap();
     for phase in ["classify", "compact", "morton", "sort", "emit", "refit"] {
         assert!(
@@ -85,7 +81,8 @@ fn gpu_lbvh_with(
             "missing phase {phase}"
         );
     }
-    assert_eq!(t.get("collapse").is_some(), options.collapse && l.leaves().unwrap() > 0);
+    let collapse = params.switch("collapse").unwrap();
+    assert_eq!(t.get("collapse").is_some(), collapse && l.leaves().unwrap() > 0);
     (
         l.read_nodes().unwrap(),
         l.leaves().unwrap(),
@@ -120,10 +117,8 @@ fn gpu_collapse_matches_the_cpu_reference_and_collapses() {
     let builder = Builder::new(&ctx).unwrap();
     let model = builder.cost_model().unwrap();
     let tf = TransferFunction::parse("band:0.5:1").unwrap();
-    let collapsed = BuildOptions {
-        collapse: true,
-        ..Default::default()
-    };
+    let lbvh = common::accel("lbvh");
+    let collapsed = lbvh.params(&[("collapse", "on")]).unwrap();
     for (dims, p, seed) in OCCUPANCIES.into_iter().chain([([96, 96, 96], 60, 6)]) {
         let v = random_bricks(dims, p, seed);
         let active = active_bricks(&v, &tf);
@@ -139,7 +134,7 @@ fn gpu_collapse_matches_the_cpu_reference_and_collapses() {
         );
         let shape = lacuna::accel::tree::shape(&want);
         assert_eq!((stats.nodes, stats.leaves), (shape.nodes, shape.leaves));
-        let (_, _, plain) = gpu_lbvh_with(&builder, &v, &tf, &BuildOptions::default());
+        let (_, _, plain) = gpu_lbvh_with(&builder, &v, &tf, &lbvh.defaults());
         assert!(stats.nodes <= plain.nodes, "{dims:?} p={p}");
         if p == 100 {
             // Every brick active: the whole volume is one leaf.
@@ -193,7 +188,7 @@ fn karras_emit_matches_the_cpu_with_duplicate_codes() {
     for codes in &cases {
         let n = codes.len();
         let got = builder
-            .kernels::<lacuna::accel::lbvh::LbvhBuilder>()
+            .shared::<lacuna::accel::lbvh::LbvhBuilder>()
             .unwrap()
             .emit_links(codes)
             .unwrap();
@@ -219,7 +214,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
     use lacuna::accel::Structure;
     use lacuna::gpu::record::{self, Access};
     use lacuna::gpu::Timer;
-    use lacuna::render::{Camera, Output, Projection, RenderSettings, RenderTarget, Renderer, Scene, View};
+    use lacuna::render::{Camera, FrameDesc, Orbit, Output, Projection, RenderTarget, Renderer, Scene};
 
     let ctx = gpu();
     let builder = Builder::new(&ctx).unwrap();
@@ -245,7 +240,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
         ),
         ("one active brick", dot, "band:0.02:1:1", Some(1)),
     ];
-    let camera = Camera {
+    let camera = Orbit {
         azimuth_deg: 30.0,
         elevation_deg: 20.0,
         projection: Projection::Perspective {
@@ -254,12 +249,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
         },
     };
     let (w, h) = (40, 32);
-    let settings = RenderSettings {
-        width: w,
-        height: h,
-        camera,
-        ..RenderSettings::default()
-    };
+    let settings = FrameDesc::builder(w, h).camera(Camera::Orbit(camera)).build().unwrap();
     let lbvh = common::accel("lbvh");
     assert!(lbvh.method().recordable());
     for (name, v, spec, want_leaves) in cases {
@@ -272,36 +262,38 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             tf: &tf,
             gpu_tf: &lut,
         };
-        let (naive, _) = renderer.render(&Structure::naive(), &gv, &lut, &settings).unwrap();
+        let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);
         let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();
-        let view = View::new(&gv, &m, w, h).unwrap();
+        let view = FrameDesc::builder(w, h).camera(Camera::Matrices(m)).build().unwrap();
         for collapse in [false, true] {
-            let options = BuildOptions {
-                collapse,
-                ..Default::default()
-            };
+            let params = lbvh
+                .params(&[("collapse", if collapse { "on" } else { "off" })])
+                .unwrap();
             let what = format!("{name}, collapse {collapse}");
             if collapse {
                 // Measured once per builder (a submission of its own), before recording.
                 builder.cost_model().unwrap();
             }
-            let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
-            let (host, _) = builder.build(lbvh, &input, &ranges, &options).unwrap();
-            let (host_frame, _) = renderer.render(&host, &gv, &lut, &settings).unwrap();
+            let (ranges, _) = builder.ranges_for(&[(lbvh, &params)], &gv).unwrap();
+            let (host, _) = builder.build(lbvh, &input, &ranges, &params).unwrap();
+            if !collapse {
+                assert_eq!(host.marched_as(), lbvh, "{what}: the tree kernel marches");
+            }
+            let host_frame = common::frame(&renderer, &host, &gv, &lut, &settings);
 
             let target = RenderTarget::new(&ctx, w, h).unwrap();
             let mut timer = Timer::new(&ctx, 16).unwrap();
             let recorded = ctx
                 .submit_and_wait(|cmd| {
                     timer.reset(cmd);
-                    let s = builder.record_build(lbvh, cmd, Some(&mut timer), &input, &ranges, &options)?;
+                    let s = builder.record_build(lbvh, cmd, Some(&mut timer), &input, &ranges, &params)?;
                     record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
                     let scene = Scene {
                         structure: &s,
                         volume: &gv,
                         tf: &lut,
                     };
-                    renderer.record_view(cmd, Some(&mut timer), &target, scene, &view, Output::Buffer, None)?;
+                    renderer.record(cmd, Some(&mut timer), &target, scene, &view, Output::Buffer)?;
                     renderer.record_readback(cmd, &target)?;
                     Ok(s)
                 })

@@ -4,8 +4,8 @@
 mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::cost::{self, FLOOR_NS};
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Stats};
-use lacuna::render::RenderSettings;
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Stats};
+use lacuna::render::FrameDesc;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -27,7 +27,7 @@ fn the_cost_model_is_measured_once_with_positive_finite_constants() {
 
 #[test]
 fn the_collapse_plans_for_the_renderers_default_step() {
-    assert_eq!(RenderSettings::default().step, cost::STEP);
+    assert_eq!(FrameDesc::builder(1, 1).build().unwrap().step(), cost::STEP);
 }
 
 /// Runs `f` with a builder, the volume and TF uploaded, and their ranges.
@@ -40,7 +40,11 @@ fn with_input<T>(
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let (ranges, _) = builder.ranges(&gv, 16).unwrap();
+    let kinds: Vec<_> = Accel::ALL
+        .iter()
+        .flat_map(|a| a.method().ranges(&a.defaults()))
+        .collect();
+    let (ranges, _) = builder.ranges(&kinds, &gv).unwrap();
     let input = BuildInput {
         volume: v,
         gpu_volume: &gv,
@@ -54,20 +58,19 @@ fn with_input<T>(
 /// off, and whether the collapsed one is marched with the naive kernel.
 fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction) -> Vec<(Accel, Stats, Stats, bool)> {
     with_input(ctx, v, tf, |builder, input, ranges| {
-        let on = BuildOptions {
-            collapse: true,
-            ..Default::default()
-        };
         Accel::skipping()
-            .filter(|a| a.method().params(&on).iter().any(|(name, _)| *name == "collapse"))
+            .filter(|a| a.method().params().iter().any(|p| p.name == "collapse"))
             .map(|a| {
-                let build = |o: &BuildOptions| {
-                    let structure = builder.build(a, input, ranges, o).unwrap().0;
-                    assert_eq!(structure.marched_naively(), structure.accel.is_naive(), "{a}");
-                    (structure.stats().unwrap().unwrap(), structure.marched_naively())
+                let build = |p: &Params| {
+                    let structure = builder.build(a, input, ranges, p).unwrap().0;
+                    let naively = structure.marched_as().is_naive();
+                    // Marched naively exactly when a whole-box leaf says so, with no bindings.
+                    assert_eq!(structure.marched_as_reason().is_some(), naively, "{a}");
+                    assert_eq!(structure.built.bindings().is_empty(), naively, "{a}");
+                    (structure.stats().unwrap().unwrap(), naively)
                 };
-                let (collapsed, naively) = build(&on);
-                (a, collapsed, build(&BuildOptions::default()).0, naively)
+                let (collapsed, naively) = build(&a.params(&[("collapse", "on")]).unwrap());
+                (a, collapsed, build(&a.defaults()).0, naively)
             })
             .collect()
     })
@@ -94,9 +97,9 @@ fn a_fully_active_volume_is_one_leaf_and_a_sparse_one_keeps_its_empty_space_out(
     // The hybrid's one-leaf tree still walks its grid inside the leaf.
     let hybrid = with_input(&ctx, &full, &tf, |builder, input, ranges| {
         let accel: Accel = "hybrid".parse().unwrap();
-        builder.build(accel, input, ranges, &BuildOptions::default()).unwrap().0
+        builder.build(accel, input, ranges, &accel.defaults()).unwrap().0
     });
-    assert!(!hybrid.marched_naively() && !hybrid.accel.is_naive());
+    assert!(hybrid.marched_as_reason().is_none() && hybrid.marched_as().name() == "hybrid");
     // Two bright 4^3 blobs in opposite corners: one leaf would march the
     // whole volume's diagonal for two small targets.
     let mut data = vec![0u8; n];

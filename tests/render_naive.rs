@@ -7,23 +7,15 @@ mod common;
 use common::{gpu, max_abs, render};
 use lacuna::accel::Accel;
 use lacuna::render::reference;
-use lacuna::render::{Camera, Filter, Projection, RenderSettings};
+use lacuna::render::{Filter, FrameBuilder, FrameDesc, Projection};
 use lacuna::volume::{VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
-fn settings(size: u32, az: f64, el: f64, projection: Projection) -> RenderSettings {
-    RenderSettings {
-        width: size,
-        height: size,
-        camera: Camera {
-            azimuth_deg: az,
-            elevation_deg: el,
-            projection,
-        },
-        step: 0.5,
-        ert: None,
-        filter: Filter::Manual,
-    }
+/// A square frame of an orbit camera, sampled with the manual filter.
+fn settings(size: u32, az: f64, el: f64, projection: Projection) -> FrameBuilder {
+    FrameDesc::builder(size, size)
+        .orbit(az, el, projection)
+        .filter(Filter::Manual)
 }
 
 /// Max abs GPU-vs-CPU difference allowed per filter. Manual: the same f32
@@ -44,22 +36,23 @@ const PERSP: Projection = Projection::Perspective {
 };
 
 /// Each filter's GPU frame against the CPU reference.
-fn check_against_reference(volume: &Volume, tf: &TransferFunction, s: &RenderSettings) {
+fn check_against_reference(volume: &Volume, tf: &TransferFunction, s: FrameBuilder) {
     check_filters(volume, tf, s, &Filter::ALL)
 }
 
-fn check_filters(volume: &Volume, tf: &TransferFunction, s: &RenderSettings, filters: &[Filter]) {
+fn check_filters(volume: &Volume, tf: &TransferFunction, s: FrameBuilder, filters: &[Filter]) {
     let ctx = gpu();
-    let params = s.params(volume.dims, volume.spacing, volume.norm).unwrap();
+    let desc = s.build().unwrap();
+    let params = desc.params_for(volume.dims, volume.spacing, volume.norm).unwrap();
     let cpu = reference::render(volume, tf, &params);
     for &filter in filters {
-        let frame = render(&ctx, volume, tf, &RenderSettings { filter, ..*s }, Accel::naive());
+        let frame = render(&ctx, volume, tf, &s.filter(filter).build().unwrap(), Accel::naive());
         let err = max_abs(&frame, &cpu);
         assert!(
             err <= tolerance(filter),
             "{} {}, {filter}: GPU vs CPU max abs {err}",
             volume.name,
-            s.camera.describe()
+            desc.camera().describe()
         );
         // The frame is not trivially empty.
         assert!(frame.pixels.iter().any(|p| p[3] > 0.01), "{}: empty frame", volume.name);
@@ -71,8 +64,8 @@ fn generators_match_the_cpu_reference_orthographic_and_perspective() {
     for spec in ["menger:27", "nbody:48", "vessels:40", "turbulence:32", "shells:36"] {
         let v = Volume::load(spec, &Default::default()).unwrap();
         let tf = TransferFunction::parse(v.default_tf.as_ref().unwrap()).unwrap();
-        check_against_reference(&v, &tf, &settings(64, 30.0, 20.0, Projection::Orthographic));
-        check_against_reference(&v, &tf, &settings(48, -115.0, 35.0, PERSP));
+        check_against_reference(&v, &tf, settings(64, 30.0, 20.0, Projection::Orthographic));
+        check_against_reference(&v, &tf, settings(48, -115.0, 35.0, PERSP));
     }
 }
 
@@ -91,7 +84,7 @@ fn axis_aligned_views_and_odd_dims_match_the_reference() {
         (0.0, -90.0),
         (45.0, 35.264),
     ] {
-        check_against_reference(&v, &tf, &settings(40, az, el, Projection::Orthographic));
+        check_against_reference(&v, &tf, settings(40, az, el, Projection::Orthographic));
     }
 }
 
@@ -103,15 +96,13 @@ fn camera_inside_the_volume_and_early_termination_match_the_reference() {
         fov_deg: 70.0,
         distance: Some(0.1),
     };
-    check_against_reference(&v, &tf, &settings(48, 10.0, 5.0, inside));
-    let mut s = settings(48, 30.0, 20.0, Projection::Orthographic);
-    s.ert = Some(0.9);
-    check_against_reference(&v, &tf, &s);
+    check_against_reference(&v, &tf, settings(48, 10.0, 5.0, inside));
+    let s = settings(48, 30.0, 20.0, Projection::Orthographic).ert(Some(0.9));
+    check_against_reference(&v, &tf, s);
     // ERT only truncates rays that reached the threshold; others are untouched.
     let ctx = gpu();
-    let cut = render(&ctx, &v, &tf, &s, Accel::naive());
-    s.ert = None;
-    let full = render(&ctx, &v, &tf, &s, Accel::naive());
+    let cut = render(&ctx, &v, &tf, &s.build().unwrap(), Accel::naive());
+    let full = render(&ctx, &v, &tf, &s.ert(None).build().unwrap(), Accel::naive());
     let mut truncated = 0;
     for (c, f) in cut.pixels.iter().zip(&full.pixels) {
         if c[3] < 0.9 {
@@ -139,7 +130,7 @@ fn a_spike_visible_only_through_interpolation_is_rendered() {
     // R8 UNORM to an 8-bit result (127/255 or 128/255 here), which misses a
     // spike narrower than 1/255 (README, "Sample filter").
     let s = settings(32, 90.0, 0.0, Projection::Orthographic);
-    check_filters(&v, &tf, &s, &[Filter::Manual]);
+    check_filters(&v, &tf, s, &[Filter::Manual]);
 }
 
 #[test]
@@ -150,15 +141,12 @@ fn hardware_filtering_moves_the_image_by_a_bounded_amount() {
     let tf = TransferFunction::parse("ramp:0.2:1").unwrap();
     let ctx = gpu();
     let s = settings(64, 12.0, 34.0, PERSP);
-    let manual = render(&ctx, &v, &tf, &s, Accel::naive());
+    let manual = render(&ctx, &v, &tf, &s.build().unwrap(), Accel::naive());
     let hardware = render(
         &ctx,
         &v,
         &tf,
-        &RenderSettings {
-            filter: Filter::Hardware,
-            ..s
-        },
+        &s.filter(Filter::Hardware).build().unwrap(),
         Accel::naive(),
     );
     let d = lacuna::frame::diff(&manual, &hardware).unwrap();
@@ -178,13 +166,19 @@ fn the_frame_lut_is_corrected_for_the_step_on_the_gpu() {
     let gv = lacuna::volume::GpuVolume::upload(&ctx, &v).unwrap();
     let lut = tf.upload(&ctx).unwrap();
     for step in [0.37f32, 1.0, 2.5] {
-        let s = RenderSettings {
-            step,
-            ..settings(8, 0.0, 0.0, Projection::Orthographic)
-        };
+        let s = settings(8, 0.0, 0.0, Projection::Orthographic)
+            .step(step)
+            .build()
+            .unwrap();
         let target = lacuna::render::RenderTarget::new(&ctx, 8, 8).unwrap();
         let naive = lacuna::accel::Structure::naive();
-        ctx.submit_and_wait(|cmd| renderer.record(cmd, None, &naive, &target, &gv, &lut, &s))
+        let scene = lacuna::render::Scene {
+            structure: &naive,
+            volume: &gv,
+            tf: &lut,
+        };
+        let out = lacuna::render::Output::Buffer;
+        ctx.submit_and_wait(|cmd| renderer.record(cmd, None, &target, scene, &s, out))
             .unwrap();
         let gpu_lut: Vec<[f32; 4]> =
             bytemuck::pod_collect_to_vec(&target.lut.buffer().download(0, target.lut.buffer().size()).unwrap());
@@ -235,10 +229,12 @@ fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
     let tf = TransferFunction::parse(&format!("band:0:1:{alpha}")).unwrap();
     let ctx = gpu();
     for (az, el, step) in [(0.0, 0.0, 0.5), (33.0, 21.0, 0.37), (60.0, -40.0, 1.3)] {
-        let mut s = settings(48, az, el, Projection::Orthographic);
-        s.step = step;
+        let s = settings(48, az, el, Projection::Orthographic)
+            .step(step)
+            .build()
+            .unwrap();
         let frame = render(&ctx, &v, &tf, &s, Accel::naive());
-        let p = s.params(v.dims, v.spacing, v.norm).unwrap();
+        let p = s.params_for(v.dims, v.spacing, v.norm).unwrap();
         let dir = [p.eye_or_dir[0] as f64, p.eye_or_dir[1] as f64, p.eye_or_dir[2] as f64];
         let len = (dir.iter().map(|c| c * c).sum::<f64>()).sqrt();
         let dir = dir.map(|c| c / len);
@@ -265,7 +261,7 @@ fn homogeneous_box_transmittance_is_exp_minus_sigma_length() {
 fn rendering_is_deterministic_bit_for_bit() {
     let v = Volume::load("nbody:40", &Default::default()).unwrap();
     let tf = TransferFunction::parse("ramp:0.2:1").unwrap();
-    let s = settings(64, 12.0, 34.0, PERSP);
+    let s = settings(64, 12.0, 34.0, PERSP).build().unwrap();
     let ctx = gpu();
     let a = render(&ctx, &v, &tf, &s, Accel::naive());
     let b = render(&ctx, &v, &tf, &s, Accel::naive());
@@ -280,7 +276,7 @@ fn degenerate_volumes_render() {
         let data: Vec<u8> = (0..n).map(|i| (i * 37 % 256) as u8).collect();
         let v = Volume::new("tiny", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
         let tf = TransferFunction::parse("band:0:1:0.5").unwrap();
-        check_against_reference(&v, &tf, &settings(16, 20.0, 10.0, Projection::Orthographic));
+        check_against_reference(&v, &tf, settings(16, 20.0, 10.0, Projection::Orthographic));
     }
 }
 
@@ -290,9 +286,9 @@ fn degenerate_volumes_render() {
 /// structure alike.
 #[test]
 fn frames_split_into_bands_equal_the_whole_frame() {
-    use lacuna::accel::{BuildInput, BuildOptions, Builder};
+    use lacuna::accel::{BuildInput, Builder};
     use lacuna::frame::diff;
-    use lacuna::render::Renderer;
+    use lacuna::render::{Renderer, Scene};
     use lacuna::volume::{GpuVolume, LoadOptions};
     let ctx = gpu();
     let v = Volume::load("nbody:48", &LoadOptions::default()).unwrap();
@@ -302,38 +298,37 @@ fn frames_split_into_bands_equal_the_whole_frame() {
     let builder = Builder::new(&ctx).unwrap();
     let renderer = Renderer::new(&ctx).unwrap();
     // 72 x 40: the last band of 8-row workgroups is partial.
-    let s = RenderSettings {
-        width: 72,
-        height: 40,
-        ..settings(72, 30.0, 20.0, Projection::Orthographic)
-    };
-    let params = s.params(v.dims, v.spacing, gv.norm).unwrap();
-    let per_ray = lacuna::limits::check_samples_per_ray(v.dims, s.step).unwrap();
+    let s = settings(72, 30.0, 20.0, Projection::Orthographic)
+        .size(72, 40)
+        .build()
+        .unwrap();
+    let per_ray = lacuna::limits::check_samples_per_ray(v.dims, s.step()).unwrap();
     for name in ["naive", "grid"] {
         let accel: Accel = name.parse().unwrap();
-        let options = BuildOptions {
-            cell: accel.method().default_cell(),
-            ..Default::default()
-        };
-        let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
+        let params = accel.defaults();
+        let (ranges, _) = builder.ranges_for(&[(accel, &params)], &gv).unwrap();
         let input = BuildInput {
             volume: &v,
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
         };
-        let (structure, _) = builder.build(accel, &input, &ranges, &options).unwrap();
-        let (whole, _, one) = renderer
-            .render_in_bands(&structure, &gv, &lut, &params, Filter::Manual, u64::MAX)
-            .unwrap();
+        let (structure, _) = builder.build(accel, &input, &ranges, &params).unwrap();
+        assert_eq!(structure.marched_as(), accel, "its own kernel marches");
+        let scene = Scene {
+            structure: &structure,
+            volume: &gv,
+            tf: &lut,
+        };
+        let (whole, _, one) = renderer.render_in_bands(scene, &s, u64::MAX).unwrap();
         assert_eq!(one, 1);
         // One row of workgroups (72 x 8 rays) per band: 5 bands.
         let budget = 72 * 8 * per_ray;
-        let (banded, timings, bands) = renderer
-            .render_in_bands(&structure, &gv, &lut, &params, Filter::Manual, budget)
-            .unwrap();
+        let (banded, timings, bands) = renderer.render_in_bands(scene, &s, budget).unwrap();
         assert_eq!(bands, 5, "{name}");
-        assert!(timings.phase("march").unwrap() >= 0.0);
+        // Each pass is timed once, summed over the bands.
+        let names: Vec<&str> = timings.phases.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["march", "readback"], "{name}");
         assert!(whole.pixels.iter().any(|p| p[3] > 0.0), "{name}: something visible");
         assert_eq!(diff(&whole, &banded).unwrap().differing, 0, "{name}");
     }

@@ -327,15 +327,14 @@ fn the_real_ch2_mri_loads_and_renders() {
     assert!(v.value_range[1] > v.value_range[0]);
     // Render a small frame of it on the GPU against the CPU reference.
     let tf = TransferFunction::parse("ramp:0.3:0.9:0.2").unwrap();
-    let s = lacuna::render::RenderSettings {
-        width: 48,
-        height: 48,
-        step: 2.0,
-        ..Default::default()
-    };
+    let s = lacuna::render::FrameDesc::builder(48, 48)
+        .step(2.0)
+        .filter(lacuna::render::Filter::Manual)
+        .build()
+        .unwrap();
     let ctx = common::gpu();
     let frame = common::render(&ctx, &v, &tf, &s, lacuna::accel::Accel::naive());
-    let cpu = lacuna::render::reference::render(&v, &tf, &s.params(v.dims, v.spacing, v.norm).unwrap());
+    let cpu = lacuna::render::reference::render(&v, &tf, &s.params_for(v.dims, v.spacing, v.norm).unwrap());
     assert!(common::max_abs(&frame, &cpu) <= 1e-4);
     assert!(
         frame.pixels.iter().filter(|p| p[3] > 0.1).count() > 200,

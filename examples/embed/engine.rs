@@ -8,12 +8,14 @@
 use super::host::{HostBuffer, Image2d};
 use ash::vk;
 use glam::{DVec3, Vec4};
-use lacuna::accel::{BuildInput, BuildOptions, Builder, Ranges, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{
     record, required_features, AdoptInfo, Context, EnabledFeatures, Staging, Timer, REQUIRED_EXTENSIONS,
 };
-use lacuna::render::{Camera, HostDepth, HostImage, Output, Projection, RenderTarget, Renderer, Scene, View};
+use lacuna::render::{
+    Camera, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection, RenderTarget, Renderer, Scene,
+};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::Timings;
@@ -29,7 +31,7 @@ pub struct Settings {
     pub volume: String,
     pub tf: Option<String>,
     pub accel: String,
-    pub camera: Camera,
+    pub camera: Orbit,
     /// Validation layer with synchronization validation on the engine's instance.
     pub validate: bool,
 }
@@ -41,7 +43,7 @@ impl Default for Settings {
             volume: "menger:64".into(),
             tf: None,
             accel: "grid".into(),
-            camera: Camera {
+            camera: Orbit {
                 azimuth_deg: 30.0,
                 elevation_deg: 20.0,
                 projection: Projection::Perspective {
@@ -281,8 +283,8 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         .unwrap_or_else(|| "ramp:0.3:1".into());
     let tf = TransferFunction::parse(&tf_spec).map_err(err)?;
     let builder = Builder::new(&ctx).map_err(err)?;
-    let options = BuildOptions::default();
-    let accel = settings.accel.parse().map_err(err)?;
+    let accel: Accel = settings.accel.parse().map_err(err)?;
+    let params = accel.defaults();
     let renderer = Renderer::new(&ctx).map_err(err)?;
     let target = RenderTarget::for_images(&ctx, size, size).map_err(err)?;
     let mut timer = Timer::new(&ctx, 16).map_err(err)?;
@@ -460,21 +462,21 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         timer.reset(cmd);
         let (gv, volume_staging) = GpuVolume::record_upload(&ctx, cmd, &volume)?;
         let (lut, tf_staging) = tf.record_upload(&ctx, cmd)?;
-        let ranges = builder.record_ranges_for(cmd, Some(&mut timer), &[accel], &gv, options.cell)?;
+        let ranges = builder.record_ranges(cmd, Some(&mut timer), &[accel.method().ranges(&params)?], &gv)?;
         let input = BuildInput {
             volume: &volume,
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
         };
-        let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &options)?;
+        let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &params)?;
         record::barrier(device, cmd, record::Access::COMPUTE_WRITE, record::Access::COMPUTE_READ);
         let scene = Scene {
             structure: &structure,
             volume: &gv,
             tf: &lut,
         };
-        let view = View::new(&gv, &m, size, size)?.step(0.5)?;
+
         let out = HostImage {
             view: layer.view,
             format: COLOUR,
@@ -488,15 +490,14 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             width: size,
             height: size,
         };
-        renderer.record_view(
-            cmd,
-            Some(&mut timer),
-            &target,
-            scene,
-            &view,
-            Output::Image(out),
-            Some(&ends),
-        )?;
+        // The engine's matrices; rays end at its depth image.
+        let frame = FrameDesc::builder(size, size)
+            .camera(Camera::Matrices(m))
+            .step(0.5)
+            .filter(Filter::Manual)
+            .depth(Some(ends))
+            .build()?;
+        renderer.record(cmd, Some(&mut timer), &target, scene, &frame, Output::Image(out))?;
         // 4. The engine reads its three images back.
         let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
         colour.transition(

@@ -3,13 +3,13 @@
 #define LACUNA_CAMERA_GLSL
 
 Ray camera_ray(uvec2 px) {
-    precise vec3 p = params.base.xyz + (float(px.x) + 0.5) * params.du.xyz + (float(px.y) + 0.5) * params.dv.xyz;
+    precise vec3 p = params.base + (float(px.x) + 0.5) * params.du + (float(px.y) + 0.5) * params.dv;
     Ray r;
-    if (params.eye_or_dir.w == 0.0) {
+    if (params.perspective == 0u) {
         r.org = p;
-        r.dir = normalize(params.eye_or_dir.xyz);
+        r.dir = normalize(params.eye_or_dir);
     } else {
-        r.org = params.eye_or_dir.xyz;
+        r.org = params.eye_or_dir;
         r.dir = normalize(p - r.org);
     }
     return r;

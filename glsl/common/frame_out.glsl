@@ -5,18 +5,18 @@
 #define LACUNA_FRAME_OUT_GLSL
 
 #ifdef FRAME_FORMAT
-layout(set = 0, binding = FRAME_BINDING, FRAME_FORMAT) uniform writeonly image2D frame_image;
+layout(set = 0, binding = FRAME_BINDING, FRAME_FORMAT) uniform writeonly image2D frame;
 
 void frame_store(uvec2 px, vec4 c) {
-    imageStore(frame_image, ivec2(px), c);
+    imageStore(frame, ivec2(px), c);
 }
 #else
 layout(std430, set = 0, binding = FRAME_BINDING) writeonly buffer Frame {
-    vec4 frame[];
+    vec4 frame_pixels[];
 };
 
 void frame_store(uvec2 px, vec4 c) {
-    frame[px.y * params.image.x + px.x] = c;
+    frame_pixels[px.y * params.image.x + px.x] = c;
 }
 #endif
 

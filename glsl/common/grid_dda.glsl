@@ -24,7 +24,7 @@ void march_grid(inout March m, float t0, float t1, float eps) {
         uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
         if (cell_flags[index] != 0u) {
             vec3 lo = vec3(cell) * c;
-            vec3 hi = min(lo + c, vec3(params.dims.xyz));
+            vec3 hi = min(lo + c, vec3(params.dims));
             vec2 s = region_span(m, lo, hi, eps);
             march_region(m, vec2(max(s.x, t0), min(s.y, t1)));
         }

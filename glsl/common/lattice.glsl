@@ -52,15 +52,15 @@ void march_set_exit(inout March m, float t_exit) {
 
 // Sets up the march for a ray; false when the ray misses the volume box.
 bool march_begin(Ray ray, float dt, out March m) {
-    vec2 hit = intersect_box(ray, vec3(0.0), vec3(params.dims.xyz));
+    vec2 hit = intersect_box(ray, vec3(0.0), vec3(params.dims));
     m.ray = ray;
     m.t_enter = max(hit.x, 0.0);
     m.dt = dt;
     m.k = 0;
     m.acc = vec4(0.0);
     m.vr = volume_ray(ray.org, ray.dir);
-    m.ert = params.march.y;
-    m.tf_n = params.dims.w;
+    m.ert = params.ert;
+    m.tf_n = params.lut_size;
     march_set_exit(m, hit.y);
     return !m.done;
 }
@@ -70,8 +70,8 @@ bool march_begin(Ray ray, float dt, out March m) {
 // shortens t_exit: the lattice stays t_enter + k * dt, so every structure
 // still takes exactly naive's samples.
 bool march_pixel(uvec2 px, out March m) {
-    bool hit = march_begin(camera_ray(px), params.march.x, m);
-    if (hit && params.depth.y != 0.0) {
+    bool hit = march_begin(camera_ray(px), params.step, m);
+    if (hit && params.depth_limits != 0u) {
         march_set_exit(m, min(m.t_exit, params.t_max[px.y * params.image.x + px.x]));
     }
     return !m.done;

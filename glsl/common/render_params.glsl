@@ -1,9 +1,8 @@
-// Per-frame render parameters, written by src/render/params.rs::RenderParams;
-// keep both in the same order. A read-only storage block, not a uniform
+// Per-frame render parameters. The host fills `shaders::blocks::RenderParams`,
+// which build.rs generates from this block (derived from a FrameDesc). A read-only storage block, not a uniform
 // block: lavapipe inlines uniform-block values used in branches into the
 // shader and compiles a new variant whenever they change, i.e. every frame
 // the camera moves (a ~50 ms stall per frame without Mesa's disk cache).
-// Every fixed member is a vec4 or mat4, so std430 and std140 lay it out alike.
 #ifndef LACUNA_RENDER_PARAMS_GLSL
 #define LACUNA_RENDER_PARAMS_GLSL
 
@@ -11,27 +10,27 @@
 #define PARAMS_ACCESS readonly
 #endif
 
-layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderParamsBlock {
+layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderParams {
     // Pixel (x, y) maps to the point base + (x + 0.5) * du + (y + 0.5) * dv,
     // all in voxel space (box [0, N] per axis, voxel i centred at i + 0.5).
-    vec4 base;
-    vec4 du;
-    vec4 dv;
-    // xyz: orthographic ray direction, or the perspective eye; w: 0 = ortho, 1 = perspective.
-    vec4 eye_or_dir;
-    // xyz: volume dimensions in voxels; w: transfer-function LUT entries.
-    uvec4 dims;
-    // x, y: image size in pixels.
-    uvec4 image;
-    // x: step dt in voxels; y: early-ray-termination alpha (> 1 = off);
-    // z, w: value normalisation, v = (texel - z) * w.
-    vec4 march;
+    // Each vec3 shares its 16 bytes with a scalar, so the block has no gaps.
+    vec3 base;
+    uint perspective; // 0: orthographic rays along eye_or_dir; 1: rays from the eye eye_or_dir
+    vec3 du;
+    float step;       // the sample spacing dt, in voxels
+    vec3 dv;
+    float ert;        // early-ray-termination alpha (> 1: off)
+    vec3 eye_or_dir;
+    uint lut_size;    // transfer-function LUT entries
+    uvec3 dims;       // volume dimensions in voxels
+    uint depth_limits; // 1: each ray ends at its t_max below
+    uvec2 image;      // image size in pixels
+    vec2 norm;        // value normalisation, v = (texel - norm.x) * norm.y
     // NDC (x, y, depth, 1) to homogeneous voxel space (host depth images).
     mat4 ndc_to_voxel;
-    // x: the far plane's depth (no surface); y: 1 when rays end at t_max.
-    vec4 depth;
-    // Per pixel (row-major), when depth.y == 1: the ray's t where the host's
-    // opaque surface is, written by glsl/render/depth_limit.comp.
+    float far_depth;  // the depth of the far plane: no surface there
+    // Per pixel (row-major), when depth_limits == 1: the ray's t where the
+    // host's opaque surface is, written by glsl/render/depth_limit.comp.
     float t_max[];
 } params;
 

@@ -25,7 +25,7 @@ struct VolumeRay {
 
 VolumeRay volume_ray(vec3 org, vec3 dir) {
     VolumeRay v;
-    vec3 dims = vec3(params.dims.xyz);
+    vec3 dims = vec3(params.dims);
     if (VOLUME_FILTER == 1u) {
         // The sampler's u * N - 0.5 puts voxel i's centre at i + 0.5, as the
         // manual path (3D images allow no unnormalised coordinates).
@@ -37,8 +37,8 @@ VolumeRay volume_ray(vec3 org, vec3 dir) {
         v.org = org;
         v.dir = dir;
     }
-    v.hi = ivec3(params.dims.xyz) - 1;
-    v.norm = params.march.zw;
+    v.hi = ivec3(params.dims) - 1;
+    v.norm = params.norm;
     return v;
 }
 

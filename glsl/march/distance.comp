@@ -10,36 +10,27 @@
 // reasons as the grid's 3D-DDA.
 #extension GL_GOOGLE_include_directive : require
 
-#define PARAMS_BINDING 0
-#define VOLUME_BINDING 1
-#define TF_BINDING 2
-#define FRAME_BINDING 3
-
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "march.glsl"
 layout(constant_id = 0) const uint OCTANTS = 0u;
 
-#include "render_params.glsl"
-#include "ray.glsl"
-#include "camera.glsl"
-#include "volume.glsl"
-#include "tf.glsl"
-#include "lattice.glsl"
 #include "distance_map.glsl"
 
-#include "frame_out.glsl"
-layout(std430, set = 0, binding = 4) readonly buffer Distances { uint distances[]; };
-layout(push_constant) uniform Grid { uvec4 cells; } grid; // xyz: cells per axis; w: cell edge
+layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Distances { uint distances[]; };
+layout(push_constant) uniform Grid {
+    uvec3 counts; // cells per axis
+    uint cell;    // cell edge in voxels
+} grid;
 
 // The distance from `cell` to the nearest cell of the other kind, for a ray of `octant`.
 uint distance_at(ivec3 cell, bool is_active, uint octant) {
-    ivec3 n = ivec3(grid.cells.xyz);
+    ivec3 n = ivec3(grid.counts);
     uint i = uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z));
     uint ch = distance_channel(is_active, octant);
     return distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
 }
 
 bool active_at(ivec3 cell) {
-    ivec3 n = ivec3(grid.cells.xyz);
+    ivec3 n = ivec3(grid.counts);
     // Channel 0 (distance to an active cell) is 0 exactly in active cells.
     return (distances[DISTANCE_WORDS * (uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z)))] & 255u) == 0u;
 }
@@ -54,8 +45,8 @@ struct Walk {
 // or with octants the cells up to d-1 ahead on every axis), then on to the
 // cell past the box's exit. Returns whether the box is active, and its span.
 bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
-    float c = float(grid.cells.w);
-    ivec3 counts = ivec3(grid.cells.xyz);
+    float c = float(grid.cell);
+    ivec3 counts = ivec3(grid.counts);
     vec3 dir = m.ray.dir;
     ivec3 stp = ivec3(sign(dir));
     ivec3 cell = w.cell;
@@ -71,7 +62,7 @@ bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
     span = vec2(0.0);
     if (is_active) {
         vec3 blo = max(vec3(lo), vec3(0.0)) * c;
-        vec3 bhi = min(vec3(hi + 1) * c, vec3(params.dims.xyz));
+        vec3 bhi = min(vec3(hi + 1) * c, vec3(params.dims));
         span = region_span(m, blo, bhi, eps);
     }
     // The exit of the box [lo, hi + 1) * c: the nearest plane ahead.
@@ -110,8 +101,8 @@ bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
 // sides of a branch, so a loop that either samples or walks pays for both
 // on every sample).
 void march_distance(inout March m, float eps) {
-    float c = float(grid.cells.w);
-    ivec3 counts = ivec3(grid.cells.xyz);
+    float c = float(grid.cell);
+    ivec3 counts = ivec3(grid.counts);
     vec3 dir = m.ray.dir;
     // A zero component never crosses its axis; count it as positive.
     uint octant = (dir.x < 0.0 ? 1u : 0u) | (dir.y < 0.0 ? 2u : 0u) | (dir.z < 0.0 ? 4u : 0u);
@@ -133,14 +124,6 @@ void march_distance(inout March m, float eps) {
     }
 }
 
-void main() {
-    uvec2 px = gl_GlobalInvocationID.xy;
-    if (px.x >= params.image.x || px.y >= params.image.y) {
-        return;
-    }
-    March m;
-    if (march_pixel(px, m)) {
-        march_distance(m, region_margin(m));
-    }
-    frame_store(px, m.acc);
+void march_ray(inout March m) {
+    march_distance(m, region_margin(m));
 }

@@ -4,24 +4,12 @@
 // in ray order; nonempty leaves' spans are marched on the global lattice.
 #extension GL_GOOGLE_include_directive : require
 
-#define PARAMS_BINDING 0
-#define VOLUME_BINDING 1
-#define TF_BINDING 2
-#define FRAME_BINDING 3
-
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "march.glsl"
 layout(constant_id = 0) const uint OCTREE_KIND = 3u;
 
-#include "render_params.glsl"
-#include "ray.glsl"
-#include "camera.glsl"
-#include "volume.glsl"
-#include "tf.glsl"
-#include "lattice.glsl"
 #include "octree_node.glsl"
 
-#include "frame_out.glsl"
-layout(std430, set = 0, binding = 4) readonly buffer Nodes { OctNode oct_nodes[]; };
+layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Nodes { OctNode oct_nodes[]; };
 
 March g_march;
 float g_eps;
@@ -37,14 +25,10 @@ bool octree_leaf(uint node, float t0, float t1) {
 
 #include "octree_traverse.glsl"
 
-void main() {
-    uvec2 px = gl_GlobalInvocationID.xy;
-    if (px.x >= params.image.x || px.y >= params.image.y) {
-        return;
-    }
-    if (march_pixel(px, g_march)) {
-        g_eps = region_margin(g_march);
-        octree_walk(OctRay(g_march.ray.org, g_march.ray.dir, g_march.t_enter, g_march.t_exit));
-    }
-    frame_store(px, g_march.acc);
+// The traversal's leaf callback reads the march from globals.
+void march_ray(inout March m) {
+    g_march = m;
+    g_eps = region_margin(m);
+    octree_walk(OctRay(m.ray.org, m.ray.dir, m.t_enter, m.t_exit));
+    m = g_march;
 }

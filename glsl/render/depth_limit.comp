@@ -27,7 +27,7 @@ void main() {
     float d = texelFetch(depth_image, ivec2(px), 0).r;
     float limit = NO_LIMIT;
     // The far plane's depth is where nothing was drawn.
-    if (d != params.depth.x) {
+    if (d != params.far_depth) {
         precise vec2 ndc = (vec2(px) + 0.5) * 2.0 / vec2(params.image.xy) - 1.0;
         precise vec4 q = params.ndc_to_voxel * vec4(ndc, d, 1.0);
         if (q.w != 0.0) {

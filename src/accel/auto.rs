@@ -8,16 +8,15 @@
 //! Re-made on every build, i.e. every transfer-function change. The model is
 //! documented in `docs/structures.md`.
 
+use super::builder::{Builder, RangeKind, Ranges};
 use super::cost::{self, CostModel};
-use super::distance::{self, DistanceKernels, DistanceMap, Summary};
-use super::naive::NoData;
-use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::distance::{self, DistanceKernels, DistanceMap, DistanceMethod, Summary};
+use super::method::{Accel, BuildInput, Built, March, MarchedAs, Method};
+use super::naive::{NoData, NAIVE};
+use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
-use super::tree::GpuTree;
-use super::{Accel, Classifier};
 use crate::error::Result;
-use crate::gpu::timings::Timings;
-use crate::gpu::{Binding, Timer};
+use crate::gpu::{Bound, Timer, Timings};
 
 /// The cell edge auto plans with when `--cell` is not given: the finest
 /// cell whose map rebuild stays cheap (`docs/results/distance.md`).
@@ -31,6 +30,9 @@ pub const OCTANT_CELLS: u64 = 1 << 15;
 
 /// Predicted distance-march time over naive time above which auto marches naively.
 pub const THRESHOLD: f64 = 1.0;
+
+const CUBE: Accel = Accel(&DistanceMethod { octants: false });
+const OCTANT: Accel = Accel(&DistanceMethod { octants: true });
 
 /// What auto chose and why.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,7 +50,7 @@ pub struct Choice {
 impl Choice {
     /// `distance-octant (cell 4)`, `distance (cell 4)` or `naive`.
     pub fn describe(&self) -> String {
-        if self.accel.is_naive() {
+        if self.accel == NAIVE {
             "naive".into()
         } else {
             format!("{} (cell {})", self.accel, self.cell)
@@ -83,14 +85,15 @@ pub fn predict(s: &Summary, cell: u32, model: &CostModel) -> f64 {
     a + steps_per_cell * walk / (samples_per_cell * model.sample_ns)
 }
 
-/// The built structure and the choice behind it.
-struct Chosen {
-    choice: Choice,
+/// The built structure and the choice behind it
+/// (`Structure::built_as::<Chosen>()`).
+pub struct Chosen {
+    pub choice: Choice,
     inner: Box<dyn Built>,
 }
 
 impl Built for Chosen {
-    fn bindings(&self) -> Vec<Binding<'_>> {
+    fn bindings(&self) -> Vec<Bound<'_>> {
         self.inner.bindings()
     }
     fn push(&self) -> Vec<u8> {
@@ -99,11 +102,12 @@ impl Built for Chosen {
     fn stats(&self) -> Result<Option<Stats>> {
         self.inner.stats()
     }
-    fn tree(&self) -> Option<&GpuTree> {
-        self.inner.tree()
-    }
-    fn choice(&self) -> Option<&Choice> {
-        Some(&self.choice)
+    fn marched_as(&self) -> Option<MarchedAs> {
+        Some(MarchedAs {
+            accel: self.choice.accel,
+            label: self.choice.describe(),
+            reason: self.choice.reason(),
+        })
     }
 }
 
@@ -117,31 +121,24 @@ impl Method for AutoMethod {
     fn description(&self) -> &'static str {
         "chooses naive or a distance map for this volume and TF from the map's statistics and the device's cost model"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Cells
+    fn params(&self) -> &'static [Param] {
+        const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
+        &[CELL_PARAM]
     }
-    fn default_cell(&self) -> u32 {
-        CELL
-    }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("cell", o.cell.to_string())]
+    fn ranges(&self, p: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Cells(p.int("cell")?))
     }
     /// The kernel of the cube map; frames use the chosen structure's
-    /// (`Structure::accel`).
+    /// (`Structure::marched_as`).
     fn march(&self) -> March {
-        distance::DistanceMethod { octants: false }.march()
+        CUBE.method().march()
     }
-    fn variants(&self) -> Vec<(String, BuildOptions)> {
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
         [CELL, 8]
             .into_iter()
             .map(|cell| {
-                (
-                    format!("auto cell {cell}"),
-                    BuildOptions {
-                        cell,
-                        ..BuildOptions::default()
-                    },
-                )
+                let p = Params::resolve(self.params(), &[("cell", &cell.to_string())])?;
+                Ok((format!("auto cell {cell}"), p))
             })
             .collect()
     }
@@ -154,30 +151,20 @@ impl Method for AutoMethod {
         builder: &Builder,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
         let ctx = builder.context();
         let model = builder.cost_model()?;
-        let kernels = builder.kernels::<DistanceKernels>()?;
-        let classifier = builder.kernels::<Classifier>()?;
-        let cells = ranges.cells(options.cell)?;
+        let kernels = builder.shared::<DistanceKernels>()?;
+        let cell = p.int("cell")?;
+        let cells = ranges.cells(cell)?;
         let out = DistanceMap::summary_buffer(ctx)?;
         // Records a map, and the summary of the first one.
         let build_map = |octants: bool, summary: bool| -> Result<(DistanceMap, Timings)> {
             let mut timer = Timer::new(ctx, 8)?;
             let map = ctx.submit_and_wait(|cmd| {
                 timer.reset(cmd);
-                let map = distance::record(
-                    ctx,
-                    &kernels,
-                    &classifier,
-                    cmd,
-                    Some(&mut timer),
-                    input.gpu_volume,
-                    cells,
-                    input.gpu_tf,
-                    octants,
-                )?;
+                let map = distance::record(builder, cmd, Some(&mut timer), input, cells, octants)?;
                 if summary {
                     map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
                 }
@@ -191,22 +178,22 @@ impl Method for AutoMethod {
         let (cube, mut timings) = build_map(false, true)?;
         let (summary, predicted) = timings.cpu("choose", || -> Result<(Summary, f64)> {
             let summary = cube.read_summary(&out)?;
-            Ok((summary, predict(&summary, options.cell, &model)))
+            Ok((summary, predict(&summary, cell, &model)))
         })?;
         let (accel, inner): (Accel, Box<dyn Built>) = if predicted >= THRESHOLD {
-            (Accel::naive(), Box::new(NoData))
+            (NAIVE, Box::new(NoData))
         } else if cells.total < OCTANT_CELLS {
             let (octant, octant_timings) = build_map(true, false)?;
             for (name, ms) in octant_timings.phases {
                 timings.push(format!("octant {name}"), ms);
             }
-            ("distance-octant".parse()?, Box::new(octant))
+            (OCTANT, Box::new(octant))
         } else {
-            ("distance".parse()?, Box::new(cube))
+            (CUBE, Box::new(cube))
         };
         let choice = Choice {
             accel,
-            cell: options.cell,
+            cell,
             predicted,
             summary,
             model,

@@ -10,9 +10,11 @@
 //!   samples near brick faces can be lost), kept to reproduce the paper.
 
 use super::bricks::GpuBricks;
+use super::params::{Param, Params};
 use crate::error::{Error, Result};
 use crate::gpu::record;
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel};
+use crate::gpu::shaders::{self, build_classify_range, build_classify_voxel};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
 use crate::prims::entry_barrier;
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
@@ -24,7 +26,27 @@ pub enum Classify {
     Voxel { apron: bool },
 }
 
+/// `--classify range|voxel`.
+pub const CLASSIFY: Param = Param::choice(
+    "classify",
+    &["range", "voxel"],
+    "range",
+    "Brick classification: range (O(bricks) per TF change) or voxel (every voxel through the TF)",
+);
+/// `--apron on|off` (with `--classify voxel`).
+pub const APRON: Param = Param::switch(
+    "apron",
+    true,
+    "With --classify voxel: keep the one-voxel apron (on), or drop it as the paper does (off; not conservative)",
+);
+
 impl Classify {
+    /// From a structure's `classify` and `apron` parameters.
+    pub fn from_params(p: &Params) -> Result<Self> {
+        let apron = if p.switch("apron")? { "on" } else { "off" };
+        Self::parse(p.choice("classify")?, apron)
+    }
+
     /// From `--classify range|voxel` and `--apron on|off`.
     pub fn parse(mode: &str, apron: &str) -> Result<Self> {
         let apron = match apron {
@@ -53,33 +75,7 @@ impl Classify {
     }
 }
 
-/// Push block of `classify_range.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RangePush {
-    bricks: u32,
-    groups_x: u32,
-    lut_size: u32,
-    pad: u32,
-}
-check_push!(RangePush, shaders::BUILD_CLASSIFY_RANGE);
-
-/// Push block of `classify_voxel.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct VoxelPush {
-    /// xyz: volume dims; w: brick edge.
-    dims: [u32; 4],
-    /// xyz: bricks per axis; w: total bricks.
-    counts: [u32; 4],
-    norm: [f32; 2],
-    apron: u32,
-    groups_x: u32,
-    lut_size: u32,
-    pad: [u32; 3],
-}
-check_push!(VoxelPush, shaders::BUILD_CLASSIFY_VOXEL);
-
+/// The classification kernels (`Builder::shared`).
 pub struct Classifier {
     ctx: Context,
     range: Kernel,
@@ -90,8 +86,8 @@ impl Classifier {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Classifier {
             ctx: ctx.clone(),
-            range: Kernel::new::<RangePush>(ctx, &shaders::BUILD_CLASSIFY_RANGE)?,
-            voxel: Kernel::new::<VoxelPush>(ctx, &shaders::BUILD_CLASSIFY_VOXEL)?,
+            range: Kernel::new::<build_classify_range::Push>(ctx, &shaders::BUILD_CLASSIFY_RANGE)?,
+            voxel: Kernel::new::<build_classify_voxel::Push>(ctx, &shaders::BUILD_CLASSIFY_VOXEL)?,
         })
     }
 
@@ -110,7 +106,7 @@ impl Classifier {
         let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.range.local_size()[0])?;
         match mode {
             Classify::Range => {
-                let push = RangePush {
+                let push = build_classify_range::Push {
                     bricks: bricks.total as u32,
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
@@ -118,38 +114,47 @@ impl Classifier {
                 };
                 self.range.dispatch(
                     cmd,
-                    &[
-                        Binding::Storage(&bricks.ranges),
-                        Binding::Storage(&tf.max_table),
-                        Binding::Storage(flags),
-                    ],
+                    &build_classify_range::Bindings {
+                        ranges: Binding::Storage(&bricks.ranges),
+                        transfer_max: Binding::Storage(&tf.max_table),
+                        flags: Binding::Storage(flags),
+                    }
+                    .list(),
                     bytemuck::bytes_of(&push),
                     groups,
                 )
             }
             Classify::Voxel { apron } => {
                 let c = bricks.counts;
-                let push = VoxelPush {
+                // dims.w: brick edge; counts.w: total bricks.
+                let push = build_classify_voxel::Push {
                     dims: [volume.dims[0], volume.dims[1], volume.dims[2], bricks.brick],
                     counts: [c[0], c[1], c[2], bricks.total as u32],
                     norm: volume.norm,
                     apron: apron as u32,
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
-                    pad: [0; 3],
+                    ..Default::default()
                 };
                 self.voxel.dispatch(
                     cmd,
-                    &[
-                        Binding::Sampled(volume.image.view, volume.sampler),
-                        Binding::Storage(&tf.lut),
-                        Binding::Storage(&tf.max_table),
-                        Binding::Storage(flags),
-                    ],
+                    &build_classify_voxel::Bindings {
+                        volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
+                        transfer_lut: Binding::Storage(&tf.lut),
+                        transfer_max: Binding::Storage(&tf.max_table),
+                        flags: Binding::Storage(flags),
+                    }
+                    .list(),
                     bytemuck::bytes_of(&push),
                     groups,
                 )
             }
         }
+    }
+}
+
+impl super::builder::PerContext for Classifier {
+    fn new(ctx: &Context) -> Result<Self> {
+        Classifier::new(ctx)
     }
 }

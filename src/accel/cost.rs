@@ -1,5 +1,5 @@
 //! The traversal cost model of cost-driven leaves, with constants measured on
-//! the device (`Builder::cost_model`).
+//! the device (`Builder::cost_model`, measured once per context).
 //!
 //! A ray crossing a box B costs, in GPU nanoseconds,
 //!
@@ -35,18 +35,21 @@
 //! on lavapipe. A constant that noise drives to or below zero is clamped to
 //! `FLOOR_NS`.
 
+use super::builder::{Builder, PerContext};
+use super::stats::Stats;
 use super::tree::{GpuTree, Node};
-use super::Stats;
+use crate::desc::{DEFAULT_STEP, ERT_OFF};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, TexelBuffer, Timer};
-use crate::tf::TransferFunction;
+use crate::gpu::shaders::{self, blocks::RenderParams, march_bvh};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, TexelBuffer, Timer};
+use crate::tf::{TransferFunction, LUT_SIZE};
 use crate::volume::{GpuVolume, Volume, VoxelData, VoxelType};
 
-/// The sample spacing (voxels) the collapse plans for: the renderer's default
+/// The sample spacing (voxels) the collapse plans for: the frame's default
 /// step. A finer step makes samples dearer relative to steps and entries, so
-/// a tree collapsed for 0.5 stays exact at any step, only less tuned.
-pub const STEP: f32 = 0.5;
+/// a tree collapsed for it stays exact at any step, only less tuned.
+pub const STEP: f32 = DEFAULT_STEP;
 
 /// The least value of a measured constant (ns).
 pub const FLOOR_NS: f64 = 1e-3;
@@ -76,6 +79,20 @@ pub struct CostModel {
 fn area_volume(lo: [i32; 3], hi: [i32; 3]) -> (f32, f32) {
     let e = [0, 1, 2].map(|a| (hi[a] - lo[a]).max(0) as f32);
     (2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]), e[0] * e[1] * e[2])
+}
+
+impl PerContext for CostModel {
+    fn new(ctx: &Context) -> Result<Self> {
+        CostModel::measure(ctx)
+    }
+}
+
+impl Builder {
+    /// The traversal cost model of this device, measured on first use (a
+    /// few small timed dispatches) and kept.
+    pub fn cost_model(&self) -> Result<CostModel> {
+        self.shared::<CostModel>().map(|m| *m)
+    }
 }
 
 impl CostModel {
@@ -246,7 +263,6 @@ impl Probe {
             vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
         )?;
         let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
-        let shader = shaders::MARCH_BVH;
         let frame = Buffer::new(
             ctx,
             "cost probe frame",
@@ -260,14 +276,14 @@ impl Probe {
                 Buffer::with_data(
                     ctx,
                     "cost probe params",
-                    &probe_params(shader.block_sizes[0] as usize, dt),
+                    bytemuck::bytes_of(&probe_params(dt)),
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                 )
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(Probe {
             ctx: ctx.clone(),
-            kernel: Kernel::create(ctx, &shader, shader.push_size as usize, &[])?,
+            kernel: Kernel::new::<()>(ctx, &shaders::MARCH_BVH)?,
             volume: GpuVolume::upload(ctx, &volume)?,
             lut,
             params,
@@ -284,44 +300,43 @@ impl Probe {
         // Dispatches write the same frame: order them.
         record::barrier(self.ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_WRITE);
         let groups = self.kernel.groups("cost probe", [RAYS, RAYS, 1])?;
-        self.kernel.dispatch(
-            cmd,
-            &[
-                Binding::Storage(params),
+        let mut bindings = vec![
+            ("params", Binding::Storage(params)),
+            (
+                "volume_tex",
                 Binding::Sampled(self.volume.image.view, self.volume.sampler),
-                Binding::TexelBuffer(self.lut.view()),
-                Binding::Storage(&self.frame),
-                Binding::Storage(&tree.nodes),
-                Binding::Storage(&tree.count),
-            ],
-            &[],
-            groups,
-        )
+            ),
+            ("tf_lut", Binding::TexelBuffer(self.lut.view())),
+            ("frame", Binding::Storage(&self.frame)),
+        ];
+        bindings.extend(
+            march_bvh::Own {
+                nodes: Binding::Storage(&tree.nodes),
+                count: Binding::Storage(&tree.count),
+            }
+            .list(),
+        );
+        self.kernel.dispatch(cmd, &bindings, &[], groups)
     }
 }
 
-/// The render parameter block (`glsl/common/render_params.glsl`) of the
-/// probe: RAYS^2 orthographic rays along +z, one per 2x2 voxel column,
-/// early termination off. Written field by field into a block of the
-/// kernel's reflected size (later fields, if any, zero).
-fn probe_params(block: usize, dt: f32) -> Vec<u8> {
+/// The render parameters of the probe: RAYS^2 orthographic rays along +z,
+/// one per 2x2 voxel column, early termination off.
+fn probe_params(dt: f32) -> RenderParams {
     let cell = (EDGE / RAYS) as f32;
-    let vec4s: [[f32; 4]; 4] = [
-        [0.0, 0.0, -1.0, 0.0], // base
-        [cell, 0.0, 0.0, 0.0], // du
-        [0.0, cell, 0.0, 0.0], // dv
-        [0.0, 0.0, 1.0, 0.0],  // orthographic direction
-    ];
-    let dims = [EDGE, EDGE, EDGE, crate::tf::LUT_SIZE as u32];
-    let image = [RAYS, RAYS, 0, 0];
-    let march = [dt, 2.0, 0.0, 1.0];
-    let mut out = Vec::with_capacity(block.max(112));
-    out.extend_from_slice(bytemuck::cast_slice(&vec4s));
-    out.extend_from_slice(bytemuck::cast_slice(&dims));
-    out.extend_from_slice(bytemuck::cast_slice(&image));
-    out.extend_from_slice(bytemuck::cast_slice(&march));
-    out.resize(block.max(out.len()), 0);
-    out
+    RenderParams {
+        base: [0.0, 0.0, -1.0],
+        du: [cell, 0.0, 0.0],
+        dv: [0.0, cell, 0.0],
+        eye_or_dir: [0.0, 0.0, 1.0],
+        step: dt,
+        ert: ERT_OFF,
+        lut_size: LUT_SIZE as u32,
+        dims: [EDGE; 3],
+        image: [RAYS, RAYS],
+        norm: [0.0, 1.0],
+        ..Default::default()
+    }
 }
 
 #[cfg(test)]

@@ -15,20 +15,25 @@
 //! up to d-1 ahead of the ray, so jumps are longer, for 16 bytes a cell).
 
 use super::bricks::GpuBricks;
+use super::builder::{Builder, PerContext, RangeKind, Ranges};
 use super::classify::{Classifier, Classify};
-use super::grid::GridPush;
-use super::registry::{BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges};
+use super::method::{BuildInput, Built, March, Method};
+use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
+use crate::gpu::shaders::{
+    self, build_distance_octant_rows, build_distance_rows, build_distance_summary, march_distance,
+};
+use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::entry_barrier;
-use crate::tf::GpuTransferFunction;
-use crate::volume::GpuVolume;
 
 /// Default cell edge in voxels: the 8^3 brick grid.
 pub const CELL: u32 = 8;
+
+/// The cell parameter of the distance maps (default [`CELL`]).
+const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
 
 /// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
 pub const CAP: u32 = 255;
@@ -36,36 +41,10 @@ pub const CAP: u32 = 255;
 /// Bytes of the summary `distance_summary.comp` writes.
 const SUMMARY_BYTES: u64 = 24;
 
-/// Push block of `distance_rows.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RowsPush {
-    counts: [u32; 4],
-    axis: u32,
-    first: u32,
-    groups_x: u32,
-    /// Grid rows along the axis.
-    rows: u32,
-}
-check_push!(RowsPush, shaders::BUILD_DISTANCE_ROWS);
-check_push!(RowsPush, shaders::BUILD_DISTANCE_OCTANT_ROWS);
-
-/// Push block of `distance_summary.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct SummaryPush {
-    counts: [u32; 4],
-    groups_x: u32,
-    per_invocation: u32,
-    pad: [u32; 2],
-}
-
 /// Cells each summary invocation sums before its workgroup's reduction:
 /// fewer workgroups, fewer barriers (lavapipe's summary of 64^3 cells took
 /// 16 ms with one cell per invocation).
 const SUMMARY_CELLS_PER_INVOCATION: u64 = 64;
-check_push!(SummaryPush, shaders::BUILD_DISTANCE_SUMMARY);
-check_push!(GridPush, shaders::MARCH_DISTANCE);
 
 /// Longest row whose envelope `distance_rows.comp` keeps in private arrays
 /// (its PRIVATE_ROW).
@@ -82,13 +61,14 @@ pub struct DistanceKernels {
     summary: [Kernel; 2],
 }
 
-impl KernelSet for DistanceKernels {
+impl PerContext for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
-        let summary = |o| Kernel::with_constants::<SummaryPush>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
-        let rows = |p| Kernel::with_constants::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
+        let summary =
+            |o| Kernel::with_constants::<build_distance_summary::Push>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
+        let rows = |p| Kernel::with_constants::<build_distance_rows::Push>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
         Ok(DistanceKernels {
             rows: [rows(0)?, rows(1)?],
-            octant_rows: Kernel::new::<RowsPush>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
+            octant_rows: Kernel::new::<build_distance_octant_rows::Push>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
             summary: [summary(0)?, summary(1)?],
         })
     }
@@ -148,18 +128,17 @@ fn words_per_cell(octants: bool) -> u64 {
 /// Records the classification of `cells` for a TF ("classify") and the
 /// three transform passes ("distance x", "distance y", "distance z") into
 /// `cmd`. Follows the `prims` barrier convention; ends with compute writes.
-#[allow(clippy::too_many_arguments)]
 pub fn record(
-    ctx: &Context,
-    kernels: &DistanceKernels,
-    classifier: &Classifier,
+    builder: &Builder,
     cmd: vk::CommandBuffer,
     mut timer: Option<&mut Timer>,
-    volume: &GpuVolume,
+    input: &BuildInput,
     cells: &GpuBricks,
-    tf: &GpuTransferFunction,
     octants: bool,
 ) -> Result<DistanceMap> {
+    let ctx = builder.context();
+    let kernels = builder.shared::<DistanceKernels>()?;
+    let classifier = builder.shared::<Classifier>()?;
     let info = ctx.info();
     let bytes = cells.total * 4 * words_per_cell(octants);
     // The rows' envelope stacks: three words per cell (cube maps), or a
@@ -193,7 +172,7 @@ pub fn record(
     )?;
 
     let pass = timer.begin(cmd, "classify")?;
-    classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
+    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
     timer.end(cmd, pass);
     // x: flags -> distances, y: distances -> scratch, z: scratch -> distances.
     let c = cells.counts;
@@ -218,14 +197,29 @@ pub fn record(
         };
         let rows = cells.total / c[axis] as u64;
         let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
-        let push = RowsPush {
+        // One block for both kernels (the cube rows' is the octant rows').
+        let push = build_distance_rows::Push {
             counts,
             axis: axis as u32,
             first,
             groups_x: groups[0],
             rows: rows as u32,
         };
-        let bindings = [Binding::Storage(src), Binding::Storage(dst), Binding::Storage(&stack)];
+        let bindings = if octants {
+            build_distance_octant_rows::Bindings {
+                src: Binding::Storage(src),
+                dst: Binding::Storage(dst),
+                deque: Binding::Storage(&stack),
+            }
+            .list()
+        } else {
+            build_distance_rows::Bindings {
+                src: Binding::Storage(src),
+                dst: Binding::Storage(dst),
+                stack: Binding::Storage(&stack),
+            }
+            .list()
+        };
         k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
         timer.end(cmd, pass);
     }
@@ -269,19 +263,20 @@ impl DistanceMap {
             Access::COMPUTE_READ_WRITE,
         );
         let c = self.counts;
-        let push = SummaryPush {
+        let push = build_distance_summary::Push {
             counts: [c[0], c[1], c[2], self.total as u32],
             groups_x: groups[0],
             per_invocation: SUMMARY_CELLS_PER_INVOCATION as u32,
-            pad: [0; 2],
+            ..Default::default()
         };
         kernel.dispatch(
             cmd,
-            &[
-                Binding::Storage(&self.flags),
-                Binding::Storage(&self.distances),
-                Binding::Storage(out),
-            ],
+            &build_distance_summary::Bindings {
+                flags: Binding::Storage(&self.flags),
+                distances: Binding::Storage(&self.distances),
+                summary: Binding::Storage(out),
+            }
+            .list(),
             bytemuck::bytes_of(&push),
             groups,
         )?;
@@ -405,33 +400,24 @@ impl Method for DistanceMethod {
             "Chebyshev distance map (Deakin & Knackstedt), one O(1) jump per empty region"
         }
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Cells
+    fn params(&self) -> &'static [Param] {
+        &[CELL_PARAM]
     }
-    fn default_cell(&self) -> u32 {
-        CELL
-    }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("cell", o.cell.to_string())]
+    fn ranges(&self, p: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Cells(p.int("cell")?))
     }
     fn march(&self) -> March {
         March {
             shader: shaders::MARCH_DISTANCE,
             constants: if self.octants { &[1] } else { &[0] },
-            push_size: std::mem::size_of::<GridPush>(),
         }
     }
-    fn variants(&self) -> Vec<(String, BuildOptions)> {
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
         [CELL, 4, 16]
             .into_iter()
             .map(|cell| {
-                (
-                    format!("{} cell {cell}", self.name()),
-                    BuildOptions {
-                        cell,
-                        ..BuildOptions::default()
-                    },
-                )
+                let p = Params::resolve(self.params(), &[("cell", &cell.to_string())])?;
+                Ok((format!("{} cell {cell}", self.name()), p))
             })
             .collect()
     }
@@ -442,29 +428,22 @@ impl Method for DistanceMethod {
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<Box<dyn Built>> {
-        let map = record(
-            builder.context(),
-            &*builder.kernels::<DistanceKernels>()?,
-            &*builder.kernels::<Classifier>()?,
-            cmd,
-            timer,
-            input.gpu_volume,
-            ranges.cells(options.cell)?,
-            input.gpu_tf,
-            self.octants,
-        )?;
-        Ok(Box::new(map))
+        let cells = ranges.cells(p.int("cell")?)?;
+        Ok(Box::new(record(builder, cmd, timer, input, cells, self.octants)?))
     }
 }
 
 impl Built for DistanceMap {
-    fn bindings(&self) -> Vec<Binding<'_>> {
-        vec![Binding::Storage(&self.distances)]
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        march_distance::Own {
+            distances: Binding::Storage(&self.distances),
+        }
+        .list()
     }
     fn push(&self) -> Vec<u8> {
-        bytemuck::bytes_of(&GridPush {
+        bytemuck::bytes_of(&march_distance::Push {
             counts: self.counts,
             cell: self.cell,
         })

@@ -3,14 +3,15 @@
 //! function; `glsl/march/grid.comp` steps through the cells by 3D-DDA.
 
 use super::bricks::GpuBricks;
+use super::builder::{Builder, RangeKind, Ranges};
 use super::classify::{Classifier, Classify};
-use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::method::{BuildInput, Built, March, Method};
+use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
-use crate::error::{Error, Result};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, MemoryLocation, OptionalTimer, Timer};
-use crate::tf::GpuTransferFunction;
-use crate::volume::GpuVolume;
+use crate::error::Result;
+use crate::gpu::shaders::{self, march_grid};
+use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
 
 /// Default cell edge in voxels.
 pub const CELL: u32 = 16;
@@ -41,9 +42,10 @@ impl Grid {
         })
     }
 
-    /// The push constants of the grid kernels: cells per axis and edge.
-    pub fn push(&self) -> GridPush {
-        GridPush {
+    /// The push constants of the grid kernels (grid, hybrid): cells per
+    /// axis and edge.
+    pub fn push(&self) -> march_grid::Push {
+        march_grid::Push {
             counts: self.counts,
             cell: self.cell,
         }
@@ -61,40 +63,26 @@ pub(crate) fn count_active(flags: &Buffer, total: u64, cache: &std::sync::OnceLo
     Ok(*cache.get_or_init(|| a))
 }
 
-/// Checks a `--cell` value.
-pub fn check_cell(cell: u32) -> Result<()> {
-    if !cell.is_power_of_two() || !(2..=256).contains(&cell) {
-        return Err(Error::invalid(
-            "cell",
-            cell.to_string(),
-            "must be a power of two in 2..=256",
-        ));
-    }
-    Ok(())
-}
-
 /// Records the classification of the cells of `cells` (ranges of `cell`^3
 /// bricks) for a TF into a new flag buffer ("classify"). Ends with compute
 /// writes.
-#[allow(clippy::too_many_arguments)]
 pub fn record(
-    ctx: &Context,
-    classifier: &Classifier,
+    builder: &Builder,
     cmd: vk::CommandBuffer,
     mut timer: Option<&mut Timer>,
-    volume: &GpuVolume,
+    input: &BuildInput,
     cells: &GpuBricks,
-    tf: &GpuTransferFunction,
 ) -> Result<Grid> {
+    let classifier = builder.shared::<Classifier>()?;
     let flags = Buffer::new(
-        ctx,
+        builder.context(),
         "grid cell flags",
         cells.total * 4,
         STORAGE_XFER,
         MemoryLocation::GpuOnly,
     )?;
     let pass = timer.begin(cmd, "classify")?;
-    classifier.record(cmd, Classify::Range, volume, cells, tf, &flags)?;
+    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
     timer.end(cmd, pass);
     Ok(Grid {
         cell: cells.brick,
@@ -105,17 +93,8 @@ pub fn record(
     })
 }
 
-/// Push block of `glsl/march/grid.comp` and `hybrid.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GridPush {
-    /// Cells per axis.
-    pub counts: [u32; 3],
-    /// Cell edge in voxels.
-    pub cell: u32,
-}
-check_push!(GridPush, shaders::MARCH_GRID);
-check_push!(GridPush, shaders::MARCH_HYBRID);
+/// The cell parameter of the grid and the hybrid (default [`CELL`]).
+pub(crate) const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
 
 /// `--accel grid`.
 pub struct GridMethod;
@@ -127,18 +106,14 @@ impl Method for GridMethod {
     fn description(&self) -> &'static str {
         "macro-cell grid (OSPRay style), 3D-DDA traversal"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Cells
+    fn params(&self) -> &'static [Param] {
+        &[CELL_PARAM]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("cell", o.cell.to_string())]
+    fn ranges(&self, p: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Cells(p.int("cell")?))
     }
     fn march(&self) -> March {
-        March {
-            shader: shaders::MARCH_GRID,
-            constants: &[],
-            push_size: std::mem::size_of::<GridPush>(),
-        }
+        March::plain(shaders::MARCH_GRID)
     }
     fn record_build(
         &self,
@@ -147,25 +122,19 @@ impl Method for GridMethod {
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<Box<dyn Built>> {
-        let classifier = builder.kernels::<Classifier>()?;
-        let grid = record(
-            builder.context(),
-            &classifier,
-            cmd,
-            timer,
-            input.gpu_volume,
-            ranges.cells(options.cell)?,
-            input.gpu_tf,
-        )?;
+        let grid = record(builder, cmd, timer, input, ranges.cells(p.int("cell")?)?)?;
         Ok(Box::new(grid))
     }
 }
 
 impl Built for Grid {
-    fn bindings(&self) -> Vec<Binding<'_>> {
-        vec![Binding::Storage(&self.flags)]
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        march_grid::Own {
+            cell_flags: Binding::Storage(&self.flags),
+        }
+        .list()
     }
     fn push(&self) -> Vec<u8> {
         bytemuck::bytes_of(&self.push()).to_vec()

@@ -2,15 +2,16 @@
 //! the global macro-cell grid. `glsl/march/hybrid.comp` traverses the tree to
 //! a leaf, then steps through the grid's cells inside it by 3D-DDA.
 
-use super::classify::Classifier;
-use super::grid::{self, Grid, GridPush};
+use super::builder::{Builder, RangeKind, Ranges};
+use super::grid::{self, Grid};
 use super::kd;
-use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::method::{BuildInput, Built, March, Method};
+use super::params::{Param, Params};
 use super::stats::Stats;
 use super::tree::GpuTree;
 use crate::error::Result;
-use crate::gpu::timings::Timings;
-use crate::gpu::{shaders, Binding, Timer};
+use crate::gpu::shaders::{self, march_hybrid};
+use crate::gpu::{Binding, Bound, Timer, Timings};
 
 pub struct Hybrid {
     pub tree: GpuTree,
@@ -27,18 +28,14 @@ impl Method for HybridMethod {
     fn description(&self) -> &'static str {
         "shallow CPU k-d tree over the macro-cell grid (Zellmann et al. 2019)"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Cells
+    fn params(&self) -> &'static [Param] {
+        &[grid::CELL_PARAM]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("cell", o.cell.to_string())]
+    fn ranges(&self, p: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Cells(p.int("cell")?))
     }
     fn march(&self) -> March {
-        March {
-            shader: shaders::MARCH_HYBRID,
-            constants: &[],
-            push_size: std::mem::size_of::<GridPush>(),
-        }
+        March::plain(shaders::MARCH_HYBRID)
     }
     /// Host-driven: the tree is built on the CPU, the grid on the GPU.
     fn recordable(&self) -> bool {
@@ -49,28 +46,19 @@ impl Method for HybridMethod {
         builder: &Builder,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
         let ctx = builder.context();
         let shallow = kd::KdParams {
             depth: kd::Depth::Shallow,
-            ..options.kd
+            ..kd::KdParams::default()
         };
         let (tree, mut t) = kd::cpu::build(ctx, input.volume, input.tf, &shallow, None)?;
-        let classifier = builder.kernels::<Classifier>()?;
-        let cells = ranges.cells(options.cell)?;
+        let cells = ranges.cells(p.int("cell")?)?;
         let mut timer = Timer::new(ctx, 1)?;
         let grid = ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            grid::record(
-                ctx,
-                &classifier,
-                cmd,
-                Some(&mut timer),
-                input.gpu_volume,
-                cells,
-                input.gpu_tf,
-            )
+            grid::record(builder, cmd, Some(&mut timer), input, cells)
         })?;
         t.extend(timer.results()?);
         Ok((Box::new(Hybrid { tree, grid }), t))
@@ -78,20 +66,18 @@ impl Method for HybridMethod {
 }
 
 impl Built for Hybrid {
-    fn bindings(&self) -> Vec<Binding<'_>> {
-        vec![
-            Binding::Storage(&self.tree.nodes),
-            Binding::Storage(&self.tree.count),
-            Binding::Storage(&self.grid.flags),
-        ]
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        march_hybrid::Own {
+            nodes: Binding::Storage(&self.tree.nodes),
+            count: Binding::Storage(&self.tree.count),
+            cell_flags: Binding::Storage(&self.grid.flags),
+        }
+        .list()
     }
     fn push(&self) -> Vec<u8> {
         bytemuck::bytes_of(&self.grid.push()).to_vec()
     }
     fn stats(&self) -> Result<Option<Stats>> {
         self.tree.stats().map(Some)
-    }
-    fn tree(&self) -> Option<&GpuTree> {
-        Some(&self.tree)
     }
 }

@@ -1,11 +1,14 @@
-//! Empty space skipping structures. A structure is one module that
-//! implements [`Method`] (what it reads, how it builds, which march kernel
-//! renders it, its parameters and statistics) plus one line in [`TABLE`].
-//! The builder, renderer, CLI, bench and tests all iterate the table; see
-//! `docs/structures.md` for the checklist.
+//! Empty space skipping structures. The contract (`method`: the [`Method`]
+//! trait, [`Built`], [`Accel`], [`Structure`]), what builds share
+//! (`builder`: the context, per-context kernels, per-volume ranges) and
+//! parameter schemas (`params`) know no structure; each structure is one
+//! module implementing [`Method`]; `table` lists them, above them all. The
+//! CLI, bench and tests iterate [`TABLE`]; see `docs/structures.md` for
+//! what adding a structure touches.
 
 pub mod auto;
 pub mod bricks;
+pub mod builder;
 pub mod classify;
 pub mod cost;
 pub mod distance;
@@ -13,18 +16,20 @@ pub mod grid;
 pub mod hybrid;
 pub mod kd;
 pub mod lbvh;
+pub mod method;
 pub mod morton;
 pub mod naive;
 pub mod octree;
-mod registry;
+pub mod params;
 mod stats;
+pub mod table;
 pub mod tree;
 
 pub use bricks::GpuBricks;
+pub use builder::{check_cell, Builder, PerContext, RangeKind, Ranges};
 pub use classify::{Classifier, Classify};
 pub use cost::CostModel;
-pub use registry::{
-    parse_collapse, Accel, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
-    Structure, TABLE,
-};
+pub use method::{Accel, BuildInput, Built, March, MarchedAs, Method, Structure};
+pub use params::{Param, Params};
 pub use stats::Stats;
+pub use table::TABLE;

@@ -17,19 +17,10 @@ pub fn morton3(c: [u32; 3]) -> u32 {
     (spread(c[0]) << 2) | (spread(c[1]) << 1) | spread(c[2])
 }
 
-/// Push block of `glsl/build/morton.comp` (the LBVH and the GPU k-d tree).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct MortonPush {
-    /// xyz: bricks per axis.
-    counts: [u32; 4],
-    n: u32,
-    groups_x: u32,
-    /// 1: code every brick (thread i is brick i) instead of a list of bricks.
-    identity: u32,
-    pad: u32,
-}
-crate::gpu::check_push!(MortonPush, crate::gpu::shaders::BUILD_MORTON);
+/// Push block of `glsl/build/morton.comp` (the LBVH and the GPU k-d tree):
+/// `counts.xyz` bricks per axis; `identity` 1 codes every brick (thread i
+/// is brick i) instead of a list of bricks.
+pub(crate) use crate::gpu::shaders::build_morton::Push as MortonPush;
 
 impl MortonPush {
     /// Codes the `n` bricks listed in the input buffer.
@@ -38,8 +29,7 @@ impl MortonPush {
             counts: [counts[0], counts[1], counts[2], 0],
             n,
             groups_x,
-            identity: 0,
-            pad: 0,
+            ..Default::default()
         }
     }
 

@@ -1,18 +1,24 @@
 //! Naive marching: every lattice sample from the ray's entry to its exit.
 //! The reference every other structure's image must equal bit for bit.
 
-use super::registry::{BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::builder::{Builder, RangeKind, Ranges};
+use super::method::{Accel, BuildInput, Built, March, Method, Structure};
+use super::params::Params;
 use super::stats::Stats;
 use crate::error::Result;
-use crate::gpu::{shaders, vk, Binding, Timer};
+use crate::gpu::{shaders, vk, Bound, Timer};
 
 pub struct Naive;
+
+/// The naive entry (what a tree of one leaf covering the volume, or `auto`
+/// finding nothing to skip, is marched as).
+pub const NAIVE: Accel = Accel(&Naive);
 
 /// Nothing to build and nothing to bind.
 pub(crate) struct NoData;
 
 impl Built for NoData {
-    fn bindings(&self) -> Vec<Binding<'_>> {
+    fn bindings(&self) -> Vec<Bound<'_>> {
         Vec::new()
     }
     fn stats(&self) -> Result<Option<Stats>> {
@@ -27,11 +33,8 @@ impl Method for Naive {
     fn description(&self) -> &'static str {
         "every lattice sample from entry to exit (the reference)"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::None
-    }
-    fn params(&self, _: &BuildOptions) -> Vec<(&'static str, String)> {
-        Vec::new()
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::None)
     }
     fn march(&self) -> March {
         March::plain(shaders::MARCH_NAIVE)
@@ -43,8 +46,19 @@ impl Method for Naive {
         _: Option<&mut Timer>,
         _: &BuildInput,
         _: &Ranges,
-        _: &BuildOptions,
+        _: &Params,
     ) -> Result<Box<dyn Built>> {
         Ok(Box::new(NoData))
+    }
+}
+
+impl Structure {
+    /// Naive marching: no structure at all.
+    pub fn naive() -> Structure {
+        Structure {
+            accel: NAIVE,
+            params: Params::default(),
+            built: Box::new(NoData),
+        }
     }
 }

@@ -13,17 +13,17 @@
 //! to naive marching.
 
 use super::bricks::GpuBricks;
-use super::classify::{Classifier, Classify};
-use super::registry::{classify_param, BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges};
+use super::builder::{Builder, RangeKind, Ranges};
+use super::classify::{Classifier, Classify, APRON, CLASSIFY};
+use super::method::{BuildInput, Built, March, Method};
+use super::params::{Param, Params};
 use super::stats::Stats;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
-use crate::gpu::timings::Timings;
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, MemoryLocation, Timer};
+use crate::gpu::shaders::{self, march_octree};
+use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, Timer, Timings};
 use crate::spatial::octree_node::{axis_bit, Node};
 use crate::spatial::{Sat3, Traversal};
-use crate::tf::GpuTransferFunction;
-use crate::volume::GpuVolume;
 
 pub struct VolumeOctree {
     pub traversal: Traversal,
@@ -89,18 +89,19 @@ impl BrickOctree {
     }
 }
 
-/// Classifies the bricks for `tf`, reads the flags back and builds the
-/// octree ("classify" on the GPU; "octree build" and "upload" on the host).
-#[allow(clippy::too_many_arguments)]
+/// Classifies the 8^3 `bricks` for the input's TF, reads the flags back and
+/// builds the octree ("classify" on the GPU; "octree build" and "upload" on
+/// the host).
 pub fn build(
-    ctx: &Context,
-    classifier: &Classifier,
-    mode: Classify,
-    volume: &GpuVolume,
+    builder: &Builder,
+    input: &BuildInput,
     bricks: &GpuBricks,
-    tf: &GpuTransferFunction,
+    mode: Classify,
     traversal: Traversal,
 ) -> Result<(VolumeOctree, Timings)> {
+    let ctx = builder.context();
+    let classifier = builder.shared::<Classifier>()?;
+    let (volume, tf) = (input.gpu_volume, input.gpu_tf);
     let flags = Buffer::new(
         ctx,
         "octree brick flags",
@@ -169,11 +170,14 @@ impl Method for OctreeMethod {
             Traversal::Rev => "octree over active 8^3 bricks, Revelles et al.'s 2000 parametric traversal",
         }
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Bricks
+    fn params(&self) -> &'static [Param] {
+        &[CLASSIFY, APRON]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![classify_param(o.classify)]
+    fn check(&self, p: &Params) -> Result<()> {
+        Classify::from_params(p).map(|_| ())
+    }
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Bricks)
     }
     fn march(&self) -> March {
         // The GLSL traversal switches on specialization constant 0.
@@ -181,7 +185,6 @@ impl Method for OctreeMethod {
         March {
             shader: shaders::MARCH_OCTREE,
             constants: std::slice::from_ref(&IDS[self.0 as usize]),
-            push_size: 0,
         }
     }
     /// Host-driven: the tree is built on the CPU from the flags read back.
@@ -193,25 +196,19 @@ impl Method for OctreeMethod {
         builder: &Builder,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let classifier = builder.kernels::<Classifier>()?;
-        let (tree, t) = build(
-            builder.context(),
-            &classifier,
-            options.classify,
-            input.gpu_volume,
-            ranges.bricks()?,
-            input.gpu_tf,
-            self.0,
-        )?;
+        let (tree, t) = build(builder, input, ranges.bricks()?, Classify::from_params(p)?, self.0)?;
         Ok((Box::new(tree), t))
     }
 }
 
 impl Built for VolumeOctree {
-    fn bindings(&self) -> Vec<Binding<'_>> {
-        vec![Binding::Storage(&self.nodes)]
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        march_octree::Own {
+            nodes: Binding::Storage(&self.nodes),
+        }
+        .list()
     }
     fn stats(&self) -> Result<Option<Stats>> {
         Ok(Some(self.stats))

@@ -8,23 +8,46 @@
 //! Siblings' boxes lie on opposite sides of their split plane, which is what
 //! makes the stack traversal visit leaves in ray order.
 
-use super::registry::{Built, March};
+use super::method::{Built, March, MarchedAs, Structure};
+use super::naive::NAIVE;
 use super::stats::Stats;
 use crate::error::Result;
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, MemoryLocation};
+use crate::gpu::shaders::{self, march_bvh};
+use crate::gpu::{vk, Binding, Bound, Buffer, Context, MemoryLocation, Timings};
 
 /// The march kernel of every structure in this format (`glsl/march/bvh.comp`).
 pub const TREE_MARCH: March = March::plain(shaders::MARCH_BVH);
 
 impl Built for GpuTree {
-    fn bindings(&self) -> Vec<Binding<'_>> {
-        vec![Binding::Storage(&self.nodes), Binding::Storage(&self.count)]
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        if self.whole_box {
+            // Marched by the naive kernel, which binds nothing of a structure.
+            return Vec::new();
+        }
+        march_bvh::Own {
+            nodes: Binding::Storage(&self.nodes),
+            count: Binding::Storage(&self.count),
+        }
+        .list()
     }
     fn stats(&self) -> Result<Option<Stats>> {
         GpuTree::stats(self).map(Some)
     }
-    fn tree(&self) -> Option<&GpuTree> {
-        Some(self)
+    /// A tree of one leaf covering the volume box has nothing to skip: the
+    /// naive kernel takes the same samples without a traversal.
+    fn marched_as(&self) -> Option<MarchedAs> {
+        self.whole_box.then(|| MarchedAs {
+            accel: NAIVE,
+            label: "naive".into(),
+            reason: "the tree is one leaf covering the volume".into(),
+        })
+    }
+}
+
+impl Structure {
+    /// The tree, for structures in the shared node format (LBVH, k-d trees).
+    pub fn tree(&self) -> Option<&GpuTree> {
+        self.built_as::<GpuTree>()
     }
 }
 
@@ -34,6 +57,8 @@ pub struct Node {
     pub lo: [i32; 4],
     pub hi: [i32; 4],
 }
+
+crate::gpu::check_layout!(Node => shaders::blocks::BvhNode { lo: lo, hi: hi });
 
 impl Node {
     pub fn is_leaf(&self) -> bool {
@@ -118,6 +143,8 @@ pub struct GpuTree {
     /// with the structure (which must outlive the submission anyway); set
     /// exactly for recorded LBVH builds.
     pub(crate) keep: Option<Box<dyn std::any::Any + Send + Sync>>,
+    /// One leaf covering the volume box (`check_whole_box`): marched naively.
+    pub(crate) whole_box: bool,
 }
 
 /// A tree's leaf count and the length of its node array.
@@ -165,6 +192,7 @@ impl GpuTree {
             stats,
             shape: std::sync::OnceLock::from(shape(nodes)),
             keep: None,
+            whole_box: false,
         })
     }
 
@@ -195,6 +223,14 @@ impl GpuTree {
         let root: Node = bytemuck::pod_read_unaligned(&self.nodes.download(0, 32)?);
         let whole = (0..3).all(|a| root.lo[a] <= 0 && root.hi[a] >= dims[a] as i32);
         Ok((root.is_leaf() && whole).then_some(root))
+    }
+
+    /// After a host build (phase "root check"): whether the tree is one leaf
+    /// covering the volume of `dims`, which the naive kernel then marches
+    /// (`Built::marched_as`). Recorded builds cannot read back and skip it.
+    pub(crate) fn check_whole_box(&mut self, dims: [u32; 3], collapsed: bool, t: &mut Timings) -> Result<()> {
+        self.whole_box = t.cpu("root check", || self.whole_box_leaf(dims, collapsed))?.is_some();
+        Ok(())
     }
 
     /// The number of leaves the build produced (for an LBVH, its active

@@ -3,8 +3,8 @@
 //! speed-against-error sweep. `bench/quick.toml` and `bench/paper.toml` are
 //! embedded in the binary, so `lacuna bench --quick` needs no files.
 
-use crate::accel::kd::KdParams;
-use crate::accel::{Accel, BuildOptions, Classify};
+use crate::accel::table::known_param;
+use crate::accel::{Accel, Params};
 use crate::error::{Error, Result};
 use crate::volume::Filter;
 use serde::Deserialize;
@@ -83,19 +83,16 @@ pub struct DatasetConfig {
     pub optional: bool,
 }
 
+/// A `[[structure]]`: a label, a structure, and values of its parameters
+/// (`cell = 4`, `kd = "deep"`, `max_leaf = 32`, `collapse = true`, ...: any
+/// structure's parameter, `-` written `_`; those the structure does not have
+/// are ignored, unknown names are an error).
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct StructureConfig {
     pub label: String,
     pub accel: String,
-    pub classify: Option<String>,
-    pub apron: Option<String>,
-    pub kd: Option<String>,
-    pub max_leaf: Option<u32>,
-    pub bins: Option<u32>,
-    pub cell: Option<u32>,
-    /// Cost-driven leaves for the trees (default false: the paper's trees).
-    pub collapse: Option<bool>,
+    #[serde(flatten)]
+    pub params: std::collections::BTreeMap<String, toml::Value>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -122,33 +119,41 @@ pub struct ErrorConfig {
 pub struct StructureSpec {
     pub label: String,
     pub accel: Accel,
-    pub options: BuildOptions,
+    pub params: Params,
 }
 
 impl StructureConfig {
     pub fn resolve(&self) -> Result<StructureSpec> {
         let accel: Accel = self.accel.parse()?;
-        let classify = Classify::parse(
-            self.classify.as_deref().unwrap_or("range"),
-            self.apron.as_deref().unwrap_or("on"),
-        )?;
-        let d = KdParams::default();
-        let kd = KdParams::parse(
-            self.kd.as_deref().unwrap_or("deep"),
-            self.max_leaf.unwrap_or(d.max_leaf),
-            self.bins.unwrap_or(d.bins),
-        )?;
-        let cell = self.cell.unwrap_or(accel.method().default_cell());
-        crate::accel::grid::check_cell(cell)?;
+        let mut given = Vec::new();
+        for (key, value) in &self.params {
+            let name = key.replace('_', "-");
+            if known_param(&name).is_none() {
+                return Err(Error::invalid(
+                    "structure parameter",
+                    key,
+                    "no structure has it (see lacuna render --help)",
+                ));
+            }
+            let text = match value {
+                toml::Value::String(s) => s.clone(),
+                toml::Value::Integer(n) => n.to_string(),
+                toml::Value::Boolean(b) => b.to_string(),
+                other => {
+                    return Err(Error::invalid(
+                        "structure parameter",
+                        format!("{key} = {other}"),
+                        "expected a string, an integer or a boolean",
+                    ))
+                }
+            };
+            given.push((name, text));
+        }
+        let given: Vec<(&str, &str)> = given.iter().map(|(n, t)| (n.as_str(), t.as_str())).collect();
         Ok(StructureSpec {
             label: self.label.clone(),
+            params: accel.params(&given)?,
             accel,
-            options: BuildOptions {
-                classify,
-                kd,
-                cell,
-                collapse: self.collapse.unwrap_or(false),
-            },
         })
     }
 }

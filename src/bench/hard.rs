@@ -3,80 +3,55 @@
 //! for bit, under each filter the volume's format supports), with no
 //! validation message and no NaN or infinity in the frame.
 
-use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Structure};
+use crate::accel::{Accel, BuildInput, Builder, Params, Structure};
 use crate::error::Result;
 use crate::frame::{diff, Frame};
 use crate::gpu::Context;
-use crate::render::{Camera, Filter, Projection, RenderParams, RenderSettings, Renderer, ERT_OFF};
-use crate::tf::{TransferFunction, LUT_SIZE};
+use crate::render::{Camera, Filter, FrameDesc, Projection, Rays, Renderer, Scene};
+use crate::tf::TransferFunction;
 use crate::volume::{GpuVolume, LoadOptions, VoxelData, VoxelType};
 use crate::Volume;
-
-pub enum View {
-    Camera(RenderSettings),
-    /// Hand-laid rays; normalisation is filled in from the volume.
-    Params(RenderParams),
-}
 
 pub struct HardCase {
     pub name: &'static str,
     pub volume: Volume,
     pub tf: &'static str,
-    pub views: Vec<View>,
+    /// The views (each rendered under every sample filter the volume's
+    /// format supports).
+    pub views: Vec<FrameDesc>,
 }
 
 /// The structures the suite checks: every registry entry but naive, with
 /// each entry's parameter variants (the paper's k-d sets).
-pub fn structures() -> Vec<(String, Accel, BuildOptions)> {
-    Accel::skipping()
-        .flat_map(|a| {
-            a.method()
-                .variants()
-                .into_iter()
-                .map(move |(label, options)| (label, a, options))
-        })
-        .collect()
+pub fn structures() -> Result<Vec<(String, Accel, Params)>> {
+    let mut out = Vec::new();
+    for a in Accel::skipping() {
+        for (label, params) in a.method().variants()? {
+            out.push((label, a, params));
+        }
+    }
+    Ok(out)
 }
 
 /// An orbit camera view (orthographic or perspective).
-pub fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: Option<f32>) -> View {
-    View::Camera(RenderSettings {
-        width: size,
-        height: size,
-        camera: Camera {
-            azimuth_deg: az,
-            elevation_deg: el,
-            projection,
-        },
-        step,
-        ert,
-        filter: Filter::Manual,
-    })
+pub fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32, ert: Option<f32>) -> Result<FrameDesc> {
+    FrameDesc::builder(size, size)
+        .orbit(az, el, projection)
+        .step(step)
+        .ert(ert)
+        .build()
 }
 
 const ORTHO: Projection = Projection::Orthographic;
 
 /// Orthographic rays laid out by hand: pixel (i, j) starts at start + i * du
-/// + j * dv and travels along dir (normalisation left for the caller).
-pub fn lattice(
-    dims: [u32; 3],
-    size: u32,
-    start: [f32; 3],
-    du: [f32; 3],
-    dv: [f32; 3],
-    dir: [f32; 3],
-    step: f32,
-) -> View {
-    View::Params(RenderParams {
-        base: [0, 1, 2, 3].map(|a| if a < 3 { start[a] - 0.5 * (du[a] + dv[a]) } else { 0.0 }),
-        du: [du[0], du[1], du[2], 0.0],
-        dv: [dv[0], dv[1], dv[2], 0.0],
-        eye_or_dir: [dir[0], dir[1], dir[2], 0.0],
-        dims: [dims[0], dims[1], dims[2], LUT_SIZE as u32],
-        image: [size, size, 0, 0],
-        march: [step, ERT_OFF, 0.0, 0.0],
-        ..RenderParams::default()
-    })
+/// + j * dv and travels along dir.
+pub fn lattice(size: u32, start: [f32; 3], du: [f32; 3], dv: [f32; 3], dir: [f32; 3], step: f32) -> Result<FrameDesc> {
+    let base = [0, 1, 2].map(|a| start[a] - 0.5 * (du[a] + dv[a]));
+    FrameDesc::builder(size, size)
+        .camera(Camera::Rays(Rays::orthographic(base, du, dv, dir)))
+        .step(step)
+        .build()
 }
 
 fn gen(spec: &str) -> Result<Volume> {
@@ -101,9 +76,9 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: gen("turbulence:33x29x31")?,
             tf: "ramp:0.5:1:0.3",
             views: vec![
-                cam(32, 0.0, 0.0, ORTHO, 0.5, None),
-                cam(32, 90.0, 0.0, ORTHO, 0.5, None),
-                cam(32, 0.0, 90.0, ORTHO, 0.5, None),
+                cam(32, 0.0, 0.0, ORTHO, 0.5, None)?,
+                cam(32, 90.0, 0.0, ORTHO, 0.5, None)?,
+                cam(32, 0.0, 90.0, ORTHO, 0.5, None)?,
             ],
         },
         HardCase {
@@ -111,28 +86,26 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: gen("turbulence:32")?,
             tf: "ramp:0.55:1:0.5",
             views: vec![lattice(
-                [32; 3],
                 33,
                 [0.0, 0.0, -5.0],
                 [1.0, 0.0, 0.0],
                 [0.0, 1.0, 0.0],
                 [0.0, 0.0, 1.0],
                 0.5,
-            )],
+            )?],
         },
         HardCase {
             name: "rays through brick corners",
             volume: gen("turbulence:32")?,
             tf: "band:0.7:1",
             views: vec![lattice(
-                [32; 3],
                 17,
                 [-4.0, -4.0, -4.0],
                 [2.0, -2.0, 0.0],
                 [1.0, 1.0, -2.0],
                 [1.0, 1.0, 1.0],
                 0.5,
-            )],
+            )?],
         },
         HardCase {
             name: "grazing rays",
@@ -140,38 +113,36 @@ pub fn cases() -> Result<Vec<HardCase>> {
             tf: "ramp:0.55:1:0.5",
             views: vec![
                 lattice(
-                    [32; 3],
                     33,
                     [40.0, 0.0, 0.0],
                     [0.0, 1.0, 0.0],
                     [0.0, 0.0, 1.0],
                     [-1.0, 0.0, 0.0],
                     1.0,
-                ),
+                )?,
                 lattice(
-                    [32; 3],
                     33,
                     [8.0, -3.0, 0.0],
                     [0.0, 0.0, 1.0],
                     [1.0, 0.0, 0.0],
                     [0.0, 1.0, 1.0],
                     0.5,
-                ),
+                )?,
             ],
         },
         HardCase {
             name: "camera inside the volume",
             volume: gen("menger:27")?,
             tf: "ramp:0.3:1:0.5",
-            views: vec![cam(32, 10.0, 5.0, persp(Some(0.1), 70.0), 0.5, None)],
+            views: vec![cam(32, 10.0, 5.0, persp(Some(0.1), 70.0), 0.5, None)?],
         },
         HardCase {
             name: "camera inside an empty region",
             volume: gen("shells:48")?,
             tf: "ramp:0.2:1:0.8",
             views: vec![
-                cam(32, 0.0, 0.0, persp(Some(0.0), 90.0), 0.5, None),
-                cam(32, 33.0, 12.0, persp(Some(0.0), 90.0), 0.3, None),
+                cam(32, 0.0, 0.0, persp(Some(0.0), 90.0), 0.5, None)?,
+                cam(32, 33.0, 12.0, persp(Some(0.0), 90.0), 0.3, None)?,
             ],
         },
         HardCase {
@@ -179,29 +150,29 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: gen("nbody:13x37x21")?,
             tf: "ramp:0.2:1:0.6",
             views: vec![
-                cam(32, 30.0, 20.0, ORTHO, 0.5, None),
-                cam(32, -140.0, -25.0, persp(None, 50.0), 0.5, None),
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None)?,
+                cam(32, -140.0, -25.0, persp(None, 50.0), 0.5, None)?,
             ],
         },
         HardCase {
             name: "degenerate dims 1 x 1 x N",
             volume: gen("shells:1x1x40")?,
             tf: "ramp:0.2:1:0.6",
-            views: vec![cam(24, 30.0, 20.0, ORTHO, 0.5, None)],
+            views: vec![cam(24, 30.0, 20.0, ORTHO, 0.5, None)?],
         },
         HardCase {
             name: "transparent transfer function",
             volume: gen("vessels:40")?,
             tf: "band:0:1:0",
-            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)],
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)?],
         },
         HardCase {
             name: "opaque transfer function",
             volume: gen("vessels:40")?,
             tf: "band:0:1:0.05",
             views: vec![
-                cam(32, 30.0, 20.0, ORTHO, 0.5, None),
-                cam(32, 30.0, 20.0, ORTHO, 0.5, Some(0.95)),
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None)?,
+                cam(32, 30.0, 20.0, ORTHO, 0.5, Some(0.95))?,
             ],
         },
         HardCase {
@@ -209,8 +180,8 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: Volume::new("dot", [40; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(dot))?,
             tf: "band:0.02:1:1",
             views: vec![
-                cam(32, 0.0, 0.0, ORTHO, 0.5, None),
-                cam(32, 45.0, 35.264389682754654, ORTHO, 0.37, None),
+                cam(32, 0.0, 0.0, ORTHO, 0.5, None)?,
+                cam(32, 45.0, 35.264389682754654, ORTHO, 0.37, None)?,
             ],
         },
         HardCase {
@@ -218,8 +189,8 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: Volume::new("halves", [24; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(halves))?,
             tf: "spike:0.5:0.0005",
             views: vec![
-                cam(24, 90.0, 0.0, ORTHO, 0.5, None),
-                cam(24, 80.0, 10.0, ORTHO, 0.25, None),
+                cam(24, 90.0, 0.0, ORTHO, 0.5, None)?,
+                cam(24, 80.0, 10.0, ORTHO, 0.25, None)?,
             ],
         },
         HardCase {
@@ -227,9 +198,9 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: gen("nbody:40")?,
             tf: "ramp:0.3:1",
             views: vec![
-                cam(32, 17.0, 23.0, ORTHO, 0.3, None),
-                cam(32, 17.0, 23.0, ORTHO, 0.77, None),
-                cam(32, 17.0, 23.0, ORTHO, 1.9, None),
+                cam(32, 17.0, 23.0, ORTHO, 0.3, None)?,
+                cam(32, 17.0, 23.0, ORTHO, 0.77, None)?,
+                cam(32, 17.0, 23.0, ORTHO, 1.9, None)?,
             ],
         },
         HardCase {
@@ -237,9 +208,9 @@ pub fn cases() -> Result<Vec<HardCase>> {
             volume: Volume::new("long", [4, 4, 3000], [1.0; 3], VoxelType::U8, VoxelData::U8(long))?,
             tf: "band:0.5:1:0.01",
             views: vec![
-                cam(16, 0.0, 0.0, ORTHO, 0.5, None),
-                cam(16, 0.3, 0.2, ORTHO, 0.7, None),
-                cam(16, 180.0, 0.0, persp(Some(1.2), 1.0), 0.5, None),
+                cam(16, 0.0, 0.0, ORTHO, 0.5, None)?,
+                cam(16, 0.3, 0.2, ORTHO, 0.7, None)?,
+                cam(16, 180.0, 0.0, persp(Some(1.2), 1.0), 0.5, None)?,
             ],
         },
     ])
@@ -253,6 +224,9 @@ pub struct Outcome {
     pub identical: bool,
     pub validation_messages: usize,
     pub finite: bool,
+    /// What marched it, when not its own kernel (`auto`'s choice, a tree of
+    /// one leaf marched naively).
+    pub marched_as: Option<String>,
     pub detail: String,
 }
 
@@ -262,30 +236,10 @@ impl Outcome {
     }
 }
 
-/// Renders `view` of `s` sampling with `filter` (hand-laid rays get the
-/// volume's normalisation).
-#[allow(clippy::too_many_arguments)]
-pub fn render_view(
-    renderer: &Renderer,
-    s: &Structure,
-    volume: &Volume,
-    gv: &GpuVolume,
-    lut: &crate::tf::GpuTransferFunction,
-    view: &View,
-    filter: Filter,
-) -> Result<Frame> {
-    match view {
-        View::Camera(settings) => {
-            let settings = RenderSettings { filter, ..*settings };
-            Ok(renderer.render(s, gv, lut, &settings)?.0)
-        }
-        View::Params(p) => {
-            let mut p = *p;
-            p.march[2] = volume.norm[0];
-            p.march[3] = volume.norm[1];
-            Ok(renderer.render_params(s, gv, lut, &p, filter)?.0)
-        }
-    }
+/// Renders `view` of `s` sampling with `filter`.
+pub fn render_view(renderer: &Renderer, scene: Scene, view: &FrameDesc, filter: Filter) -> Result<Frame> {
+    let view = view.to_builder().filter(filter).build()?;
+    Ok(renderer.render(scene, &view)?.0)
 }
 
 /// Runs every case for every structure and filter on a validated context.
@@ -306,19 +260,24 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
             tf: &tf,
             gpu_tf: &lut,
         };
-        // Ranges per cell edge the variants use, computed once each.
-        let mut ranges = std::collections::HashMap::new();
+        // The ranges every variant reads, each kind computed once.
+        let variants = structures()?;
+        let with: Vec<(Accel, &Params)> = variants.iter().map(|(_, a, p)| (*a, p)).collect();
+        let (ranges, _) = builder.ranges_for(&with, &gv)?;
         let mut built = Vec::new();
-        for (label, accel, options) in structures() {
-            let cell_ranges = match ranges.entry(options.cell) {
-                std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-                std::collections::hash_map::Entry::Vacant(e) => e.insert(builder.ranges(&gv, options.cell)?.0),
-            };
-            built.push((label, builder.build(accel, &scene, cell_ranges, &options)?.0));
+        for (label, accel, params) in &variants {
+            built.push((label.clone(), builder.build(*accel, &scene, &ranges, params)?.0));
         }
         let structures = built;
         for filter in Filter::ALL.into_iter().filter(|&f| gv.sampler_for(f).is_ok()) {
-            let render = |s: &Structure, view: &View| render_view(&renderer, s, v, &gv, &lut, view, filter);
+            let render = |s: &Structure, view: &FrameDesc| {
+                let scene = Scene {
+                    structure: s,
+                    volume: &gv,
+                    tf: &lut,
+                };
+                render_view(&renderer, scene, view, filter)
+            };
             let naive: Vec<Frame> = case
                 .views
                 .iter()
@@ -347,6 +306,7 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
                     identical,
                     validation_messages: messages.len() + baseline,
                     finite,
+                    marched_as: s.marched_as_reason().map(|m| m.label),
                     detail,
                 });
             }
@@ -356,9 +316,14 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
 }
 
 /// The pass/fail table: a row per case and filter, a column per structure.
+/// A cell reads `pass` (`pass (naive)` when another kernel marched it).
 pub fn table(outcomes: &[Outcome]) -> String {
-    let structures = structures();
-    let labels: Vec<&str> = structures.iter().map(|s| s.0.as_str()).collect();
+    let mut labels: Vec<&str> = Vec::new();
+    for o in outcomes {
+        if !labels.contains(&o.structure.as_str()) {
+            labels.push(&o.structure);
+        }
+    }
     let mut s = format!(
         "| hard case | filter | {} |\n|---|---|{}\n",
         labels.join(" | "),
@@ -371,16 +336,19 @@ pub fn table(outcomes: &[Outcome]) -> String {
         }
     }
     for (c, f) in rows {
-        let cells: Vec<&str> = labels
+        let cells: Vec<String> = labels
             .iter()
             .map(|l| {
                 match outcomes
                     .iter()
                     .find(|o| o.case == c && o.filter == f && o.structure == *l)
                 {
-                    Some(o) if o.passed() => "pass",
-                    Some(_) => "FAIL",
-                    None => "-",
+                    Some(o) if o.passed() => match &o.marched_as {
+                        Some(m) => format!("pass ({m})"),
+                        None => "pass".into(),
+                    },
+                    Some(_) => "FAIL".into(),
+                    None => "-".into(),
                 }
             })
             .collect();

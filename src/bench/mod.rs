@@ -10,11 +10,13 @@ mod plots;
 mod progress;
 pub mod record;
 pub mod run;
+pub mod schedule;
 pub mod tables;
 
 pub use config::BenchConfig;
 pub use record::{ErrorPoint, Record};
-pub use run::{schedule, warm_up, BenchOutput, RunOptions, Slot, WarmedUp};
+pub use run::{BenchOutput, RunOptions};
+pub use schedule::{schedule, warm_up, Slot, WarmedUp};
 
 use crate::error::{Error, Result};
 use crate::frame::write_atomically;

@@ -134,7 +134,9 @@ pub struct Record {
     /// Sample filter of the timed frames (manual or hardware).
     #[serde(default = "manual")]
     pub filter: String,
-    /// For `auto`: the structure it chose (`distance (cell 4)`, `naive`).
+    /// When another entry's kernel marched the frames: `auto`'s choice
+    /// (`distance (cell 4)`, `naive`), or `naive` for a tree of one leaf
+    /// covering the volume (`Structure::marched_as`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chosen: Option<String>,
 }

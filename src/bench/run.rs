@@ -10,16 +10,17 @@
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
-use crate::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
+use super::schedule::{schedule, spread, warm_up};
+use crate::accel::{Accel, BuildInput, Builder, Params, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
 use crate::gpu::{Context, Timer};
-use crate::render::{Camera, Filter, Projection, RenderSettings, RenderTarget, Renderer};
+use crate::render::{Filter, FrameDesc, Output, Projection, RenderTarget, Renderer, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
 use crate::Volume;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// What a run produced.
@@ -55,18 +56,11 @@ impl<'a> FrameTimer<'a> {
     }
 
     /// One frame: GPU ms of the march pass, and the frame when `read`.
-    fn frame(
-        &mut self,
-        s: &Structure,
-        v: &GpuVolume,
-        tf: &GpuTransferFunction,
-        settings: &RenderSettings,
-        read: bool,
-    ) -> Result<(f64, Option<Frame>)> {
+    fn frame(&mut self, scene: Scene, desc: &FrameDesc, read: bool) -> Result<(f64, Option<Frame>)> {
         let (renderer, target, timer) = (self.renderer, &self.target, &mut self.timer);
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            renderer.record(cmd, Some(timer), s, target, v, tf, settings)?;
+            renderer.record(cmd, Some(timer), target, scene, desc, Output::Buffer)?;
             if read {
                 renderer.record_readback(cmd, target)?;
             }
@@ -78,25 +72,30 @@ impl<'a> FrameTimer<'a> {
     }
 }
 
-fn orbit(config: &BenchConfig, view: u32, views: u32, step: f32, ert: Option<f32>, filter: Filter) -> RenderSettings {
-    RenderSettings {
-        width: config.size[0],
-        height: config.size[1],
-        camera: Camera {
-            azimuth_deg: 360.0 * view as f64 / views as f64,
-            elevation_deg: config.elevation,
-            projection: Projection::Orthographic,
-        },
-        step,
-        ert,
-        filter,
-    }
+/// View `view` of `views` of the orbit the benchmark turns through.
+fn orbit(
+    config: &BenchConfig,
+    view: u32,
+    views: u32,
+    step: f32,
+    ert: Option<f32>,
+    filter: Filter,
+) -> Result<FrameDesc> {
+    FrameDesc::builder(config.size[0], config.size[1])
+        .orbit(
+            360.0 * view as f64 / views as f64,
+            config.elevation,
+            Projection::Orthographic,
+        )
+        .step(step)
+        .ert(ert)
+        .filter(filter)
+        .build()
 }
 
 fn params_of(s: &StructureSpec) -> BTreeMap<String, String> {
-    s.accel
-        .method()
-        .params(&s.options)
+    s.params
+        .describe()
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect()
@@ -121,27 +120,39 @@ fn load(ctx: &Context, spec: &str, tf: Option<&str>) -> Result<Loaded> {
     })
 }
 
+/// The speed-against-error sweep of one data set: what it sweeps.
+struct Sweep<'a> {
+    config: &'a BenchConfig,
+    e: &'a ErrorConfig,
+    setup: &'a Setup,
+    spec: &'a str,
+    /// The structure the sweep is timed with, on the uploaded volume.
+    scene: Scene<'a>,
+    filters: &'a [Filter],
+}
+
 /// The speed-against-error sweep of one data set, on its uploaded volume.
-#[allow(clippy::too_many_arguments)]
-fn error_sweep(
-    config: &BenchConfig,
-    e: &ErrorConfig,
-    setup: &Setup,
-    spec: &str,
-    structure: &Structure,
-    gv: &GpuVolume,
-    lut: &GpuTransferFunction,
-    filters: &[Filter],
-    frames: &mut FrameTimer,
-    progress: &Progress,
-) -> Result<Vec<ErrorPoint>> {
+fn error_sweep(sweep: &Sweep, frames: &mut FrameTimer, progress: &Progress) -> Result<Vec<ErrorPoint>> {
+    let Sweep {
+        config,
+        e,
+        setup,
+        spec,
+        scene,
+        filters,
+    } = *sweep;
     let mut points = Vec::new();
     let mut reference = Vec::new();
+    let naive = Structure::naive();
+    let reference_scene = Scene {
+        structure: &naive,
+        ..scene
+    };
     for view in 0..e.frames {
-        let settings = orbit(config, view, e.frames, e.reference_step, None, Filter::Manual);
+        let desc = orbit(config, view, e.frames, e.reference_step, None, Filter::Manual)?;
         reference.push(
             frames
-                .frame(&Structure::naive(), gv, lut, &settings, true)?
+                .frame(reference_scene, &desc, true)?
                 .1
                 .ok_or_else(|| missing("reference frame"))?,
         );
@@ -153,19 +164,13 @@ fn error_sweep(
     {
         let ert = (ert > 0.0).then_some(ert);
         // A new step is a new workload: warm up again.
-        let first = orbit(config, 0, e.frames, step, ert, filter);
+        let first = orbit(config, 0, e.frames, step, ert, filter)?;
         warm_up(config.warmup, config.warmup_cap, config.stable, |_| {
-            Ok(frames.frame(structure, gv, lut, &first, false)?.0)
+            Ok(frames.frame(scene, &first, false)?.0)
         })?;
         let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
         for view in 0..e.frames {
-            let (ms, f) = frames.frame(
-                structure,
-                gv,
-                lut,
-                &orbit(config, view, e.frames, step, ert, filter),
-                true,
-            )?;
+            let (ms, f) = frames.frame(scene, &orbit(config, view, e.frames, step, ert, filter)?, true)?;
             let d = diff(&reference[view as usize], &f.ok_or_else(|| missing("sweep frame"))?)?;
             times.push(ms);
             sq += d.rmse * d.rmse * d.pixels as f64;
@@ -179,7 +184,7 @@ fn error_sweep(
         points.push(ErrorPoint {
             setup: setup.clone(),
             dataset: spec.to_string(),
-            accel: structure.accel().name().into(),
+            accel: scene.structure.accel.name().into(),
             sweep_step: step,
             ert,
             filter: filter.to_string(),
@@ -196,69 +201,6 @@ fn error_sweep(
     Ok(points)
 }
 
-/// One timed frame of the interleaved schedule.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Slot {
-    pub view: u32,
-    pub round: u32,
-    /// Index into the structures, in timing order (naive first).
-    pub structure: usize,
-}
-
-/// The order frames are timed in: for each view, `rounds` rounds, and in
-/// each round every structure once, in order. A structure's frames of one
-/// view are thus spread over the same stretch of time as every other's.
-pub fn schedule(views: u32, rounds: u32, structures: usize) -> impl Iterator<Item = Slot> {
-    (0..views).flat_map(move |view| {
-        (0..rounds).flat_map(move |round| (0..structures).map(move |structure| Slot { view, round, structure }))
-    })
-}
-
-/// How a warm-up ended: runs made, and whether it stopped at the cap.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct WarmedUp {
-    pub runs: u32,
-    pub capped: bool,
-}
-
-/// Runs `once` (which returns a time) at least `least` times and until two
-/// consecutive times agree within the fraction `stable`, or `cap` times.
-/// One run is never enough: on lavapipe the frames after the first are
-/// still slow with a cold shader cache.
-pub fn warm_up(least: u32, cap: u32, stable: f64, mut once: impl FnMut(u32) -> Result<f64>) -> Result<WarmedUp> {
-    let least = least.max(2);
-    let mut previous: Option<f64> = None;
-    for i in 0..cap.max(least) {
-        let t = once(i)?;
-        if i + 1 >= least {
-            if let Some(p) = previous {
-                if (t - p).abs() <= stable * t.min(p) {
-                    return Ok(WarmedUp {
-                        runs: i + 1,
-                        capped: false,
-                    });
-                }
-            }
-        }
-        previous = Some(t);
-    }
-    Ok(WarmedUp {
-        runs: cap.max(least),
-        capped: true,
-    })
-}
-
-/// max/min of positive times; 1 when there is nothing to compare.
-fn spread(ms: &[f64]) -> f64 {
-    let min = ms.iter().cloned().fold(f64::INFINITY, f64::min);
-    let max = ms.iter().cloned().fold(0.0, f64::max);
-    if min > 0.0 && min.is_finite() {
-        max / min
-    } else {
-        1.0
-    }
-}
-
 /// The structures in timing order: naive first (added when the config has
 /// none), the rest in config order.
 fn timing_order(structures: Vec<StructureSpec>) -> Vec<StructureSpec> {
@@ -268,7 +210,7 @@ fn timing_order(structures: Vec<StructureSpec>) -> Vec<StructureSpec> {
         out.push(StructureSpec {
             label: "naive".into(),
             accel: Accel::naive(),
-            options: BuildOptions::default(),
+            params: Params::default(),
         });
     }
     let first_naive = structures.iter().position(is_naive);
@@ -324,7 +266,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         ),
         cost_model: structures
             .iter()
-            .any(|s| s.options.collapse)
+            .any(|s| s.params.switch("collapse").unwrap_or(false))
             .then(|| builder.cost_model())
             .transpose()?,
     };
@@ -366,6 +308,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let lut = tf.upload(ctx)?;
         let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
         let settings = |view: u32| orbit(config, view, config.frames, config.step, config.ert, filter);
+
         let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
@@ -383,28 +326,17 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             100.0 * visible as f64 / n as f64,
             100.0 * active as f64 / grid.len() as f64,
         );
-        // Per-volume ranges, once per cell size in use, of the kinds the
-        // structures with that cell size read.
-        let mut ranges: HashMap<u32, (Ranges, Timings)> = HashMap::new();
-        for s in &structures {
-            if let std::collections::hash_map::Entry::Vacant(e) = ranges.entry(s.options.cell) {
-                let accels: Vec<Accel> = structures
-                    .iter()
-                    .filter(|o| o.options.cell == s.options.cell)
-                    .map(|o| o.accel)
-                    .collect();
-                e.insert(builder.ranges_for(&accels, &gv, s.options.cell)?);
-            }
-        }
+        // Per-volume ranges, each kind the structures read once.
+        let reads: Vec<(Accel, &Params)> = structures.iter().map(|s| (s.accel, &s.params)).collect();
+        let (ranges, _) = builder.ranges_for(&reads, &gv)?;
 
         // Builds: warm up each structure, then time them round-robin.
         let mut runs: Vec<Run> = Vec::with_capacity(structures.len());
         for s in &structures {
             progress.at(&format!("{} - {} warm-up", loaded.spec, s.label));
-            let r = &ranges[&s.options.cell].0;
             let mut structure = Structure::naive();
             let warmed = warm_up(config.warmup, config.warmup_cap, config.stable, |i| {
-                let (st, t) = builder.build(s.accel, &scene, r, &s.options)?;
+                let (st, t) = builder.build(s.accel, &scene, &ranges, &s.params)?;
                 structure = st;
                 advance(&progress, i, least);
                 Ok(t.total())
@@ -425,7 +357,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         progress.at(&format!("{} - timed builds", loaded.spec));
         for _ in 0..config.builds {
             for (s, run) in structures.iter().zip(&mut runs) {
-                let (st, t) = builder.build(s.accel, &scene, &ranges[&s.options.cell].0, &s.options)?;
+                let (st, t) = builder.build(s.accel, &scene, &ranges, &s.params)?;
                 run.structure = st;
                 run.builds.push(t);
                 progress.step(1);
@@ -436,9 +368,10 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         // round-robin.
         for (s, run) in structures.iter().zip(&mut runs) {
             progress.at(&format!("{} - {} warm-up frames", loaded.spec, s.label));
-            let structure = &run.structure;
+            let scene = scene_of(&run.structure, &gv, &lut);
+            let first = settings(0)?;
             let warmed = warm_up(config.warmup, config.warmup_cap, config.stable, |i| {
-                let (ms, _) = frames.frame(structure, &gv, &lut, &settings(0), false)?;
+                let (ms, _) = frames.frame(scene, &first, false)?;
                 advance(&progress, i, least);
                 Ok(ms)
             })?;
@@ -452,7 +385,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         for slot in schedule(config.frames, config.rounds, structures.len()) {
             let first = slot.view == 0 && slot.round == 0;
             let run = &mut runs[slot.structure];
-            let (ms, frame) = frames.frame(&run.structure, &gv, &lut, &settings(slot.view), first)?;
+            let (ms, frame) = frames.frame(scene_of(&run.structure, &gv, &lut), &settings(slot.view)?, first)?;
             run.times[slot.view as usize].push(ms);
             if let Some(frame) = frame {
                 let reference = naive0.get_or_insert_with(|| frame.clone());
@@ -464,8 +397,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
         let naive = runs.first().ok_or_else(|| missing("naive frames"))?;
         for (s, run) in structures.iter().zip(&runs) {
-            let r = &ranges[&s.options.cell].0;
-            let ranges_ms = r.ms(s.accel.method().ranges())?;
+            let ranges_ms = ranges.ms(s.accel.method().ranges(&s.params)?)?;
             let totals: Vec<f64> = run.builds.iter().map(Timings::total).collect();
             let build = FrameTimes::of(totals.clone());
             let phases = Timings::median(&run.builds);
@@ -490,10 +422,11 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     config.stable * 100.0
                 ));
             }
-            if run.structure.marched_naively() {
+            // Skipping that found nothing to skip says so.
+            if let Some(m) = run.structure.marched_as_reason().filter(|m| m.accel.is_naive()) {
                 out.notes.push(format!(
-                    "{} - {}: one leaf covering the volume, marched with the naive kernel",
-                    loaded.spec, s.label
+                    "{} - {}: marched with the naive kernel ({})",
+                    loaded.spec, s.label, m.reason
                 ));
             }
             if unstable {
@@ -531,7 +464,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 warmed_up: run.warmup,
                 error_vs_naive: run.error.clone().ok_or_else(|| missing("frame 0"))?,
                 filter: filter.to_string(),
-                chosen: run.structure.choice().map(|c| c.describe()),
+                chosen: run.structure.marched_as_reason().map(|m| m.label),
             });
             if let Some(first) = &run.first {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));
@@ -544,10 +477,10 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             .filter(|e| e.datasets.as_ref().is_none_or(|d| d.contains(&loaded.spec)))
         {
             progress.at(&format!("{} - speed against error", loaded.spec));
-            let opts = BuildOptions::default();
             let accel: Accel = e.accel.parse()?;
-            let (r, _) = builder.ranges_for(&[accel], &gv, opts.cell)?;
-            let (structure, _) = builder.build(accel, &scene, &r, &opts)?;
+            let params = accel.defaults();
+            let (r, _) = builder.ranges_for(&[(accel, &params)], &gv)?;
+            let (structure, _) = builder.build(accel, &scene, &r, &params)?;
             let mut filters = e.filters(filter)?;
             filters.retain(|&f| {
                 let usable = gv.sampler_for(f).is_ok();
@@ -561,23 +494,24 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 }
                 usable
             });
-            out.errors.extend(error_sweep(
+            let sweep = Sweep {
                 config,
                 e,
-                &setup,
-                &loaded.spec,
-                &structure,
-                &gv,
-                &lut,
-                &filters,
-                &mut frames,
-                &progress,
-            )?);
+                setup: &setup,
+                spec: &loaded.spec,
+                scene: scene_of(&structure, &gv, &lut),
+                filters: &filters,
+            };
+            out.errors.extend(error_sweep(&sweep, &mut frames, &progress)?);
         }
     }
 
     progress.finish();
     Ok(out)
+}
+
+fn scene_of<'a>(structure: &'a Structure, volume: &'a GpuVolume, tf: &'a GpuTransferFunction) -> Scene<'a> {
+    Scene { structure, volume, tf }
 }
 
 /// Counts warm-up run `i` on the progress bar, growing it past the least.

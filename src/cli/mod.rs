@@ -1,5 +1,6 @@
 //! The command line: one module per command; what they share lives here.
 
+pub mod args;
 pub mod bench;
 pub mod devices;
 pub mod diff;
@@ -14,7 +15,6 @@ pub mod view;
 use clap::Args;
 pub use lacuna::frame::check_parent;
 use lacuna::gpu::{Context, ContextOptions, DeviceInfo};
-use lacuna::render::{Camera, Filter, Projection, RenderSettings};
 use lacuna::volume::{LoadOptions, RawLayout, VoxelType};
 use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
@@ -86,38 +86,6 @@ pub fn validation_verdict(ctx: &Context) -> ExitCode {
 }
 
 /// The transfer function given, else the volume's default (generators have one).
-/// The validated render settings of the frame options `render` and `view`
-/// share: size, orbit camera (perspective with an optional distance, else
-/// orthographic), step, early termination and sample filter.
-pub fn frame_settings(
-    size: (u32, u32),
-    camera: (f64, f64),
-    perspective: Option<f64>,
-    distance: Option<f64>,
-    step: f32,
-    ert: Option<f32>,
-    filter: Option<Filter>,
-) -> Result<RenderSettings> {
-    let projection = match perspective {
-        Some(fov_deg) => Projection::Perspective { fov_deg, distance },
-        None => Projection::Orthographic,
-    };
-    let settings = RenderSettings {
-        width: size.0,
-        height: size.1,
-        camera: Camera {
-            azimuth_deg: camera.0,
-            elevation_deg: camera.1,
-            projection,
-        },
-        step,
-        ert,
-        filter: filter.unwrap_or_default(),
-    };
-    settings.validate()?;
-    Ok(settings)
-}
-
 pub fn tf_for(spec: Option<&TransferFunction>, volume: &Volume) -> Result<Option<TransferFunction>> {
     match (spec, &volume.default_tf) {
         (Some(tf), _) => Ok(Some(tf.clone())),

@@ -1,12 +1,12 @@
 //! `lacuna render`: one frame with any structure, GPU time per pass, EXR or PNG out.
 
-use super::{check_parent, context, frame_settings, tf_for, validation_verdict, VolumeArgs};
+use super::args::{AccelParser, FrameArgs, StructureArgs};
+use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
-use lacuna::accel::kd::KdParams;
-use lacuna::accel::{parse_collapse, Accel, BuildInput, BuildOptions, Builder, Classify, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
-use lacuna::render::{self, Camera, Filter, RenderSettings, Renderer};
+use lacuna::render::{self, FrameDesc, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
@@ -19,51 +19,16 @@ pub struct RenderArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<TransferFunction>,
-    /// Empty space skipping structure: auto (default: chosen per volume and TF), naive, lbvh, grid, distance, distance-octant, kd-cpu, kd-gpu, hybrid, octree-84, octree-89, octree-93, octree-rev.
-    #[arg(long, default_value = "auto")]
+    /// Empty space skipping structure (default auto: chosen per volume and TF).
+    #[arg(long, default_value = "auto", value_parser = AccelParser)]
     accel: Accel,
-    /// Brick classification of skipping structures: range (default, O(bricks) per TF change) or voxel.
-    #[arg(long, default_value = "range")]
-    classify: String,
-    /// With --classify voxel: keep the one-voxel apron (on), or drop it as the paper does (off; not conservative).
-    #[arg(long, default_value = "on")]
-    apron: String,
-    /// k-d trees: shallow (leaf below 10 % of the root volume) or deep (leaf at 8^3).
-    #[arg(long, default_value = "deep")]
-    kd: String,
-    /// Deep k-d trees: split leaves longer than this many voxels in the middle.
-    #[arg(long, default_value_t = 32)]
-    max_leaf: u32,
-    /// GPU k-d tree: candidate bins per node.
-    #[arg(long, default_value_t = 4)]
-    bins: u32,
-    /// Macro-cell edge in voxels, a power of two (default: the structure's; grid and hybrid 16, distance maps 8).
-    #[arg(long)]
-    cell: Option<u32>,
-    /// Trees (lbvh, kd-cpu, kd-gpu): cost-driven leaves, a subtree cheaper as one leaf by the measured cost model becomes one (on), or the paper's trees (off).
-    #[arg(long, default_value = "off")]
-    collapse: String,
+    #[command(flatten)]
+    structure: StructureArgs,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
     size: (u32, u32),
-    /// Orbit camera AZIMUTH,ELEVATION in degrees.
-    #[arg(long, default_value = "30,20", allow_hyphen_values = true, value_parser = Camera::parse_orbit)]
-    camera: (f64, f64),
-    /// Perspective projection with this vertical field of view (degrees); default orthographic.
-    #[arg(long)]
-    perspective: Option<f64>,
-    /// Perspective eye distance from the centre, in bounding-sphere radii (default: fit).
-    #[arg(long, requires = "perspective")]
-    distance: Option<f64>,
-    /// Sample step in voxels.
-    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    step: f32,
-    /// Early ray termination at this accumulated alpha (default off).
-    #[arg(long, allow_hyphen_values = true)]
-    ert: Option<f32>,
-    /// Sample filter: manual (eight texel fetches, f32 weights) or hardware (the sampler's linear filtering; default where the volume's format supports it).
-    #[arg(long)]
-    filter: Option<Filter>,
+    #[command(flatten)]
+    frame: FrameArgs,
     /// Time this many builds and frames and report per-phase medians.
     #[arg(long, default_value_t = 1)]
     repeat: u32,
@@ -83,23 +48,9 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     /// Every option checked, before any file is read or GPU work is done.
-    fn options(&self) -> Result<(BuildOptions, RenderSettings, Option<FrameFormat>)> {
-        let options = BuildOptions {
-            classify: Classify::parse(&self.classify, &self.apron)?,
-            kd: KdParams::parse(&self.kd, self.max_leaf, self.bins)?,
-            cell: self.cell.unwrap_or(self.accel.method().default_cell()),
-            collapse: parse_collapse(&self.collapse)?,
-        };
-        options.validate()?;
-        let settings = frame_settings(
-            self.size,
-            self.camera,
-            self.perspective,
-            self.distance,
-            self.step,
-            self.ert,
-            self.filter,
-        )?;
+    fn options(&self) -> Result<(Params, FrameDesc, Option<FrameFormat>)> {
+        let params = self.structure.params(self.accel)?;
+        let desc = self.frame.desc(self.size)?;
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
         }
@@ -114,7 +65,7 @@ impl RenderArgs {
         if let Some(out) = &self.out {
             check_parent(out)?;
         }
-        Ok((options, settings, format))
+        Ok((params, desc, format))
     }
 }
 
@@ -124,7 +75,7 @@ fn build(
     ctx: &Context,
     args: &RenderArgs,
     input: &BuildInput,
-    options: &BuildOptions,
+    params: &Params,
 ) -> Result<(Structure, Option<Timings>)> {
     if args.accel.is_naive() {
         return Ok((Structure::naive(), None));
@@ -133,10 +84,10 @@ fn build(
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.warmup + args.repeat {
-        // Ranges (only those this accel reads) are per volume; timed with
-        // every run so the warm-up covers them.
-        let (ranges, mut timings) = builder.ranges_for(&[args.accel], input.gpu_volume, options.cell)?;
-        let (structure, t) = builder.build(args.accel, input, &ranges, options)?;
+        // Ranges (only those this structure reads) are per volume; timed
+        // with every run so the warm-up covers them.
+        let (ranges, mut timings) = builder.ranges_for(&[(args.accel, params)], input.gpu_volume)?;
+        let (structure, t) = builder.build(args.accel, input, &ranges, params)?;
         timings.extend(t);
         times.push(timings);
         last = Some(structure);
@@ -146,18 +97,17 @@ fn build(
 }
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
-    let (options, mut settings, format) = args.options()?;
+    let (params, desc, format) = args.options()?;
     // The device first: the volume's size is checked against its limits
     // from the spec or header, before any voxel is read or made.
     let ctx = context(args.validate)?;
     let volume = args.volume.load_for(&ctx)?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
-    settings.params(volume.dims, volume.spacing, volume.norm)?;
+    desc.params_for(volume.dims, volume.spacing, [0.0, 1.0])?;
 
     let renderer = Renderer::new(&ctx)?;
     let gpu_volume = GpuVolume::upload(&ctx, &volume)?;
-    settings.filter = args.filter.unwrap_or_else(|| gpu_volume.default_filter());
-    gpu_volume.sampler_for(settings.filter)?;
+    gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
     let lut = tf.upload(&ctx)?;
     let input = BuildInput {
         volume: &volume,
@@ -165,10 +115,15 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         tf: &tf,
         gpu_tf: &lut,
     };
-    let (structure, build) = build(&ctx, args, &input, &options)?;
+    let (structure, build) = build(&ctx, args, &input, &params)?;
+    let scene = Scene {
+        structure: &structure,
+        volume: &gpu_volume,
+        tf: &lut,
+    };
     let mut frames = Vec::new();
     for _ in 0..args.warmup + args.repeat {
-        frames.push(renderer.render(&structure, &gpu_volume, &lut, &settings)?);
+        frames.push(renderer.render(scene, &desc)?);
     }
     let timings = Timings::median(
         &frames[args.warmup as usize..]
@@ -182,7 +137,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         .ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
 
     let info = ctx.info();
-    let params = args.accel.method().params(&options);
+    let (width, height) = desc.size();
     println!(
         "device  {} ({}), subTexelPrecisionBits {}",
         info.name, info.driver, info.sub_texel_precision_bits
@@ -193,13 +148,15 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     );
     println!("tf      {}", tf.spec);
     println!(
-        "frame   {}x{}, {}, step {}, filter {}{}, accel {}",
-        settings.width,
-        settings.height,
-        settings.camera.describe(),
-        settings.step,
-        settings.filter,
-        if args.filter.is_none() { " (device default)" } else { "" },
+        "frame   {width}x{height}, {}, step {}, filter {}{}, accel {}",
+        desc.camera().describe(),
+        desc.step(),
+        desc.filter_for(&gpu_volume),
+        if desc.filter().is_none() {
+            " (device default)"
+        } else {
+            ""
+        },
         args.accel
     );
     if args.repeat > 1 || args.warmup > 0 {
@@ -210,25 +167,21 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     }
     if let Some(build) = &build {
         println!("structure {}", args.accel.method().description());
-        for (k, v) in &params {
+        for (k, v) in params.describe() {
             println!("  {k} {v}");
         }
         println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
     }
-    if let Some(choice) = structure.choice() {
-        println!("auto -> {}", choice.describe());
-        println!("  {}", choice.reason());
-    } else if structure.accel.is_naive() && !args.accel.is_naive() {
-        println!("marched with the naive kernel: the tree is one leaf covering the volume");
+    if let Some(m) = structure.marched_as_reason() {
+        println!("{} -> {}", args.accel, m.label);
+        println!("  {}", m.reason);
     }
     if let Some(stats) = structure.stats()? {
         println!("structure {stats}");
     }
     println!("render GPU time per pass:\n{timings}");
     if let (Some(out), Some(format)) = (&args.out, format) {
-        describe(
-            &mut frame, &volume, &tf, &structure, args.accel, &params, &settings, &ctx, &timings,
-        )?;
+        describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
         match &args.background {
             Some(background) => frame.write_png_over(out, background)?,
             None => frame.write(out, format)?,
@@ -238,34 +191,32 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     Ok(validation_verdict(&ctx))
 }
 
-/// The frame's metadata: what made it.
-#[allow(clippy::too_many_arguments)]
+/// The frame's metadata: what made it (the scene, its structure and
+/// parameters, what marched it, the frame's description, the device).
 pub(super) fn describe(
     frame: &mut Frame,
     volume: &Volume,
     tf: &TransferFunction,
-    structure: &Structure,
-    accel: Accel,
-    params: &[(&'static str, String)],
-    settings: &RenderSettings,
+    scene: Scene,
+    desc: &FrameDesc,
     ctx: &Context,
     timings: &Timings,
 ) -> Result<()> {
     let info = ctx.info();
+    let structure = scene.structure;
     let meta = &mut frame.metadata;
     meta.insert("volume".into(), volume.name.clone());
     meta.insert("tf".into(), tf.spec.clone());
-    meta.insert("accel".into(), accel.to_string());
-    if let Some(choice) = structure.choice() {
-        meta.insert("auto".into(), choice.describe());
+    meta.insert("accel".into(), structure.accel.to_string());
+    if let Some(m) = structure.marched_as_reason() {
+        meta.insert("marched_as".into(), m.label);
     }
-    for (k, v) in params {
-        meta.insert(k.to_string(), v.clone());
+    for (k, v) in structure.params.describe() {
+        meta.insert(k.to_string(), v);
     }
-    meta.insert("camera".into(), settings.camera.describe());
-    meta.insert("step".into(), settings.step.to_string());
-    meta.insert("ert".into(), settings.ert.map_or("off".into(), |e| e.to_string()));
-    meta.insert("filter".into(), settings.filter.to_string());
+    for (k, v) in desc.describe(scene.volume) {
+        meta.insert(k.to_string(), v);
+    }
     meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
     meta.insert("gpu_ms".into(), format!("{:.4}", timings.phase("march")?));
     Ok(())

@@ -4,7 +4,7 @@
 
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
-use super::requirements::{missing_requirement, required_features, AdoptInfo, REQUIRED_EXTENSIONS};
+use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 use super::validation::{Messenger, ValidationMessage};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
@@ -90,7 +90,22 @@ impl Context {
         })();
         match built {
             Ok((messenger, pd, device, queue, family)) => {
-                Self::assemble(Some(entry), instance, pd, device, queue, family, messenger, true)
+                let (vulkan12, vulkan13) = required_features();
+                let handles = AdoptInfo {
+                    entry: Some(entry),
+                    instance,
+                    physical_device: pd,
+                    device,
+                    queue,
+                    queue_family: family,
+                    enabled: EnabledFeatures {
+                        api_version: vk::API_VERSION_1_3,
+                        extensions: REQUIRED_EXTENSIONS.iter().map(|e| (*e).to_owned()).collect(),
+                        vulkan12,
+                        vulkan13,
+                    },
+                };
+                Self::assemble(handles, messenger, true)
             }
             Err(e) => {
                 unsafe { instance.destroy_instance(None) };
@@ -151,29 +166,20 @@ impl Context {
             Some(entry) => Some(Messenger::new(entry, &host.instance)?),
             None => None,
         };
-        Self::assemble(
-            host.entry,
-            host.instance,
-            host.physical_device,
-            host.device,
-            host.queue,
-            host.queue_family,
-            messenger,
-            false,
-        )
+        Self::assemble(host, messenger, false)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn assemble(
-        entry: Option<ash::Entry>,
-        instance: ash::Instance,
-        pd: vk::PhysicalDevice,
-        device: ash::Device,
-        queue: vk::Queue,
-        family: u32,
-        messenger: Option<Messenger>,
-        owned: bool,
-    ) -> Result<Self> {
+    /// The context on `handles`; `owned`: created here, destroyed with it.
+    fn assemble(handles: AdoptInfo, messenger: Option<Messenger>, owned: bool) -> Result<Self> {
+        let AdoptInfo {
+            entry,
+            instance,
+            physical_device: pd,
+            device,
+            queue,
+            queue_family: family,
+            ..
+        } = handles;
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let bits = families.get(family as usize).map_or(0, |f| f.timestamp_valid_bits);
         let info = device_info(&instance, pd, bits);

@@ -1,42 +1,14 @@
 //! Compute kernels from embedded SPIR-V: one descriptor set bound with push
 //! descriptors (`VK_KHR_push_descriptor`), so recording needs no descriptor
 //! pools and a recorded command buffer holds no lacuna-owned descriptor state.
+//! Resources are bound by the shader's binding names (`shaders::NAME::Bindings`
+//! lists them), never by position.
 
-use super::shaders::Shader;
+use super::binding::{Binding, Bound};
+use super::shaders::{Shader, Slot};
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
-
-/// A resource bound at one binding slot, in binding order.
-#[derive(Clone, Copy)]
-pub enum Binding<'a> {
-    Storage(&'a super::Buffer),
-    /// A byte range of a storage buffer.
-    StorageRange(&'a super::Buffer, u64, u64),
-    Uniform(&'a super::Buffer),
-    /// A sampled image with its sampler (`sampler3D` in GLSL), in
-    /// SHADER_READ_ONLY_OPTIMAL.
-    Sampled(vk::ImageView, vk::Sampler),
-    /// A sampled image with its sampler in the given layout (a host's depth
-    /// image in DEPTH_READ_ONLY_OPTIMAL, say).
-    SampledIn(vk::ImageView, vk::Sampler, vk::ImageLayout),
-    /// A storage image (`image2D` in GLSL) in GENERAL layout.
-    StorageImage(vk::ImageView),
-    /// A uniform texel buffer (`samplerBuffer` in GLSL): a buffer view.
-    TexelBuffer(vk::BufferView),
-}
-
-impl Binding<'_> {
-    fn descriptor_type(&self) -> vk::DescriptorType {
-        match self {
-            Binding::Storage(_) | Binding::StorageRange(..) => vk::DescriptorType::STORAGE_BUFFER,
-            Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
-            Binding::Sampled(..) | Binding::SampledIn(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
-            Binding::TexelBuffer(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
-        }
-    }
-}
 
 pub struct Kernel {
     ctx: Context,
@@ -45,7 +17,7 @@ pub struct Kernel {
     set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pub pipeline: vk::Pipeline,
-    bindings: &'static [vk::DescriptorType],
+    bindings: &'static [Slot],
     push_size: u32,
     local_size: [u32; 3],
 }
@@ -116,10 +88,10 @@ impl Kernel {
             .bindings
             .iter()
             .enumerate()
-            .map(|(i, &ty)| {
+            .map(|(i, slot)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
-                    .descriptor_type(ty)
+                    .descriptor_type(slot.ty)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -183,11 +155,17 @@ impl Kernel {
         super::record::groups_for(self.ctx.info(), what, threads, self.local_size)
     }
 
-    /// Binds the pipeline, pushes `bindings` and `push` constants, and
-    /// dispatches `groups` workgroups. Records only; no barriers. Bindings
-    /// that do not match the shader's (count or type) are an error naming the
-    /// kernel, and nothing is recorded.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Binding], push: &[u8], groups: [u32; 3]) -> Result<()> {
+    /// The shader's bindings: (name, descriptor type), in binding order.
+    pub fn slots(&self) -> &'static [Slot] {
+        self.bindings
+    }
+
+    /// Binds the pipeline, pushes `bindings` (each to the binding of its
+    /// name) and `push` constants, and dispatches `groups` workgroups.
+    /// Records only; no barriers. A binding missing, given twice, unknown
+    /// to the shader or of another type, or a push block of another size, is
+    /// an error naming the kernel and the binding, and nothing is recorded.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Bound], push: &[u8], groups: [u32; 3]) -> Result<()> {
         self.dispatch_base(cmd, bindings, push, [0; 3], groups)
     }
 
@@ -196,27 +174,18 @@ impl Kernel {
     pub fn dispatch_base(
         &self,
         cmd: vk::CommandBuffer,
-        bindings: &[Binding],
+        bindings: &[Bound],
         push: &[u8],
         base: [u32; 3],
         groups: [u32; 3],
     ) -> Result<()> {
-        if bindings.len() != self.bindings.len() || push.len() != self.push_size as usize {
+        let bindings = self.in_slot_order(bindings)?;
+        if push.len() != self.push_size as usize {
             return Err(Error::Interface(format!(
-                "kernel {}: {} bindings and {} push bytes given, the shader has {} and {}",
+                "kernel {}: {} push bytes given, the shader's block is {}",
                 self.name,
-                bindings.len(),
                 push.len(),
-                self.bindings.len(),
                 self.push_size
-            )));
-        }
-        if let Some(i) = (0..bindings.len()).find(|&i| bindings[i].descriptor_type() != self.bindings[i]) {
-            return Err(Error::Interface(format!(
-                "kernel {}: binding {i} is a {:?}, the shader declares a {:?}",
-                self.name,
-                bindings[i].descriptor_type(),
-                self.bindings[i]
             )));
         }
         let device = self.ctx.device();
@@ -298,6 +267,38 @@ impl Kernel {
             }
         }
         Ok(())
+    }
+}
+
+impl Kernel {
+    /// `bindings` in the shader's binding order, checked by name and type.
+    fn in_slot_order<'a>(&self, bindings: &[Bound<'a>]) -> Result<Vec<Binding<'a>>> {
+        let fail = |why: String| Err(Error::Interface(format!("kernel {}: {why}", self.name)));
+        for (i, (name, _)) in bindings.iter().enumerate() {
+            if !self.bindings.iter().any(|s| s.name == *name) {
+                let known: Vec<&str> = self.bindings.iter().map(|s| s.name).collect();
+                return fail(format!("no binding named {name} (the shader has {})", known.join(", ")));
+            }
+            if bindings[..i].iter().any(|(n, _)| n == name) {
+                return fail(format!("binding {name} given twice"));
+            }
+        }
+        let mut ordered = Vec::with_capacity(self.bindings.len());
+        for slot in self.bindings {
+            let Some((_, b)) = bindings.iter().find(|(n, _)| *n == slot.name) else {
+                return fail(format!("binding {} not given", slot.name));
+            };
+            if b.descriptor_type() != slot.ty {
+                return fail(format!(
+                    "binding {} is a {:?}, the shader declares a {:?}",
+                    slot.name,
+                    b.descriptor_type(),
+                    slot.ty
+                ));
+            }
+            ordered.push(*b);
+        }
+        Ok(ordered)
     }
 }
 

@@ -3,6 +3,7 @@
 //! reflected shaders, recording and barriers, timestamp timer and timings,
 //! validation messenger. Imports nothing of lacuna but `error`.
 
+mod binding;
 mod context;
 mod device;
 mod instance;
@@ -16,29 +17,34 @@ pub mod timings;
 mod validation;
 
 pub use ash::vk;
+pub use binding::{Binding, Bound};
 pub use context::{Context, ContextOptions};
 pub use device::{list_devices, select_device, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
-pub use kernel::{Binding, Kernel};
+pub use kernel::Kernel;
 pub use requirements::{required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 pub use shaders::{LocalDim, Shader};
 
-/// Compile-time check that a `#[repr(C)]` push-constant block has the size of
-/// the shader's block as reflected from its SPIR-V.
-macro_rules! check_push {
-    ($ty:ty, $shader:expr) => {
-        const _: () = assert!(
-            std::mem::size_of::<$ty>() == $shader.push_size as usize,
-            concat!(
-                "push block ",
-                stringify!($ty),
-                " does not match the shader ",
-                stringify!($shader)
-            )
-        );
+/// Compile-time check that a host type is laid out as a struct the shaders
+/// declare (generated into `shaders::blocks` from the SPIR-V): the same size,
+/// and each named field at the offset of the shader member it pairs with.
+/// A member renamed in the GLSL fails to compile here; one moved or resized
+/// fails the assertion.
+macro_rules! check_layout {
+    ($host:ty => $shader:ty { $($field:ident : $member:ident),* $(,)? }) => {
+        const _: () = {
+            assert!(
+                std::mem::size_of::<$host>() == std::mem::size_of::<$shader>(),
+                concat!(stringify!($host), " and ", stringify!($shader), " differ in size")
+            );
+            $(assert!(
+                std::mem::offset_of!($host, $field) == std::mem::offset_of!($shader, $member),
+                concat!(stringify!($host), ".", stringify!($field), " is not at ", stringify!($shader), ".", stringify!($member))
+            );)*
+        };
     };
 }
-pub(crate) use check_push;
+pub(crate) use check_layout;
 pub use memory::{check_image3d, Buffer, Image3d, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};
 pub use timings::Timings;

@@ -2,6 +2,17 @@
 //! `u32` words (so no alignment trap from `include_bytes!`), each with the
 //! interface `build.rs` read from the SPIR-V itself: kernels are created from
 //! this, never from hand-kept copies of bindings or sizes.
+//!
+//! Generated beside each shader constant (`MARCH_GRID`) is a module of its
+//! host-side interface (`march_grid`): `Push`, its push-constant block as a
+//! `#[repr(C)]` Pod struct with the shader's member names, offsets and types,
+//! and `Bindings` (march kernels: `Own`), its bindings as named fields.
+//! Kernels bind by name, so a binding renumbered in a `.comp` still gets its
+//! resource, and a binding renamed, added or removed, or a push member
+//! renamed, retyped or moved, fails to compile where Rust fills them.
+//! `blocks` holds the structs the host lays out in GPU memory
+//! (`RenderParams`, the node and primitive formats), checked to agree across
+//! every shader that declares them.
 
 use ash::vk;
 
@@ -14,18 +25,24 @@ pub enum LocalDim {
     Spec { id: u32, default: u32 },
 }
 
+/// One binding of set 0: its name in the shader (the variable's, or an
+/// anonymous block's in snake_case), its type and, for a uniform or storage
+/// block, the size of its fixed part in bytes (else 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    pub name: &'static str,
+    pub ty: vk::DescriptorType,
+    pub block_size: u32,
+}
+
 /// A compute shader and its reflected interface.
 #[derive(Clone, Copy, Debug)]
 pub struct Shader {
     /// Path under `glsl/` without `.comp`, e.g. `march/naive`.
     pub name: &'static str,
     pub words: &'static [u32],
-    /// Descriptor types of bindings 0.. of set 0.
-    pub bindings: &'static [vk::DescriptorType],
-    /// Per binding: the block size in bytes of a uniform or storage buffer
-    /// (of a storage block ending in a runtime array, the part before it),
-    /// else 0.
-    pub block_sizes: &'static [u32],
+    /// Bindings 0.. of set 0.
+    pub bindings: &'static [Slot],
     /// Size in bytes of the push-constant block (0: none).
     pub push_size: u32,
     pub local_size: [LocalDim; 3],
@@ -45,6 +62,13 @@ impl Shader {
             LocalDim::Spec { id, default } => constants.iter().find(|c| c.0 == id).map_or(default, |c| c.1),
         })
     }
+
+    /// The binding named `name`.
+    pub fn slot(&self, name: &str) -> Option<(u32, &Slot)> {
+        (0..).zip(self.bindings).find(|(_, s)| s.name == name)
+    }
 }
+
+use super::binding::Binding;
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

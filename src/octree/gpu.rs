@@ -9,19 +9,8 @@ use super::prims::{Ray, TraceResult, TraceScene};
 use super::traverse::Traversal;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
-
-/// Push block of `trace.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct TracePush {
-    /// Rays in this batch.
-    count: u32,
-    /// 1: shadow rays (stop at the first hit found).
-    any_hit: u32,
-    groups_x: u32,
-}
-check_push!(TracePush, shaders::OCTREE_TRACE);
+use crate::gpu::shaders::{self, octree_trace};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
 
 /// Rays per dispatch (32 MiB of rays and of results at most).
 const BATCH: usize = 1 << 20;
@@ -36,7 +25,9 @@ impl TraceKernels {
     pub fn new(ctx: &Context) -> Result<Self> {
         let kernels = Traversal::ALL
             .into_iter()
-            .map(|t| Kernel::with_constants::<TracePush>(ctx, &shaders::OCTREE_TRACE, &[t.id()]).map(|k| (t, k)))
+            .map(|t| {
+                Kernel::with_constants::<octree_trace::Push>(ctx, &shaders::OCTREE_TRACE, &[t.id()]).map(|k| (t, k))
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(TraceKernels {
             ctx: ctx.clone(),
@@ -129,20 +120,21 @@ impl<'k> GpuTracer<'k> {
             let ray_bytes: &[u8] = bytemuck::cast_slice(batch);
             self.rays.host_mut()?[..ray_bytes.len()].copy_from_slice(ray_bytes);
             let groups = record::groups_linear(ctx.info(), "trace rays", batch.len() as u64, kernel.local_size()[0])?;
-            let push = TracePush {
+            let push = octree_trace::Push {
                 count: batch.len() as u32,
                 any_hit: u32::from(any_hit),
                 groups_x: groups[0],
             };
             let timer = &mut self.timer;
-            let bindings = [
-                Binding::Storage(&self.nodes),
-                Binding::Storage(&self.refs),
-                Binding::Storage(&self.prims),
-                Binding::Storage(&self.verts),
-                Binding::Storage(&self.rays),
-                Binding::Storage(&self.results),
-            ];
+            let bindings = octree_trace::Bindings {
+                nodes: Binding::Storage(&self.nodes),
+                refs: Binding::Storage(&self.refs),
+                prims: Binding::Storage(&self.prims),
+                verts: Binding::Storage(&self.verts),
+                rays: Binding::Storage(&self.rays),
+                results: Binding::Storage(&self.results),
+            }
+            .list();
             ctx.submit_and_wait(|cmd| {
                 timer.reset(cmd);
                 let pass = timer.begin(cmd, "trace")?;

@@ -29,6 +29,8 @@ pub struct Prim {
     pub info: [u32; 4],
 }
 
+crate::gpu::check_layout!(Prim => crate::gpu::shaders::blocks::Prim { a: a, b: b, c: c, info: info });
+
 /// A ray as the GPU reads it (32 bytes): hits count in (tmin, tmax).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -38,6 +40,8 @@ pub struct Ray {
     pub dir: [f32; 3],
     pub tmax: f32,
 }
+
+crate::gpu::check_layout!(Ray => crate::gpu::shaders::blocks::TraceRay { org: org_tmin, dir: dir_tmax });
 
 /// One ray's result and Havran's per-ray counters (32 bytes).
 #[repr(C)]

@@ -4,22 +4,9 @@
 use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record;
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel};
+use crate::gpu::shaders::{self, prims_brick_minmax as k};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
 use crate::volume::GpuVolume;
-
-/// Push block of `brick_minmax.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct MinMaxPush {
-    /// xyz: volume dims; w: brick edge.
-    dims: [u32; 4],
-    /// xyz: bricks per axis; w: total bricks.
-    counts: [u32; 4],
-    norm: [f32; 2],
-    apron: u32,
-    groups_x: u32,
-}
-crate::gpu::check_push!(MinMaxPush, shaders::PRIMS_BRICK_MINMAX);
 
 pub struct BrickMinMax {
     ctx: Context,
@@ -35,7 +22,7 @@ impl BrickMinMax {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(BrickMinMax {
             ctx: ctx.clone(),
-            kernel: Kernel::new::<MinMaxPush>(ctx, &shaders::PRIMS_BRICK_MINMAX)?,
+            kernel: Kernel::new::<k::Push>(ctx, &shaders::PRIMS_BRICK_MINMAX)?,
         })
     }
 
@@ -54,7 +41,8 @@ impl BrickMinMax {
         check_range(self.ctx.info(), "brick ranges", total * 8)?;
         entry_barrier(self.ctx.device(), cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.kernel.local_size()[0])?;
-        let push = MinMaxPush {
+        // dims.w: brick edge; counts.w: total bricks.
+        let push = k::Push {
             dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
             counts: [counts[0], counts[1], counts[2], total as u32],
             norm: volume.norm,
@@ -63,10 +51,11 @@ impl BrickMinMax {
         };
         self.kernel.dispatch(
             cmd,
-            &[
-                Binding::Sampled(volume.image.view, volume.sampler),
-                Binding::Storage(out),
-            ],
+            &k::Bindings {
+                volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
+                ranges: Binding::Storage(out),
+            }
+            .list(),
             bytemuck::bytes_of(&push),
             groups,
         )

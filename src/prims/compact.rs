@@ -5,23 +5,14 @@ use super::entry_barrier;
 use super::scan::{Scan, ScanScratch};
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+use crate::gpu::shaders::{self, prims_compact as k};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 pub struct Compact {
     ctx: Context,
     kernel: Kernel,
     scan: Scan,
 }
-
-/// Push block of `compact.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CompactPush {
-    n: u32,
-    groups_x: u32,
-    pad: [u32; 2],
-}
-crate::gpu::check_push!(CompactPush, shaders::PRIMS_COMPACT);
 
 pub struct CompactScratch {
     capacity: u64,
@@ -33,7 +24,7 @@ impl Compact {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Compact {
             ctx: ctx.clone(),
-            kernel: Kernel::new::<CompactPush>(ctx, &shaders::PRIMS_COMPACT)?,
+            kernel: Kernel::new::<k::Push>(ctx, &shaders::PRIMS_COMPACT)?,
             scan: Scan::new(ctx)?,
         })
     }
@@ -86,19 +77,20 @@ impl Compact {
         self.scan.record(cmd, &scratch.offsets, n, &scratch.scan)?;
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
         let groups = record::groups_linear(self.ctx.info(), "compact", n, self.kernel.local_size()[0])?;
-        let push = CompactPush {
+        let push = k::Push {
             n: n as u32,
             groups_x: groups[0],
-            pad: [0; 2],
+            ..Default::default()
         };
         self.kernel.dispatch(
             cmd,
-            &[
-                Binding::Storage(flags),
-                Binding::Storage(&scratch.offsets),
-                Binding::Storage(indices),
-                Binding::Storage(count),
-            ],
+            &k::Bindings {
+                flags: Binding::Storage(flags),
+                offsets: Binding::Storage(&scratch.offsets),
+                out: Binding::Storage(indices),
+                count: Binding::Storage(count),
+            }
+            .list(),
             bytemuck::bytes_of(&push),
             groups,
         )

@@ -7,7 +7,8 @@ use super::scan::{Scan, ScanScratch};
 use super::{check_range, entry_barrier};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::{shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
+use crate::gpu::shaders::{self, prims_radix_hist, prims_radix_scatter};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 pub const BITS_PER_PASS: u32 = 4;
 
@@ -17,20 +18,6 @@ pub struct RadixSort {
     scatter: Kernel,
     scan: Scan,
 }
-
-/// Push block of `radix_hist.comp` and `radix_scatter.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct SortPush {
-    n: u32,
-    groups_x: u32,
-    shift: u32,
-    blocks: u32,
-    digit_mask: u32,
-    pad: [u32; 3],
-}
-crate::gpu::check_push!(SortPush, shaders::PRIMS_RADIX_HIST);
-crate::gpu::check_push!(SortPush, shaders::PRIMS_RADIX_SCATTER);
 
 /// Ping-pong and histogram buffers for sorts of up to `capacity` elements.
 pub struct SortScratch {
@@ -51,8 +38,8 @@ impl RadixSort {
         let c = layout.check(ctx.info())?.constants();
         Ok(RadixSort {
             ctx: ctx.clone(),
-            hist: Kernel::with_constants::<SortPush>(ctx, &shaders::PRIMS_RADIX_HIST, &c)?,
-            scatter: Kernel::with_constants::<SortPush>(ctx, &shaders::PRIMS_RADIX_SCATTER, &c)?,
+            hist: Kernel::with_constants::<prims_radix_hist::Push>(ctx, &shaders::PRIMS_RADIX_HIST, &c)?,
+            scatter: Kernel::with_constants::<prims_radix_scatter::Push>(ctx, &shaders::PRIMS_RADIX_SCATTER, &c)?,
             scan: Scan::with_layout(ctx, layout)?,
         })
     }
@@ -132,13 +119,14 @@ impl RadixSort {
             // The last pass of a key width that is not a multiple of 4 sees only the remaining bits.
             let shift = pass * BITS_PER_PASS;
             let digit_mask = (1u32 << (key_bits - shift).min(BITS_PER_PASS)) - 1;
-            let push = SortPush {
+            // One block for both kernels (`prims_radix_scatter::Push` is hist's).
+            let push = prims_radix_hist::Push {
                 n: n as u32,
                 groups_x: groups[0],
                 shift,
                 blocks: blocks as u32,
                 digit_mask,
-                pad: [0; 3],
+                ..Default::default()
             };
             let push = bytemuck::bytes_of(&push);
             if pass > 0 {
@@ -146,7 +134,11 @@ impl RadixSort {
             }
             self.hist.dispatch(
                 cmd,
-                &[Binding::Storage(src.0), Binding::Storage(&scratch.hist)],
+                &prims_radix_hist::Bindings {
+                    keys: Binding::Storage(src.0),
+                    hist: Binding::Storage(&scratch.hist),
+                }
+                .list(),
                 push,
                 groups,
             )?;
@@ -154,13 +146,14 @@ impl RadixSort {
             record::compute_to_compute(device, cmd);
             self.scatter.dispatch(
                 cmd,
-                &[
-                    Binding::Storage(src.0),
-                    Binding::Storage(src.1),
-                    Binding::Storage(dst.0),
-                    Binding::Storage(dst.1),
-                    Binding::Storage(&scratch.hist),
-                ],
+                &prims_radix_scatter::Bindings {
+                    keys_in: Binding::Storage(src.0),
+                    vals_in: Binding::Storage(src.1),
+                    keys_out: Binding::Storage(dst.0),
+                    vals_out: Binding::Storage(dst.1),
+                    offsets: Binding::Storage(&scratch.hist),
+                }
+                .list(),
                 push,
                 groups,
             )?;

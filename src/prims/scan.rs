@@ -6,19 +6,8 @@ use super::layout::{BlockLayout, BLOCK};
 use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self};
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation};
-
-/// Push block of `scan_blocks.comp` and `scan_add.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ScanPush {
-    n: u32,
-    groups_x: u32,
-    write_sums: u32,
-    pad: u32,
-}
-check_push!(ScanPush, shaders::PRIMS_SCAN_BLOCKS);
-check_push!(ScanPush, shaders::PRIMS_SCAN_ADD);
+use crate::gpu::shaders::{self, prims_scan_add, prims_scan_blocks};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 pub struct Scan {
     ctx: Context,
@@ -43,8 +32,8 @@ impl Scan {
         let c = layout.check(ctx.info())?.constants();
         Ok(Scan {
             ctx: ctx.clone(),
-            blocks: Kernel::with_constants::<ScanPush>(ctx, &shaders::PRIMS_SCAN_BLOCKS, &c)?,
-            add: Kernel::with_constants::<ScanPush>(ctx, &shaders::PRIMS_SCAN_ADD, &c)?,
+            blocks: Kernel::with_constants::<prims_scan_blocks::Push>(ctx, &shaders::PRIMS_SCAN_BLOCKS, &c)?,
+            add: Kernel::with_constants::<prims_scan_add::Push>(ctx, &shaders::PRIMS_SCAN_ADD, &c)?,
         })
     }
 
@@ -100,21 +89,33 @@ impl Scan {
         } else {
             &scratch.dummy
         };
-        let push = ScanPush {
+        let push = prims_scan_blocks::Push {
             n: n as u32,
             groups_x: groups[0],
             write_sums: (blocks > 1) as u32,
             pad: 0,
         };
-        let bindings = [Binding::Storage(data), Binding::Storage(sums)];
+        let bindings = prims_scan_blocks::Bindings {
+            data: Binding::Storage(data),
+            sums: Binding::Storage(sums),
+        };
         self.blocks
-            .dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+            .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
         if blocks > 1 {
             record::compute_to_compute(self.ctx.device(), cmd);
             self.level(cmd, sums, blocks, scratch, depth + 1)?;
             record::compute_to_compute(self.ctx.device(), cmd);
-            let push = ScanPush { write_sums: 0, ..push };
-            self.add.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+            let push = prims_scan_add::Push {
+                n: n as u32,
+                groups_x: groups[0],
+                ..Default::default()
+            };
+            let bindings = prims_scan_add::Bindings {
+                data: Binding::Storage(data),
+                offsets: Binding::Storage(sums),
+            };
+            self.add
+                .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
         }
         Ok(())
     }

@@ -1,20 +1,16 @@
-//! Rendering: cameras (orbit, or a host's matrices), typed march inputs, settings, the marcher dispatch and readback, and the
-//! CPU reference marcher. Frames and their files live in `crate::frame`.
+//! Rendering: the march kernels and their dispatch (`Renderer`), where a
+//! frame goes (`RenderTarget`, host images), and the CPU reference marcher.
+//! What a frame is lives in `crate::desc` (re-exported here); frames and
+//! their files in `crate::frame`.
 
-mod camera;
 mod marcher;
-mod matrices;
-mod params;
 pub mod reference;
-mod settings;
 mod target;
-mod view;
 
-pub use crate::volume::Filter;
-pub use camera::{Camera, Projection};
+pub use crate::desc::{
+    orthographic, parse_size, perspective, Camera, CameraMatrices, Filter, FrameBuilder, FrameDesc, HostDepth, Orbit,
+    Projection, Rays, DEFAULT_STEP, ERT_OFF,
+};
+pub use crate::gpu::shaders::blocks::RenderParams;
 pub use marcher::{Renderer, Scene};
-pub use matrices::{orthographic, perspective, CameraMatrices};
-pub use params::{RenderParams, ERT_OFF};
-pub use settings::{parse_size, RenderSettings};
-pub use target::{HostDepth, HostImage, Output, RenderTarget};
-pub use view::View;
+pub use target::{HostImage, Output, RenderTarget};

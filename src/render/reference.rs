@@ -3,8 +3,8 @@
 //! sampling is the manual filter's; against `Filter::Hardware` it differs by
 //! the device's filtering precision (README, "Sample filter").
 
-use super::params::RenderParams;
 use crate::frame::Frame;
+use crate::gpu::shaders::blocks::RenderParams;
 use crate::tf::{self, TransferFunction};
 use crate::volume::Volume;
 use glam::{I64Vec3, Mat4, UVec3, Vec2, Vec3, Vec4};
@@ -51,7 +51,7 @@ pub fn sample(volume: &Volume, p: Vec3) -> f32 {
 }
 
 /// The premultiplied RGBA of one pixel; `corrected` is
-/// `tf.corrected_lut(p.march[0])` (full-length samples read it, the ray's
+/// `tf.corrected_lut(p.step)` (full-length samples read it, the ray's
 /// shortened last sample corrects the raw LUT's alpha itself, as the GLSL).
 // Negated comparisons mirror the GLSL: a NaN bound stops the march.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -74,7 +74,7 @@ pub fn camera_ray(p: &RenderParams, x: u32, y: u32) -> (Vec3, Vec3) {
         Vec3::from_slice(&p.dv),
     );
     let point = base + du * (x as f32 + 0.5) + dv * (y as f32 + 0.5);
-    let (org, dir) = if p.eye_or_dir[3] == 0.0 {
+    let (org, dir) = if p.perspective == 0 {
         (point, Vec3::from_slice(&p.eye_or_dir))
     } else {
         let eye = Vec3::from_slice(&p.eye_or_dir);
@@ -104,8 +104,8 @@ pub fn trace_to(
         Some(limit) if t_enter < t_exit => t_exit.min(limit),
         _ => t_exit,
     };
-    let dt = p.march[0];
-    let ert = p.march[1];
+    let dt = p.step;
+    let ert = p.ert;
     let mut acc = [0f32; 4];
     if !(t_enter < t_exit) {
         return acc;
@@ -152,7 +152,7 @@ pub fn render(volume: &Volume, tf: &TransferFunction, p: &RenderParams) -> Frame
 /// As `render`, each ray ending at its pixel's limit (`depth_limits`) when given.
 pub fn render_to(volume: &Volume, tf: &TransferFunction, p: &RenderParams, limits: Option<&[f32]>) -> Frame {
     let (w, h) = (p.image[0], p.image[1]);
-    let corrected = tf.corrected_lut(p.march[0]);
+    let corrected = tf.corrected_lut(p.step);
     let corrected = &corrected;
     let pixels: Vec<[f32; 4]> = (0..h)
         .into_par_iter()
@@ -167,7 +167,7 @@ pub fn render_to(volume: &Volume, tf: &TransferFunction, p: &RenderParams, limit
 
 /// Per-pixel ray limits (t in voxels) from a host depth image (row-major,
 /// one depth per pixel), as `glsl/render/depth_limit.comp`: the far plane's
-/// depth (`p.depth[0]`) is no limit.
+/// depth (`p.far_depth`) is no limit.
 pub fn depth_limits(p: &RenderParams, depth: &[f32]) -> Vec<f32> {
     const NO_LIMIT: f32 = 3.4e38;
     let (w, h) = (p.image[0], p.image[1]);
@@ -176,7 +176,7 @@ pub fn depth_limits(p: &RenderParams, depth: &[f32]) -> Vec<f32> {
         .flat_map(|y| (0..w).map(move |x| (x, y)))
         .map(|(x, y)| {
             let d = depth[(y * w + x) as usize];
-            if d == p.depth[0] {
+            if d == p.far_depth {
                 return NO_LIMIT;
             }
             let ndc = (Vec2::new(x as f32, y as f32) + 0.5) * 2.0 / Vec2::new(w as f32, h as f32) - 1.0;

@@ -1,11 +1,10 @@
 //! Where a frame goes: lacuna's per-size buffers (`RenderTarget`), and the
-//! host's images a frame can be written to (`HostImage`) or end at
-//! (`HostDepth`).
+//! host's images a frame can be written to (`HostImage`).
 
-use super::params::RenderParams;
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::record;
+use crate::gpu::shaders::blocks::RenderParams;
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, TexelBuffer};
 
 /// The per-frame-size buffers of a frame: its parameter block (with the
@@ -30,21 +29,6 @@ pub struct RenderTarget {
 pub struct HostImage {
     pub view: vk::ImageView,
     pub format: vk::Format,
-    pub layout: vk::ImageLayout,
-    pub width: u32,
-    pub height: u32,
-}
-
-/// A host's depth image that ends each ray at the first opaque surface: a
-/// view of its depth aspect (any depth format; read with `texelFetch`, one
-/// texel per pixel) created with `SAMPLED` usage, in `layout`
-/// (DEPTH_READ_ONLY_OPTIMAL, DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-/// SHADER_READ_ONLY_OPTIMAL or GENERAL). Its depths are unprojected with the
-/// view's `CameraMatrices` (projection and `reverse_z`); the far plane's depth
-/// means "nothing drawn".
-#[derive(Clone, Copy, Debug)]
-pub struct HostDepth {
-    pub view: vk::ImageView,
     pub layout: vk::ImageLayout,
     pub width: u32,
     pub height: u32,
@@ -85,32 +69,6 @@ impl HostImage {
         if (self.width, self.height) != (width, height) {
             return Err(Error::invalid(
                 "host image",
-                format!("{}x{}", self.width, self.height),
-                format!("the frame is {width}x{height}"),
-            ));
-        }
-        Ok(())
-    }
-}
-
-impl HostDepth {
-    pub(crate) fn check(&self, width: u32, height: u32) -> Result<()> {
-        let readable = [
-            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
-            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            vk::ImageLayout::GENERAL,
-        ];
-        if !readable.contains(&self.layout) {
-            return Err(Error::invalid(
-                "host depth layout",
-                format!("{:?}", self.layout),
-                "must be a layout shaders sample depth in (DEPTH_READ_ONLY_OPTIMAL, ...)",
-            ));
-        }
-        if (self.width, self.height) != (width, height) {
-            return Err(Error::invalid(
-                "host depth",
                 format!("{}x{}", self.width, self.height),
                 format!("the frame is {width}x{height}"),
             ));

@@ -22,6 +22,13 @@ pub struct Node {
     pub info: [u32; 4],
 }
 
+crate::gpu::check_layout!(Node => crate::gpu::shaders::blocks::OctNode {
+    lo: lo,
+    hi: hi,
+    split: split,
+    info: info,
+});
+
 impl Node {
     pub fn is_leaf(&self) -> bool {
         self.info[3] & 1 == 1

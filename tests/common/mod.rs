@@ -2,10 +2,10 @@
 //! synchronization validation, and tests fail on any message.
 #![allow(dead_code)]
 
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{Context, ContextOptions};
-use lacuna::render::{RenderSettings, Renderer};
+use lacuna::render::{FrameDesc, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
 use std::process::Command;
@@ -31,34 +31,60 @@ pub fn assert_clean(ctx: &Context) {
 }
 
 /// Renders on the GPU with validation, asserting no validation message.
-pub fn render(ctx: &Context, volume: &Volume, tf: &TransferFunction, settings: &RenderSettings, accel: Accel) -> Frame {
-    render_with(ctx, volume, tf, settings, accel, &BuildOptions::default())
+pub fn render(ctx: &Context, volume: &Volume, tf: &TransferFunction, desc: &FrameDesc, accel: Accel) -> Frame {
+    render_with(ctx, volume, tf, desc, accel, &accel.defaults())
 }
 
-/// As `render`, with the build options of skipping structures.
+/// As `render`, with the structure's parameters.
 pub fn render_with(
     ctx: &Context,
     volume: &Volume,
     tf: &TransferFunction,
-    settings: &RenderSettings,
+    desc: &FrameDesc,
     accel: Accel,
-    options: &BuildOptions,
+    params: &Params,
 ) -> Frame {
     let renderer = Renderer::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, volume).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let builder = Builder::new(ctx).unwrap();
-    let (ranges, _) = builder.ranges(&gv, options.cell).unwrap();
-    let scene = BuildInput {
+    let (ranges, _) = builder.ranges_for(&[(accel, params)], &gv).unwrap();
+    let input = BuildInput {
         volume,
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
     };
-    let (structure, _) = builder.build(accel, &scene, &ranges, options).unwrap();
-    let (frame, _) = renderer.render(&structure, &gv, &lut, settings).unwrap();
+    let (structure, _) = builder.build(accel, &input, &ranges, params).unwrap();
+    let scene = Scene {
+        structure: &structure,
+        volume: &gv,
+        tf: &lut,
+    };
+    let (frame, _) = renderer.render(scene, desc).unwrap();
     assert_clean(ctx);
     frame
+}
+
+/// Renders `structure` (built for `lut` over `gv`) with `desc`.
+pub fn frame(
+    renderer: &Renderer,
+    structure: &Structure,
+    gv: &GpuVolume,
+    lut: &lacuna::tf::GpuTransferFunction,
+    desc: &FrameDesc,
+) -> Frame {
+    let scene = Scene {
+        structure,
+        volume: gv,
+        tf: lut,
+    };
+    renderer.render(scene, desc).unwrap().0
+}
+
+/// A `width` x `height` frame at the default orbit with `step`.
+pub fn desc(width: u32, height: u32) -> lacuna::render::FrameBuilder {
+    FrameDesc::builder(width, height)
 }
 
 /// Per-channel max abs difference.

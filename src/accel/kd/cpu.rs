@@ -7,16 +7,15 @@ use super::{
     cheaper_as_leaf, choose, flatten, forced_plane, halves, longest_axis, raster_planes, volume, Candidate, IBox,
     KdNode, KdParams,
 };
-use super::{kd_variants, Depth};
+use super::{kd_variants, Depth, KD, MAX_LEAF};
+use crate::accel::builder::{Builder, RangeKind, Ranges};
 use crate::accel::cost::CostModel;
-use crate::accel::registry::{
-    collapse_param, BuildInput, BuildOptions, Builder, Built, March, Method, RangeKind, Ranges,
-};
+use crate::accel::method::{BuildInput, Built, March, Method};
+use crate::accel::params::{Param, Params, COLLAPSE};
 use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, Node, TREE_MARCH};
 use crate::error::Result;
-use crate::gpu::timings::Timings;
-use crate::gpu::Context;
+use crate::gpu::{Context, Timings};
 use crate::tf::TransferFunction;
 use crate::volume::Volume;
 use rayon::prelude::*;
@@ -101,17 +100,20 @@ impl Method for KdCpu {
     fn description(&self) -> &'static str {
         "k-d tree built on the multi-core CPU from summed volume tables (Zellmann et al. 2018)"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::None
+    fn params(&self) -> &'static [Param] {
+        &[KD, MAX_LEAF, COLLAPSE]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![("kd", o.kd.describe()), collapse_param(o.collapse)]
+    fn check(&self, p: &Params) -> Result<()> {
+        KdParams::from_params(p).map(|_| ())
+    }
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::None)
     }
     fn march(&self) -> March {
         TREE_MARCH
     }
-    fn variants(&self) -> Vec<(String, BuildOptions)> {
-        kd_variants(self.name(), &[(Depth::Shallow, 32), (Depth::Deep, 32)])
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
+        kd_variants(self, &[(Depth::Shallow, 32), (Depth::Deep, 32)])
     }
     /// Host-driven: built on the CPU from the host volume, then uploaded.
     fn recordable(&self) -> bool {
@@ -122,10 +124,13 @@ impl Method for KdCpu {
         builder: &Builder,
         input: &BuildInput,
         _: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let model = options.collapse.then(|| builder.cost_model()).transpose()?;
-        let (tree, t) = build(builder.context(), input.volume, input.tf, &options.kd, model.as_ref())?;
+        let collapse = p.switch("collapse")?;
+        let model = collapse.then(|| builder.cost_model()).transpose()?;
+        let kd = KdParams::from_params(p)?;
+        let (mut tree, mut t) = build(builder.context(), input.volume, input.tf, &kd, model.as_ref())?;
+        tree.check_whole_box(input.gpu_volume.dims, collapse, &mut t)?;
         Ok((Box::new(tree), t))
     }
 }

@@ -10,48 +10,21 @@ use super::{
     binned_planes, cheaper_as_leaf, choose, forced_plane, halves, longest_axis, volume, Candidate, IBox, KdNode,
     KdParams, RASTER,
 };
-use super::{kd_variants, Depth};
+use super::{kd_variants, Depth, BINS, KD, MAX_LEAF};
+use crate::accel::builder::{Builder, PerContext, RangeKind, Ranges};
 use crate::accel::cost::CostModel;
+use crate::accel::method::{BuildInput, Built, March, Method};
 use crate::accel::morton::{MortonPush, MAX_BRICKS_PER_AXIS};
-use crate::accel::registry::{
-    collapse_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind, Ranges,
-};
+use crate::accel::params::{Param, Params, COLLAPSE};
 use crate::accel::stats::Stats;
 use crate::accel::tree::{GpuTree, STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self};
-use crate::gpu::timings::Timings;
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
+use crate::gpu::shaders::{self, build_box_query, build_brick_tight, build_morton};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer, Timings};
 use crate::prims::{entry_barrier, RadixSort};
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
-
-/// Push block of `brick_tight.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct TightPush {
-    /// xyz: volume dims; w: brick edge.
-    dims: [u32; 4],
-    /// xyz: bricks per axis; w: total bricks.
-    counts: [u32; 4],
-    norm: [f32; 2],
-    groups_x: u32,
-    lut_size: u32,
-}
-check_push!(TightPush, shaders::BUILD_BRICK_TIGHT);
-
-/// Push block of `box_query.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct QueryPush {
-    /// xyz: bricks per axis; w: bricks.
-    counts: [u32; 4],
-    queries: u32,
-    groups_x: u32,
-    brick: u32,
-    pad: u32,
-}
-check_push!(QueryPush, shaders::BUILD_BOX_QUERY);
 
 pub struct KdGpuBuilder {
     ctx: Context,
@@ -76,9 +49,9 @@ impl KdGpuBuilder {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(KdGpuBuilder {
             ctx: ctx.clone(),
-            tight: Kernel::new::<TightPush>(ctx, &shaders::BUILD_BRICK_TIGHT)?,
+            tight: Kernel::new::<build_brick_tight::Push>(ctx, &shaders::BUILD_BRICK_TIGHT)?,
             morton: Kernel::new::<MortonPush>(ctx, &shaders::BUILD_MORTON)?,
-            query: Kernel::new::<QueryPush>(ctx, &shaders::BUILD_BOX_QUERY)?,
+            query: Kernel::new::<build_box_query::Push>(ctx, &shaders::BUILD_BOX_QUERY)?,
             sort: RadixSort::new(ctx)?,
         })
     }
@@ -113,14 +86,16 @@ impl KdGpuBuilder {
             entry_barrier(self.ctx.device(), cmd);
             self.query.dispatch(
                 cmd,
-                &[
-                    Binding::Storage(&s.codes),
-                    Binding::Storage(&s.order),
-                    Binding::Storage(&s.boxes),
-                    Binding::Storage(&qbuf),
-                    Binding::Storage(&rbuf),
-                ],
-                bytemuck::bytes_of(&QueryPush {
+                &build_box_query::Bindings {
+                    codes: Binding::Storage(&s.codes),
+                    order: Binding::Storage(&s.order),
+                    boxes: Binding::Storage(&s.boxes),
+                    queries: Binding::Storage(&qbuf),
+                    results: Binding::Storage(&rbuf),
+                }
+                .list(),
+                // counts.w: bricks.
+                bytemuck::bytes_of(&build_box_query::Push {
                     counts: [c[0], c[1], c[2], s.total as u32],
                     queries: n as u32,
                     groups_x: groups[0],
@@ -293,7 +268,8 @@ impl KdGpuBuilder {
             timer.reset(cmd);
             let pass = timer.begin(cmd, "bricks")?;
             let groups = record::groups_linear(info, "brick boxes", total, 1)?;
-            let push = TightPush {
+            // dims.w: brick edge; counts.w: total bricks.
+            let push = build_brick_tight::Push {
                 dims: [gv.dims[0], gv.dims[1], gv.dims[2], brick],
                 counts: [counts[0], counts[1], counts[2], total as u32],
                 norm: gv.norm,
@@ -302,11 +278,12 @@ impl KdGpuBuilder {
             };
             self.tight.dispatch(
                 cmd,
-                &[
-                    Binding::Sampled(gv.image.view, gv.sampler),
-                    Binding::Storage(&tf.max_table),
-                    Binding::Storage(&boxes),
-                ],
+                &build_brick_tight::Bindings {
+                    volume_tex: Binding::Sampled(gv.image.view, gv.sampler),
+                    transfer_max: Binding::Storage(&tf.max_table),
+                    boxes: Binding::Storage(&boxes),
+                }
+                .list(),
                 bytemuck::bytes_of(&push),
                 groups,
             )?;
@@ -315,11 +292,12 @@ impl KdGpuBuilder {
             let groups = record::groups_linear(info, "morton", total, self.morton.local_size()[0])?;
             self.morton.dispatch(
                 cmd,
-                &[
-                    Binding::Storage(&dummy),
-                    Binding::Storage(&codes),
-                    Binding::Storage(&order),
-                ],
+                &build_morton::Bindings {
+                    active_bricks: Binding::Storage(&dummy),
+                    codes: Binding::Storage(&codes),
+                    payload: Binding::Storage(&order),
+                }
+                .list(),
                 bytemuck::bytes_of(&MortonPush::every(counts, total as u32, groups[0])),
                 groups,
             )?;
@@ -352,7 +330,7 @@ struct Sorted {
     order: Buffer,
 }
 
-impl KernelSet for KdGpuBuilder {
+impl PerContext for KdGpuBuilder {
     fn new(ctx: &Context) -> Result<Self> {
         KdGpuBuilder::new(ctx)
     }
@@ -368,21 +346,20 @@ impl Method for KdGpu {
     fn description(&self) -> &'static str {
         "k-d tree built with GPU reductions over Morton-ordered bricks (Zellmann et al. 2019)"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::None
+    fn params(&self) -> &'static [Param] {
+        &[KD, MAX_LEAF, BINS, COLLAPSE]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![
-            ("kd", o.kd.describe()),
-            ("bins", o.kd.bins.to_string()),
-            collapse_param(o.collapse),
-        ]
+    fn check(&self, p: &Params) -> Result<()> {
+        KdParams::from_params(p).map(|_| ())
+    }
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::None)
     }
     fn march(&self) -> March {
         TREE_MARCH
     }
-    fn variants(&self) -> Vec<(String, BuildOptions)> {
-        kd_variants(self.name(), &[(Depth::Shallow, 32), (Depth::Deep, 128)])
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
+        kd_variants(self, &[(Depth::Shallow, 32), (Depth::Deep, 128)])
     }
     /// Host-driven: the host recursion submits one batch of queries per level.
     fn recordable(&self) -> bool {
@@ -393,11 +370,18 @@ impl Method for KdGpu {
         builder: &Builder,
         input: &BuildInput,
         _: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let kd = builder.kernels::<KdGpuBuilder>()?;
-        let model = options.collapse.then(|| builder.cost_model()).transpose()?;
-        let (tree, t) = kd.build(input.gpu_volume, input.gpu_tf, &options.kd, model.as_ref())?;
+        let kd = builder.shared::<KdGpuBuilder>()?;
+        let collapse = p.switch("collapse")?;
+        let model = collapse.then(|| builder.cost_model()).transpose()?;
+        let (mut tree, mut t) = kd.build(
+            input.gpu_volume,
+            input.gpu_tf,
+            &KdParams::from_params(p)?,
+            model.as_ref(),
+        )?;
+        tree.check_whole_box(input.gpu_volume.dims, collapse, &mut t)?;
         Ok((Box::new(tree), t))
     }
 }

@@ -16,6 +16,8 @@ pub mod gpu;
 pub mod occupancy;
 
 use super::cost::CostModel;
+use super::method::Method;
+use super::params::{Param, Params};
 use super::tree::Node;
 use crate::error::{Error, Result};
 
@@ -60,7 +62,34 @@ impl Default for KdParams {
     }
 }
 
+/// `--kd shallow|deep`: the halting rule.
+pub const KD: Param = Param::choice(
+    "kd",
+    &["shallow", "deep"],
+    "deep",
+    "k-d trees: shallow (leaf below 10 % of the root volume) or deep (leaf at 8^3)",
+);
+/// `--max-leaf N`: deep trees split leaves longer than this in the middle.
+pub const MAX_LEAF: Param = Param::int(
+    "max-leaf",
+    32,
+    8,
+    1 << 16,
+    "Deep k-d trees: split leaves longer than this many voxels in the middle",
+);
+/// `--bins N`: the GPU builder's candidate planes per node.
+pub const BINS: Param = Param::int("bins", 4, 2, 64, "GPU k-d tree: candidate bins per node");
+
 impl KdParams {
+    /// From a structure's `kd`, `max-leaf` and (if it has one) `bins`.
+    pub fn from_params(p: &Params) -> Result<Self> {
+        let bins = match p.int("bins") {
+            Ok(b) => b,
+            Err(_) => KdParams::default().bins,
+        };
+        Self::parse(p.choice("kd")?, p.int("max-leaf")?, bins)
+    }
+
     /// From `--kd shallow|deep`, `--max-leaf N`, `--bins N`.
     pub fn parse(depth: &str, max_leaf: u32, bins: u32) -> Result<Self> {
         let depth = match depth {
@@ -232,35 +261,28 @@ pub fn leaf_boxes(nodes: &[Node]) -> Vec<IBox> {
         .collect()
 }
 
-/// The paper's k-d parameter sets as registry variants: (depth, max leaf),
-/// then the deep set with cost-driven leaves.
-pub(crate) fn kd_variants(name: &str, sets: &[(Depth, u32)]) -> Vec<(String, crate::accel::BuildOptions)> {
-    let mut out: Vec<(String, crate::accel::BuildOptions)> = sets
-        .iter()
-        .map(|&(depth, max_leaf)| {
-            let kd = KdParams {
-                depth,
-                max_leaf,
-                ..KdParams::default()
-            };
-            let label = match depth {
-                Depth::Shallow => format!("{name} shallow"),
-                Depth::Deep => format!("{name} MLS={max_leaf}"),
-            };
-            (
-                label,
-                crate::accel::BuildOptions {
-                    kd,
-                    ..Default::default()
-                },
-            )
-        })
-        .collect();
-    if let Some((label, o)) = out.iter().find(|(_, o)| o.kd.depth == Depth::Deep).cloned() {
+/// The paper's k-d parameter sets as variants of `method` (whose schema has
+/// `kd`, `max-leaf` and `collapse`): (depth, max leaf), then the deep set
+/// with cost-driven leaves.
+pub(crate) fn kd_variants(method: &dyn Method, sets: &[(Depth, u32)]) -> Result<Vec<(String, Params)>> {
+    let name = method.name();
+    let mut out = Vec::new();
+    for &(depth, max_leaf) in sets {
+        let (label, kd) = match depth {
+            Depth::Shallow => (format!("{name} shallow"), "shallow"),
+            Depth::Deep => (format!("{name} MLS={max_leaf}"), "deep"),
+        };
+        let max_leaf = max_leaf.to_string();
+        let given = [("kd", kd), ("max-leaf", max_leaf.as_str())];
+        out.push((label, Params::resolve(method.params(), &given)?));
+    }
+    if let Some(&(_, max_leaf)) = sets.iter().find(|(d, _)| *d == Depth::Deep) {
+        let max_leaf = max_leaf.to_string();
+        let given = [("kd", "deep"), ("max-leaf", max_leaf.as_str()), ("collapse", "on")];
         out.push((
-            format!("{label}, collapsed"),
-            crate::accel::BuildOptions { collapse: true, ..o },
+            format!("{name} MLS={max_leaf}, collapsed"),
+            Params::resolve(method.params(), &given)?,
         ));
     }
-    out
+    Ok(out)
 }

@@ -16,22 +16,21 @@
 pub mod cpu;
 
 use super::bricks::GpuBricks;
-use super::classify::{Classifier, Classify};
+use super::builder::{Builder, PerContext, RangeKind, Ranges};
+use super::classify::{Classifier, Classify, APRON, CLASSIFY};
 use super::cost::CostModel;
+use super::method::{BuildInput, Built, March, Method};
 use super::morton::MortonPush;
 use super::morton::MAX_BRICKS_PER_AXIS;
-use super::registry::{
-    classify_param, collapse_param, BuildInput, BuildOptions, Builder, Built, KernelSet, March, Method, RangeKind,
-    Ranges,
-};
+use super::params::{Param, Params, COLLAPSE};
 use super::stats::Stats;
 use super::tree::Sizes;
 pub use super::tree::{height, GpuTree, Node};
 use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::timings::Timings;
-use crate::gpu::{check_push, shaders, vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
+use crate::gpu::shaders::{self, build_lbvh_collapse, build_lbvh_emit, build_lbvh_refit, build_morton};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer, Timings};
 use crate::prims::{entry_barrier, Compact, CompactScratch, RadixSort, SortScratch};
 use crate::tf::GpuTransferFunction;
 use crate::volume::GpuVolume;
@@ -39,35 +38,18 @@ use crate::volume::GpuVolume;
 /// A built LBVH is a tree in the shared node format.
 pub type Lbvh = GpuTree;
 
-/// Push block of `lbvh_emit.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct EmitPush {
-    groups_x: u32,
-    pad: [u32; 3],
+/// What an LBVH build reads.
+#[derive(Clone, Copy)]
+pub struct LbvhInput<'a> {
+    pub classifier: &'a Classifier,
+    pub mode: Classify,
+    pub volume: &'a GpuVolume,
+    /// The 8^3 brick ranges (`RangeKind::Bricks`).
+    pub bricks: &'a GpuBricks,
+    pub tf: &'a GpuTransferFunction,
+    /// Cost-driven leaves with this model; None: the paper's tree.
+    pub collapse: Option<&'a CostModel>,
 }
-check_push!(EmitPush, shaders::BUILD_LBVH_EMIT);
-
-/// Push block of `lbvh_refit.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RefitPush {
-    /// xyz: volume dims; w: brick edge.
-    dims: [u32; 4],
-    /// xyz: bricks per axis.
-    counts: [u32; 4],
-    groups_x: u32,
-    pad: u32,
-}
-check_push!(RefitPush, shaders::BUILD_LBVH_REFIT);
-
-/// Push block of `lbvh_collapse.comp`: `CostModel::gpu_constants`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CollapsePush {
-    model: [f32; 4],
-}
-check_push!(CollapsePush, shaders::BUILD_LBVH_COLLAPSE);
 
 /// Per-volume buffers of the selection phase (classify + compact).
 pub struct SelectScratch {
@@ -107,9 +89,9 @@ impl LbvhBuilder {
             compact: Compact::new(ctx)?,
             sort: RadixSort::new(ctx)?,
             morton: Kernel::new::<MortonPush>(ctx, &shaders::BUILD_MORTON)?,
-            emit: Kernel::new::<EmitPush>(ctx, &shaders::BUILD_LBVH_EMIT)?,
-            refit: Kernel::new::<RefitPush>(ctx, &shaders::BUILD_LBVH_REFIT)?,
-            collapse: Kernel::new::<CollapsePush>(ctx, &shaders::BUILD_LBVH_COLLAPSE)?,
+            emit: Kernel::new::<build_lbvh_emit::Push>(ctx, &shaders::BUILD_LBVH_EMIT)?,
+            refit: Kernel::new::<build_lbvh_refit::Push>(ctx, &shaders::BUILD_LBVH_REFIT)?,
+            collapse: Kernel::new::<build_lbvh_collapse::Push>(ctx, &shaders::BUILD_LBVH_COLLAPSE)?,
         })
     }
 
@@ -153,19 +135,14 @@ impl LbvhBuilder {
     /// copy of the active count to host memory: after the submission,
     /// `active_count(scratch)` is n and `scratch.active[0..n]` the active
     /// brick indices in ascending order.
-    #[allow(clippy::too_many_arguments)]
     pub fn record_select(
         &self,
         cmd: vk::CommandBuffer,
         timer: Option<&mut Timer>,
-        classifier: &Classifier,
-        mode: Classify,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        tf: &GpuTransferFunction,
+        input: &LbvhInput,
         s: &SelectScratch,
     ) -> Result<()> {
-        self.record_classify_compact(cmd, timer, classifier, mode, volume, bricks, tf, s)?;
+        self.record_classify_compact(cmd, timer, input, s)?;
         let device = self.ctx.device();
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         unsafe {
@@ -185,18 +162,21 @@ impl LbvhBuilder {
     }
 
     /// "classify" and "compact" of `record_select`, without the copy.
-    #[allow(clippy::too_many_arguments)]
     fn record_classify_compact(
         &self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
-        classifier: &Classifier,
-        mode: Classify,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        tf: &GpuTransferFunction,
+        input: &LbvhInput,
         s: &SelectScratch,
     ) -> Result<()> {
+        let LbvhInput {
+            classifier,
+            mode,
+            volume,
+            bricks,
+            tf,
+            ..
+        } = *input;
         let pass = timer.begin(cmd, "classify")?;
         classifier.record(cmd, mode, volume, bricks, tf, &s.flags)?;
         timer.end(cmd, pass);
@@ -235,26 +215,29 @@ impl LbvhBuilder {
     }
 
     /// Records Morton codes, the sort, the emit and the refit ("morton",
-    /// "sort", "emit", "refit") for the active bricks listed in `active`,
-    /// then with a cost model the collapse into cost-driven leaves
-    /// ("collapse"). Ends with compute writes of `nodes`. The kernels take
-    /// the active count n from `count` on the GPU; `h.n` is what the pass
-    /// is sized for: n itself (the host-driven build), or the brick
+    /// "sort", "emit", "refit") for the active bricks listed in
+    /// `select.active`, then with a cost model the collapse into cost-driven
+    /// leaves ("collapse"). Ends with compute writes of `nodes`. The kernels
+    /// take the active count n from `select.count` on the GPU; `h.n` is what
+    /// the pass is sized for: n itself (the host-driven build), or the brick
     /// capacity when `active[n..h.n]` holds `u32::MAX` (a recorded build:
     /// those entries sort last and the threads past n return).
-    #[allow(clippy::too_many_arguments)]
     pub fn record_hierarchy(
         &self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        active: &Buffer,
-        count: &Buffer,
+        input: &LbvhInput,
+        select: &SelectScratch,
         h: &HierarchyScratch,
         nodes: &Buffer,
-        collapse: Option<&CostModel>,
     ) -> Result<()> {
+        let LbvhInput {
+            volume,
+            bricks,
+            collapse,
+            ..
+        } = *input;
+        let (active, count) = (&select.active, &select.count);
         let n = h.n;
         if n == 0 {
             return Ok(());
@@ -267,11 +250,12 @@ impl LbvhBuilder {
         let groups = record::groups_linear(info, "morton", n, self.morton.local_size()[0])?;
         self.morton.dispatch(
             cmd,
-            &[
-                Binding::Storage(active),
-                Binding::Storage(&h.codes),
-                Binding::Storage(&h.payload),
-            ],
+            &build_morton::Bindings {
+                active_bricks: Binding::Storage(active),
+                codes: Binding::Storage(&h.codes),
+                payload: Binding::Storage(&h.payload),
+            }
+            .list(),
             bytemuck::bytes_of(&MortonPush::list(c, n as u32, groups[0])),
             groups,
         )?;
@@ -294,14 +278,16 @@ impl LbvhBuilder {
         let d = volume.dims;
         self.refit.dispatch(
             cmd,
-            &[
-                Binding::Storage(&h.payload),
-                Binding::Storage(nodes),
-                Binding::Storage(&h.parents),
-                Binding::Storage(&h.visits),
-                Binding::Storage(count),
-            ],
-            bytemuck::bytes_of(&RefitPush {
+            &build_lbvh_refit::Bindings {
+                payload: Binding::Storage(&h.payload),
+                nodes: Binding::Storage(nodes),
+                parents: Binding::Storage(&h.parents),
+                visits: Binding::Storage(&h.visits),
+                count: Binding::Storage(count),
+            }
+            .list(),
+            // dims.w: brick edge.
+            bytemuck::bytes_of(&build_lbvh_refit::Push {
                 dims: [d[0], d[1], d[2], bricks.brick],
                 counts: [c[0], c[1], c[2], 0],
                 groups_x: groups[0],
@@ -335,14 +321,16 @@ impl LbvhBuilder {
         let groups = record::groups_linear(self.ctx.info(), "collapse", h.n, self.collapse.local_size()[0])?;
         self.collapse.dispatch(
             cmd,
-            &[
-                Binding::Storage(nodes),
-                Binding::Storage(&h.parents),
-                Binding::Storage(&h.visits),
-                Binding::Storage(&h.costs),
-                Binding::Storage(count),
-            ],
-            bytemuck::bytes_of(&CollapsePush {
+            &build_lbvh_collapse::Bindings {
+                nodes: Binding::Storage(nodes),
+                parents: Binding::Storage(&h.parents),
+                visits: Binding::Storage(&h.visits),
+                costs: Binding::Storage(&h.costs),
+                count: Binding::Storage(count),
+            }
+            .list(),
+            // `CostModel::gpu_constants`.
+            bytemuck::bytes_of(&build_lbvh_collapse::Push {
                 model: model.gpu_constants(),
             }),
             groups,
@@ -364,15 +352,16 @@ impl LbvhBuilder {
         let groups = record::groups_linear(self.ctx.info(), "emit", n - 1, self.emit.local_size()[0])?;
         self.emit.dispatch(
             cmd,
-            &[
-                Binding::Storage(codes),
-                Binding::Storage(nodes),
-                Binding::Storage(parents),
-                Binding::Storage(count),
-            ],
-            bytemuck::bytes_of(&EmitPush {
+            &build_lbvh_emit::Bindings {
+                codes: Binding::Storage(codes),
+                nodes: Binding::Storage(nodes),
+                parents: Binding::Storage(parents),
+                count: Binding::Storage(count),
+            }
+            .list(),
+            bytemuck::bytes_of(&build_lbvh_emit::Push {
                 groups_x: groups[0],
-                pad: [0; 3],
+                ..Default::default()
             }),
             groups,
         )
@@ -399,21 +388,13 @@ impl LbvhBuilder {
     /// then the hierarchy sized to the active count), with cost-driven
     /// leaves when a cost model is given. Returns the structure and the GPU
     /// time of each phase.
-    #[allow(clippy::too_many_arguments)]
-    pub fn build(
-        &self,
-        classifier: &Classifier,
-        mode: Classify,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        tf: &GpuTransferFunction,
-        collapse: Option<&CostModel>,
-    ) -> Result<(Lbvh, Timings)> {
+    pub fn build(&self, input: &LbvhInput) -> Result<(Lbvh, Timings)> {
+        let bricks = input.bricks;
         let select = self.select_scratch(bricks)?;
         let mut timer = Timer::new(&self.ctx, 8)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_select(cmd, Some(&mut timer), classifier, mode, volume, bricks, tf, &select)
+            self.record_select(cmd, Some(&mut timer), input, &select)
         })?;
         let mut timings = timer.results()?;
         let n = self.active_count(&select)? as u64;
@@ -421,17 +402,7 @@ impl LbvhBuilder {
         let nodes = self.nodes_buffer(n)?;
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_hierarchy(
-                cmd,
-                Some(&mut timer),
-                volume,
-                bricks,
-                &select.active,
-                &select.count,
-                &h,
-                &nodes,
-                collapse,
-            )
+            self.record_hierarchy(cmd, Some(&mut timer), input, &select, &h, &nodes)
         })?;
         timings.extend(timer.results()?);
         let node_count = if n == 0 { 0 } else { 2 * n - 1 };
@@ -452,6 +423,7 @@ impl LbvhBuilder {
             // Derived from a node readback only when statistics are asked
             // for (a collapse leaves fewer reachable nodes).
             shape: std::sync::OnceLock::new(),
+            whole_box: false,
         };
         Ok((lbvh, timings))
     }
@@ -466,18 +438,13 @@ impl LbvhBuilder {
     /// writes. The returned tree keeps the scratch buffers the command
     /// buffer uses; its leaf and node counts and statistics are read back
     /// on first request, after the submission completed.
-    #[allow(clippy::too_many_arguments)]
     pub fn record_build(
         &self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
-        classifier: &Classifier,
-        mode: Classify,
-        volume: &GpuVolume,
-        bricks: &GpuBricks,
-        tf: &GpuTransferFunction,
-        collapse: Option<&CostModel>,
+        input: &LbvhInput,
     ) -> Result<Lbvh> {
+        let bricks = input.bricks;
         let select = self.select_scratch(bricks)?;
         let capacity = bricks.total;
         let h = self.hierarchy_scratch(capacity)?;
@@ -486,18 +453,8 @@ impl LbvhBuilder {
         // A fresh buffer: no earlier access to order. The compaction's entry
         // barrier makes the fill visible to its writes and to the Morton pass.
         unsafe { device.cmd_fill_buffer(cmd, select.active.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
-        self.record_classify_compact(cmd, timer.as_deref_mut(), classifier, mode, volume, bricks, tf, &select)?;
-        self.record_hierarchy(
-            cmd,
-            timer,
-            volume,
-            bricks,
-            &select.active,
-            &select.count,
-            &h,
-            &nodes,
-            collapse,
-        )?;
+        self.record_classify_compact(cmd, timer.as_deref_mut(), input, &select)?;
+        self.record_hierarchy(cmd, timer, input, &select, &h, &nodes)?;
         let SelectScratch {
             flags,
             active,
@@ -516,11 +473,12 @@ impl LbvhBuilder {
             },
             shape: std::sync::OnceLock::new(),
             keep: Some(Box::new((flags, active, count_readback, compact, h))),
+            whole_box: false,
         })
     }
 }
 
-impl KernelSet for LbvhBuilder {
+impl PerContext for LbvhBuilder {
     fn new(ctx: &Context) -> Result<Self> {
         LbvhBuilder::new(ctx)
     }
@@ -536,24 +494,26 @@ impl Method for LbvhMethod {
     fn description(&self) -> &'static str {
         "linear BVH over active 8^3 bricks (Karras 2012), built on the GPU"
     }
-    fn ranges(&self) -> RangeKind {
-        RangeKind::Bricks
+    fn params(&self) -> &'static [Param] {
+        &[CLASSIFY, APRON, COLLAPSE]
     }
-    fn params(&self, o: &BuildOptions) -> Vec<(&'static str, String)> {
-        vec![classify_param(o.classify), collapse_param(o.collapse)]
+    fn check(&self, p: &Params) -> Result<()> {
+        Classify::from_params(p).map(|_| ())
+    }
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::Bricks)
     }
     fn march(&self) -> March {
         TREE_MARCH
     }
-    fn variants(&self) -> Vec<(String, BuildOptions)> {
-        let collapsed = BuildOptions {
-            collapse: true,
-            ..BuildOptions::default()
-        };
-        vec![
-            (self.name().to_string(), BuildOptions::default()),
-            (format!("{} collapsed", self.name()), collapsed),
-        ]
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
+        Ok(vec![
+            (self.name().to_string(), Params::defaults(self.params())),
+            (
+                format!("{} collapsed", self.name()),
+                Params::resolve(self.params(), &[("collapse", "on")])?,
+            ),
+        ])
     }
     /// `record_build` sizes the hierarchy for every brick (no readback);
     /// `build` stays host-driven, sized by the active count read back
@@ -568,25 +528,20 @@ impl Method for LbvhMethod {
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<Box<dyn Built>> {
-        let lbvh = builder.kernels::<LbvhBuilder>()?;
-        let classifier = builder.kernels::<Classifier>()?;
-        let model = if options.collapse {
-            Some(builder.cost_model()?)
-        } else {
-            None
+        let lbvh = builder.shared::<LbvhBuilder>()?;
+        let classifier = builder.shared::<Classifier>()?;
+        let model = p.switch("collapse")?.then(|| builder.cost_model()).transpose()?;
+        let input = LbvhInput {
+            classifier: &classifier,
+            mode: Classify::from_params(p)?,
+            volume: input.gpu_volume,
+            bricks: ranges.bricks()?,
+            tf: input.gpu_tf,
+            collapse: model.as_ref(),
         };
-        let tree = lbvh.record_build(
-            cmd,
-            timer,
-            &classifier,
-            options.classify,
-            input.gpu_volume,
-            ranges.bricks()?,
-            input.gpu_tf,
-            model.as_ref(),
-        )?;
+        let tree = lbvh.record_build(cmd, timer, &input)?;
         Ok(Box::new(tree))
     }
     fn build(
@@ -594,23 +549,22 @@ impl Method for LbvhMethod {
         builder: &Builder,
         input: &BuildInput,
         ranges: &Ranges,
-        options: &BuildOptions,
+        p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let lbvh = builder.kernels::<LbvhBuilder>()?;
-        let classifier = builder.kernels::<Classifier>()?;
-        let model = if options.collapse {
-            Some(builder.cost_model()?)
-        } else {
-            None
+        let lbvh = builder.shared::<LbvhBuilder>()?;
+        let classifier = builder.shared::<Classifier>()?;
+        let collapse = p.switch("collapse")?;
+        let model = collapse.then(|| builder.cost_model()).transpose()?;
+        let lbvh_input = LbvhInput {
+            classifier: &classifier,
+            mode: Classify::from_params(p)?,
+            volume: input.gpu_volume,
+            bricks: ranges.bricks()?,
+            tf: input.gpu_tf,
+            collapse: model.as_ref(),
         };
-        let (tree, t) = lbvh.build(
-            &classifier,
-            options.classify,
-            input.gpu_volume,
-            ranges.bricks()?,
-            input.gpu_tf,
-            model.as_ref(),
-        )?;
+        let (mut tree, mut t) = lbvh.build(&lbvh_input)?;
+        tree.check_whole_box(input.gpu_volume.dims, collapse, &mut t)?;
         Ok((Box::new(tree), t))
     }
 }

@@ -2,9 +2,9 @@
 //! zoom and pan (host math through glam), the transfer function's shape,
 //! the structure, early ray termination and the step. Pure state, no GPU.
 
-use glam::{DVec2, Vec3, Vec4};
+use glam::{DVec2, Vec3};
 use lacuna::accel::{Accel, TABLE};
-use lacuna::render::{Projection, RenderParams, RenderSettings};
+use lacuna::render::{Camera, Filter, FrameDesc, Orbit, Projection};
 use lacuna::{Error, Result};
 
 /// Steps the `[` and `]` keys move between, in voxels.
@@ -127,12 +127,16 @@ pub struct Change {
 
 /// The viewer's state.
 pub struct Controls {
-    pub settings: RenderSettings,
+    pub orbit: Orbit,
+    pub size: (u32, u32),
+    pub step: f32,
+    pub ert: Option<f32>,
     /// Image-plane zoom (> 1 magnifies) and pan (in viewport heights) about the
     /// orbit camera's own framing.
     pub zoom: f64,
     pub pan: DVec2,
-    initial: (RenderSettings, Projection),
+    /// The orbit to reset to, and the projection the `P` key switches to.
+    initial: (Orbit, Projection),
     /// Transfer-function presets; `T` cycles them, the arrows reshape the current one.
     pub presets: Vec<Shape>,
     pub preset: usize,
@@ -142,14 +146,20 @@ pub struct Controls {
 }
 
 impl Controls {
-    pub fn new(settings: RenderSettings, tf_spec: &str, accel: Accel, json: Option<String>) -> Self {
+    /// The viewer's state starting at `frame` (an orbit camera; another
+    /// camera starts at the default orbit).
+    pub fn new(frame: &FrameDesc, tf_spec: &str, accel: Accel, json: Option<String>) -> Self {
         let mut presets = vec![Shape::parse(tf_spec)];
         for spec in ["ramp:0.3:1", "band:0.4:0.6:0.5", "spike:0.5:0.05"] {
             if presets[0].spec() != spec {
                 presets.push(Shape::parse(spec));
             }
         }
-        let projection = match settings.camera.projection {
+        let orbit = match frame.camera() {
+            Camera::Orbit(o) => *o,
+            _ => Orbit::default(),
+        };
+        let projection = match orbit.projection {
             Projection::Orthographic => Projection::Perspective {
                 fov_deg: 40.0,
                 distance: None,
@@ -157,8 +167,11 @@ impl Controls {
             p => p,
         };
         Controls {
-            initial: (settings, projection),
-            settings,
+            initial: (orbit, projection),
+            orbit,
+            size: frame.size(),
+            step: frame.step(),
+            ert: frame.ert(),
             zoom: 1.0,
             pan: DVec2::ZERO,
             presets,
@@ -175,14 +188,14 @@ impl Controls {
 
     /// Orbits by a mouse drag of `(dx, dy)` pixels.
     pub fn orbit(&mut self, dx: f64, dy: f64) {
-        let camera = &mut self.settings.camera;
-        camera.azimuth_deg = (camera.azimuth_deg - dx * 0.4).rem_euclid(360.0);
-        camera.elevation_deg = (camera.elevation_deg + dy * 0.4).clamp(-89.0, 89.0);
+        let o = &mut self.orbit;
+        o.azimuth_deg = (o.azimuth_deg - dx * 0.4).rem_euclid(360.0);
+        o.elevation_deg = (o.elevation_deg + dy * 0.4).clamp(-89.0, 89.0);
     }
 
     /// Pans by a mouse drag of `(dx, dy)` pixels.
     pub fn drag_pan(&mut self, dx: f64, dy: f64) {
-        let h = self.settings.height.max(1) as f64;
+        let h = self.size.1.max(1) as f64;
         self.pan += DVec2::new(-dx, -dy) / (h * self.zoom);
     }
 
@@ -229,30 +242,27 @@ impl Controls {
                 change.structure = true;
             }
             "e" | "E" => {
-                self.settings.ert = match self.settings.ert {
+                self.ert = match self.ert {
                     Some(_) => None,
                     None => Some(ERT),
                 };
             }
             "[" | "]" => {
-                let i = STEPS
-                    .iter()
-                    .position(|s| *s >= self.settings.step)
-                    .unwrap_or(STEPS.len() - 1);
+                let i = STEPS.iter().position(|s| *s >= self.step).unwrap_or(STEPS.len() - 1);
                 let i = if key == "[" {
                     i.saturating_sub(1)
                 } else {
                     (i + 1).min(STEPS.len() - 1)
                 };
-                self.settings.step = STEPS[i];
+                self.step = STEPS[i];
             }
             "p" | "P" => {
-                std::mem::swap(&mut self.initial.1, &mut self.settings.camera.projection);
+                std::mem::swap(&mut self.initial.1, &mut self.orbit.projection);
             }
             "r" | "R" => {
-                let camera = self.initial.0.camera;
-                self.settings.camera.azimuth_deg = camera.azimuth_deg;
-                self.settings.camera.elevation_deg = camera.elevation_deg;
+                let start = self.initial.0;
+                self.orbit.azimuth_deg = start.azimuth_deg;
+                self.orbit.elevation_deg = start.elevation_deg;
                 self.zoom = 1.0;
                 self.pan = DVec2::ZERO;
             }
@@ -263,34 +273,41 @@ impl Controls {
         change
     }
 
-    /// The shader parameters for a volume: `render`'s camera for these
-    /// settings, then zoom and pan applied to its pixel plane (about the
-    /// plane's centre), so an untouched view is `render`'s exactly.
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
-        let mut p = self.settings.params(dims, spacing, norm)?;
+    /// The frame for a volume of `dims` voxels with `spacing`: `render`'s
+    /// orbit camera for this state, then zoom and pan applied to its pixel
+    /// plane (about the plane's centre), so an untouched view is `render`'s
+    /// exactly.
+    pub fn desc(&self, dims: [u32; 3], spacing: [f32; 3], filter: Filter) -> Result<FrameDesc> {
+        let (w, h) = self.size;
+        let orbit = Camera::Orbit(self.orbit);
+        let frame = FrameDesc::builder(w, h)
+            .camera(orbit)
+            .step(self.step)
+            .ert(self.ert)
+            .filter(filter);
         if self.zoom == 1.0 && self.pan == DVec2::ZERO {
-            return Ok(p);
+            return frame.build();
         }
-        let (w, h) = (self.settings.width as f32, self.settings.height as f32);
-        let du = Vec4::from(p.du).truncate();
-        let dv = Vec4::from(p.dv).truncate();
-        let centre = Vec4::from(p.base).truncate() + du * (w / 2.0) + dv * (h / 2.0);
+        let mut rays = orbit.rays(dims, spacing, w, h)?;
+        let (w, h) = (w as f32, h as f32);
+        let du = Vec3::from(rays.du);
+        let dv = Vec3::from(rays.dv);
+        let centre = Vec3::from(rays.base) + du * (w / 2.0) + dv * (h / 2.0);
         let scale = (1.0 / self.zoom) as f32;
         let pan = self.pan.as_vec2() * h;
         let centre: Vec3 = centre + du * pan.x + dv * pan.y;
         let (du, dv) = (du * scale, dv * scale);
         let base = centre - du * (w / 2.0) - dv * (h / 2.0);
-        p.base = base.extend(0.0).to_array();
-        p.du = du.extend(0.0).to_array();
-        p.dv = dv.extend(0.0).to_array();
-        if !(p.base.iter().chain(&p.du).chain(&p.dv)).all(|v| v.is_finite()) {
-            return Err(Error::invalid(
+        rays.base = base.to_array();
+        rays.du = du.to_array();
+        rays.dv = dv.to_array();
+        frame.camera(Camera::Rays(rays)).build().map_err(|e| {
+            Error::invalid(
                 "view",
                 format!("zoom {}", self.zoom),
-                "the camera is not finite",
-            ));
-        }
-        Ok(p)
+                format!("the camera is not usable ({e})"),
+            )
+        })
     }
 }
 
@@ -299,12 +316,13 @@ mod tests {
     use super::*;
 
     fn controls(spec: &str) -> Controls {
-        Controls::new(
-            RenderSettings::default(),
-            spec,
-            Accel::naive(),
-            Some("cool.json".into()),
-        )
+        let frame = FrameDesc::builder(1024, 1024).build().unwrap();
+        Controls::new(&frame, spec, Accel::naive(), Some("cool.json".into()))
+    }
+
+    /// What a control changes: TF, structure, camera, step, ERT, zoom.
+    fn state(c: &Controls) -> (String, &'static str, Orbit, f32, Option<f32>, f64) {
+        (c.tf_spec(), c.accel.name(), c.orbit, c.step, c.ert, c.zoom)
     }
 
     #[test]
@@ -328,11 +346,10 @@ mod tests {
     fn every_known_key_does_something_and_others_are_unknown() {
         for key in KEYS {
             let mut c = controls("ramp:0.3:1");
-            let before = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
             c.zoom = 2.0;
+            let before = state(&c);
             let change = c.key(key, false);
-            let after = (c.tf_spec(), c.accel.name(), c.settings, c.zoom);
-            let acted = change != Change::default() || after != (before.0.clone(), before.1, before.2, 2.0);
+            let acted = change != Change::default() || state(&c) != before;
             assert!(acted, "{key} did nothing");
             assert!(known_key(key) && (key.len() > 1 || known_key(&key.to_uppercase())));
         }
@@ -353,36 +370,45 @@ mod tests {
         c.key("Tab", true);
         assert_eq!(c.accel.name(), TABLE[TABLE.len() - 1].name());
         c.key("]", false);
-        assert_eq!(c.settings.step, 1.0);
+        assert_eq!(c.step, 1.0);
         for _ in 0..9 {
             c.key("[", false);
         }
-        assert_eq!(c.settings.step, 0.125);
+        assert_eq!(c.step, 0.125);
         c.key("e", false);
-        assert_eq!(c.settings.ert, Some(ERT));
+        assert_eq!(c.ert, Some(ERT));
         c.key("e", false);
-        assert_eq!(c.settings.ert, None);
+        assert_eq!(c.ert, None);
     }
 
     #[test]
     fn an_untouched_view_is_renders_camera_and_zoom_pan_move_the_pixel_plane() {
         let mut c = controls("ramp:0.3:1");
         let (dims, spacing, norm) = ([40, 30, 20], [1.0, 1.0, 2.0], [1.0, 0.0]);
-        let exact = c.settings.params(dims, spacing, norm).unwrap();
-        assert_eq!(c.params(dims, spacing, norm).unwrap(), exact);
+        let params = |c: &Controls| {
+            c.desc(dims, spacing, Filter::Manual)
+                .unwrap()
+                .params_for(dims, spacing, norm)
+                .unwrap()
+        };
+        let exact = FrameDesc::builder(1024, 1024)
+            .build()
+            .unwrap()
+            .params_for(dims, spacing, norm)
+            .unwrap();
+        assert_eq!(params(&c), exact);
         c.scroll(1.0);
-        let zoomed = c.params(dims, spacing, norm).unwrap();
-        let du = |p: &RenderParams| Vec4::from(p.du).truncate();
+        let zoomed = params(&c);
+        let du = |p: &lacuna::render::RenderParams| Vec3::from(p.du);
         assert!((du(&zoomed) * 1.1 - du(&exact)).length() < 1e-5);
         // Zoom keeps the plane's centre; a pan moves it along the plane.
-        let centre =
-            |p: &RenderParams| Vec4::from(p.base).truncate() + du(p) * 512.0 + Vec4::from(p.dv).truncate() * 512.0;
+        let centre = |p: &lacuna::render::RenderParams| Vec3::from(p.base) + du(p) * 512.0 + Vec3::from(p.dv) * 512.0;
         assert!((centre(&zoomed) - centre(&exact)).length() < 1e-3);
         c.drag_pan(10.0, 0.0);
-        let panned = c.params(dims, spacing, norm).unwrap();
+        let panned = params(&c);
         let moved = centre(&panned) - centre(&zoomed);
         assert!((moved + du(&zoomed) * 10.0).length() < 1e-3, "{moved}");
         c.key("r", false);
-        assert_eq!(c.params(dims, spacing, norm).unwrap(), exact);
+        assert_eq!(params(&c), exact);
     }
 }

@@ -7,13 +7,14 @@ mod controls;
 mod host;
 mod scene;
 
-use super::{check_parent, frame_settings, tf_for, validation_verdict, VolumeArgs};
+use super::args::{AccelParser, FrameArgs};
+use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use controls::{Change, Controls, Shape};
 use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
-use lacuna::render::{self, Camera, Filter, RenderSettings};
+use lacuna::render::{self, Filter, FrameDesc};
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
 use std::path::{Path, PathBuf};
@@ -33,8 +34,8 @@ pub struct ViewArgs {
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     #[arg(long)]
     tf: Option<TransferFunction>,
-    /// Empty space skipping structure to start with (Tab switches): auto, naive, lbvh, grid, ...
-    #[arg(long, default_value = "auto")]
+    /// Empty space skipping structure to start with (Tab switches).
+    #[arg(long, default_value = "auto", value_parser = AccelParser)]
     accel: Accel,
     /// A ParaView JSON colormap the J key loads (read again on every press).
     #[arg(long)]
@@ -42,21 +43,8 @@ pub struct ViewArgs {
     /// Window (and frame) size WxH.
     #[arg(long, default_value = "512x512", value_parser = render::parse_size)]
     size: (u32, u32),
-    /// Orbit camera AZIMUTH,ELEVATION in degrees.
-    #[arg(long, default_value = "30,20", allow_hyphen_values = true, value_parser = Camera::parse_orbit)]
-    camera: (f64, f64),
-    /// Perspective projection with this vertical field of view (degrees); default orthographic.
-    #[arg(long)]
-    perspective: Option<f64>,
-    /// Sample step in voxels.
-    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    step: f32,
-    /// Early ray termination at this accumulated alpha (default off; E toggles 0.99).
-    #[arg(long, allow_hyphen_values = true)]
-    ert: Option<f32>,
-    /// Sample filter: manual or hardware (default: as render).
-    #[arg(long)]
-    filter: Option<Filter>,
+    #[command(flatten)]
+    frame: FrameArgs,
     /// Render this many frames, then exit (for tests and scripts).
     #[arg(long)]
     frames: Option<u32>,
@@ -92,22 +80,15 @@ struct Viewer {
 
 struct App<'a> {
     args: &'a ViewArgs,
-    setup: Option<(lacuna::Volume, TransferFunction, RenderSettings)>,
+    setup: Option<(lacuna::Volume, TransferFunction, FrameDesc)>,
     viewer: Option<Viewer>,
     error: Option<Error>,
 }
 
 impl ViewArgs {
-    fn settings(&self) -> Result<RenderSettings> {
-        let settings = frame_settings(
-            self.size,
-            self.camera,
-            self.perspective,
-            None,
-            self.step,
-            self.ert,
-            self.filter,
-        )?;
+    /// The first frame, every option checked.
+    fn desc(&self) -> Result<FrameDesc> {
+        let desc = self.frame.desc(self.size)?;
         if self.frames == Some(0) {
             return Err(Error::invalid("frames", "0", "must be at least 1"));
         }
@@ -125,15 +106,15 @@ impl ViewArgs {
                 format!("expected one of: {}", controls::KEYS.join(", ")),
             ));
         }
-        Ok(settings)
+        Ok(desc)
     }
 }
 
 pub fn run(args: &ViewArgs) -> Result<ExitCode> {
-    let settings = args.settings()?;
+    let desc = args.desc()?;
     let volume = args.volume.load()?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
-    settings.params(volume.dims, volume.spacing, volume.norm)?;
+    desc.params_for(volume.dims, volume.spacing, [0.0, 1.0])?;
     let event_loop = EventLoop::new().map_err(|e| {
         Error::NoDevice(format!(
             "cannot open a window ({e}); set DISPLAY, or run under xvfb-run"
@@ -142,7 +123,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         args,
-        setup: Some((volume, tf, settings)),
+        setup: Some((volume, tf, desc)),
         viewer: None,
         error: None,
     };
@@ -176,21 +157,22 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
 
 impl App<'_> {
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let Some((volume, tf, settings)) = self.setup.take() else {
+        let Some((volume, tf, desc)) = self.setup.take() else {
             return Ok(());
         };
+        let (width, height) = desc.size();
         let attributes = Window::default_attributes()
             .with_title("lacuna view")
-            .with_inner_size(PhysicalSize::new(settings.width, settings.height));
+            .with_inner_size(PhysicalSize::new(width, height));
         let window = event_loop
             .create_window(attributes)
             .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
         let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel)?;
-        let filter = self.args.filter.unwrap_or_else(|| scene.default_filter());
+        let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
-        let controls = Controls::new(settings, &tf.spec, self.args.accel, json);
+        let controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
         self.viewer = Some(Viewer {
             scene,
             host,
@@ -315,18 +297,17 @@ impl Viewer {
         if self.resize {
             let size = self.window.inner_size();
             let extent = self.host.resize((size.width, size.height))?;
-            self.controls.settings.width = extent.width;
-            self.controls.settings.height = extent.height;
+            self.controls.size = (extent.width, extent.height);
             self.resize = false;
         }
         let last = args.frames.is_some_and(|n| self.drawn + 1 >= n);
         let shot = last && args.screenshot.is_some();
         let volume = &self.scene.volume;
-        let params = self.controls.params(volume.dims, volume.spacing, volume.norm)?;
-        let (scene, filter) = (&mut self.scene, self.filter);
+        let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
+        let scene = &mut self.scene;
         let presented = self
             .host
-            .frame(|cmd, canvas| scene.record(cmd, canvas, &params, filter, shot || self.shots > 0))?;
+            .frame(|cmd, canvas| scene.record(cmd, canvas, &desc, shot || self.shots > 0))?;
         self.resize |= presented.stale;
         if !presented.drawn {
             return Ok(false);
@@ -368,9 +349,9 @@ impl Viewer {
         let Some(mut frame): Option<Frame> = self.scene.frame()? else {
             return Ok(());
         };
-        let mut settings = self.controls.settings;
-        settings.filter = self.filter;
-        self.scene.describe(&mut frame, &settings)?;
+        let volume = &self.scene.volume;
+        let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
+        self.scene.describe(&mut frame, &desc)?;
         frame.write(path, format)?;
         println!("wrote {}", path.display());
         Ok(())
@@ -419,11 +400,11 @@ impl Viewer {
 
     fn title(&self) -> String {
         let scene = &self.scene;
-        let accel = match scene.structure.choice() {
-            Some(choice) => format!("auto -> {}", choice.describe()),
+        let accel = match scene.structure.marched_as_reason() {
+            Some(m) => format!("{} -> {}", scene.accel, m.label),
             None => scene.accel.to_string(),
         };
-        let settings = &self.controls.settings;
+        let c = &self.controls;
         format!(
             "lacuna view · {} · {accel} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
             scene.volume.name,
@@ -431,8 +412,8 @@ impl Viewer {
             self.fps,
             scene.march_ms(),
             scene.rebuild_ms(),
-            settings.step,
-            settings.ert.map_or("off".to_string(), |e| e.to_string()),
+            c.step,
+            c.ert.map_or("off".to_string(), |e| e.to_string()),
         )
     }
 }

@@ -5,11 +5,11 @@
 //! is the host.
 
 use super::host::Canvas;
-use lacuna::accel::{Accel, BuildInput, BuildOptions, Builder, Ranges, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
-use lacuna::render::{Filter, RenderParams, RenderSettings, RenderTarget, Renderer};
+use lacuna::render::{Filter, FrameDesc, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
@@ -23,9 +23,9 @@ pub struct Scene {
     pub tf: TransferFunction,
     lut: GpuTransferFunction,
     pub accel: Accel,
-    options: BuildOptions,
-    /// The per-volume ranges the structure reads (per structure and cell).
-    ranges: Option<(Accel, u32, Ranges)>,
+    params: Params,
+    /// The per-volume ranges the structure reads (per structure and parameters).
+    ranges: Option<(Accel, Params, Ranges)>,
     pub structure: Structure,
     target: Option<RenderTarget>,
     timer: Timer,
@@ -47,7 +47,7 @@ impl Scene {
             tf,
             lut,
             accel,
-            options: BuildOptions::default(),
+            params: accel.defaults(),
             ranges: None,
             structure: Structure::naive(),
             target: None,
@@ -78,10 +78,7 @@ impl Scene {
     /// A new structure, with `render`'s defaults for its parameters.
     pub fn set_accel(&mut self, accel: Accel) -> Result<()> {
         self.accel = accel;
-        self.options = BuildOptions {
-            cell: accel.method().default_cell(),
-            ..BuildOptions::default()
-        };
+        self.params = accel.defaults();
         self.rebuild()
     }
 
@@ -93,12 +90,12 @@ impl Scene {
             self.structure = Structure::naive();
             return Ok(());
         }
-        let key = (self.accel.name(), self.options.cell);
-        if self.ranges.as_ref().map(|(a, c, _)| (a.name(), *c)) != Some(key) {
+        let current = self.ranges.as_ref().map(|(a, p, _)| (*a, p));
+        if current != Some((self.accel, &self.params)) {
             let (ranges, _) = self
                 .builder
-                .ranges_for(&[self.accel], &self.gpu_volume, self.options.cell)?;
-            self.ranges = Some((self.accel, self.options.cell, ranges));
+                .ranges_for(&[(self.accel, &self.params)], &self.gpu_volume)?;
+            self.ranges = Some((self.accel, self.params.clone(), ranges));
         }
         let Some((_, _, ranges)) = &self.ranges else {
             unreachable!("ranges were just computed")
@@ -109,7 +106,7 @@ impl Scene {
             tf: &self.tf,
             gpu_tf: &self.lut,
         };
-        let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.options)?;
+        let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.params)?;
         self.structure = structure;
         self.build = build;
         Ok(())
@@ -119,14 +116,7 @@ impl Scene {
     /// then the frame buffer copied into `canvas`, left in
     /// TRANSFER_SRC_OPTIMAL and visible to transfer reads; with `readback`,
     /// also the copy to host memory that `frame` reads.
-    pub fn record(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        canvas: &Canvas,
-        params: &RenderParams,
-        filter: Filter,
-        readback: bool,
-    ) -> Result<()> {
+    pub fn record(&mut self, cmd: vk::CommandBuffer, canvas: &Canvas, desc: &FrameDesc, readback: bool) -> Result<()> {
         let (w, h) = (canvas.extent.width, canvas.extent.height);
         if self.target.as_ref().map(|t| (t.width, t.height)) != Some((w, h)) {
             self.target = Some(RenderTarget::new(&self.ctx, w, h)?);
@@ -135,16 +125,13 @@ impl Scene {
             unreachable!("target was just made")
         };
         self.timer.reset(cmd);
-        self.renderer.record_params(
-            cmd,
-            Some(&mut self.timer),
-            &self.structure,
-            target,
-            &self.gpu_volume,
-            &self.lut,
-            params,
-            filter,
-        )?;
+        let scene = lacuna::render::Scene {
+            structure: &self.structure,
+            volume: &self.gpu_volume,
+            tf: &self.lut,
+        };
+        self.renderer
+            .record(cmd, Some(&mut self.timer), target, scene, desc, Output::Buffer)?;
         let device = self.ctx.device();
         let frame_buffer = target
             .frame
@@ -226,19 +213,13 @@ impl Scene {
         self.target.as_ref().map(RenderTarget::read).transpose()
     }
 
-    /// The settings' description for frame metadata, with this scene's state.
-    pub fn describe(&self, frame: &mut Frame, settings: &RenderSettings) -> Result<()> {
-        let params = self.accel.method().params(&self.options);
-        super::super::render::describe(
-            frame,
-            &self.volume,
-            &self.tf,
-            &self.structure,
-            self.accel,
-            &params,
-            settings,
-            &self.ctx,
-            &self.march,
-        )
+    /// The frame's metadata, as `render` writes it, with this scene's state.
+    pub fn describe(&self, frame: &mut Frame, desc: &FrameDesc) -> Result<()> {
+        let scene = lacuna::render::Scene {
+            structure: &self.structure,
+            volume: &self.gpu_volume,
+            tf: &self.lut,
+        };
+        super::super::render::describe(frame, &self.volume, &self.tf, scene, desc, &self.ctx, &self.march)
     }
 }

@@ -4,7 +4,6 @@
 //! whose rays `CameraMatrices` forms (the one way every camera does).
 
 use super::matrices::{orthographic, perspective, CameraMatrices};
-use super::params::RenderParams;
 use crate::error::{Error, Result};
 use glam::{BVec3, DMat4, DVec3, DVec4, UVec3, Vec3};
 
@@ -18,16 +17,18 @@ pub enum Projection {
     Perspective { fov_deg: f64, distance: Option<f64> },
 }
 
+/// An orbit about the volume's centre: azimuth about y from +z, elevation
+/// above the xz plane, in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
+pub struct Orbit {
     pub azimuth_deg: f64,
     pub elevation_deg: f64,
     pub projection: Projection,
 }
 
-impl Default for Camera {
+impl Default for Orbit {
     fn default() -> Self {
-        Camera {
+        Orbit {
             azimuth_deg: 30.0,
             elevation_deg: 20.0,
             projection: Projection::Orthographic,
@@ -50,7 +51,7 @@ fn sincos_deg(deg: f64) -> (f64, f64) {
     deg.to_radians().sin_cos()
 }
 
-impl Camera {
+impl Orbit {
     /// Parses `AZIMUTH,ELEVATION` in degrees.
     pub fn parse_orbit(s: &str) -> Result<(f64, f64)> {
         let bad = || Error::invalid("camera", s, "expected AZIMUTH,ELEVATION in degrees");
@@ -61,6 +62,35 @@ impl Camera {
             return Err(bad());
         }
         Ok((a, e))
+    }
+
+    /// Finite angles; a perspective field of view in (0, 180) and a
+    /// distance that is finite and >= 0.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.azimuth_deg.is_finite() && self.elevation_deg.is_finite()) {
+            return Err(Error::invalid(
+                "camera",
+                format!("{},{}", self.azimuth_deg, self.elevation_deg),
+                "azimuth and elevation must be finite",
+            ));
+        }
+        if let Projection::Perspective { fov_deg, distance } = self.projection {
+            if !(fov_deg > 0.0 && fov_deg < 180.0) {
+                return Err(Error::invalid(
+                    "field of view",
+                    fov_deg.to_string(),
+                    "must be in (0, 180) degrees",
+                ));
+            }
+            if distance.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
+                return Err(Error::invalid(
+                    "camera distance",
+                    format!("{distance:?}"),
+                    "must be finite and >= 0",
+                ));
+            }
+        }
+        Ok(())
     }
 
     pub fn describe(&self) -> String {
@@ -80,26 +110,11 @@ impl Camera {
 
     /// The orbit camera as view and projection matrices (Vulkan clip space)
     /// for a volume of `dims` voxels with `spacing` at `width` x `height`;
-    /// the volume's physical box `[0, dims * spacing]` is the world. `params`
+    /// the volume's physical box `[0, dims * spacing]` is the world. The frame
     /// forms its rays from these, so a host passing the same matrices to
     /// [`CameraMatrices`] renders the same image bit for bit.
     pub fn matrices(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<CameraMatrices> {
-        if let Projection::Perspective { fov_deg, distance } = self.projection {
-            if !(fov_deg > 0.0 && fov_deg < 180.0) {
-                return Err(Error::invalid(
-                    "field of view",
-                    fov_deg.to_string(),
-                    "must be in (0, 180) degrees",
-                ));
-            }
-            if distance.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
-                return Err(Error::invalid(
-                    "camera distance",
-                    format!("{distance:?}"),
-                    "must be finite and >= 0",
-                ));
-            }
-        }
+        self.validate()?;
         let extent = UVec3::from(dims).as_dvec3() * Vec3::from(spacing).as_dvec3();
         let centre = extent * 0.5;
         let radius = centre.length();
@@ -142,13 +157,5 @@ impl Camera {
             DVec4::new(-right.dot(eye), -up.dot(eye), -to_eye.dot(eye), 1.0),
         );
         Ok(CameraMatrices::new(view, projection))
-    }
-
-    /// The camera part of `RenderParams` for a volume of `dims` voxels with
-    /// `spacing`, rendered at `width` x `height`: [`Camera::matrices`] through
-    /// [`CameraMatrices::params`].
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
-        self.matrices(dims, spacing, width, height)?
-            .params(dims, spacing, width, height)
     }
 }

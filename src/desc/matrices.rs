@@ -17,9 +17,9 @@
 //!
 //! The volume is marched from where a ray enters it (never behind its start)
 //! to where it leaves; the near and far planes do not clip it, a depth image
-//! does (`DepthInput`).
+//! does (`HostDepth`).
 
-use super::params::RenderParams;
+use super::Rays;
 use crate::error::{Error, Result};
 use glam::{DMat4, DVec2, DVec3, DVec4, Mat4, Vec3};
 
@@ -120,10 +120,14 @@ impl CameraMatrices {
         ))
     }
 
-    /// The shader's camera parameters (`base`, `du`, `dv`, `eye_or_dir`, the
-    /// image size, the volume dims and the depth unprojection) for a volume
-    /// of `dims` voxels with `spacing`, rendered at `width` x `height`.
-    pub fn params(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<RenderParams> {
+    /// Finite, invertible matrices.
+    pub fn validate(&self) -> Result<()> {
+        self.inverses().map(|_| ())
+    }
+
+    /// The rays (and the depth unprojection) in the voxel space of a volume
+    /// with `spacing`, rendered at `width` x `height`.
+    pub fn rays(&self, spacing: [f32; 3], width: u32, height: u32) -> Result<Rays> {
         if width == 0 || height == 0 {
             return Err(Error::invalid(
                 "size",
@@ -159,8 +163,8 @@ impl CameraMatrices {
         let (near_z, far_z) = if self.reverse_z { (1.0, 0.0) } else { (0.0, 1.0) };
         let (w, h) = (width as f64, height as f64);
         let corners = [DVec2::new(-1.0, -1.0), DVec2::new(1.0, -1.0), DVec2::new(-1.0, 1.0)];
-        let v4 = |p: Vec3, w: f32| p.extend(w).to_array();
-        let mut params = RenderParams::default();
+        let v3 = |p: Vec3| p.to_array();
+        let mut rays = Rays::orthographic([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
         if self.is_perspective() {
             let w_row = self.projection.row(3).truncate();
             // The point of the pixel's ray (through the view origin) where clip w = 1.
@@ -170,10 +174,11 @@ impl CameraMatrices {
             };
             let [c0, c1, c2] = corners.map(unit);
             let eye = view_to_world.transform_point3(DVec3::ZERO);
-            params.base = v4(to_voxel_point(view_to_world.transform_point3(c0)), 0.0);
-            params.du = v4(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)), 0.0);
-            params.dv = v4(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)), 0.0);
-            params.eye_or_dir = v4(to_voxel_point(eye), 1.0);
+            rays.base = v3(to_voxel_point(view_to_world.transform_point3(c0)));
+            rays.du = v3(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)));
+            rays.dv = v3(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)));
+            rays.eye_or_dir = v3(to_voxel_point(eye));
+            rays.perspective = true;
         } else {
             // The pixel's ray (near to far) and where it crosses view z = 0.
             let origin = |ndc: DVec2| {
@@ -183,19 +188,19 @@ impl CameraMatrices {
                 (a - d * (a.z / d.z), d)
             };
             let [(c0, dir), (c1, _), (c2, _)] = corners.map(origin);
-            params.base = v4(to_voxel_point(view_to_world.transform_point3(c0)), 0.0);
-            params.du = v4(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)), 0.0);
-            params.dv = v4(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)), 0.0);
+            rays.base = v3(to_voxel_point(view_to_world.transform_point3(c0)));
+            rays.du = v3(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)));
+            rays.dv = v3(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)));
             // The f32 direction normalised in f64: divided by the length
             // (not times its reciprocal, as glam's normalize() does).
             let d = to_voxel_vector(view_to_world.transform_vector3(dir / dir.length())).as_dvec3();
-            params.eye_or_dir = v4((d / d.length()).as_vec3(), 0.0);
+            rays.eye_or_dir = v3((d / d.length()).as_vec3());
         }
-        let finite_params = [params.base, params.du, params.dv, params.eye_or_dir]
+        let finite_rays = [rays.base, rays.du, rays.dv, rays.eye_or_dir]
             .iter()
             .flatten()
             .all(|v| v.is_finite());
-        if !finite_params {
+        if !finite_rays {
             return Err(Error::invalid(
                 "camera",
                 format!("{self:?}"),
@@ -207,12 +212,10 @@ impl CameraMatrices {
         if !identity {
             world_to_voxel *= world_to_model;
         }
-        params.ndc_to_voxel = (world_to_voxel * view_to_world * clip_to_view)
+        rays.ndc_to_voxel = (world_to_voxel * view_to_world * clip_to_view)
             .as_mat4()
             .to_cols_array_2d();
-        params.depth = [far_z as f32, 0.0, 0.0, 0.0];
-        params.dims = [dims[0], dims[1], dims[2], crate::tf::LUT_SIZE as u32];
-        params.image = [width, height, 0, 0];
-        Ok(params)
+        rays.far_depth = far_z as f32;
+        Ok(rays)
     }
 }

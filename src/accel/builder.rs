@@ -1,0 +1,205 @@
+//! What every structure's build shares, knowing no structure: the context,
+//! objects made once per context on first use (kernel sets, the cost
+//! model), and the per-volume value ranges builds read. `Builder::build`
+//! itself is in `method.rs`, beside the `Method` trait it calls.
+
+use super::bricks::{self, GpuBricks};
+use crate::error::{Error, Result};
+use crate::gpu::{vk, Context, Timer, Timings};
+use crate::prims::BrickMinMax;
+use crate::volume::GpuVolume;
+use std::any::{Any, TypeId};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// Something made once per context, when a build first needs it, and shared
+/// by every build that does: a structure's kernels, the cost model.
+pub trait PerContext: Send + Sync + Sized + 'static {
+    fn new(ctx: &Context) -> Result<Self>;
+}
+
+/// Which per-volume value ranges (computed once per volume upload) a build
+/// reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RangeKind {
+    /// None: naive marching, and builders that read the volume itself.
+    None,
+    /// 8^3 brick ranges over the one-voxel apron (phase "ranges").
+    Bricks,
+    /// Ranges of macro cells of this edge over the apron (phase "cell ranges").
+    Cells(u32),
+}
+
+/// Per-volume value ranges, each with the GPU time it took (ms; NaN for
+/// recorded ranges, which the caller's timer timed).
+#[derive(Default)]
+pub struct Ranges {
+    bricks: Option<(GpuBricks, f64)>,
+    cells: Vec<(GpuBricks, f64)>,
+}
+
+impl Ranges {
+    /// The 8^3 brick ranges.
+    pub fn bricks(&self) -> Result<&GpuBricks> {
+        self.bricks
+            .as_ref()
+            .map(|b| &b.0)
+            .ok_or_else(|| missing("8^3 brick ranges"))
+    }
+
+    /// The ranges of `cell`^3 macro cells.
+    pub fn cells(&self, cell: u32) -> Result<&GpuBricks> {
+        self.cell_entry(cell)
+            .map(|c| &c.0)
+            .ok_or_else(|| missing(&format!("ranges of {cell}^3 cells")))
+    }
+
+    fn cell_entry(&self, cell: u32) -> Option<&(GpuBricks, f64)> {
+        self.cells.iter().find(|c| c.0.brick == cell)
+    }
+
+    /// Whether the ranges of `kind` are here.
+    pub fn has(&self, kind: RangeKind) -> bool {
+        match kind {
+            RangeKind::None => true,
+            RangeKind::Bricks => self.bricks.is_some(),
+            RangeKind::Cells(cell) => self.cell_entry(cell).is_some(),
+        }
+    }
+
+    /// GPU milliseconds of the ranges of `kind` (0 for none).
+    pub fn ms(&self, kind: RangeKind) -> Result<f64> {
+        match kind {
+            RangeKind::None => Ok(0.0),
+            RangeKind::Bricks => self.bricks.as_ref().map(|b| b.1).ok_or_else(|| missing("brick ranges")),
+            RangeKind::Cells(cell) => self.cell_entry(cell).map(|c| c.1).ok_or_else(|| missing("cell ranges")),
+        }
+    }
+}
+
+fn missing(what: &str) -> Error {
+    Error::invalid(
+        "ranges",
+        format!("no {what}"),
+        "not computed for this volume (Builder::ranges with the structure's RangeKind)",
+    )
+}
+
+/// Builds structures: holds the context and what is made once per context.
+pub struct Builder {
+    ctx: Context,
+    shared: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
+}
+
+impl Builder {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        Ok(Builder {
+            ctx: ctx.clone(),
+            shared: Mutex::new(HashMap::new()),
+        })
+    }
+
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// The `T` of this context (kernels, the cost model), made on first use.
+    pub fn shared<T: PerContext>(&self) -> Result<Arc<T>> {
+        let mut map = self.shared.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(k) = map.get(&TypeId::of::<T>()) {
+            if let Ok(k) = Arc::clone(k).downcast::<T>() {
+                return Ok(k);
+            }
+        }
+        let k = Arc::new(T::new(&self.ctx)?);
+        map.insert(TypeId::of::<T>(), k.clone());
+        Ok(k)
+    }
+
+    /// The per-volume ranges of every kind in `kinds` (each once), computed
+    /// and waited for: once per volume upload.
+    pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
+        let mut t = Timings::default();
+        let mut ranges = Ranges::default();
+        for kind in distinct(kinds)? {
+            let minmax = self.shared::<BrickMinMax>()?;
+            let (size, pass) = size_and_pass(kind);
+            let (b, ms) = GpuBricks::compute(&self.ctx, &minmax, volume, size)?;
+            t.push(pass, ms);
+            ranges.insert(kind, b, ms);
+        }
+        Ok((ranges, t))
+    }
+
+    /// As `ranges`, recorded into `cmd` (passes "ranges" and "cell ranges"
+    /// on `timer`): the ranges are ready after the submission, and
+    /// `Ranges::ms` is NaN for them (read the caller's timer). Ends with
+    /// compute writes: a barrier from `Access::COMPUTE_WRITE` to
+    /// `Access::COMPUTE_READ` before a build reads them (`record_build`
+    /// begins with one).
+    pub fn record_ranges(
+        &self,
+        cmd: vk::CommandBuffer,
+        mut timer: Option<&mut Timer>,
+        kinds: &[RangeKind],
+        volume: &GpuVolume,
+    ) -> Result<Ranges> {
+        let mut ranges = Ranges::default();
+        for kind in distinct(kinds)? {
+            let minmax = self.shared::<BrickMinMax>()?;
+            let (size, pass) = size_and_pass(kind);
+            let b = GpuBricks::allocate(&self.ctx, volume, size)?;
+            b.record(cmd, timer.as_deref_mut(), pass, &minmax, volume)?;
+            ranges.insert(kind, b, f64::NAN);
+        }
+        Ok(ranges)
+    }
+}
+
+impl Ranges {
+    fn insert(&mut self, kind: RangeKind, bricks: GpuBricks, ms: f64) {
+        match kind {
+            RangeKind::Bricks => self.bricks = Some((bricks, ms)),
+            _ => self.cells.push((bricks, ms)),
+        }
+    }
+}
+
+/// The kinds that need computing, each once, in order; cell edges checked.
+fn distinct(kinds: &[RangeKind]) -> Result<Vec<RangeKind>> {
+    let mut out: Vec<RangeKind> = Vec::new();
+    for &k in kinds {
+        if let RangeKind::Cells(cell) = k {
+            check_cell(cell)?;
+        }
+        if k != RangeKind::None && !out.contains(&k) {
+            out.push(k);
+        }
+    }
+    Ok(out)
+}
+
+fn size_and_pass(kind: RangeKind) -> (u32, &'static str) {
+    match kind {
+        RangeKind::Cells(cell) => (cell, "cell ranges"),
+        _ => (bricks::BRICK, "ranges"),
+    }
+}
+
+/// Checks a macro-cell edge: a power of two in 2..=256.
+pub fn check_cell(cell: u32) -> Result<()> {
+    if !cell.is_power_of_two() || !(2..=256).contains(&cell) {
+        return Err(Error::invalid(
+            "cell",
+            cell.to_string(),
+            "must be a power of two in 2..=256",
+        ));
+    }
+    Ok(())
+}
+
+impl PerContext for BrickMinMax {
+    fn new(ctx: &Context) -> Result<Self> {
+        BrickMinMax::new(ctx)
+    }
+}

@@ -1,0 +1,296 @@
+//! The contract between lacuna and a skipping structure, knowing no
+//! structure: the [`Method`] trait a structure implements, what a build
+//! returns ([`Built`]), the handle [`Accel`] and a built [`Structure`]. The
+//! table of lacuna's structures lives above them all (`table.rs`); a
+//! structure written outside the crate implements [`Method`] and is used
+//! through `Accel(&MyStructure)` exactly as the built-in ones.
+
+use super::builder::{Builder, RangeKind, Ranges};
+use super::params::{Param, Params};
+use super::stats::Stats;
+use crate::error::{Error, Result};
+use crate::gpu::{vk, Bound, Shader, Timer, Timings};
+use crate::tf::{GpuTransferFunction, TransferFunction};
+use crate::volume::{GpuVolume, Volume};
+use std::any::Any;
+
+/// The march kernel that renders a structure: a shader of `glsl/march/`
+/// and its specialization constants (constant_id 0, 1, ...).
+#[derive(Clone, Copy, Debug)]
+pub struct March {
+    pub shader: Shader,
+    pub constants: &'static [u32],
+}
+
+impl March {
+    /// A kernel without specialization.
+    pub const fn plain(shader: Shader) -> Self {
+        March { shader, constants: &[] }
+    }
+}
+
+/// What a build reads: the volume and transfer function on the host (for
+/// host-built structures) and on the GPU.
+pub struct BuildInput<'a> {
+    pub volume: &'a Volume,
+    pub gpu_volume: &'a GpuVolume,
+    pub tf: &'a TransferFunction,
+    pub gpu_tf: &'a GpuTransferFunction,
+}
+
+/// When a built structure is marched by another entry's kernel: which, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarchedAs {
+    /// The entry whose kernel (and, unless naive, whose built data) marches.
+    pub accel: Accel,
+    /// What it is, as printed: `distance-octant (cell 4)`, `naive`.
+    pub label: String,
+    /// One line on why.
+    pub reason: String,
+}
+
+/// A built structure: what its march kernel reads beyond the bindings
+/// every march kernel has (`glsl/common/march.glsl`: the render parameters,
+/// volume, LUT and frame, which the renderer binds).
+pub trait Built: Any {
+    /// The kernel's own bindings, by name (`shaders::march_NAME::Own::list`).
+    fn bindings(&self) -> Vec<Bound<'_>>;
+    /// The march kernel's push constants (empty for none).
+    fn push(&self) -> Vec<u8> {
+        Vec::new()
+    }
+    /// The paper's Table 1 statistics (None: nothing built). May read the
+    /// structure back once.
+    fn stats(&self) -> Result<Option<Stats>>;
+    /// Set when another entry's kernel marches this structure: `auto`'s
+    /// choice, or a tree that is one leaf covering the volume (marched by
+    /// the naive kernel). None: the entry's own kernel (`Method::march`).
+    fn marched_as(&self) -> Option<MarchedAs> {
+        None
+    }
+}
+
+/// A skipping structure: its parameters, what it reads, how it is built,
+/// how it is marched. Implement it in the structure's module and add one
+/// line to the table (`table.rs`).
+pub trait Method: Sync {
+    /// The CLI name (`--accel NAME`).
+    fn name(&self) -> &'static str;
+    /// One line for listings: what it is and who it is after.
+    fn description(&self) -> &'static str;
+    /// Its parameters (`params.rs`); the command line, the bench TOML,
+    /// records and frame metadata list them from here.
+    fn params(&self) -> &'static [Param] {
+        &[]
+    }
+    /// Checks a combination of values the schema alone cannot (called by
+    /// [`Accel::params`]).
+    fn check(&self, params: &Params) -> Result<()> {
+        let _ = params;
+        Ok(())
+    }
+    /// The per-volume ranges its build reads with these parameters.
+    fn ranges(&self, params: &Params) -> Result<RangeKind>;
+    /// Its march kernel.
+    fn march(&self) -> March;
+    /// The parameter sets the exactness checks (the identity tests and
+    /// `bench --suite hard`) build it with: (label, values).
+    fn variants(&self) -> Result<Vec<(String, Params)>> {
+        Ok(vec![(self.name().to_string(), Params::defaults(self.params()))])
+    }
+    /// Whether `record_build` records the whole build into one command
+    /// buffer. Host-driven builders (a CPU build, a readback, one submission
+    /// per tree level) return false and implement `build` instead.
+    fn recordable(&self) -> bool {
+        true
+    }
+    /// Records the build for the input's transfer function into `cmd`,
+    /// timing its passes with `timer`. Barriers: begins with the `prims`
+    /// entry barrier (earlier compute and transfer writes visible) and ends
+    /// with compute writes; order the march after it with a barrier from
+    /// `Access::COMPUTE_WRITE` to `Access::COMPUTE_READ`.
+    fn record_build(
+        &self,
+        builder: &Builder,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<Box<dyn Built>> {
+        let _ = (builder, cmd, timer, input, ranges, params);
+        Err(Error::Unsupported(format!(
+            "{} is built by the host (it reads results back between passes): call build, not record_build",
+            self.name()
+        )))
+    }
+    /// Builds and waits: the path a transfer-function change takes. Returns
+    /// the structure and the time of each phase. The default submits
+    /// `record_build` once.
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let ctx = builder.context();
+        let mut timer = Timer::new(ctx, 16)?;
+        let built = ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record_build(builder, cmd, Some(&mut timer), input, ranges, params)
+        })?;
+        Ok((built, timer.results()?))
+    }
+}
+
+/// A handle to a structure: cheap to copy, compared by name.
+#[derive(Clone, Copy)]
+pub struct Accel(pub &'static dyn Method);
+
+impl Accel {
+    pub fn method(self) -> &'static dyn Method {
+        self.0
+    }
+
+    pub fn name(self) -> &'static str {
+        self.0.name()
+    }
+
+    /// Its parameters at their defaults, with `given` (name, text) values
+    /// parsed in (names of other structures' parameters are left out), and
+    /// checked.
+    pub fn params(self, given: &[(&str, &str)]) -> Result<Params> {
+        let p = Params::resolve(self.0.params(), given)?;
+        self.0.check(&p)?;
+        Ok(p)
+    }
+
+    /// Its parameters at their defaults.
+    pub fn defaults(self) -> Params {
+        Params::defaults(self.0.params())
+    }
+}
+
+impl PartialEq for Accel {
+    fn eq(&self, other: &Self) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl Eq for Accel {}
+
+impl std::hash::Hash for Accel {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.name().hash(state)
+    }
+}
+
+impl std::fmt::Debug for Accel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::fmt::Display for Accel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(feature = "serde")]
+impl serde::Serialize for Accel {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// A built structure with the entry that built it.
+pub struct Structure {
+    pub accel: Accel,
+    pub params: Params,
+    pub built: Box<dyn Built>,
+}
+
+impl Structure {
+    /// The entry whose kernel marches this structure's frames: its own, or
+    /// what [`Built::marched_as`] names.
+    pub fn marched_as(&self) -> Accel {
+        self.built.marched_as().map_or(self.accel, |m| m.accel)
+    }
+
+    /// Why another entry's kernel marches it, when one does.
+    pub fn marched_as_reason(&self) -> Option<MarchedAs> {
+        self.built.marched_as()
+    }
+
+    /// The march kernel its frames use.
+    pub fn march(&self) -> March {
+        self.marched_as().method().march()
+    }
+
+    /// The paper's Table 1 statistics (None when nothing was built).
+    pub fn stats(&self) -> Result<Option<Stats>> {
+        self.built.stats()
+    }
+
+    /// The built data as its concrete type (`auto::Chosen`, `GpuTree`, ...).
+    pub fn built_as<T: Any>(&self) -> Option<&T> {
+        (self.built.as_ref() as &dyn Any).downcast_ref::<T>()
+    }
+}
+
+impl Builder {
+    /// Builds `accel` with `params` for the input's transfer function and
+    /// waits: the path a TF change takes. Returns the structure and its
+    /// timings per phase.
+    pub fn build(
+        &self,
+        accel: Accel,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<(Structure, Timings)> {
+        accel.method().check(params)?;
+        let (built, t) = accel.method().build(self, input, ranges, params)?;
+        Ok((
+            Structure {
+                accel,
+                params: params.clone(),
+                built,
+            },
+            t,
+        ))
+    }
+
+    /// Records the build of a recordable structure into `cmd` (see
+    /// [`Method::record_build`] for the barriers); host-driven structures
+    /// return an error saying so.
+    pub fn record_build(
+        &self,
+        accel: Accel,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<Structure> {
+        accel.method().check(params)?;
+        let built = accel.method().record_build(self, cmd, timer, input, ranges, params)?;
+        Ok(Structure {
+            accel,
+            params: params.clone(),
+            built,
+        })
+    }
+
+    /// The per-volume ranges the structures read (each kind once): once
+    /// per volume upload.
+    pub fn ranges_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
+        let kinds = structures
+            .iter()
+            .map(|(a, p)| a.method().ranges(p))
+            .collect::<Result<Vec<_>>>()?;
+        self.ranges(&kinds, volume)
+    }
+}

@@ -1,0 +1,391 @@
+//! What a frame is: [`FrameDesc`], every input of one frame besides the
+//! scene (volume, transfer function, structure) and where it goes. Every
+//! entry point takes one (the library's `Renderer`, `lacuna render`, `view`,
+//! `bench`, the embedding API). Its fields are typed, its defaults are
+//! here and nowhere else, and it is validated once, when built; the GPU
+//! parameter block (`shaders::blocks::RenderParams`) is derived from it.
+//!
+//! A frame is described, not a renderer configured: what later work adds to
+//! a frame (render mode, shading, clip planes, jitter, several channels, a
+//! time step) becomes a field here with its default, and the block grows
+//! a member; callers that do not set it keep today's frame.
+
+mod matrices;
+mod orbit;
+
+pub use crate::volume::Filter;
+pub use matrices::{orthographic, perspective, CameraMatrices};
+pub use orbit::{Orbit, Projection};
+
+use crate::error::{Error, Result};
+use crate::gpu::shaders::blocks::RenderParams;
+use crate::gpu::vk;
+use crate::volume::GpuVolume;
+
+/// The default sample spacing along each ray, in voxels.
+pub const DEFAULT_STEP: f32 = 0.5;
+
+/// The early-termination alpha the shaders read as "off": accumulated
+/// alpha never exceeds 1.
+pub const ERT_OFF: f32 = 2.0;
+
+/// Where the rays come from.
+// Unboxed, so a frame description stays `Copy`: a few hundred bytes, made
+// once per frame.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Camera {
+    /// An orbit about the volume's centre (the command line's cameras).
+    Orbit(Orbit),
+    /// A host's view and projection matrices (the one way rays are formed;
+    /// an orbit becomes these too).
+    Matrices(CameraMatrices),
+    /// Rays laid out in voxel space by hand (hard cases, probes).
+    Rays(Rays),
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera::Orbit(Orbit::default())
+    }
+}
+
+impl Camera {
+    /// For printouts and frame metadata.
+    pub fn describe(&self) -> String {
+        match self {
+            Camera::Orbit(o) => o.describe(),
+            Camera::Matrices(m) => format!(
+                "matrices ({}{})",
+                if m.is_perspective() {
+                    "perspective"
+                } else {
+                    "orthographic"
+                },
+                if m.reverse_z { ", reverse-Z" } else { "" }
+            ),
+            Camera::Rays(r) => format!(
+                "rays base={:?} du={:?} dv={:?} {}={:?}",
+                r.base,
+                r.du,
+                r.dv,
+                if r.perspective { "eye" } else { "dir" },
+                r.eye_or_dir
+            ),
+        }
+    }
+
+    /// The rays for a volume of `dims` voxels with `spacing` at `width` x `height`.
+    pub fn rays(&self, dims: [u32; 3], spacing: [f32; 3], width: u32, height: u32) -> Result<Rays> {
+        match self {
+            Camera::Orbit(o) => o.matrices(dims, spacing, width, height)?.rays(spacing, width, height),
+            Camera::Matrices(m) => m.rays(spacing, width, height),
+            Camera::Rays(r) => Ok(*r),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        match self {
+            Camera::Orbit(o) => o.validate(),
+            Camera::Matrices(m) => m.validate(),
+            Camera::Rays(r) => r.validate(),
+        }
+    }
+}
+
+/// Rays in voxel space (the volume box is `[0, dims]`, voxel i centred at
+/// i + 0.5): pixel (x, y) passes through `base + (x + 0.5) du + (y + 0.5) dv`;
+/// orthographic rays start there along `eye_or_dir`, perspective rays start
+/// at the eye `eye_or_dir` and pass there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rays {
+    pub base: [f32; 3],
+    pub du: [f32; 3],
+    pub dv: [f32; 3],
+    pub eye_or_dir: [f32; 3],
+    pub perspective: bool,
+    /// NDC (x, y, depth, 1) to homogeneous voxel space: unprojects a host depth.
+    pub ndc_to_voxel: [[f32; 4]; 4],
+    /// The depth of the far plane (where a host depth image has nothing).
+    pub far_depth: f32,
+}
+
+impl Rays {
+    /// Orthographic rays along `dir` (not normalised: the shaders do)
+    /// starting at pixel (0, 0)'s corner `base`.
+    pub fn orthographic(base: [f32; 3], du: [f32; 3], dv: [f32; 3], dir: [f32; 3]) -> Rays {
+        Rays {
+            base,
+            du,
+            dv,
+            eye_or_dir: dir,
+            perspective: false,
+            ndc_to_voxel: [[0.0; 4]; 4],
+            far_depth: 0.0,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        let finite = [self.base, self.du, self.dv, self.eye_or_dir]
+            .iter()
+            .flatten()
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(Error::invalid("rays", format!("{self:?}"), "must be finite"));
+        }
+        Ok(())
+    }
+}
+
+/// A host's depth image that ends each ray at the first opaque surface: a
+/// view of its depth aspect (any depth format; read with `texelFetch`, one
+/// texel per pixel) created with `SAMPLED` usage, in `layout`
+/// (DEPTH_READ_ONLY_OPTIMAL, DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+/// SHADER_READ_ONLY_OPTIMAL or GENERAL). Its depths are unprojected with the
+/// frame's camera (`CameraMatrices`: projection and `reverse_z`); the far
+/// plane's depth means "nothing drawn".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HostDepth {
+    pub view: vk::ImageView,
+    pub layout: vk::ImageLayout,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl HostDepth {
+    fn check(&self, width: u32, height: u32) -> Result<()> {
+        let readable = [
+            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            vk::ImageLayout::GENERAL,
+        ];
+        if !readable.contains(&self.layout) {
+            return Err(Error::invalid(
+                "host depth layout",
+                format!("{:?}", self.layout),
+                "must be a layout shaders sample depth in (DEPTH_READ_ONLY_OPTIMAL, ...)",
+            ));
+        }
+        if (self.width, self.height) != (width, height) {
+            return Err(Error::invalid(
+                "host depth",
+                format!("{}x{}", self.width, self.height),
+                format!("the frame is {width}x{height}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Every input of one frame besides the scene: size, camera, sampling,
+/// early termination, and a host depth image to end rays at. Made by
+/// [`FrameDesc::builder`], which validates; read-only after.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameDesc {
+    width: u32,
+    height: u32,
+    camera: Camera,
+    step: f32,
+    ert: Option<f32>,
+    filter: Option<Filter>,
+    depth: Option<HostDepth>,
+}
+
+/// Sets a [`FrameDesc`]'s fields; `build` checks them all.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameBuilder(FrameDesc);
+
+impl FrameDesc {
+    /// A `width` x `height` frame: the default orbit camera (azimuth 30,
+    /// elevation 20, orthographic, fitted), step [`DEFAULT_STEP`], early
+    /// termination off, the volume's default sample filter
+    /// (`GpuVolume::default_filter`), no depth image.
+    pub fn builder(width: u32, height: u32) -> FrameBuilder {
+        FrameBuilder(FrameDesc {
+            width,
+            height,
+            camera: Camera::default(),
+            step: DEFAULT_STEP,
+            ert: None,
+            filter: None,
+            depth: None,
+        })
+    }
+
+    /// This frame's fields, to change some and build again.
+    pub fn to_builder(&self) -> FrameBuilder {
+        FrameBuilder(*self)
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// Sample spacing along each ray, in voxels.
+    pub fn step(&self) -> f32 {
+        self.step
+    }
+
+    /// Early ray termination at this accumulated alpha (None: off).
+    pub fn ert(&self) -> Option<f32> {
+        self.ert
+    }
+
+    /// The sample filter asked for (None: the volume's default).
+    pub fn filter(&self) -> Option<Filter> {
+        self.filter
+    }
+
+    /// The sample filter of this frame on `volume`.
+    pub fn filter_for(&self, volume: &GpuVolume) -> Filter {
+        self.filter.unwrap_or_else(|| volume.default_filter())
+    }
+
+    pub fn depth(&self) -> Option<&HostDepth> {
+        self.depth.as_ref()
+    }
+
+    /// The shader parameter block for `volume` (the volume-dependent checks:
+    /// the samples-per-ray cap, rays that stay finite).
+    pub fn params(&self, volume: &GpuVolume) -> Result<RenderParams> {
+        self.params_for(volume.dims, volume.spacing, volume.norm)
+    }
+
+    /// As `params`, for a volume of `dims` voxels with `spacing` whose
+    /// texels `norm` maps to values (the CPU reference's host volumes).
+    pub fn params_for(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
+        crate::limits::check_samples_per_ray(dims, self.step)?;
+        let r = self.camera.rays(dims, spacing, self.width, self.height)?;
+        Ok(RenderParams {
+            base: r.base,
+            perspective: r.perspective as u32,
+            du: r.du,
+            step: self.step,
+            dv: r.dv,
+            ert: self.ert.unwrap_or(ERT_OFF),
+            eye_or_dir: r.eye_or_dir,
+            lut_size: crate::tf::LUT_SIZE as u32,
+            dims,
+            depth_limits: self.depth.is_some() as u32,
+            image: [self.width, self.height],
+            norm,
+            ndc_to_voxel: r.ndc_to_voxel,
+            far_depth: r.far_depth,
+        })
+    }
+
+    /// (name, value) pairs for printouts and frame metadata.
+    pub fn describe(&self, volume: &GpuVolume) -> Vec<(&'static str, String)> {
+        vec![
+            ("camera", self.camera.describe()),
+            ("step", self.step.to_string()),
+            ("ert", self.ert.map_or("off".into(), |e| e.to_string())),
+            ("filter", self.filter_for(volume).to_string()),
+        ]
+    }
+}
+
+impl FrameBuilder {
+    pub fn camera(mut self, camera: Camera) -> Self {
+        self.0.camera = camera;
+        self
+    }
+
+    /// An orbit camera at `azimuth`, `elevation` degrees.
+    pub fn orbit(self, azimuth_deg: f64, elevation_deg: f64, projection: Projection) -> Self {
+        self.camera(Camera::Orbit(Orbit {
+            azimuth_deg,
+            elevation_deg,
+            projection,
+        }))
+    }
+
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        self.0.width = width;
+        self.0.height = height;
+        self
+    }
+
+    /// Sample spacing along each ray, in voxels (> 0).
+    pub fn step(mut self, voxels: f32) -> Self {
+        self.0.step = voxels;
+        self
+    }
+
+    /// Early ray termination at this accumulated alpha in (0, 1]; None: off.
+    pub fn ert(mut self, alpha: Option<f32>) -> Self {
+        self.0.ert = alpha;
+        self
+    }
+
+    /// How samples are reconstructed between voxels (hardware filtering
+    /// needs a volume format the device filters linearly).
+    pub fn filter(mut self, filter: Filter) -> Self {
+        self.0.filter = Some(filter);
+        self
+    }
+
+    /// The volume's default sample filter (`GpuVolume::default_filter`).
+    pub fn default_filter(mut self) -> Self {
+        self.0.filter = None;
+        self
+    }
+
+    /// Rays end at the host's depth image (of the frame's size).
+    pub fn depth(mut self, depth: Option<HostDepth>) -> Self {
+        self.0.depth = depth;
+        self
+    }
+
+    /// The frame, every field checked.
+    pub fn build(self) -> Result<FrameDesc> {
+        let d = self.0;
+        if d.width == 0 || d.height == 0 {
+            return Err(Error::invalid(
+                "size",
+                format!("{}x{}", d.width, d.height),
+                "width and height must be > 0",
+            ));
+        }
+        // The frame buffer's readback and the frame itself.
+        crate::limits::check_host(
+            format_args!("frame {}x{}", d.width, d.height),
+            d.width as u64 * d.height as u64,
+            32,
+        )?;
+        if !(d.step.is_finite() && d.step > 0.0) {
+            return Err(Error::invalid(
+                "step",
+                d.step.to_string(),
+                "must be a finite number > 0 (voxels)",
+            ));
+        }
+        if let Some(e) = d.ert {
+            if !(e > 0.0 && e <= 1.0) {
+                return Err(Error::invalid("ert", e.to_string(), "must be in (0, 1]"));
+            }
+        }
+        d.camera.validate()?;
+        if let Some(depth) = &d.depth {
+            depth.check(d.width, d.height)?;
+        }
+        Ok(d)
+    }
+}
+
+/// Parses `WxH` (both > 0).
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let bad = |why: &str| Error::invalid("size", s, why.to_string());
+    let (w, h) = s.split_once('x').ok_or_else(|| bad("expected WxH"))?;
+    let w: u32 = w.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    let h: u32 = h.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    if w == 0 || h == 0 {
+        return Err(bad("width and height must be > 0"));
+    }
+    Ok((w, h))
+}
