@@ -2,7 +2,12 @@
 //! into `$OUT_DIR/shaders.rs` as `u32` arrays, so the binary needs no shader
 //! files and the SPIR-V is 4-byte aligned by construction. Beside the words
 //! goes each shader's interface read from the SPIR-V (`build/reflect.rs`):
-//! bindings, push-constant size, workgroup size. Kernels are created from it.
+//! named bindings, push-constant size, workgroup size, from which kernels
+//! are created; and its host side, generated: a module per kernel with its
+//! push block as a `#[repr(C)]` struct (`Push`) and its bindings as a struct
+//! of named fields (`Bindings`; march kernels `Own`), `MarchCommon` (the
+//! bindings every march kernel has), and `blocks` (the structs the host lays
+//! out in GPU memory, checked alike across the shaders that declare them).
 
 use glslang::include::{IncludeHandler, IncludeResult, IncludeType};
 use glslang::{
@@ -177,6 +182,21 @@ fn interface_module(
             .join(", ")
     );
     Ok(out)
+}
+
+/// `MarchCommon`: the bindings every march kernel has, which the renderer
+/// fills for whichever kernel marches.
+fn march_common() -> String {
+    let fields: Vec<String> = MARCH_COMMON
+        .iter()
+        .map(|n| format!("    pub {n}: Binding<'a>,"))
+        .collect();
+    let list: Vec<String> = MARCH_COMMON.iter().map(|n| format!("({n:?}, self.{n})")).collect();
+    format!(
+        "/// The bindings every march kernel has (`glsl/common/march.glsl`); a\n/// structure's own are its kernel's `Own`.\npub struct MarchCommon<'a> {{\n{}\n}}\nimpl<'a> MarchCommon<'a> {{\n    /// (name, resource) pairs for `Kernel::dispatch`.\n    pub fn list(self) -> Vec<(&'static str, Binding<'a>)> {{\n        vec![{}]\n    }}\n}}\n",
+        fields.join("\n"),
+        list.join(", ")
+    )
 }
 
 /// `pub mod blocks`: the [`SHARED_STRUCTS`], each checked to be laid out
@@ -358,6 +378,7 @@ fn main() {
         Ok(module) => generated.push_str(&module),
         Err(e) => panic!("GLSL interface types: {e}"),
     }
+    generated.push_str(&march_common());
     generated.push_str("/// Every embedded shader.\npub static ALL: &[Shader] = &[\n");
     for (_, name) in &names {
         let _ = writeln!(generated, "    {name},");

@@ -67,32 +67,92 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The source without comments and string literals (paths in docs or
-/// messages are not imports).
+/// The source without comments, string literals (raw ones too) and char
+/// literals: paths in docs or messages are not imports.
 fn code_of(text: &str) -> String {
+    let c: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
-    let mut chars = text.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '/' if chars.peek() == Some(&'/') => {
-                for c in chars.by_ref() {
-                    if c == '\n' {
-                        out.push('\n');
-                        break;
-                    }
+    let mut i = 0;
+    while i < c.len() {
+        let at = |i: usize, k: usize| c.get(i + k).copied().unwrap_or('\0');
+        match c[i] {
+            '/' if at(i, 1) == '/' => {
+                while i < c.len() && c[i] != '\n' {
+                    i += 1;
                 }
             }
-            '"' => {
-                let mut escaped = false;
-                for c in chars.by_ref() {
-                    if !escaped && c == '"' {
+            '/' if at(i, 1) == '*' => {
+                let mut depth = 0;
+                while i < c.len() {
+                    if c[i] == '/' && at(i, 1) == '*' {
+                        depth += 1;
+                        i += 2;
+                    } else if c[i] == '*' && at(i, 1) == '/' {
+                        depth -= 1;
+                        i += 2;
+                        if depth == 0 {
+                            break;
+                        }
+                    } else {
+                        i += 1;
+                    }
+                }
+                out.push(' ');
+            }
+            'r' if (at(i, 1) == '"' || at(i, 1) == '#')
+                && (i == 0 || !c[i - 1].is_alphanumeric() && c[i - 1] != '_') =>
+            {
+                // r"..." or r#"..."#
+                let mut j = i + 1;
+                let mut hashes = 0;
+                while c.get(j) == Some(&'#') {
+                    hashes += 1;
+                    j += 1;
+                }
+                if c.get(j) != Some(&'"') {
+                    out.push('r');
+                    i += 1;
+                    continue;
+                }
+                j += 1;
+                loop {
+                    if j >= c.len() {
                         break;
                     }
-                    escaped = !escaped && c == '\\';
+                    if c[j] == '"' && (0..hashes).all(|h| c.get(j + 1 + h) == Some(&'#')) {
+                        j += 1 + hashes;
+                        break;
+                    }
+                    j += 1;
                 }
                 out.push_str("\"\"");
+                i = j;
             }
-            _ => out.push(c),
+            '"' => {
+                i += 1;
+                while i < c.len() && c[i] != '"' {
+                    i += if c[i] == '\\' { 2 } else { 1 };
+                }
+                i += 1;
+                out.push_str("\"\"");
+            }
+            // A char literal ('x', '\n', '"'); a lifetime ('a) has no closing quote.
+            '\'' if at(i, 1) == '\\' => {
+                i += 2;
+                while i < c.len() && c[i] != '\'' {
+                    i += 1;
+                }
+                i += 1;
+                out.push_str("' '");
+            }
+            '\'' if at(i, 2) == '\'' => {
+                i += 3;
+                out.push_str("' '");
+            }
+            ch => {
+                out.push(ch);
+                i += 1;
+            }
         }
     }
     out
@@ -293,6 +353,15 @@ fn name(m: &Module) -> String {
     } else {
         m.join("/")
     }
+}
+
+#[test]
+fn the_source_reader_skips_comments_strings_and_chars() {
+    let code = code_of(
+        "let a = '\"'; use crate::x; /* crate::y */ let s = r#\"crate::z\"#; // crate::w\nlet b = \"crate::v\"; fn f<'a>() {}",
+    );
+    assert_eq!(paths_in(&code), ["crate::x", "crate::x"], "{code}");
+    assert!(code.contains("fn f<'a>()"), "{code}");
 }
 
 #[test]

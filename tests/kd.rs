@@ -179,7 +179,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
                     .unwrap();
                 let tree = s.tree().unwrap();
                 let nodes = tree.read_nodes().unwrap();
-                let what = format!("{spec} {accel} {} collapse {collapse}", kd.describe());
+                let what = format!("{spec} {accel} {kd:?} collapse {collapse}");
                 check_tree(&what, &occ, &leaf_boxes(&nodes), &kd, collapse);
                 if collapse {
                     // Every split kept is one the cost model prefers.
@@ -229,22 +229,22 @@ fn kd_params(accel: Accel, kd: &KdParams, collapse: bool) -> Params {
         ("bins", bins.as_str()),
         ("collapse", collapse),
     ];
-    let p = accel.params(&given).unwrap();
+    let p = lacuna::accel::table::params_for(accel, &given).unwrap();
     assert_eq!(KdParams::from_params(&p).unwrap().depth, kd.depth);
     p
 }
 
 #[test]
-fn kd_parameters_are_validated() {
-    assert!(KdParams::parse("medium", 32, 4)
-        .unwrap_err()
-        .to_string()
-        .contains("expected shallow or deep"));
-    assert!(KdParams::parse("deep", 4, 4)
-        .unwrap_err()
-        .to_string()
-        .contains("max-leaf"));
-    assert!(KdParams::parse("deep", 32, 1).unwrap_err().to_string().contains("bins"));
+fn kd_parameters_are_validated_by_their_schemas() {
+    let kd = common::accel("kd-gpu");
+    for (given, needle) in [
+        (("kd", "medium"), "expected shallow or deep"),
+        (("max-leaf", "4"), "an integer >= 8"),
+        (("bins", "1"), "an integer in 2..=64"),
+    ] {
+        let err = kd.params(&[given]).unwrap_err().to_string();
+        assert!(err.contains(given.0) && err.contains(needle), "{err}");
+    }
     assert!(lacuna::accel::check_cell(12)
         .unwrap_err()
         .to_string()

@@ -11,7 +11,7 @@
 use super::builder::{Builder, RangeKind, Ranges};
 use super::cost::{self, CostModel};
 use super::distance::{self, DistanceKernels, DistanceMap, DistanceMethod, Summary};
-use super::method::{Accel, BuildInput, Built, March, MarchedAs, Method};
+use super::method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method};
 use super::naive::{NoData, NAIVE};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
@@ -51,7 +51,7 @@ impl Choice {
     /// `distance-octant (cell 4)`, `distance (cell 4)` or `naive`.
     pub fn describe(&self) -> String {
         if self.accel == NAIVE {
-            "naive".into()
+            NAIVE.name().into()
         } else {
             format!("{} (cell {})", self.accel, self.cell)
         }
@@ -107,6 +107,7 @@ impl Built for Chosen {
             accel: self.choice.accel,
             label: self.choice.describe(),
             reason: self.choice.reason(),
+            kind: MarchedKind::Choice,
         })
     }
 }

@@ -116,6 +116,13 @@ impl Builder {
         Ok(k)
     }
 
+    /// The `T` of this context if a build made it already (nothing is made).
+    pub fn made<T: PerContext>(&self) -> Option<Arc<T>> {
+        let map = self.shared.lock().unwrap_or_else(|p| p.into_inner());
+        map.get(&TypeId::of::<T>())
+            .and_then(|k| Arc::clone(k).downcast::<T>().ok())
+    }
+
     /// The per-volume ranges of every kind in `kinds` (each once), computed
     /// and waited for: once per volume upload.
     pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
@@ -186,16 +193,9 @@ fn size_and_pass(kind: RangeKind) -> (u32, &'static str) {
     }
 }
 
-/// Checks a macro-cell edge: a power of two in 2..=256.
+/// Checks a macro-cell edge against the `cell` parameter's schema.
 pub fn check_cell(cell: u32) -> Result<()> {
-    if !cell.is_power_of_two() || !(2..=256).contains(&cell) {
-        return Err(Error::invalid(
-            "cell",
-            cell.to_string(),
-            "must be a power of two in 2..=256",
-        ));
-    }
-    Ok(())
+    super::params::CELL.parse(&cell.to_string()).map(|_| ())
 }
 
 impl PerContext for BrickMinMax {

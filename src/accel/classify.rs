@@ -41,36 +41,18 @@ pub const APRON: Param = Param::switch(
 );
 
 impl Classify {
-    /// From a structure's `classify` and `apron` parameters.
+    /// From a structure's `classify` and `apron` parameters: dropping the
+    /// apron is the paper's voxel voting only (range classification is
+    /// always conservative).
     pub fn from_params(p: &Params) -> Result<Self> {
-        let apron = if p.switch("apron")? { "on" } else { "off" };
-        Self::parse(p.choice("classify")?, apron)
-    }
-
-    /// From `--classify range|voxel` and `--apron on|off`.
-    pub fn parse(mode: &str, apron: &str) -> Result<Self> {
-        let apron = match apron {
-            "on" => true,
-            "off" => false,
-            other => return Err(Error::invalid("apron", other, "expected on or off")),
-        };
-        match (mode, apron) {
+        match (p.choice("classify")?, p.switch("apron")?) {
             ("range", true) => Ok(Classify::Range),
             ("range", false) => Err(Error::invalid(
                 "apron",
                 "off",
                 "only --classify voxel can drop the apron (range classification is always conservative)",
             )),
-            ("voxel", apron) => Ok(Classify::Voxel { apron }),
-            (other, _) => Err(Error::invalid("classify", other, "expected range or voxel")),
-        }
-    }
-
-    pub fn describe(self) -> &'static str {
-        match self {
-            Classify::Range => "range",
-            Classify::Voxel { apron: true } => "voxel, apron on",
-            Classify::Voxel { apron: false } => "voxel, apron off (paper)",
+            (_, apron) => Ok(Classify::Voxel { apron }),
         }
     }
 }

@@ -41,7 +41,7 @@ use super::tree::{GpuTree, Node};
 use crate::desc::{DEFAULT_STEP, ERT_OFF};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
-use crate::gpu::shaders::{self, blocks::RenderParams, march_bvh};
+use crate::gpu::shaders::{self, blocks::RenderParams, march_bvh, MarchCommon};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, TexelBuffer, Timer};
 use crate::tf::{TransferFunction, LUT_SIZE};
 use crate::volume::{GpuVolume, Volume, VoxelData, VoxelType};
@@ -300,15 +300,13 @@ impl Probe {
         // Dispatches write the same frame: order them.
         record::barrier(self.ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_WRITE);
         let groups = self.kernel.groups("cost probe", [RAYS, RAYS, 1])?;
-        let mut bindings = vec![
-            ("params", Binding::Storage(params)),
-            (
-                "volume_tex",
-                Binding::Sampled(self.volume.image.view, self.volume.sampler),
-            ),
-            ("tf_lut", Binding::TexelBuffer(self.lut.view())),
-            ("frame", Binding::Storage(&self.frame)),
-        ];
+        let mut bindings = MarchCommon {
+            params: Binding::Storage(params),
+            volume_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
+            tf_lut: Binding::TexelBuffer(self.lut.view()),
+            frame: Binding::Storage(&self.frame),
+        }
+        .list();
         bindings.extend(
             march_bvh::Own {
                 nodes: Binding::Storage(&tree.nodes),

@@ -47,6 +47,18 @@ pub struct MarchedAs {
     pub label: String,
     /// One line on why.
     pub reason: String,
+    pub kind: MarchedKind,
+}
+
+/// Why a structure is marched by another entry's kernel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MarchedKind {
+    /// Choosing is what the structure does (`auto`).
+    Choice,
+    /// The build found nothing to skip (a tree that is one leaf covering
+    /// the volume is marched by the naive kernel: the same samples, no
+    /// traversal).
+    NothingToSkip,
 }
 
 /// A built structure: what its march kernel reads beyond the bindings
@@ -158,8 +170,9 @@ impl Accel {
     }
 
     /// Its parameters at their defaults, with `given` (name, text) values
-    /// parsed in (names of other structures' parameters are left out), and
-    /// checked.
+    /// parsed in, and checked; a name it does not have is an error (for
+    /// values given to every structure, as the command line's flags are,
+    /// see `table::params_for`).
     pub fn params(self, given: &[(&str, &str)]) -> Result<Params> {
         let p = Params::resolve(self.0.params(), given)?;
         self.0.check(&p)?;

@@ -29,7 +29,7 @@ pub use bricks::GpuBricks;
 pub use builder::{check_cell, Builder, PerContext, RangeKind, Ranges};
 pub use classify::{Classifier, Classify};
 pub use cost::CostModel;
-pub use method::{Accel, BuildInput, Built, March, MarchedAs, Method, Structure};
+pub use method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method, Structure};
 pub use params::{Param, Params};
 pub use stats::Stats;
 pub use table::TABLE;

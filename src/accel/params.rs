@@ -110,6 +110,11 @@ impl Param {
         match self.kind {
             Kind::Int {
                 min,
+                max: u32::MAX,
+                power_of_two: false,
+            } => format!("an integer >= {min}"),
+            Kind::Int {
+                min,
                 max,
                 power_of_two: false,
             } => format!("an integer in {min}..={max}"),
@@ -160,16 +165,31 @@ impl Params {
     }
 
     /// `schema`'s defaults with the `given` (name, text) values parsed in;
-    /// names `schema` does not have are left out (they belong to other
-    /// structures: the command line's flags are every structure's).
+    /// a name `schema` does not have is an error listing the ones it has.
     pub fn resolve(schema: &[Param], given: &[(&str, &str)]) -> Result<Params> {
         let mut out = Self::defaults(schema);
         for (name, text) in given {
-            if let Some(p) = schema.iter().find(|p| p.name == *name) {
-                out.set(p.name, p.parse(text)?);
-            }
+            let p = schema.iter().find(|p| p.name == *name).ok_or_else(|| {
+                let names: Vec<&str> = schema.iter().map(|p| p.name).collect();
+                let has = if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                };
+                Error::invalid(
+                    "parameter",
+                    *name,
+                    format!("not a parameter of this structure (it has: {has})"),
+                )
+            })?;
+            out.set(p.name, p.parse(text)?);
         }
         Ok(out)
+    }
+
+    /// Whether the structure has the parameter `name`.
+    pub fn has(&self, name: &str) -> bool {
+        self.values.iter().any(|(n, _)| *n == name)
     }
 
     fn set(&mut self, name: &str, value: Value) {

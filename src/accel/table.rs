@@ -3,7 +3,7 @@
 //! `method.rs`); the CLI, the bench and the tests iterate it.
 
 use super::method::Accel;
-use super::params::{Kind, Param};
+use super::params::{Param, Params};
 use super::{auto, distance, grid, hybrid, kd, lbvh, naive, octree};
 use crate::error::{Error, Result};
 use crate::spatial::Traversal;
@@ -26,9 +26,6 @@ pub const TABLE: &[Accel] = &[
 ];
 
 impl Accel {
-    /// Every registered structure ([`TABLE`]).
-    pub const ALL: &'static [Accel] = TABLE;
-
     /// Naive marching, the reference every structure must equal.
     pub fn naive() -> Accel {
         naive::NAIVE
@@ -124,13 +121,31 @@ pub fn shared_params(accels: &[Accel]) -> Result<Vec<SharedParam>> {
     Ok(out)
 }
 
-/// Whether some structure of the table has a parameter of this name and
-/// kind (bench TOML keys use `_` for `-`).
-pub fn known_param(name: &str) -> Option<Kind> {
-    let name = name.replace('_', "-");
-    TABLE
-        .iter()
-        .flat_map(|a| a.method().params())
-        .find(|p| p.name == name)
-        .map(|p| p.kind)
+/// `accel`'s parameters from values given to every structure (the command
+/// line's flags, a bench TOML's keys): each value is checked against the
+/// parameter of its name, whichever structures have it (a name none has, or
+/// a bad value, is an error), then `accel` takes those it has.
+pub fn params_for(accel: Accel, given: &[(&str, &str)]) -> Result<Params> {
+    let shared = shared_params(TABLE)?;
+    let mut own = Vec::new();
+    for &(name, text) in given {
+        let param = shared
+            .iter()
+            .map(|s| s.param)
+            .chain(accel.method().params().iter().copied())
+            .find(|p| p.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = shared.iter().map(|s| s.param.name).collect();
+                Error::invalid(
+                    "parameter",
+                    name,
+                    format!("no structure has it (parameters: {})", names.join(", ")),
+                )
+            })?;
+        param.parse(text)?;
+        if accel.method().params().iter().any(|p| p.name == name) {
+            own.push((name, text));
+        }
+    }
+    accel.params(&own)
 }

@@ -8,7 +8,7 @@
 //! Siblings' boxes lie on opposite sides of their split plane, which is what
 //! makes the stack traversal visit leaves in ray order.
 
-use super::method::{Built, March, MarchedAs, Structure};
+use super::method::{Built, March, MarchedAs, MarchedKind, Structure};
 use super::naive::NAIVE;
 use super::stats::Stats;
 use crate::error::Result;
@@ -38,8 +38,9 @@ impl Built for GpuTree {
     fn marched_as(&self) -> Option<MarchedAs> {
         self.whole_box.then(|| MarchedAs {
             accel: NAIVE,
-            label: "naive".into(),
+            label: NAIVE.name().into(),
             reason: "the tree is one leaf covering the volume".into(),
+            kind: MarchedKind::NothingToSkip,
         })
     }
 }

@@ -3,7 +3,7 @@
 //! speed-against-error sweep. `bench/quick.toml` and `bench/paper.toml` are
 //! embedded in the binary, so `lacuna bench --quick` needs no files.
 
-use crate::accel::table::known_param;
+use crate::accel::table::params_for;
 use crate::accel::{Accel, Params};
 use crate::error::{Error, Result};
 use crate::volume::Filter;
@@ -128,13 +128,6 @@ impl StructureConfig {
         let mut given = Vec::new();
         for (key, value) in &self.params {
             let name = key.replace('_', "-");
-            if known_param(&name).is_none() {
-                return Err(Error::invalid(
-                    "structure parameter",
-                    key,
-                    "no structure has it (see lacuna render --help)",
-                ));
-            }
             let text = match value {
                 toml::Value::String(s) => s.clone(),
                 toml::Value::Integer(n) => n.to_string(),
@@ -152,7 +145,7 @@ impl StructureConfig {
         let given: Vec<(&str, &str)> = given.iter().map(|(n, t)| (n.as_str(), t.as_str())).collect();
         Ok(StructureSpec {
             label: self.label.clone(),
-            params: accel.params(&given)?,
+            params: params_for(accel, &given)?,
             accel,
         })
     }

@@ -134,9 +134,8 @@ pub struct Record {
     /// Sample filter of the timed frames (manual or hardware).
     #[serde(default = "manual")]
     pub filter: String,
-    /// When another entry's kernel marched the frames: `auto`'s choice
-    /// (`distance (cell 4)`, `naive`), or `naive` for a tree of one leaf
-    /// covering the volume (`Structure::marched_as`).
+    /// For a structure that chooses another (`auto`): its choice
+    /// (`distance (cell 4)`, `naive`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chosen: Option<String>,
 }

@@ -11,7 +11,7 @@ use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
-use crate::accel::{Accel, BuildInput, Builder, Params, Structure};
+use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
@@ -248,7 +248,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
     let builder = Builder::new(ctx)?;
     let renderer = Renderer::new(ctx)?;
     let info = ctx.info();
-    let setup = Setup {
+    let mut setup = Setup {
         config: config.name.clone(),
         device: info.name.clone(),
         driver: info.driver.clone(),
@@ -264,11 +264,8 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             "orthographic orbit, elevation {}, {} views",
             config.elevation, config.frames
         ),
-        cost_model: structures
-            .iter()
-            .any(|s| s.params.switch("collapse").unwrap_or(false))
-            .then(|| builder.cost_model())
-            .transpose()?,
+        // Set once a build has measured it (cost-driven leaves).
+        cost_model: None,
     };
     let least = config.warmup.max(2) as u64;
     let per_structure = 2 * least + config.builds as u64 + config.frames as u64 * config.rounds as u64;
@@ -395,6 +392,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             progress.step(1);
         }
 
+        setup.cost_model = builder.made::<CostModel>().map(|m| *m);
         let naive = runs.first().ok_or_else(|| missing("naive frames"))?;
         for (s, run) in structures.iter().zip(&runs) {
             let ranges_ms = ranges.ms(s.accel.method().ranges(&s.params)?)?;
@@ -422,8 +420,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     config.stable * 100.0
                 ));
             }
-            // Skipping that found nothing to skip says so.
-            if let Some(m) = run.structure.marched_as_reason().filter(|m| m.accel.is_naive()) {
+            // A structure that found nothing to skip says so.
+            let fell_back = |m: &MarchedAs| m.kind == MarchedKind::NothingToSkip;
+            if let Some(m) = run.structure.marched_as_reason().filter(fell_back) {
                 out.notes.push(format!(
                     "{} - {}: marched with the naive kernel ({})",
                     loaded.spec, s.label, m.reason
@@ -464,7 +463,11 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 warmed_up: run.warmup,
                 error_vs_naive: run.error.clone().ok_or_else(|| missing("frame 0"))?,
                 filter: filter.to_string(),
-                chosen: run.structure.marched_as_reason().map(|m| m.label),
+                chosen: run
+                    .structure
+                    .marched_as_reason()
+                    .filter(|m| m.kind == MarchedKind::Choice)
+                    .map(|m| m.label),
             });
             if let Some(first) = &run.first {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));

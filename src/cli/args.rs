@@ -4,7 +4,7 @@
 
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::{Arg, ArgMatches, Args, Command, FromArgMatches};
-use lacuna::accel::table::{shared_params, SharedParam};
+use lacuna::accel::table::{params_for, shared_params, SharedParam};
 use lacuna::accel::{Accel, Params, TABLE};
 use lacuna::render::{Filter, FrameBuilder, FrameDesc, Orbit, Projection, DEFAULT_STEP};
 use lacuna::Result;
@@ -13,8 +13,8 @@ use lacuna::Result;
 #[derive(Args, Clone)]
 pub struct FrameArgs {
     /// Orbit camera AZIMUTH,ELEVATION in degrees.
-    #[arg(long, default_value = "30,20", allow_hyphen_values = true, value_parser = Orbit::parse_orbit)]
-    pub camera: (f64, f64),
+    #[arg(long, default_value_t = Angles::default(), allow_hyphen_values = true)]
+    pub camera: Angles,
     /// Perspective projection with this vertical field of view (degrees); default orthographic.
     #[arg(long)]
     pub perspective: Option<f64>,
@@ -58,6 +58,31 @@ impl FrameArgs {
     }
 }
 
+/// `--camera AZIMUTH,ELEVATION` in degrees; its default is the frame's
+/// (`Orbit::default`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Angles(pub f64, pub f64);
+
+impl Default for Angles {
+    fn default() -> Self {
+        let o = Orbit::default();
+        Angles(o.azimuth_deg, o.elevation_deg)
+    }
+}
+
+impl std::fmt::Display for Angles {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{}", self.0, self.1)
+    }
+}
+
+impl std::str::FromStr for Angles {
+    type Err = lacuna::Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Orbit::parse_orbit(s).map(|(a, e)| Angles(a, e))
+    }
+}
+
 /// `--accel NAME`: a structure of the table; `--help` lists them.
 #[derive(Clone)]
 pub struct AccelParser;
@@ -94,11 +119,12 @@ pub struct StructureArgs {
 }
 
 impl StructureArgs {
-    /// `accel`'s parameters: its defaults with the values given (flags of
-    /// other structures' parameters are ignored), checked.
+    /// `accel`'s parameters: its defaults with the values given, checked
+    /// (every flag's value is checked; flags of other structures' parameters
+    /// are then left out).
     pub fn params(&self, accel: Accel) -> Result<Params> {
         let given: Vec<(&str, &str)> = self.given.iter().map(|(n, v)| (*n, v.as_str())).collect();
-        accel.params(&given)
+        params_for(accel, &given)
     }
 
     fn schema() -> Vec<SharedParam> {

@@ -103,7 +103,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let volume = args.volume.load_for(&ctx)?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
-    desc.params_for(volume.dims, volume.spacing, [0.0, 1.0])?;
+    desc.check_for(volume.dims, volume.spacing)?;
 
     let renderer = Renderer::new(&ctx)?;
     let gpu_volume = GpuVolume::upload(&ctx, &volume)?;

@@ -1,6 +1,6 @@
 //! A camera as a host engine has it: view and projection matrices in Vulkan
 //! clip space, and where the volume sits in the world. This is the one place
-//! rays are formed; the CLI's orbit cameras come here too (`Camera::matrices`).
+//! rays are formed; the CLI's orbit cameras come here too (`Orbit::matrices`).
 //!
 //! Conventions (Vulkan): clip x right, y down, depth 0 at the near plane and 1
 //! at the far one (`reverse_z`: 1 near, 0 far); pixel (x, y) of a W x H image

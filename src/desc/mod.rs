@@ -256,6 +256,12 @@ impl FrameDesc {
         self.params_for(volume.dims, volume.spacing, volume.norm)
     }
 
+    /// The checks that need the volume (the samples-per-ray cap, finite
+    /// rays), before it is loaded: a volume of `dims` voxels with `spacing`.
+    pub fn check_for(&self, dims: [u32; 3], spacing: [f32; 3]) -> Result<()> {
+        self.params_for(dims, spacing, [0.0, 1.0]).map(|_| ())
+    }
+
     /// As `params`, for a volume of `dims` voxels with `spacing` whose
     /// texels `norm` maps to values (the CPU reference's host volumes).
     pub fn params_for(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {

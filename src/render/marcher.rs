@@ -7,7 +7,7 @@ use crate::desc::FrameDesc;
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
-use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit};
+use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit, MarchCommon};
 use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, Timer, Timings};
 use crate::tf::GpuTransferFunction;
 use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
@@ -18,10 +18,6 @@ use std::sync::{Arc, Mutex};
 /// A march kernel: shader name (with its output variant), the structure's
 /// specialization constants, and the sample filter.
 type KernelKey = (&'static str, &'static [u32], Filter);
-
-/// The bindings every march kernel has (`glsl/common/march.glsl`), which
-/// the renderer binds; a structure binds the rest (`Built::bindings`).
-const COMMON_BINDINGS: [&str; 4] = ["params", "volume_tex", "tf_lut", "frame"];
 
 /// What a frame shows: the structure (built for `tf`), the volume and the
 /// transfer function on the GPU.
@@ -89,12 +85,6 @@ impl Renderer {
         let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(k) = map.get(&key) {
             return Ok(k.clone());
-        }
-        if let Some(missing) = COMMON_BINDINGS.iter().find(|b| march.shader.slot(b).is_none()) {
-            return Err(Error::Interface(format!(
-                "kernel {}: a march kernel has the binding {missing} (glsl/common/march.glsl)",
-                march.shader.name
-            )));
         }
         let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
         constants.push((FILTER_CONSTANT_ID, filter.constant()));
@@ -199,12 +189,14 @@ impl Renderer {
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
-        let mut bindings: Vec<Bound> = vec![
-            ("params", Binding::Storage(&target.params)),
-            ("volume_tex", Binding::Sampled(volume.image.view, sampler)),
-            ("tf_lut", Binding::TexelBuffer(target.lut.view())),
-            ("frame", output),
-        ];
+        // The bindings every march kernel has, then the structure's own.
+        let mut bindings: Vec<Bound> = MarchCommon {
+            params: Binding::Storage(&target.params),
+            volume_tex: Binding::Sampled(volume.image.view, sampler),
+            tf_lut: Binding::TexelBuffer(target.lut.view()),
+            frame: output,
+        }
+        .list();
         bindings.extend(structure.built.bindings());
         let push = structure.built.push();
         let mut timer = timer;

@@ -82,11 +82,6 @@ pub fn frame(
     renderer.render(scene, desc).unwrap().0
 }
 
-/// A `width` x `height` frame at the default orbit with `step`.
-pub fn desc(width: u32, height: u32) -> lacuna::render::FrameBuilder {
-    FrameDesc::builder(width, height)
-}
-
 /// Per-channel max abs difference.
 pub fn max_abs(a: &Frame, b: &Frame) -> f64 {
     lacuna::frame::diff(a, b).unwrap().max_abs

@@ -19,7 +19,7 @@ use super::cost::CostModel;
 use super::method::Method;
 use super::params::{Param, Params};
 use super::tree::Node;
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// A box of voxel footprints: `[lo, hi)` per axis.
 pub type IBox = [[i32; 3]; 2];
@@ -74,47 +74,30 @@ pub const MAX_LEAF: Param = Param::int(
     "max-leaf",
     32,
     8,
-    1 << 16,
+    u32::MAX,
     "Deep k-d trees: split leaves longer than this many voxels in the middle",
 );
 /// `--bins N`: the GPU builder's candidate planes per node.
 pub const BINS: Param = Param::int("bins", 4, 2, 64, "GPU k-d tree: candidate bins per node");
 
 impl KdParams {
-    /// From a structure's `kd`, `max-leaf` and (if it has one) `bins`.
+    /// From a structure's `kd`, `max-leaf` and (if it has one) `bins`
+    /// parameters (their schemas checked the values).
     pub fn from_params(p: &Params) -> Result<Self> {
-        let bins = match p.int("bins") {
-            Ok(b) => b,
-            Err(_) => KdParams::default().bins,
-        };
-        Self::parse(p.choice("kd")?, p.int("max-leaf")?, bins)
-    }
-
-    /// From `--kd shallow|deep`, `--max-leaf N`, `--bins N`.
-    pub fn parse(depth: &str, max_leaf: u32, bins: u32) -> Result<Self> {
-        let depth = match depth {
+        let depth = match p.choice("kd")? {
             "shallow" => Depth::Shallow,
-            "deep" => Depth::Deep,
-            other => return Err(Error::invalid("kd", other, "expected shallow or deep")),
+            _ => Depth::Deep,
         };
-        if max_leaf < 8 {
-            return Err(Error::invalid(
-                "max-leaf",
-                max_leaf.to_string(),
-                "must be at least 8 voxels",
-            ));
-        }
-        if !(2..=64).contains(&bins) {
-            return Err(Error::invalid("bins", bins.to_string(), "must be in 2..=64"));
-        }
-        Ok(KdParams { depth, max_leaf, bins })
-    }
-
-    pub fn describe(&self) -> String {
-        match self.depth {
-            Depth::Shallow => "shallow".into(),
-            Depth::Deep => format!("deep, max leaf {}", self.max_leaf),
-        }
+        let bins = if p.has("bins") {
+            p.int("bins")?
+        } else {
+            KdParams::default().bins
+        };
+        Ok(KdParams {
+            depth,
+            max_leaf: p.int("max-leaf")?,
+            bins,
+        })
     }
 
     /// Whether a node of volume `vol` is a leaf whatever its splits.

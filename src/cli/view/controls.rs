@@ -5,7 +5,7 @@
 use glam::{DVec2, Vec3};
 use lacuna::accel::{Accel, TABLE};
 use lacuna::render::{Camera, Filter, FrameDesc, Orbit, Projection};
-use lacuna::{Error, Result};
+use lacuna::Result;
 
 /// Steps the `[` and `]` keys move between, in voxels.
 const STEPS: [f32; 6] = [0.125, 0.25, 0.5, 1.0, 2.0, 4.0];
@@ -301,13 +301,7 @@ impl Controls {
         rays.base = base.to_array();
         rays.du = du.to_array();
         rays.dv = dv.to_array();
-        frame.camera(Camera::Rays(rays)).build().map_err(|e| {
-            Error::invalid(
-                "view",
-                format!("zoom {}", self.zoom),
-                format!("the camera is not usable ({e})"),
-            )
-        })
+        frame.camera(Camera::Rays(rays)).build()
     }
 }
 

@@ -114,7 +114,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let desc = args.desc()?;
     let volume = args.volume.load()?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
-    desc.params_for(volume.dims, volume.spacing, [0.0, 1.0])?;
+    desc.check_for(volume.dims, volume.spacing)?;
     let event_loop = EventLoop::new().map_err(|e| {
         Error::NoDevice(format!(
             "cannot open a window ({e}); set DISPLAY, or run under xvfb-run"

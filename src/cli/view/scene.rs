@@ -5,7 +5,7 @@
 //! is the host.
 
 use super::host::Canvas;
-use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, RangeKind, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
@@ -24,8 +24,8 @@ pub struct Scene {
     lut: GpuTransferFunction,
     pub accel: Accel,
     params: Params,
-    /// The per-volume ranges the structure reads (per structure and parameters).
-    ranges: Option<(Accel, Params, Ranges)>,
+    /// The per-volume ranges the structure reads, and which they are.
+    ranges: Option<(RangeKind, Ranges)>,
     pub structure: Structure,
     target: Option<RenderTarget>,
     timer: Timer,
@@ -90,14 +90,12 @@ impl Scene {
             self.structure = Structure::naive();
             return Ok(());
         }
-        let current = self.ranges.as_ref().map(|(a, p, _)| (*a, p));
-        if current != Some((self.accel, &self.params)) {
-            let (ranges, _) = self
-                .builder
-                .ranges_for(&[(self.accel, &self.params)], &self.gpu_volume)?;
-            self.ranges = Some((self.accel, self.params.clone(), ranges));
+        let kind = self.accel.method().ranges(&self.params)?;
+        if self.ranges.as_ref().map(|(k, _)| *k) != Some(kind) {
+            let (ranges, _) = self.builder.ranges(&[kind], &self.gpu_volume)?;
+            self.ranges = Some((kind, ranges));
         }
-        let Some((_, _, ranges)) = &self.ranges else {
+        let Some((_, ranges)) = &self.ranges else {
             unreachable!("ranges were just computed")
         };
         let input = BuildInput {
