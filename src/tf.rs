@@ -357,7 +357,15 @@ impl TransferFunction {
         let table = self.max_table_flat();
         let name = "transfer function max table";
         let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&table), usage)?;
-        Ok((GpuTransferFunction { lut, max_table }, a.join(b)))
+        let visible = self.visible_entries();
+        Ok((
+            GpuTransferFunction {
+                lut,
+                max_table,
+                visible,
+            },
+            a.join(b),
+        ))
     }
 
     /// Uploads the LUT (`vec4` per entry) and the max-alpha table and waits.
@@ -366,7 +374,19 @@ impl TransferFunction {
         let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
         let table = self.max_table_flat();
         let max_table = Buffer::with_data(ctx, "transfer function max table", bytemuck::cast_slice(&table), usage)?;
-        Ok(GpuTransferFunction { lut, max_table })
+        Ok(GpuTransferFunction {
+            lut,
+            max_table,
+            visible: self.visible_entries(),
+        })
+    }
+
+    /// The first and last LUT entries with alpha > 0; None if every entry
+    /// is transparent.
+    pub fn visible_entries(&self) -> Option<[u32; 2]> {
+        let first = self.lut.iter().position(|c| c[3] > 0.0)?;
+        let last = self.lut.iter().rposition(|c| c[3] > 0.0)?;
+        Some([first as u32, last as u32])
     }
 }
 
@@ -376,6 +396,8 @@ impl TransferFunction {
 pub struct GpuTransferFunction {
     pub lut: Buffer,
     pub max_table: Buffer,
+    /// `TransferFunction::visible_entries` (MIP and MinIP skip by it).
+    pub visible: Option<[u32; 2]>,
 }
 
 impl std::str::FromStr for TransferFunction {

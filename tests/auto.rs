@@ -7,6 +7,7 @@ mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::{auto, BuildInput, Builder, Structure};
 use lacuna::frame::diff;
+use lacuna::render::Mode;
 use lacuna::render::{FrameDesc, Renderer};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -25,6 +26,7 @@ fn build(builder: &Builder, v: &Volume, gv: &GpuVolume, tf: &TransferFunction, c
         gpu_volume: gv,
         tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     builder.build(auto, &input, &ranges, &params).unwrap().0
 }

@@ -3,26 +3,8 @@
 //! input as a one-line error with a non-zero exit and no output file.
 
 mod common;
-use common::{lacuna, Run};
+use common::{fails, lacuna, render_ok};
 use lacuna::frame::Frame;
-use std::path::Path;
-
-/// Renders `spec` at a small size with validation on; panics on failure.
-fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
-    let mut args = vec![
-        "render",
-        spec,
-        "--size",
-        "40x32",
-        "--validate",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    let r = lacuna(&args, &[]);
-    assert_eq!(r.code, 0, "stdout: {}\nstderr: {}", r.stdout, r.stderr);
-    r
-}
 
 #[test]
 fn render_prints_pass_timings_and_writes_an_exr_with_metadata() {
@@ -486,29 +468,6 @@ fn devices_lists_at_least_one() {
     let r = lacuna(&["devices"], &[]);
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stdout.starts_with("0: "), "{}", r.stdout);
-}
-
-/// Asserts a one-line `error:` on stderr naming `needle`, a non-zero exit,
-/// and that no output file (or temporary) was created.
-fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out.exr");
-    let mut all: Vec<&str> = args.to_vec();
-    let out_s = out.to_str().unwrap().to_string();
-    if args[0] == "render" {
-        all.extend(["--out", &out_s, "--validate"]);
-    }
-    let r = lacuna(&all, env);
-    assert_ne!(r.code, 0, "{all:?} succeeded: {}", r.stdout);
-    let lines: Vec<&str> = r.stderr.trim().lines().collect();
-    assert_eq!(lines.len(), 1, "{all:?}: expected one line, got:\n{}", r.stderr);
-    assert!(lines[0].contains(needle), "{all:?}: '{}' lacks '{needle}'", lines[0]);
-    assert!(!r.stderr.contains("panicked"));
-    assert_eq!(
-        std::fs::read_dir(dir.path()).unwrap().count(),
-        0,
-        "{all:?} left a file behind"
-    );
 }
 
 #[test]

@@ -7,6 +7,7 @@ use common::{assert_clean, gpu};
 use lacuna::accel::distance::{self, DistanceKernels, DistanceMap, Summary};
 use lacuna::accel::{BuildInput, Builder, RangeKind};
 use lacuna::gpu::{Context, Timer};
+use lacuna::render::Mode;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -48,6 +49,7 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     let map = ctx
         .submit_and_wait(|cmd| {

@@ -13,6 +13,7 @@ mod host;
 
 use common::{assert_clean, gpu};
 use lacuna::accel::{BuildInput, Builder};
+use lacuna::render::Mode;
 use lacuna::render::{Camera, Filter, FrameDesc, Renderer, Scene};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -49,6 +50,7 @@ fn occludes_with(accel: &str) {
         gpu_volume: &gv,
         tf: &tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     let naive_accel = common::accel("naive");
     let naive = builder

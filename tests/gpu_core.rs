@@ -386,7 +386,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("volume_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("tf_lut", texels),
             ("frame", d),
-            ("cell_flags", d)
+            ("cells", d)
         ]
     );
     assert_eq!(g.push_size, 16);

@@ -14,6 +14,7 @@ use glam::{DMat4, DVec3, DVec4};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{vk, Context};
+use lacuna::render::Mode;
 use lacuna::render::{
     reference, Camera, CameraMatrices, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection,
     RenderTarget, Renderer, Scene,
@@ -52,6 +53,7 @@ fn fixture(names: &[&str]) -> Fixture {
         gpu_volume: &gv,
         tf: &tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     let structures = wanted
         .iter()

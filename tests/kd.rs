@@ -8,6 +8,7 @@ use common::{assert_clean, gpu};
 use lacuna::accel::kd::occupancy::Occupancy;
 use lacuna::accel::kd::{cheaper_as_leaf, leaf_boxes, volume, Depth, IBox, KdParams};
 use lacuna::accel::{Accel, BuildInput, Builder, Params};
+use lacuna::render::Mode;
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -171,6 +172,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
+            mode: Mode::Composite,
         };
         for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {
             for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {

@@ -6,6 +6,7 @@ mod common;
 use common::{assert_clean, gpu};
 use lacuna::accel::lbvh::{cpu, Node};
 use lacuna::accel::{BuildInput, Builder, Classify, Params, RangeKind, Stats};
+use lacuna::render::Mode;
 use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
 use lacuna::{TransferFunction, Volume};
 
@@ -72,6 +73,7 @@ fn gpu_lbvh_with(builder: &Builder, v: &Volume, tf: &TransferFunction, params: &
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, params).unwrap();
     let l = s.tree().unwrap();
@@ -261,6 +263,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
+            mode: Mode::Composite,
         };
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);
         let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();

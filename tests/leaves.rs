@@ -6,6 +6,7 @@ use common::{assert_clean, gpu};
 use lacuna::accel::cost::{self, FLOOR_NS};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Stats};
 use lacuna::render::FrameDesc;
+use lacuna::render::Mode;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -50,6 +51,7 @@ fn with_input<T>(
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     f(&builder, &input, &ranges)
 }

@@ -15,6 +15,7 @@ use lacuna::frame::diff;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::shaders::{self, march_grid};
 use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
+use lacuna::render::Mode;
 use lacuna::render::{Filter, FrameDesc, Projection, Renderer, Scene};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{Result, TransferFunction, Volume};
@@ -172,6 +173,11 @@ impl Method for FullGrid {
     fn march(&self) -> March {
         March::plain(shaders::MARCH_GRID)
     }
+    /// The grid kernel reads value ranges in MIP and MinIP frames, which
+    /// this toy does not build.
+    fn marches(&self, mode: &Mode) -> bool {
+        matches!(mode, Mode::Composite | Mode::Iso(_))
+    }
     fn record_build(
         &self,
         builder: &Builder,
@@ -214,7 +220,7 @@ impl Method for FullGrid {
 impl Built for FullGridData {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
-            cell_flags: Binding::Storage(&self.flags),
+            cells: Binding::Storage(&self.flags),
         }
         .list()
     }
@@ -261,6 +267,7 @@ fn a_structure_outside_the_table_builds_records_and_renders_exactly() {
         gpu_volume: &gv,
         tf: &tf,
         gpu_tf: &lut,
+        mode: Mode::Composite,
     };
     // Submitted by the default `Method::build`, and recorded into ours.
     let (built, timings) = builder.build(toy, &input, &ranges, &params).unwrap();

@@ -3,8 +3,9 @@
 // the cell's planes at every step (no accumulated error); a direction
 // component of exactly 0 never crosses its axis. Cell spans come from the
 // cell boxes with the usual margin, so a cell the DDA grazes past within
-// rounding is still covered by its neighbours' margins. The includer binds
-// `cell_flags` and provides GRID_CELL (edge in voxels) and GRID_COUNTS.
+// rounding is still covered by its neighbours' margins. The includer
+// provides GRID_CELL (edge in voxels), GRID_COUNTS and GRID_CELL_ACTIVE(m, i)
+// (whether ray m marches cell i).
 #ifndef LACUNA_GRID_DDA_GLSL
 #define LACUNA_GRID_DDA_GLSL
 
@@ -22,7 +23,7 @@ void march_grid(inout March m, float t0, float t1, float eps) {
     int guard = counts.x + counts.y + counts.z + 4;
     while (guard-- > 0 && !m.done) {
         uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
-        if (cell_flags[index] != 0u) {
+        if (GRID_CELL_ACTIVE(m, index)) {
             vec3 lo = vec3(cell) * c;
             vec3 hi = min(lo + c, vec3(params.dims));
             vec2 s = region_span(m, lo, hi, eps);

@@ -6,6 +6,18 @@
 #define LACUNA_LATTICE_GLSL
 
 #include "opacity.glsl"
+#include "light.glsl"
+
+// What a ray accumulates (src/desc/look.rs `Mode::constant`), and whether
+// composite samples are lit: specialization constants, so a composite frame
+// compiles to the plain composite march.
+layout(constant_id = 17) const uint MARCH_MODE = 0u;
+layout(constant_id = 18) const uint MARCH_SHADE = 0u;
+const uint MODE_COMPOSITE = 0u;
+const uint MODE_MIP = 1u;
+const uint MODE_MINIP = 2u;
+const uint MODE_AVERAGE = 3u;
+const uint MODE_ISO = 4u;
 
 struct March {
     Ray ray;
@@ -21,10 +33,26 @@ struct March {
     VolumeRay vr;
     float ert;     // early-termination alpha
     uint tf_n;     // LUT entries per table
+    float jitter;  // the pixel's lattice offset in steps, [0, 1) (0 without jitter)
+    // Mode state: the extreme so far (mip, minip); the sum and count of
+    // samples (average); the previous sample's value, whether it is the
+    // sample just before k, and the surface hit (iso).
+    float best;
+    float sum;
+    float count;
+    float prev;
+    bool has_prev;
+    bool hit;
+    float hit_t;
+    float hit_v;
 };
 
+// Bisection steps refining an iso crossing: the step over 2^16.
+const int ISO_BISECTIONS = 16;
+
 float lattice_t(March m, int k) {
-    precise float t = m.t_enter + float(k) * m.dt;
+    // (k + 0) is k exactly: without jitter this is t_enter + k dt.
+    precise float t = m.t_enter + (float(k) + m.jitter) * m.dt;
     return t;
 }
 
@@ -32,7 +60,7 @@ float lattice_t(March m, int k) {
 // decreases with k, so every k below it has t_k < t: loops can count
 // indices instead of comparing each sample's t.
 int lattice_index(March m, float t) {
-    int k = max(m.k, int(ceil((t - m.t_enter) / m.dt)));
+    int k = max(m.k, int(ceil((t - m.t_enter) / m.dt - m.jitter)));
     // ceil of a rounded quotient can be one off either way: fix it on t_k itself.
     while (k > m.k && lattice_t(m, k - 1) >= t) {
         k -= 1;
@@ -61,20 +89,53 @@ bool march_begin(Ray ray, float dt, out March m) {
     m.vr = volume_ray(ray.org, ray.dir);
     m.ert = params.ert;
     m.tf_n = params.lut_size;
+    m.jitter = 0.0;
+    m.best = MARCH_MODE == MODE_MINIP ? 2.0 : -1.0;
+    m.sum = 0.0;
+    m.count = 0.0;
+    m.prev = 0.0;
+    m.has_prev = false;
+    m.hit = false;
+    m.hit_t = 0.0;
+    m.hit_v = 0.0;
     march_set_exit(m, hit.y);
     return !m.done;
 }
 
-// Sets up pixel px's march along its camera ray (camera.glsl), ending at
-// the host's opaque surface when the frame has a depth limit. The limit only
-// shortens t_exit: the lattice stays t_enter + k * dt, so every structure
-// still takes exactly naive's samples.
-bool march_pixel(uvec2 px, out March m) {
-    bool hit = march_begin(camera_ray(px), params.step, m);
-    if (hit && params.depth_limits != 0u) {
-        march_set_exit(m, min(m.t_exit, params.t_max[px.y * params.image.x + px.x]));
+// A fixed per-pixel fraction in [0, 1) (PCG hash of the pixel), the same on
+// every device and in src/render/reference.rs.
+float pixel_jitter(uvec2 px) {
+    uint h = px.x * 747796405u + px.y * 2891336453u + 277803737u;
+    h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;
+    h = (h >> 22u) ^ h;
+    return float(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// The part of the ray the clip planes and crop box keep: (lo, hi) in t.
+vec2 clip_interval(Ray r) {
+    vec2 keep = vec2(-3.4e38, 3.4e38);
+    for (uint i = 0u; i < params.clip_count; ++i) {
+        vec4 c = params.clip[i];
+        precise float at = dot(c.xyz, r.org) + c.w;
+        precise float along = dot(c.xyz, r.dir);
+        if (along == 0.0) {
+            if (!(at >= 0.0)) {
+                keep = vec2(1.0, -1.0);
+            }
+        } else {
+            precise float t = -at / along;
+            if (along > 0.0) {
+                keep.x = max(keep.x, t);
+            } else {
+                keep.y = min(keep.y, t);
+            }
+        }
     }
-    return !m.done;
+    if (params.crop != 0u) {
+        vec2 box = intersect_box(r, params.crop_lo, params.crop_hi);
+        keep = vec2(max(keep.x, box.x), min(keep.y, box.y));
+    }
+    return keep;
 }
 
 // Advances k to the first lattice point at or past t (never backwards).
@@ -86,10 +147,36 @@ void march_skip_to(inout March m, float t) {
         m.done = true;
         return;
     }
-    m.k = lattice_index(m, t);
+    int k = lattice_index(m, t);
+    // A skip leaves no previous sample to pair with (iso).
+    m.has_prev = m.has_prev && k == m.k;
+    m.k = k;
     if (m.k >= m.k_end) {
         m.done = true;
     }
+}
+
+// Sets up pixel px's march along its camera ray (camera.glsl), ending at
+// the host's opaque surface when the frame has a depth limit. The limit only
+// shortens t_exit: the lattice stays t_enter + k * dt, so every structure
+// still takes exactly naive's samples.
+bool march_pixel(uvec2 px, out March m) {
+    bool hit = march_begin(camera_ray(px), params.step, m);
+    if (hit && params.jitter != 0u) {
+        m.jitter = pixel_jitter(px);
+        march_set_exit(m, m.t_exit);
+    }
+    if (hit && params.depth_limits != 0u) {
+        march_set_exit(m, min(m.t_exit, params.t_max[px.y * params.image.x + px.x]));
+    }
+    // Clip planes and the crop box cut the ray's interval; the lattice
+    // keeps its origin at the box entry.
+    if (hit && (params.clip_count != 0u || params.crop != 0u)) {
+        vec2 keep = clip_interval(m.ray);
+        march_set_exit(m, min(m.t_exit, keep.y));
+        march_skip_to(m, keep.x);
+    }
+    return !m.done;
 }
 
 // Composites one sample whose alpha is its opacity over its path length.
@@ -113,15 +200,92 @@ vec4 shade(March m, float v, float w) {
     return tf_lookup(v, 0u, m.tf_n);
 }
 
+// The sample colour at value v standing for w voxels of path, lit when the
+// frame is shaded (p: the sample's point in the filter's coordinates).
+vec4 composite_sample(March m, float v, float w, vec3 p, bool full) {
+    vec4 c = full ? tf_lookup(v, 0u, m.tf_n) : shade(m, v, w);
+    if (MARCH_SHADE != 0u && c.a > 0.0) {
+        c = light_sample(m.vr, p, m.ray.dir, c);
+    }
+    return c;
+}
+
+// The first crossing of an iso value between the lattice samples at t0
+// (value v0) and t1 (value v1), refined by bisection on the trilinear field
+// along the ray: records the smallest crossing's t and value, ends the march.
+void iso_crossing(inout March m, float t0, float v0, float t1, float v1) {
+    float best_t = 3.4e38;
+    float best_v = 0.0;
+    for (uint i = 0u; i < params.iso_count; ++i) {
+        float iso = params.iso[i];
+        bool below = v0 < iso;
+        if (below == (v1 < iso)) {
+            continue;
+        }
+        float a = t0;
+        float b = t1;
+        for (int it = 0; it < ISO_BISECTIONS; ++it) {
+            precise float mid = 0.5 * (a + b);
+            if ((sample_volume(m.vr, mid) < iso) == below) {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        precise float t = 0.5 * (a + b);
+        if (t < best_t) {
+            best_t = t;
+            best_v = iso;
+        }
+    }
+    if (best_t < 3.4e38) {
+        m.hit = true;
+        m.hit_t = best_t;
+        m.hit_v = best_v;
+        m.done = true;
+    }
+}
+
+// Takes the sample at t (value v) standing for w voxels; `full`: w == dt.
+void take_sample(inout March m, float t, float w, bool full) {
+    float v = sample_volume(m.vr, t);
+    if (VOLUME_NAN != 0u && isnan(v)) {
+        m.has_prev = false;
+        return;
+    }
+    if (MARCH_MODE == MODE_COMPOSITE) {
+        precise vec3 p = m.vr.org + t * m.vr.dir;
+        composite(m, composite_sample(m, v, w, p, full));
+    } else if (MARCH_MODE == MODE_MIP) {
+        m.best = max(m.best, v);
+        // Nothing exceeds 1: the rest of the ray cannot change the result.
+        m.done = m.best >= 1.0;
+    } else if (MARCH_MODE == MODE_MINIP) {
+        m.best = min(m.best, v);
+        m.done = m.best <= 0.0;
+    } else if (MARCH_MODE == MODE_AVERAGE) {
+        m.sum += v;
+        m.count += 1.0;
+    } else {
+        if (m.has_prev) {
+            iso_crossing(m, lattice_t(m, m.k - 1), m.prev, t, v);
+        }
+        m.prev = v;
+        m.has_prev = true;
+    }
+}
+
 // Takes lattice sample k, which is not the ray's last (k + 1 < k_end), and
 // moves to k + 1; ends the march on early termination. Each sample stands
 // for [t_k, t_k + dt): all but the last have the full length, so they read
 // the corrected LUT with no branch (a CPU SIMD lane runs both sides of one).
 void march_full_sample(inout March m) {
     float t = lattice_t(m, m.k);
-    composite(m, tf_lookup(sample_volume(m.vr, t), 0u, m.tf_n));
+    take_sample(m, t, m.dt, true);
     m.k += 1;
-    m.done = m.acc.a >= m.ert;
+    if (MARCH_MODE == MODE_COMPOSITE) {
+        m.done = m.acc.a >= m.ert;
+    }
 }
 
 // Takes the ray's last sample (k = k_end - 1), weighted by its length up to
@@ -129,9 +293,39 @@ void march_full_sample(inout March m) {
 void march_last_sample(inout March m) {
     float t = lattice_t(m, m.k);
     precise float w = min(m.dt, m.t_exit - t);
-    composite(m, shade(m, sample_volume(m.vr, t), w));
+    take_sample(m, t, w, false);
     m.k += 1;
     m.done = true;
+}
+
+// The pixel's premultiplied RGBA once the march ended.
+vec4 march_result(March m) {
+    if (MARCH_MODE == MODE_COMPOSITE) {
+        return m.acc;
+    }
+    if (MARCH_MODE == MODE_ISO) {
+        if (!m.hit) {
+            return vec4(0.0);
+        }
+        // Opaque, in the iso colour or the TF's colour at the value, lit.
+        vec3 rgb = params.iso_colored != 0u ? params.iso_color : tf_lookup(m.hit_v, m.tf_n, m.tf_n).rgb;
+        precise vec3 p = m.vr.org + m.hit_t * m.vr.dir;
+        return vec4(light_sample(m.vr, p, m.ray.dir, vec4(rgb, 1.0)).rgb, 1.0);
+    }
+    float v = m.best;
+    if (MARCH_MODE == MODE_AVERAGE) {
+        if (m.count == 0.0) {
+            return vec4(0.0);
+        }
+        precise float mean = m.sum / m.count;
+        v = mean;
+    } else if (v < 0.0 || v > 1.0) {
+        // No sample (a missed or fully clipped ray, or only no-data samples).
+        return vec4(0.0);
+    }
+    // One value through the raw LUT: its colour and opacity, premultiplied.
+    vec4 c = tf_lookup(v, m.tf_n, m.tf_n);
+    return vec4(c.rgb * c.a, c.a);
 }
 
 // Marches the samples k < stop (stop <= k_end), front to back: the full
@@ -181,6 +375,12 @@ vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
 // back; k never moves backwards, so overlapping spans take no sample twice.
 void march_region(inout March m, vec2 span) {
     if (span.x < span.y) {
+        if (MARCH_MODE == MODE_ISO) {
+            // Iso tests pairs of consecutive samples: a pair that straddles
+            // the region's entry or exit is the region's too. Pairs wholly
+            // outside active regions cross nothing (README, "Isosurfaces").
+            span = vec2(span.x - m.dt, span.y + m.dt);
+        }
         march_skip_to(m, span.x);
         march_span(m, span.y);
     }

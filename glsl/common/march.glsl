@@ -40,7 +40,7 @@ void main() {
     if (march_pixel(px, m)) {
         march_ray(m);
     }
-    frame_store(px, m.acc);
+    frame_store(px, march_result(m));
 }
 
 #endif

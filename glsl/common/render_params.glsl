@@ -29,6 +29,28 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     // NDC (x, y, depth, 1) to homogeneous voxel space (host depth images).
     mat4 ndc_to_voxel;
     float far_depth;  // the depth of the far plane: no surface there
+    uint jitter;      // 1: each pixel's lattice starts a hashed fraction of a step later
+    uint clip_count;  // clip planes in use
+    uint crop;        // 1: the crop box applies
+    vec4 clip[6];     // keep a x + b y + c z + d >= 0 (voxel space)
+    vec3 crop_lo;     // the crop box (voxel space)
+    uint iso_count;   // iso values in use (mode iso)
+    vec3 crop_hi;
+    uint iso_colored; // 1: iso surfaces take iso_color, else the TF's colour at the value
+    vec4 iso;         // iso values (normalised)
+    vec3 iso_color;
+    float gradient_lo; // gradient opacity: 0 at this gradient magnitude...
+    vec3 light;       // direction toward a fixed light (physical space, unit)
+    uint headlight;   // 1: the light is at the eye
+    vec4 shading;     // ambient, diffuse, specular, shininess
+    vec3 spacing;     // physical size of a voxel
+    float gradient_hi; // ...1 at this one
+    uint gradient_opacity; // 1: opacity times the gradient ramp
+    // MIP (MinIP): values at or below (above) value_bound map to transparent;
+    // a sample exceeds its footprint's value range by at most value_margin
+    // (src/accel/mode.rs). Read by structures that skip per ray.
+    float value_bound;
+    float value_margin;
     // Per pixel (row-major), when depth_limits == 1: the ray's t where the
     // host's opaque surface is, written by glsl/render/depth_limit.comp.
     float t_max[];

@@ -12,6 +12,12 @@
 
 layout(set = 0, binding = VOLUME_BINDING) uniform sampler3D volume_tex;
 layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
+// 1: the volume holds NaN voxels ("no data"; src/volume, README "NaN"). A
+// sample any of whose eight voxels is NaN is NaN (IEEE arithmetic carries
+// it through the interpolation), and NaN samples contribute nothing. Only
+// the manual filter samples such volumes: hardware filtering of NaN is the
+// device's to define.
+layout(constant_id = 19) const uint VOLUME_NAN = 0u;
 
 // What sampling along one ray needs, loaded once per ray: a storage-buffer
 // read per sample is dear on lavapipe, and the hardware path's coordinates
@@ -19,6 +25,7 @@ layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
 struct VolumeRay {
     vec3 org;  // the ray in the filter's coordinates: voxels (manual) or
     vec3 dir;  // normalised texture coordinates (hardware)
+    vec3 unit; // one voxel along each axis in those coordinates
     ivec3 hi;  // the last voxel per axis
     vec2 norm; // v = (texel - norm.x) * norm.y
 };
@@ -33,9 +40,11 @@ VolumeRay volume_ray(vec3 org, vec3 dir) {
         precise vec3 d = dir / dims;
         v.org = o;
         v.dir = d;
+        v.unit = 1.0 / dims;
     } else {
         v.org = org;
         v.dir = dir;
+        v.unit = vec3(1.0);
     }
     v.hi = ivec3(params.dims) - 1;
     v.norm = params.norm;
@@ -72,16 +81,24 @@ float sample_manual(vec3 p, ivec3 hi) {
     return raw;
 }
 
-// Normalised value in [0, 1] at the ray's point t.
-float sample_volume(VolumeRay r, float t) {
-    precise vec3 p = r.org + t * r.dir;
+// The stored texel value at p (the filter's coordinates).
+float sample_raw(VolumeRay r, vec3 p) {
     precise float raw;
     if (VOLUME_FILTER == 1u) {
         raw = textureLod(volume_tex, p, 0.0).r;
     } else {
         raw = sample_manual(p, r.hi);
     }
-    precise float v = (raw - r.norm.x) * r.norm.y;
+    return raw;
+}
+
+// Normalised value in [0, 1] at the ray's point t (NaN: no data).
+float sample_volume(VolumeRay r, float t) {
+    precise vec3 p = r.org + t * r.dir;
+    precise float v = (sample_raw(r, p) - r.norm.x) * r.norm.y;
+    if (VOLUME_NAN != 0u && isnan(v)) {
+        return v;
+    }
     return clamp(v, 0.0, 1.0);
 }
 

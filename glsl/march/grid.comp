@@ -1,18 +1,38 @@
 #version 460
 // Macro-cell grid: 3D-DDA over the cells from entry to exit, marching the
-// active ones on the global lattice.
+// active ones on the global lattice. A cell is active by its flag (the
+// frame's classification), or in MIP (MinIP) frames by its value range
+// against the ray's running max (min), decided as the ray reaches it.
 #extension GL_GOOGLE_include_directive : require
 
 #include "march.glsl"
 
-layout(std430, set = 0, binding = OWN_BINDING) readonly buffer CellFlags { uint cell_flags[]; };
+// Per cell: a flag (composite, iso), or the bits of its normalised value
+// range over the apron, (min, max) (mip, minip: src/accel/grid.rs).
+layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Cells { uint cells[]; };
 layout(push_constant) uniform Grid {
     uvec3 counts; // cells per axis
     uint cell;    // cell edge in voxels
 } grid;
 
+// A cell can change a MIP pixel only if some sample in it can exceed both
+// the running max and every value the TF maps to transparent; samples lie
+// within the cell's range widened by value_margin (src/accel/mode.rs).
+bool grid_cell_active(March m, uint i) {
+    if (MARCH_MODE == MODE_MIP) {
+        float hi = uintBitsToFloat(cells[2u * i + 1u]);
+        return hi + params.value_margin > max(m.best, params.value_bound);
+    }
+    if (MARCH_MODE == MODE_MINIP) {
+        float lo = uintBitsToFloat(cells[2u * i]);
+        return lo - params.value_margin < min(m.best, params.value_bound);
+    }
+    return cells[i] != 0u;
+}
+
 #define GRID_CELL grid.cell
 #define GRID_COUNTS grid.counts
+#define GRID_CELL_ACTIVE(m, i) grid_cell_active(m, i)
 #include "grid_dda.glsl"
 
 void march_ray(inout March m) {

@@ -17,6 +17,7 @@ layout(push_constant) uniform Grid {
 
 #define GRID_CELL grid.cell
 #define GRID_COUNTS grid.counts
+#define GRID_CELL_ACTIVE(m, i) (cell_flags[i] != 0u)
 #include "grid_dda.glsl"
 #define TREE_LEAF(m, span, eps) march_grid(m, span.x, span.y, eps)
 #include "tree_traverse.glsl"

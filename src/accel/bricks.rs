@@ -70,7 +70,8 @@ impl GpuBricks {
             ctx,
             "brick ranges",
             total * 8,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
+            // A grid's MIP frames copy them (src/accel/grid.rs).
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;
         Ok(GpuBricks {

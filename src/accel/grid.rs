@@ -1,6 +1,9 @@
 //! Macro-cell grid (OSPRay style): per-cell value ranges over a one-voxel
 //! apron computed once per volume, reclassified in O(cells) per transfer
-//! function; `glsl/march/grid.comp` steps through the cells by 3D-DDA.
+//! function; `glsl/march/grid.comp` steps through the cells by 3D-DDA. In
+//! MIP and MinIP frames the cells keep their ranges instead of flags, and
+//! each ray decides per cell whether it can beat the ray's running max
+//! (min) (`accel::mode`).
 
 use super::bricks::GpuBricks;
 use super::builder::{Builder, RangeKind, Ranges};
@@ -9,7 +12,9 @@ use super::method::{BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
+use crate::desc::Mode;
 use crate::error::Result;
+use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, march_grid};
 use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
 
@@ -19,8 +24,10 @@ pub const CELL: u32 = 16;
 pub struct Grid {
     pub cell: u32,
     pub counts: [u32; 3],
-    /// u32 per cell, 1 = active.
+    /// u32 per cell, 1 = active; or, when `ranges`, vec2(min, max) per cell.
     pub flags: Buffer,
+    /// The cells hold value ranges, decided per ray (MIP, MinIP).
+    pub ranges: bool,
     total: u64,
     /// Counted from a flag readback only when statistics are asked for.
     active: std::sync::OnceLock<u64>,
@@ -29,7 +36,12 @@ pub struct Grid {
 impl Grid {
     /// The paper's Table 1 statistics (counts the active cells once).
     pub fn stats(&self) -> Result<Stats> {
-        let active = count_active(&self.flags, self.total, &self.active)?;
+        // Ranges are decided per ray: every cell may be marched.
+        let active = if self.ranges {
+            self.total
+        } else {
+            count_active(&self.flags, self.total, &self.active)?
+        };
         let unit = if self.cell == 16 { "16^3 cells" } else { "cells" };
         Ok(Stats {
             unit,
@@ -38,7 +50,7 @@ impl Grid {
             nodes: self.total,
             leaves: active,
             height: 1,
-            bytes: self.total * 4,
+            bytes: self.flags.size(),
         })
     }
 
@@ -88,6 +100,45 @@ pub fn record(
         cell: cells.brick,
         counts: cells.counts,
         flags,
+        ranges: false,
+        total: cells.total,
+        active: std::sync::OnceLock::new(),
+    })
+}
+
+/// Records a copy of the value ranges of `cells` into a new buffer the
+/// grid's MIP and MinIP frames read ("classify": what replaces it). Ends
+/// with the copy made visible to compute reads.
+pub fn record_ranges(
+    builder: &Builder,
+    cmd: vk::CommandBuffer,
+    mut timer: Option<&mut Timer>,
+    cells: &GpuBricks,
+) -> Result<Grid> {
+    let bytes = cells.total * 8;
+    let ranges = Buffer::new(
+        builder.context(),
+        "grid cell ranges",
+        bytes,
+        STORAGE_XFER,
+        MemoryLocation::GpuOnly,
+    )?;
+    let device = builder.context().device();
+    let pass = timer.begin(cmd, "classify")?;
+    record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+    let region = [vk::BufferCopy {
+        src_offset: 0,
+        dst_offset: 0,
+        size: bytes,
+    }];
+    unsafe { device.cmd_copy_buffer(cmd, cells.ranges.raw, ranges.raw, &region) };
+    record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+    timer.end(cmd, pass);
+    Ok(Grid {
+        cell: cells.brick,
+        counts: cells.counts,
+        flags: ranges,
+        ranges: true,
         total: cells.total,
         active: std::sync::OnceLock::new(),
     })
@@ -124,7 +175,11 @@ impl Method for GridMethod {
         ranges: &Ranges,
         p: &Params,
     ) -> Result<Box<dyn Built>> {
-        let grid = record(builder, cmd, timer, input, ranges.cells(p.int("cell")?)?)?;
+        let cells = ranges.cells(p.int("cell")?)?;
+        let grid = match input.mode {
+            Mode::Mip | Mode::MinIp => record_ranges(builder, cmd, timer, cells)?,
+            _ => record(builder, cmd, timer, input, cells)?,
+        };
         Ok(Box::new(grid))
     }
 }
@@ -132,7 +187,7 @@ impl Method for GridMethod {
 impl Built for Grid {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
-            cell_flags: Binding::Storage(&self.flags),
+            cells: Binding::Storage(&self.flags),
         }
         .list()
     }

@@ -8,6 +8,7 @@
 use super::builder::{Builder, RangeKind, Ranges};
 use super::params::{Param, Params};
 use super::stats::Stats;
+use crate::desc::Mode;
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Bound, Shader, Timer, Timings};
 use crate::tf::{GpuTransferFunction, TransferFunction};
@@ -30,12 +31,15 @@ impl March {
 }
 
 /// What a build reads: the volume and transfer function on the host (for
-/// host-built structures) and on the GPU.
+/// host-built structures) and on the GPU, and the mode of the frames it is
+/// for (what "empty" means: `accel::mode`).
+#[derive(Clone, Copy)]
 pub struct BuildInput<'a> {
     pub volume: &'a Volume,
     pub gpu_volume: &'a GpuVolume,
     pub tf: &'a TransferFunction,
     pub gpu_tf: &'a GpuTransferFunction,
+    pub mode: Mode,
 }
 
 /// When a built structure is marched by another entry's kernel: which, and why.
@@ -59,6 +63,9 @@ pub enum MarchedKind {
     /// the volume is marched by the naive kernel: the same samples, no
     /// traversal).
     NothingToSkip,
+    /// The structure does not skip in the frame's mode (`Method::marches`):
+    /// naive marching.
+    ModeFallback,
 }
 
 /// A built structure: what its march kernel reads beyond the bindings
@@ -105,6 +112,12 @@ pub trait Method: Sync {
     fn ranges(&self, params: &Params) -> Result<RangeKind>;
     /// Its march kernel.
     fn march(&self) -> March;
+    /// Whether its kernel marches frames of `mode` skipping exactly
+    /// (`accel::mode`); in other modes it is marched naively. Default:
+    /// every mode but average, each classifying by its activity function.
+    fn marches(&self, mode: &Mode) -> bool {
+        !matches!(mode, Mode::Average)
+    }
     /// The parameter sets the exactness checks (the identity tests and
     /// `bench --suite hard`) build it with: (label, values).
     fn variants(&self) -> Result<Vec<(String, Params)>> {
@@ -222,10 +235,32 @@ impl serde::Serialize for Accel {
 pub struct Structure {
     pub accel: Accel,
     pub params: Params,
+    /// The mode of the frames it was built for (None: any, as naive).
+    pub mode: Option<Mode>,
     pub built: Box<dyn Built>,
+    /// What a recorded build's command buffer still reads (the activity
+    /// LUT of a mode's build and its staging).
+    pub(crate) _keep: Option<Box<dyn Any>>,
 }
 
 impl Structure {
+    /// A frame of `mode` can use this structure: it was built for frames
+    /// that classify alike (`Mode::same_classification`).
+    pub fn check_mode(&self, mode: &Mode) -> Result<()> {
+        match &self.mode {
+            Some(built) if !built.same_classification(mode) => Err(Error::invalid(
+                "frame mode",
+                mode.name(),
+                format!(
+                    "the {} structure was built for {} frames: build it with the frame's mode",
+                    self.accel,
+                    built.name()
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The entry whose kernel marches this structure's frames: its own, or
     /// what [`Built::marched_as`] names.
     pub fn marched_as(&self) -> Accel {
@@ -250,60 +285,5 @@ impl Structure {
     /// The built data as its concrete type (`auto::Chosen`, `GpuTree`, ...).
     pub fn built_as<T: Any>(&self) -> Option<&T> {
         (self.built.as_ref() as &dyn Any).downcast_ref::<T>()
-    }
-}
-
-impl Builder {
-    /// Builds `accel` with `params` for the input's transfer function and
-    /// waits: the path a TF change takes. Returns the structure and its
-    /// timings per phase.
-    pub fn build(
-        &self,
-        accel: Accel,
-        input: &BuildInput,
-        ranges: &Ranges,
-        params: &Params,
-    ) -> Result<(Structure, Timings)> {
-        accel.method().check(params)?;
-        let (built, t) = accel.method().build(self, input, ranges, params)?;
-        Ok((
-            Structure {
-                accel,
-                params: params.clone(),
-                built,
-            },
-            t,
-        ))
-    }
-
-    /// Records the build of a recordable structure into `cmd` (see
-    /// [`Method::record_build`] for the barriers); host-driven structures
-    /// return an error saying so.
-    pub fn record_build(
-        &self,
-        accel: Accel,
-        cmd: vk::CommandBuffer,
-        timer: Option<&mut Timer>,
-        input: &BuildInput,
-        ranges: &Ranges,
-        params: &Params,
-    ) -> Result<Structure> {
-        accel.method().check(params)?;
-        let built = accel.method().record_build(self, cmd, timer, input, ranges, params)?;
-        Ok(Structure {
-            accel,
-            params: params.clone(),
-            built,
-        })
-    }
-
-    /// The per-volume ranges the structures read (each kind once): once
-    /// per volume upload.
-    pub fn ranges_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
-        let kinds = structures
-            .iter()
-            .map(|(a, p)| a.method().ranges(p))
-            .collect::<Result<Vec<_>>>()?;
-        self.ranges(&kinds, volume)
     }
 }

@@ -8,6 +8,7 @@
 
 pub mod auto;
 pub mod bricks;
+mod build;
 pub mod builder;
 pub mod classify;
 pub mod cost;
@@ -17,6 +18,7 @@ pub mod hybrid;
 pub mod kd;
 pub mod lbvh;
 pub mod method;
+pub mod mode;
 pub mod morton;
 pub mod naive;
 pub mod octree;

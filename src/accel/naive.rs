@@ -5,6 +5,7 @@ use super::builder::{Builder, RangeKind, Ranges};
 use super::method::{Accel, BuildInput, Built, March, Method, Structure};
 use super::params::Params;
 use super::stats::Stats;
+use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::{shaders, vk, Bound, Timer};
 
@@ -39,6 +40,10 @@ impl Method for Naive {
     fn march(&self) -> March {
         March::plain(shaders::MARCH_NAIVE)
     }
+    /// Every mode: the reference.
+    fn marches(&self, _: &Mode) -> bool {
+        true
+    }
     fn record_build(
         &self,
         _: &Builder,
@@ -58,7 +63,9 @@ impl Structure {
         Structure {
             accel: NAIVE,
             params: Params::default(),
+            mode: None,
             built: Box::new(NoData),
+            _keep: None,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! validation message and no NaN or infinity in the frame.
 
 use crate::accel::{Accel, BuildInput, Builder, Params, Structure};
+use crate::desc::Mode;
 use crate::error::Result;
 use crate::frame::{diff, Frame};
 use crate::gpu::Context;
@@ -259,6 +260,7 @@ pub fn run(ctx: &Context, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>>
             gpu_volume: &gv,
             tf: &tf,
             gpu_tf: &lut,
+            mode: Mode::Composite,
         };
         // The ranges every variant reads, each kind computed once.
         let variants = structures()?;

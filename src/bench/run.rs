@@ -12,6 +12,7 @@ use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
 use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
+use crate::desc::Mode;
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
@@ -311,6 +312,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             gpu_volume: &gv,
             tf,
             gpu_tf: &lut,
+            mode: Mode::Composite,
         };
         // lacuna info's occupancy figures.
         let n = v.data.len();

@@ -2,6 +2,7 @@
 //! early termination, sample filter) and the structure (`--accel` and every
 //! structure's parameters, as flags made from their schemas).
 
+use super::look::LookArgs;
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::{Arg, ArgMatches, Args, Command, FromArgMatches};
 use lacuna::accel::table::{params_for, shared_params, SharedParam};
@@ -30,11 +31,14 @@ pub struct FrameArgs {
     /// Sample filter: manual (eight texel fetches, f32 weights) or hardware (the sampler's linear filtering; default where the volume's format supports it).
     #[arg(long)]
     pub filter: Option<Filter>,
+    #[command(flatten)]
+    pub look: LookArgs,
 }
 
 impl FrameArgs {
-    /// The frame's builder at `size` with these options (not yet validated).
-    pub fn builder(&self, size: (u32, u32)) -> FrameBuilder {
+    /// The frame's builder at `size` with these options (not yet validated
+    /// together: `build` does).
+    pub fn builder(&self, size: (u32, u32)) -> Result<FrameBuilder> {
         let projection = match self.perspective {
             Some(fov_deg) => Projection::Perspective {
                 fov_deg,
@@ -46,15 +50,16 @@ impl FrameArgs {
             .orbit(self.camera.0, self.camera.1, projection)
             .step(self.step)
             .ert(self.ert);
-        match self.filter {
+        let b = match self.filter {
             Some(f) => b.filter(f),
             None => b,
-        }
+        };
+        self.look.apply(b)
     }
 
     /// The validated frame at `size`.
     pub fn desc(&self, size: (u32, u32)) -> Result<FrameDesc> {
-        self.builder(size).build()
+        self.builder(size)?.build()
     }
 }
 

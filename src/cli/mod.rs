@@ -6,6 +6,7 @@ pub mod devices;
 pub mod diff;
 pub mod export;
 pub mod info;
+pub mod look;
 pub mod octree;
 pub mod render;
 pub mod scene;

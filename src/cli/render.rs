@@ -6,7 +6,7 @@ use clap::Args;
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
-use lacuna::render::{self, FrameDesc, Renderer, Scene};
+use lacuna::render::{self, FrameDesc, Mode, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
@@ -114,6 +114,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         gpu_volume: &gpu_volume,
         tf: &tf,
         gpu_tf: &lut,
+        mode: *desc.mode(),
     };
     let (structure, build) = build(&ctx, args, &input, &params)?;
     let scene = Scene {
@@ -159,6 +160,18 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         },
         args.accel
     );
+    let look: Vec<String> = desc
+        .describe(&gpu_volume)
+        .into_iter()
+        .filter(|(k, _)| LOOK_KEYS.contains(k))
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect();
+    if !look.is_empty() {
+        println!("look    {}", look.join("; "));
+    }
+    for note in look_notes(&desc) {
+        println!("note: {note}");
+    }
     if args.repeat > 1 || args.warmup > 0 {
         println!(
             "timings are medians of {} runs after {} untimed warm-up runs",
@@ -189,6 +202,38 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         println!("wrote {}", out.display());
     }
     Ok(validation_verdict(&ctx))
+}
+
+/// The keys of `FrameDesc::describe` past the camera, step, ERT and filter.
+const LOOK_KEYS: [&str; 12] = [
+    "mode",
+    "iso",
+    "iso_color",
+    "shade",
+    "clip0",
+    "clip1",
+    "clip2",
+    "clip3",
+    "clip4",
+    "clip5",
+    "crop",
+    "jitter",
+];
+
+/// What a user may not expect of this frame's look.
+pub(super) fn look_notes(desc: &FrameDesc) -> Vec<String> {
+    let mut notes = Vec::new();
+    if let Mode::Iso(iso) = desc.mode() {
+        for v in iso.values().iter().filter(|v| !(**v > 0.0 && **v <= 1.0)) {
+            notes.push(format!(
+                "iso value {v} lies outside the normalised data range (0, 1]: it shows no surface"
+            ));
+        }
+    }
+    if matches!(desc.mode(), Mode::Average) {
+        notes.push("average visits every sample in the box: no structure skips in it, each marches naively".into());
+    }
+    notes
 }
 
 /// The frame's metadata: what made it (the scene, its structure and

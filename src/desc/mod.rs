@@ -10,12 +10,19 @@
 //! time step) becomes a field here with its default, and the block grows
 //! a member; callers that do not set it keep today's frame.
 
+mod clip;
 mod matrices;
+mod mode;
 mod orbit;
+mod parse;
+mod shading;
 
 pub use crate::volume::Filter;
+pub use clip::{Clip, MAX_CLIP};
 pub use matrices::{orthographic, perspective, CameraMatrices};
+pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 pub use orbit::{Orbit, Projection};
+pub use shading::{Light, Shading};
 
 use crate::error::{Error, Result};
 use crate::gpu::shaders::blocks::RenderParams;
@@ -179,7 +186,8 @@ impl HostDepth {
 }
 
 /// Every input of one frame besides the scene: size, camera, sampling,
-/// early termination, and a host depth image to end rays at. Made by
+/// early termination, what a ray accumulates and how it is lit, what of the
+/// volume is kept, and a host depth image to end rays at. Made by
 /// [`FrameDesc::builder`], which validates; read-only after.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameDesc {
@@ -190,6 +198,10 @@ pub struct FrameDesc {
     ert: Option<f32>,
     filter: Option<Filter>,
     depth: Option<HostDepth>,
+    mode: Mode,
+    shading: Option<Shading>,
+    clip: Clip,
+    jitter: bool,
 }
 
 /// Sets a [`FrameDesc`]'s fields; `build` checks them all.
@@ -200,7 +212,8 @@ impl FrameDesc {
     /// A `width` x `height` frame: the default orbit camera (azimuth 30,
     /// elevation 20, orthographic, fitted), step [`DEFAULT_STEP`], early
     /// termination off, the volume's default sample filter
-    /// (`GpuVolume::default_filter`), no depth image.
+    /// (`GpuVolume::default_filter`), no depth image, composite mode
+    /// unshaded, the whole volume, no jitter.
     pub fn builder(width: u32, height: u32) -> FrameBuilder {
         FrameBuilder(FrameDesc {
             width,
@@ -210,6 +223,10 @@ impl FrameDesc {
             ert: None,
             filter: None,
             depth: None,
+            mode: Mode::Composite,
+            shading: None,
+            clip: Clip::default(),
+            jitter: false,
         })
     }
 
@@ -250,6 +267,34 @@ impl FrameDesc {
         self.depth.as_ref()
     }
 
+    /// What a ray accumulates.
+    pub fn mode(&self) -> &Mode {
+        &self.mode
+    }
+
+    /// Gradient shading of composite samples (None: unshaded).
+    pub fn shading(&self) -> Option<&Shading> {
+        self.shading.as_ref()
+    }
+
+    /// The lighting a sample or surface gets: the frame's, or for iso
+    /// surfaces (always lit) the default.
+    pub fn lighting(&self) -> Option<Shading> {
+        match self.mode {
+            Mode::Iso(_) => Some(self.shading.unwrap_or_default()),
+            _ => self.shading,
+        }
+    }
+
+    pub fn clip(&self) -> &Clip {
+        &self.clip
+    }
+
+    /// Whether each pixel's lattice is shifted by a hashed fraction of the step.
+    pub fn jitter(&self) -> bool {
+        self.jitter
+    }
+
     /// The shader parameter block for `volume` (the volume-dependent checks:
     /// the samples-per-ray cap, rays that stay finite).
     pub fn params(&self, volume: &GpuVolume) -> Result<RenderParams> {
@@ -266,7 +311,21 @@ impl FrameDesc {
     /// texels `norm` maps to values (the CPU reference's host volumes).
     pub fn params_for(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {
         crate::limits::check_samples_per_ray(dims, self.step)?;
+        self.clip.check_for(dims)?;
         let r = self.camera.rays(dims, spacing, self.width, self.height)?;
+        let mut clip = [[0.0; 4]; MAX_CLIP];
+        clip[..self.clip.planes().len()].copy_from_slice(self.clip.planes());
+        let [crop_lo, crop_hi] = self.clip.crop_box().unwrap_or_default();
+        let (iso, iso_count, iso_color) = match &self.mode {
+            Mode::Iso(i) => {
+                let mut v = [0.0; MAX_ISO];
+                v[..i.values().len()].copy_from_slice(i.values());
+                (v, i.values().len() as u32, i.color)
+            }
+            _ => ([0.0; MAX_ISO], 0, None),
+        };
+        let light = self.lighting().unwrap_or_default();
+        let [gradient_lo, gradient_hi] = light.gradient_opacity.unwrap_or_default();
         Ok(RenderParams {
             base: r.base,
             perspective: r.perspective as u32,
@@ -282,17 +341,63 @@ impl FrameDesc {
             norm,
             ndc_to_voxel: r.ndc_to_voxel,
             far_depth: r.far_depth,
+            jitter: self.jitter as u32,
+            clip_count: self.clip.planes().len() as u32,
+            crop: self.clip.crop_box().is_some() as u32,
+            clip,
+            crop_lo,
+            iso_count,
+            crop_hi,
+            iso_colored: iso_color.is_some() as u32,
+            iso,
+            iso_color: iso_color.unwrap_or_default(),
+            gradient_lo,
+            light: light.light_dir().unwrap_or_default(),
+            headlight: light.light_dir().is_none() as u32,
+            shading: [light.ambient, light.diffuse, light.specular, light.shininess],
+            spacing,
+            gradient_hi,
+            gradient_opacity: light.gradient_opacity.is_some() as u32,
+            // The TF's: the renderer sets it (`Mode::value_bound`).
+            value_bound: self.mode.value_bound(None),
+            value_margin: crate::volume::value_margin(norm),
         })
     }
 
     /// (name, value) pairs for printouts and frame metadata.
     pub fn describe(&self, volume: &GpuVolume) -> Vec<(&'static str, String)> {
-        vec![
+        let mut out = vec![
             ("camera", self.camera.describe()),
             ("step", self.step.to_string()),
             ("ert", self.ert.map_or("off".into(), |e| e.to_string())),
             ("filter", self.filter_for(volume).to_string()),
-        ]
+        ];
+        // What differs from a plain composite frame.
+        if self.mode != Mode::Composite {
+            out.push(("mode", self.mode.name().into()));
+        }
+        if let Mode::Iso(i) = &self.mode {
+            let values: Vec<String> = i.values().iter().map(|v| v.to_string()).collect();
+            out.push(("iso", values.join(",")));
+            if let Some([r, g, b]) = i.color {
+                out.push(("iso_color", format!("{r},{g},{b}")));
+            }
+        }
+        if let Some(s) = self.lighting() {
+            out.push(("shade", s.describe()));
+        }
+        for (i, [a, b, c, d]) in self.clip.planes().iter().enumerate() {
+            let key = ["clip0", "clip1", "clip2", "clip3", "clip4", "clip5"][i];
+            out.push((key, format!("{a},{b},{c},{d}")));
+        }
+        if let Some([lo, hi]) = self.clip.crop_box() {
+            let axes: Vec<String> = (0..3).map(|a| format!("{}:{}", lo[a], hi[a])).collect();
+            out.push(("crop", axes.join(",")));
+        }
+        if self.jitter {
+            out.push(("jitter", "on".into()));
+        }
+        out
     }
 }
 
@@ -348,6 +453,31 @@ impl FrameBuilder {
         self
     }
 
+    /// What a ray accumulates (default composite).
+    pub fn mode(mut self, mode: Mode) -> Self {
+        self.0.mode = mode;
+        self
+    }
+
+    /// Gradient shading of composite samples, and the lighting of iso
+    /// surfaces (None: composite unshaded; iso lit by the default).
+    pub fn shading(mut self, shading: Option<Shading>) -> Self {
+        self.0.shading = shading;
+        self
+    }
+
+    /// What of the volume is kept.
+    pub fn clip(mut self, clip: Clip) -> Self {
+        self.0.clip = clip;
+        self
+    }
+
+    /// Shifts each pixel's lattice by a hashed fraction of the step.
+    pub fn jitter(mut self, on: bool) -> Self {
+        self.0.jitter = on;
+        self
+    }
+
     /// The frame, every field checked.
     pub fn build(self) -> Result<FrameDesc> {
         let d = self.0;
@@ -380,6 +510,7 @@ impl FrameBuilder {
         if let Some(depth) = &d.depth {
             depth.check(d.width, d.height)?;
         }
+        mode::validate(&d.mode, &d.shading, d.ert)?;
         Ok(d)
     }
 }

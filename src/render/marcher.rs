@@ -3,7 +3,7 @@
 
 use super::target::{Output, RenderTarget};
 use crate::accel::{March, Structure};
-use crate::desc::FrameDesc;
+use crate::desc::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
@@ -16,8 +16,9 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 /// A march kernel: shader name (with its output variant), the structure's
-/// specialization constants, and the sample filter.
-type KernelKey = (&'static str, &'static [u32], Filter);
+/// specialization constants, the sample filter, and the frame's mode and
+/// shading constants.
+type KernelKey = (&'static str, &'static [u32], Filter, [u32; 2]);
 
 /// What a frame shows: the structure (built for `tf`), the volume and the
 /// transfer function on the GPU.
@@ -65,15 +66,22 @@ impl Renderer {
         })
     }
 
-    /// The march kernel `march` sampling with `filter` and writing the frame
-    /// buffer, created on first use.
+    /// The march kernel `march` sampling with `filter`, for composite
+    /// unshaded frames, writing the frame buffer; created on first use.
     pub fn kernel(&self, march: March, filter: Filter) -> Result<Arc<Kernel>> {
-        self.kernel_for(march, filter, None)
+        self.kernel_for(march, filter, [0, 0], None)
     }
 
-    /// As `kernel`, writing a storage image of the `variant` format instead
+    /// As `kernel`, for frames of `look` (`MARCH_MODE`, `MARCH_SHADE`),
+    /// writing a storage image of the `variant` format instead
     /// (`march/NAME@rgba8`, ...: build.rs).
-    fn kernel_for(&self, mut march: March, filter: Filter, variant: Option<&str>) -> Result<Arc<Kernel>> {
+    fn kernel_for(
+        &self,
+        mut march: March,
+        filter: Filter,
+        look: [u32; 2],
+        variant: Option<&str>,
+    ) -> Result<Arc<Kernel>> {
         if let Some(v) = variant {
             let name = format!("{}@{v}", march.shader.name);
             march.shader = *shaders::ALL
@@ -81,13 +89,15 @@ impl Renderer {
                 .find(|s| s.name == name)
                 .ok_or_else(|| Error::Interface(format!("kernel {name}: no such shader variant")))?;
         }
-        let key = (march.shader.name, march.constants, filter);
+        let key = (march.shader.name, march.constants, filter, look);
         let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(k) = map.get(&key) {
             return Ok(k.clone());
         }
         let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
         constants.push((FILTER_CONSTANT_ID, filter.constant()));
+        constants.push((MODE_CONSTANT_ID, look[0]));
+        constants.push((SHADE_CONSTANT_ID, look[1]));
         let shader = march.shader;
         let k = Arc::new(Kernel::specialized(
             &self.ctx,
@@ -174,10 +184,12 @@ impl Renderer {
     ) -> Result<()> {
         let Destination { variant, output, rows } = to;
         let Scene { structure, volume, tf } = scene;
-        let params = desc.params(volume)?;
+        let mut params = desc.params(volume)?;
+        params.value_bound = desc.mode().value_bound(tf.visible);
         let filter = desc.filter_for(volume);
         let sampler = volume.sampler_for(filter)?;
-        let kernel = self.kernel_for(structure.march(), filter, variant)?;
+        structure.check_mode(desc.mode())?;
+        let kernel = self.kernel_for(structure.march(), filter, look_of(desc), variant)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
         let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
@@ -274,7 +286,12 @@ impl Renderer {
         let (width, height) = desc.size();
         let target = RenderTarget::new(&self.ctx, width, height)?;
         let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
-        let kernel = self.kernel_for(scene.structure.march(), desc.filter_for(scene.volume), None)?;
+        let kernel = self.kernel_for(
+            scene.structure.march(),
+            desc.filter_for(scene.volume),
+            look_of(desc),
+            None,
+        )?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         // Rays in one row of workgroups; at least one row per band.
         let row_rays = target.width as u64 * kernel.local_size()[1] as u64;
@@ -311,6 +328,13 @@ impl Renderer {
         }
         Ok((target.read()?, timings, bands))
     }
+}
+
+/// The frame's `MARCH_MODE` and `MARCH_SHADE` constants.
+fn look_of(desc: &FrameDesc) -> [u32; 2] {
+    // Only composite frames branch on shading (iso surfaces are always lit).
+    let shade = matches!(desc.mode(), Mode::Composite) && desc.shading().is_some();
+    [desc.mode().constant(), shade as u32]
 }
 
 impl Drop for Renderer {

@@ -8,8 +8,8 @@ pub mod reference;
 mod target;
 
 pub use crate::desc::{
-    orthographic, parse_size, perspective, Camera, CameraMatrices, Filter, FrameBuilder, FrameDesc, HostDepth, Orbit,
-    Projection, Rays, DEFAULT_STEP, ERT_OFF,
+    orthographic, parse_size, perspective, Camera, CameraMatrices, Clip, Filter, FrameBuilder, FrameDesc, HostDepth,
+    Iso, Light, Mode, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF,
 };
 pub use crate::gpu::shaders::blocks::RenderParams;
 pub use marcher::{Renderer, Scene};

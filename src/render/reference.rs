@@ -3,6 +3,7 @@
 //! sampling is the manual filter's; against `Filter::Hardware` it differs by
 //! the device's filtering precision (README, "Sample filter").
 
+use crate::desc::FrameDesc;
 use crate::frame::Frame;
 use crate::gpu::shaders::blocks::RenderParams;
 use crate::tf::{self, TransferFunction};
@@ -29,8 +30,14 @@ pub fn intersect_box(org: Vec3, dir: Vec3, lo: Vec3, hi: Vec3) -> (f32, f32) {
     (t0, t1)
 }
 
-/// Trilinear sample with clamp-to-edge at voxel-space point `p`.
+/// Trilinear sample with clamp-to-edge at voxel-space point `p`, normalised.
 pub fn sample(volume: &Volume, p: Vec3) -> f32 {
+    volume.normalize(sample_raw(volume, p))
+}
+
+/// The stored texel value trilinearly interpolated at voxel-space point `p`
+/// (clamp to edge), as `sample_manual` in `glsl/common/volume.glsl`.
+pub fn sample_raw(volume: &Volume, p: Vec3) -> f32 {
     let hi = UVec3::from(volume.dims).as_i64vec3() - 1;
     let q = p - 0.5;
     let fl = q.floor();
@@ -46,24 +53,297 @@ pub fn sample(volume: &Volume, p: Vec3) -> f32 {
     let c10 = mix(texel(0, 1, 0), texel(1, 1, 0), f.x);
     let c01 = mix(texel(0, 0, 1), texel(1, 0, 1), f.x);
     let c11 = mix(texel(0, 1, 1), texel(1, 1, 1), f.x);
-    let raw = mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
-    volume.normalize(raw)
+    mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z)
 }
 
-/// The premultiplied RGBA of one pixel; `corrected` is
-/// `tf.corrected_lut(p.step)` (full-length samples read it, the ray's
-/// shortened last sample corrects the raw LUT's alpha itself, as the GLSL).
-// Negated comparisons mirror the GLSL: a NaN bound stops the march.
+/// How a frame's samples are combined (the shaders' specialization
+/// constants): `FrameDesc::mode().constant()` and whether composite
+/// samples are lit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Look {
+    pub mode: u32,
+    pub shade: bool,
+}
+
+impl Look {
+    /// A frame description's.
+    pub fn of(desc: &FrameDesc) -> Look {
+        Look {
+            mode: desc.mode().constant(),
+            shade: desc.shading().is_some(),
+        }
+    }
+}
+
+const MODE_COMPOSITE: u32 = 0;
+const MODE_MIP: u32 = 1;
+const MODE_MINIP: u32 = 2;
+const MODE_AVERAGE: u32 = 3;
+/// As `ISO_BISECTIONS` in `glsl/common/lattice.glsl`.
+const ISO_BISECTIONS: u32 = 16;
+
+/// One frame's rays on the CPU, as the GLSL marches them.
+pub struct Tracer<'a> {
+    pub volume: &'a Volume,
+    pub tf: &'a TransferFunction,
+    pub p: &'a RenderParams,
+    pub look: Look,
+    /// `tf.corrected_lut(p.step)`: full-length samples read it, the ray's
+    /// shortened last sample corrects the raw LUT's alpha itself.
+    corrected: Vec<[f32; 4]>,
+}
+
+/// As `pixel_jitter` in `glsl/common/lattice.glsl`.
+pub fn pixel_jitter(x: u32, y: u32) -> f32 {
+    let mut h = x
+        .wrapping_mul(747796405)
+        .wrapping_add(y.wrapping_mul(2891336453))
+        .wrapping_add(277803737);
+    h = ((h >> ((h >> 28) + 4)) ^ h).wrapping_mul(277803737);
+    h = (h >> 22) ^ h;
+    (h >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// As `clip_interval` in `glsl/common/lattice.glsl`: the (lo, hi) in t the
+/// clip planes and crop box keep.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub fn trace(
-    volume: &Volume,
-    tf: &TransferFunction,
-    corrected: &[[f32; 4]],
-    p: &RenderParams,
-    x: u32,
-    y: u32,
-) -> [f32; 4] {
-    trace_to(volume, tf, corrected, p, x, y, None)
+pub fn clip_interval(p: &RenderParams, org: Vec3, dir: Vec3) -> (f32, f32) {
+    let (mut lo, mut hi) = (-3.4e38f32, 3.4e38f32);
+    for c in &p.clip[..p.clip_count as usize] {
+        let n = Vec3::new(c[0], c[1], c[2]);
+        let at = n.dot(org) + c[3];
+        let along = n.dot(dir);
+        if along == 0.0 {
+            if !(at >= 0.0) {
+                (lo, hi) = (1.0, -1.0);
+            }
+        } else {
+            let t = -at / along;
+            if along > 0.0 {
+                lo = lo.max(t);
+            } else {
+                hi = hi.min(t);
+            }
+        }
+    }
+    if p.crop != 0 {
+        let (a, b) = intersect_box(org, dir, Vec3::from(p.crop_lo), Vec3::from(p.crop_hi));
+        lo = lo.max(a);
+        hi = hi.min(b);
+    }
+    (lo, hi)
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(volume: &'a Volume, tf: &'a TransferFunction, p: &'a RenderParams, look: Look) -> Self {
+        Tracer {
+            volume,
+            tf,
+            p,
+            look,
+            corrected: tf.corrected_lut(p.step),
+        }
+    }
+
+    /// The normalised sample at voxel-space point `pos` (NaN: no data).
+    fn sample(&self, pos: Vec3) -> f32 {
+        let v = (sample_raw(self.volume, pos) - self.volume.norm[0]) * self.volume.norm[1];
+        if v.is_nan() {
+            v
+        } else {
+            v.clamp(0.0, 1.0)
+        }
+    }
+
+    /// As `light_sample` in `glsl/common/light.glsl`.
+    fn light(&self, pos: Vec3, dir: Vec3, c: [f32; 4]) -> [f32; 4] {
+        let p = self.p;
+        let spacing = Vec3::from(p.spacing);
+        let mut g = Vec3::ZERO;
+        for a in 0..3 {
+            let mut e = Vec3::ZERO;
+            e[a] = 1.0;
+            let hi = sample_raw(self.volume, pos + e);
+            let lo = sample_raw(self.volume, pos - e);
+            g[a] = (hi - lo) * 0.5 * self.volume.norm[1] / spacing[a];
+        }
+        let len = g.length();
+        let [ka, kd, ks, shininess] = p.shading;
+        let view = (-dir * spacing).normalize();
+        let l = if p.headlight != 0 { view } else { Vec3::from(p.light) };
+        let rgb = Vec3::new(c[0], c[1], c[2]);
+        let lit = if len > 0.0 && len.is_finite() {
+            let n = g / len;
+            let h = (l + view).normalize();
+            let nd = n.dot(l).abs();
+            let nh = n.dot(h).abs();
+            rgb * (ka + kd * nd) + Vec3::splat(ks * nh.powf(shininess))
+        } else {
+            rgb * (ka + kd)
+        };
+        let mut a = c[3];
+        if p.gradient_opacity != 0 {
+            let ramp = ((len - p.gradient_lo) / (p.gradient_hi - p.gradient_lo)).clamp(0.0, 1.0);
+            a *= if ramp.is_nan() { 0.0 } else { ramp };
+        }
+        let lit = lit.min(Vec3::ONE);
+        [lit.x, lit.y, lit.z, a]
+    }
+
+    /// The premultiplied RGBA of pixel (x, y), its ray ending at `t_limit`
+    /// (voxels along it) when given.
+    // Negated comparisons mirror the GLSL: a NaN bound stops the march.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub fn pixel(&self, x: u32, y: u32, t_limit: Option<f32>) -> [f32; 4] {
+        let p = self.p;
+        let (org, dir) = camera_ray(p, x, y);
+        let hi = UVec3::from(self.volume.dims).as_vec3();
+        let (t_near, box_exit) = intersect_box(org, dir, Vec3::ZERO, hi);
+        let t_enter = t_near.max(0.0);
+        let mut t_exit = match t_limit {
+            Some(limit) if t_enter < box_exit => box_exit.min(limit),
+            _ => box_exit,
+        };
+        let jitter = if p.jitter != 0 { pixel_jitter(x, y) } else { 0.0 };
+        let dt = p.step;
+        let lattice_t = |k: u32| t_enter + (k as f32 + jitter) * dt;
+        let mut k = 0u32;
+        if !(t_enter < t_exit) {
+            return [0.0; 4];
+        }
+        if p.clip_count != 0 || p.crop != 0 {
+            let (lo, clip_hi) = clip_interval(p, org, dir);
+            t_exit = t_exit.min(clip_hi);
+            while lattice_t(k) < lo {
+                k += 1;
+            }
+        }
+        let mode = self.look.mode;
+        let mut acc = [0f32; 4];
+        let mut best = if mode == MODE_MINIP { 2.0f32 } else { -1.0 };
+        let (mut sum, mut count) = (0f32, 0f32);
+        let mut prev: Option<(f32, f32)> = None;
+        loop {
+            let t = lattice_t(k);
+            if !(t < t_exit) {
+                break;
+            }
+            // Only the ray's last sample is shortened (glsl/common/lattice.glsl).
+            let last = !(lattice_t(k + 1) < t_exit);
+            let w = if last { dt.min(t_exit - t) } else { dt };
+            let pos = org + dir * t;
+            let v = self.sample(pos);
+            k += 1;
+            if v.is_nan() {
+                prev = None;
+                continue;
+            }
+            match mode {
+                MODE_COMPOSITE => {
+                    let mut c = if w < dt {
+                        let c = self.tf.lookup(v);
+                        [c[0], c[1], c[2], tf::opacity(c[3], w)]
+                    } else {
+                        tf::lookup_in(&self.corrected, v)
+                    };
+                    if self.look.shade && c[3] > 0.0 {
+                        c = self.light(pos, dir, c);
+                    }
+                    if c[3] > 0.0 {
+                        let a = c[3].min(1.0);
+                        let transmit = 1.0 - acc[3];
+                        for ch in 0..3 {
+                            acc[ch] += transmit * a * c[ch];
+                        }
+                        acc[3] += transmit * a;
+                    }
+                    if acc[3] >= p.ert {
+                        break;
+                    }
+                }
+                MODE_MIP => {
+                    best = best.max(v);
+                    if best >= 1.0 {
+                        break;
+                    }
+                }
+                MODE_MINIP => {
+                    best = best.min(v);
+                    if best <= 0.0 {
+                        break;
+                    }
+                }
+                MODE_AVERAGE => {
+                    sum += v;
+                    count += 1.0;
+                }
+                _ => {
+                    if let Some((t0, v0)) = prev {
+                        if let Some((t_hit, iso)) = self.iso_crossing(org, dir, (t0, v0), (t, v)) {
+                            return self.iso_surface(org, dir, t_hit, iso);
+                        }
+                    }
+                    prev = Some((t, v));
+                }
+            }
+        }
+        match mode {
+            MODE_COMPOSITE => acc,
+            MODE_AVERAGE | MODE_MIP | MODE_MINIP => {
+                let v = if mode == MODE_AVERAGE {
+                    if count == 0.0 {
+                        return [0.0; 4];
+                    }
+                    sum / count
+                } else if !(0.0..=1.0).contains(&best) {
+                    return [0.0; 4];
+                } else {
+                    best
+                };
+                let c = self.tf.lookup(v);
+                [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
+            }
+            _ => [0.0; 4],
+        }
+    }
+
+    /// As `iso_crossing` in `glsl/common/lattice.glsl`: the smallest refined
+    /// crossing of an iso value between consecutive lattice samples
+    /// (t0, v0) and (t1, v1).
+    fn iso_crossing(&self, org: Vec3, dir: Vec3, (t0, v0): (f32, f32), (t1, v1): (f32, f32)) -> Option<(f32, f32)> {
+        let mut best: Option<(f32, f32)> = None;
+        for &iso in &self.p.iso[..self.p.iso_count as usize] {
+            let below = v0 < iso;
+            if below == (v1 < iso) {
+                continue;
+            }
+            let (mut a, mut b) = (t0, t1);
+            for _ in 0..ISO_BISECTIONS {
+                let mid = 0.5 * (a + b);
+                if (self.sample(org + dir * mid) < iso) == below {
+                    a = mid;
+                } else {
+                    b = mid;
+                }
+            }
+            let t = 0.5 * (a + b);
+            if best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, iso));
+            }
+        }
+        best
+    }
+
+    fn iso_surface(&self, org: Vec3, dir: Vec3, t: f32, iso: f32) -> [f32; 4] {
+        let rgb = if self.p.iso_colored != 0 {
+            self.p.iso_color
+        } else {
+            let c = self.tf.lookup(iso);
+            [c[0], c[1], c[2]]
+        };
+        let lit = self.light(org + dir * t, dir, [rgb[0], rgb[1], rgb[2], 1.0]);
+        [lit[0], lit[1], lit[2], 1.0]
+    }
 }
 
 /// The ray of pixel (x, y) in voxel space, as `camera_ray` in `glsl/common/camera.glsl`.
@@ -85,82 +365,29 @@ pub fn camera_ray(p: &RenderParams, x: u32, y: u32) -> (Vec3, Vec3) {
     (org, dir / dir.length())
 }
 
-/// As `trace`, the ray ending at `t_limit` (voxels along it) when given.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub fn trace_to(
-    volume: &Volume,
-    tf: &TransferFunction,
-    corrected: &[[f32; 4]],
-    p: &RenderParams,
-    x: u32,
-    y: u32,
-    t_limit: Option<f32>,
-) -> [f32; 4] {
-    let (org, dir) = camera_ray(p, x, y);
-    let hi = UVec3::from(volume.dims).as_vec3();
-    let (t_near, t_exit) = intersect_box(org, dir, Vec3::ZERO, hi);
-    let t_enter = t_near.max(0.0);
-    let t_exit = match t_limit {
-        Some(limit) if t_enter < t_exit => t_exit.min(limit),
-        _ => t_exit,
-    };
-    let dt = p.step;
-    let ert = p.ert;
-    let mut acc = [0f32; 4];
-    if !(t_enter < t_exit) {
-        return acc;
-    }
-    let lattice_t = |k: u32| t_enter + k as f32 * dt;
-    let mut k = 0u32;
-    loop {
-        let t = lattice_t(k);
-        if !(t < t_exit) {
-            break;
-        }
-        // Only the ray's last sample is shortened (glsl/common/lattice.glsl).
-        let last = !(lattice_t(k + 1) < t_exit);
-        let w = if last { dt.min(t_exit - t) } else { dt };
-        let pos = org + dir * t;
-        let v = sample(volume, pos);
-        let c = if w < dt {
-            let c = tf.lookup(v);
-            [c[0], c[1], c[2], tf::opacity(c[3], w)]
-        } else {
-            tf::lookup_in(corrected, v)
-        };
-        if c[3] > 0.0 {
-            let a = c[3].min(1.0);
-            let transmit = 1.0 - acc[3];
-            for ch in 0..3 {
-                acc[ch] += transmit * a * c[ch];
-            }
-            acc[3] += transmit * a;
-        }
-        k += 1;
-        if acc[3] >= ert {
-            break;
-        }
-    }
-    acc
-}
-
-/// Renders a whole frame on the CPU (parallel over rows).
+/// Renders a whole composite, unshaded frame on the CPU (parallel over rows).
 pub fn render(volume: &Volume, tf: &TransferFunction, p: &RenderParams) -> Frame {
     render_to(volume, tf, p, None)
 }
 
 /// As `render`, each ray ending at its pixel's limit (`depth_limits`) when given.
 pub fn render_to(volume: &Volume, tf: &TransferFunction, p: &RenderParams, limits: Option<&[f32]>) -> Frame {
-    let (w, h) = (p.image[0], p.image[1]);
-    let corrected = tf.corrected_lut(p.step);
-    let corrected = &corrected;
+    render_look(&Tracer::new(volume, tf, p, Look::default()), limits)
+}
+
+/// Renders frame `desc` of `volume` on the CPU: its mode, shading, clip,
+/// crop and jitter (the sample filter is always the manual one's).
+pub fn render_frame(volume: &Volume, tf: &TransferFunction, desc: &FrameDesc) -> crate::Result<Frame> {
+    let p = desc.params_for(volume.dims, volume.spacing, volume.norm)?;
+    Ok(render_look(&Tracer::new(volume, tf, &p, Look::of(desc)), None))
+}
+
+fn render_look(tracer: &Tracer, limits: Option<&[f32]>) -> Frame {
+    let (w, h) = (tracer.p.image[0], tracer.p.image[1]);
     let pixels: Vec<[f32; 4]> = (0..h)
         .into_par_iter()
         .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let limit = limits.map(|l| l[(y * w + x) as usize]);
-            trace_to(volume, tf, corrected, p, x, y, limit)
-        })
+        .map(|(x, y)| tracer.pixel(x, y, limits.map(|l| l[(y * w + x) as usize])))
         .collect();
     Frame::new(w, h, pixels)
 }

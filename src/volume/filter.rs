@@ -20,6 +20,23 @@ pub enum Filter {
 /// ids structures use for their own constants (0, 1, ...).
 pub const FILTER_CONSTANT_ID: u32 = 16;
 
+/// How far an interpolated sample of a volume with texel normalisation
+/// `norm` can lie beyond the normalised range of its eight voxels, under
+/// either filter: the rounding of the trilinear weights and sums (relative
+/// to the largest texel magnitude, scaled by the normalisation) and of a
+/// hardware filter's fixed-point weights, with room to spare. Structures
+/// that compare samples with value ranges (MIP, MinIP) widen them by it.
+pub fn value_margin(norm: [f32; 2]) -> f32 {
+    let [lo, scale] = norm;
+    let rounding = if scale != 0.0 {
+        let magnitude = lo.abs().max((lo + 1.0 / scale).abs());
+        64.0 * f32::EPSILON * magnitude * scale.abs()
+    } else {
+        0.0
+    };
+    1.0 / 65536.0 + rounding
+}
+
 impl Filter {
     pub const ALL: [Filter; 2] = [Filter::Manual, Filter::Hardware];
 

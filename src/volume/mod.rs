@@ -18,7 +18,7 @@ pub use decode::VoxelType;
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
 };
-pub use filter::{Filter, FILTER_CONSTANT_ID};
+pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID};
 pub use gpu::GpuVolume;
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use spec::{LoadOptions, VolumeSpec};

@@ -2,12 +2,15 @@
 //! synchronization validation, and tests fail on any message.
 #![allow(dead_code)]
 
+pub mod identity;
+
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{Context, ContextOptions};
 use lacuna::render::{FrameDesc, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
+use std::path::Path;
 use std::process::Command;
 
 /// A validated context (LACUNA_DEVICE still selects the device).
@@ -54,6 +57,7 @@ pub fn render_with(
         gpu_volume: &gv,
         tf,
         gpu_tf: &lut,
+        mode: *desc.mode(),
     };
     let (structure, _) = builder.build(accel, &input, &ranges, params).unwrap();
     let scene = Scene {
@@ -111,4 +115,44 @@ pub fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
         stdout: String::from_utf8_lossy(&out.stdout).into(),
         stderr: String::from_utf8_lossy(&out.stderr).into(),
     }
+}
+
+/// Renders `spec` at a small size with validation on; panics on failure.
+pub fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
+    let mut args = vec![
+        "render",
+        spec,
+        "--size",
+        "40x32",
+        "--validate",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let r = lacuna(&args, &[]);
+    assert_eq!(r.code, 0, "stdout: {}\nstderr: {}", r.stdout, r.stderr);
+    r
+}
+
+/// Asserts a one-line `error:` on stderr naming `needle`, a non-zero exit,
+/// and that no output file (or temporary) was created.
+pub fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let mut all: Vec<&str> = args.to_vec();
+    let out_s = out.to_str().unwrap().to_string();
+    if args[0] == "render" {
+        all.extend(["--out", &out_s, "--validate"]);
+    }
+    let r = lacuna(&all, env);
+    assert_ne!(r.code, 0, "{all:?} succeeded: {}", r.stdout);
+    let lines: Vec<&str> = r.stderr.trim().lines().collect();
+    assert_eq!(lines.len(), 1, "{all:?}: expected one line, got:\n{}", r.stderr);
+    assert!(lines[0].contains(needle), "{all:?}: '{}' lacks '{needle}'", lines[0]);
+    assert!(!r.stderr.contains("panicked"));
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "{all:?} left a file behind"
+    );
 }

@@ -9,7 +9,7 @@ use lacuna::accel::{Accel, BuildInput, Builder, Params, RangeKind, Ranges, Struc
 use lacuna::frame::Frame;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
-use lacuna::render::{Filter, FrameDesc, Output, RenderTarget, Renderer};
+use lacuna::render::{Filter, FrameDesc, Mode, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
@@ -24,6 +24,8 @@ pub struct Scene {
     lut: GpuTransferFunction,
     pub accel: Accel,
     params: Params,
+    /// The frames' mode the structure is built for.
+    pub mode: Mode,
     /// The per-volume ranges the structure reads, and which they are.
     ranges: Option<(RangeKind, Ranges)>,
     pub structure: Structure,
@@ -48,6 +50,7 @@ impl Scene {
             lut,
             accel,
             params: accel.defaults(),
+            mode: Mode::Composite,
             ranges: None,
             structure: Structure::naive(),
             target: None,
@@ -103,6 +106,7 @@ impl Scene {
             gpu_volume: &self.gpu_volume,
             tf: &self.tf,
             gpu_tf: &self.lut,
+            mode: self.mode,
         };
         let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.params)?;
         self.structure = structure;

@@ -1,0 +1,117 @@
+//! `Builder::build` and `record_build`: a structure for one transfer
+//! function and frame mode, classified by the mode's activity function
+//! (`accel::mode`), or marched naively in a mode it does not skip in.
+
+use super::builder::{Builder, Ranges};
+use super::method::{Accel, BuildInput, Built, Structure};
+use super::mode::{activity, ModeFallback};
+use super::params::Params;
+use crate::error::Result;
+use crate::gpu::{vk, Timer, Timings};
+use crate::volume::GpuVolume;
+use std::any::Any;
+
+impl Builder {
+    /// Builds `accel` with `params` for the input's transfer function and
+    /// mode, and waits: the path a TF change takes. Returns the structure
+    /// and its timings per phase. A structure that does not march the mode
+    /// is not built: it is marched naively (`MarchedKind::ModeFallback`).
+    pub fn build(
+        &self,
+        accel: Accel,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<(Structure, Timings)> {
+        accel.method().check(params)?;
+        if !accel.method().marches(&input.mode) {
+            return Ok((fallback(accel, params, input), Timings::default()));
+        }
+        let (built, t) = match activity(&input.mode, input.tf)? {
+            Some(activity) => {
+                let gpu_activity = activity.upload(self.context())?;
+                let classified = BuildInput {
+                    tf: &activity,
+                    gpu_tf: &gpu_activity,
+                    ..*input
+                };
+                accel.method().build(self, &classified, ranges, params)?
+            }
+            None => accel.method().build(self, input, ranges, params)?,
+        };
+        Ok((
+            Structure {
+                accel,
+                params: params.clone(),
+                mode: Some(input.mode),
+                built,
+                _keep: None,
+            },
+            t,
+        ))
+    }
+
+    /// Records the build of a recordable structure into `cmd` (see
+    /// [`Method::record_build`] for the barriers); host-driven structures
+    /// return an error saying so.
+    pub fn record_build(
+        &self,
+        accel: Accel,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        input: &BuildInput,
+        ranges: &Ranges,
+        params: &Params,
+    ) -> Result<Structure> {
+        accel.method().check(params)?;
+        if !accel.method().marches(&input.mode) {
+            return Ok(fallback(accel, params, input));
+        }
+        let (built, keep): (Box<dyn Built>, Option<Box<dyn Any>>) = match activity(&input.mode, input.tf)? {
+            Some(activity) => {
+                let (gpu_activity, staging) = activity.record_upload(self.context(), cmd)?;
+                let classified = BuildInput {
+                    tf: &activity,
+                    gpu_tf: &gpu_activity,
+                    ..*input
+                };
+                let built = accel
+                    .method()
+                    .record_build(self, cmd, timer, &classified, ranges, params)?;
+                (built, Some(Box::new((gpu_activity, staging))))
+            }
+            None => (
+                accel.method().record_build(self, cmd, timer, input, ranges, params)?,
+                None,
+            ),
+        };
+        Ok(Structure {
+            accel,
+            params: params.clone(),
+            mode: Some(input.mode),
+            built,
+            _keep: keep,
+        })
+    }
+
+    /// The per-volume ranges the structures read (each kind once): once
+    /// per volume upload.
+    pub fn ranges_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
+        let kinds = structures
+            .iter()
+            .map(|(a, p)| a.method().ranges(p))
+            .collect::<Result<Vec<_>>>()?;
+        self.ranges(&kinds, volume)
+    }
+}
+
+/// A structure that does not march the input's mode: naive marching.
+fn fallback(accel: Accel, params: &Params, input: &BuildInput) -> Structure {
+    Structure {
+        accel,
+        params: params.clone(),
+        mode: Some(input.mode),
+        built: Box::new(ModeFallback::new(accel, &input.mode)),
+        _keep: None,
+    }
+}
