@@ -1,13 +1,14 @@
 #version 460
 // Per-8^3-brick tight box of the active voxel footprints (k-d tree on the
 // GPU). A footprint [i, i+1]^3 is active iff the TF's max alpha over the 27
-// voxels its samples can read is > 0 (DESIGN invariant 2). The brick and its
+// voxels its samples can read is > 0 (DESIGN invariant 2), NaN voxels ignored. The brick and its
 // one-voxel apron are staged in shared memory; the box is reduced there with
 // atomics. An empty brick writes an inverted box (lo = INT_MAX, hi = INT_MIN).
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
 #include "dispatch.glsl"
+#include "nan.glsl"
 
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 2) writeonly buffer Boxes { ivec4 boxes[]; }; // lo, hi (exclusive) per brick
@@ -41,7 +42,7 @@ void main() {
         ivec3 l = ivec3(int(i) % S, (int(i) / S) % S, int(i) / (S * S));
         ivec3 v = clamp(origin + l - 1, ivec3(0), hi);
         precise float n = (texelFetch(volume_tex, v, 0).r - pc.norm.x) * pc.norm.y;
-        staged[i] = clamp(n, 0.0, 1.0);
+        staged[i] = is_nan(n) ? n : clamp(n, 0.0, 1.0);
     }
     if (lid < 3u) {
         box[lid] = 0x7FFFFFFF;
@@ -62,8 +63,10 @@ void main() {
                     // Staged index of voxel v + (d - 1), clamped like the volume.
                     ivec3 s = clamp(v + ivec3(dx, dy, dz) - 1, ivec3(0), hi) - origin + 1;
                     float x = staged[s.x + S * (s.y + S * s.z)];
-                    mn = min(mn, x);
-                    mx = max(mx, x);
+                    if (!is_nan(x)) {
+                        mn = min(mn, x);
+                        mx = max(mx, x);
+                    }
                 }
             }
         }

@@ -9,6 +9,7 @@
 
 layout(local_size_x = 64) in;
 #include "dispatch.glsl"
+#include "nan.glsl"
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) readonly buffer TransferLut { vec4 tf_lut[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Flags { uint flags[]; };
@@ -31,7 +32,7 @@ layout(push_constant) uniform Push {
 float value_at(ivec3 i) {
     ivec3 c = clamp(i, ivec3(0), ivec3(pc.dims.xyz) - 1);
     precise float v = (texelFetch(volume_tex, c, 0).r - pc.norm.x) * pc.norm.y;
-    return clamp(v, 0.0, 1.0);
+    return is_nan(v) ? v : clamp(v, 0.0, 1.0);
 }
 
 float lut_alpha(float v) {
@@ -56,7 +57,8 @@ void main() {
         for (int z = first.z; z <= last.z && !hit; ++z) {
             for (int y = first.y; y <= last.y && !hit; ++y) {
                 for (int x = first.x; x <= last.x && !hit; ++x) {
-                    hit = lut_alpha(value_at(ivec3(x, y, z))) > 0.0;
+                    float v = value_at(ivec3(x, y, z));
+                    hit = !is_nan(v) && lut_alpha(v) > 0.0;
                 }
             }
         }
@@ -67,12 +69,15 @@ void main() {
                 for (int x = first.x - 1; x <= last.x && !hit; ++x) {
                     float mn = 3.4e38;
                     float mx = -3.4e38;
+                    bool no_data = false;
                     for (int c = 0; c < 8; ++c) {
                         float v = value_at(ivec3(x, y, z) + ivec3(c & 1, (c >> 1) & 1, c >> 2));
+                        no_data = no_data || is_nan(v);
                         mn = min(mn, v);
                         mx = max(mx, v);
                     }
-                    hit = tf_max_alpha(mn, mx) > 0.0;
+                    // A cell with a NaN voxel has only NaN samples.
+                    hit = !no_data && tf_max_alpha(mn, mx) > 0.0;
                 }
             }
         }

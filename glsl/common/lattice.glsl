@@ -249,7 +249,7 @@ void iso_crossing(inout March m, float t0, float v0, float t1, float v1) {
 // Takes the sample at t (value v) standing for w voxels; `full`: w == dt.
 void take_sample(inout March m, float t, float w, bool full) {
     float v = sample_volume(m.vr, t);
-    if (VOLUME_NAN != 0u && isnan(v)) {
+    if (VOLUME_NAN != 0u && is_nan(v)) {
         m.has_prev = false;
         return;
     }

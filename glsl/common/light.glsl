@@ -30,7 +30,8 @@ vec4 light_sample(VolumeRay r, vec3 p, vec3 dir, vec4 c) {
     precise vec3 view = normalize(-dir * params.spacing);
     vec3 l = params.headlight != 0u ? view : params.light;
     vec3 lit;
-    if (len > 0.0 && !isinf(len) && !isnan(len)) {
+    // Not finite only where a NaN voxel is read (NaN volumes).
+    if (len > 0.0 && len < 3.4e38) {
         precise vec3 n = g / len;
         precise vec3 h = normalize(l + view);
         precise float nd = abs(dot(n, l));
@@ -43,8 +44,8 @@ vec4 light_sample(VolumeRay r, vec3 p, vec3 dir, vec4 c) {
     }
     float a = c.a;
     if (params.gradient_opacity != 0u) {
-        precise float ramp = clamp((len - params.gradient_lo) / (params.gradient_hi - params.gradient_lo), 0.0, 1.0);
-        a *= isnan(ramp) ? 0.0 : ramp;
+        precise float ramp = (len - params.gradient_lo) / (params.gradient_hi - params.gradient_lo);
+        a *= is_nan(ramp) ? 0.0 : clamp(ramp, 0.0, 1.0);
     }
     return vec4(min(lit, vec3(1.0)), a);
 }

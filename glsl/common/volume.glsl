@@ -10,6 +10,8 @@
 #ifndef LACUNA_VOLUME_GLSL
 #define LACUNA_VOLUME_GLSL
 
+#include "nan.glsl"
+
 layout(set = 0, binding = VOLUME_BINDING) uniform sampler3D volume_tex;
 layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
 // 1: the volume holds NaN voxels ("no data"; src/volume, README "NaN"). A
@@ -96,7 +98,7 @@ float sample_raw(VolumeRay r, vec3 p) {
 float sample_volume(VolumeRay r, float t) {
     precise vec3 p = r.org + t * r.dir;
     precise float v = (sample_raw(r, p) - r.norm.x) * r.norm.y;
-    if (VOLUME_NAN != 0u && isnan(v)) {
+    if (VOLUME_NAN != 0u && is_nan(v)) {
         return v;
     }
     return clamp(v, 0.0, 1.0);

@@ -1,11 +1,13 @@
 #version 460
 // Min/max of normalised voxel values per brick of `brick`^3 voxels, widened by
 // an apron of `apron` voxels per side (clamped to the volume). One invocation
-// per brick; output vec2(min, max) per brick, x fastest.
+// per brick; output vec2(min, max) per brick, x fastest. NaN voxels are
+// ignored; a brick of NaN only gets an empty range (min > max).
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
 #include "dispatch.glsl"
+#include "nan.glsl"
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
 layout(push_constant) uniform Push {
@@ -30,8 +32,10 @@ void main() {
         for (int y = lo.y; y <= hi.y; ++y) {
             for (int x = lo.x; x <= hi.x; ++x) {
                 float t = texelFetch(volume_tex, ivec3(x, y, z), 0).r;
-                mn = min(mn, t);
-                mx = max(mx, t);
+                if (!is_nan(t)) {
+                    mn = min(mn, t);
+                    mx = max(mx, t);
+                }
             }
         }
     }

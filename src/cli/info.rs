@@ -28,10 +28,23 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     println!("type     {}", v.source_type);
     println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
     println!("values   {} .. {}", v.value_range[0], v.value_range[1]);
+    let d = v.no_data;
+    if d.total() > 0 {
+        println!(
+            "no data  {} voxels ({:.3} %): {} NaN, {} +inf, {} -inf (transparent; ranges ignore them)",
+            d.total(),
+            100.0 * d.total() as f64 / v.voxel_count() as f64,
+            d.nan,
+            d.pos_inf,
+            d.neg_inf
+        );
+    }
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {
         let n = v.normalize(v.data.texel(i));
-        bins[((n * 10.0) as usize).min(9)] += 1;
+        if !n.is_nan() {
+            bins[((n * 10.0) as usize).min(9)] += 1;
+        }
     }
     let total = v.voxel_count() as f64;
     println!("histogram of normalised values (10 bins, % of voxels):");
@@ -53,7 +66,8 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     }
     if let Some(tf) = tf_for(args.tf.as_ref(), &v)? {
         let visible = (0..v.data.len())
-            .filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0)
+            .map(|i| v.normalize(v.data.texel(i)))
+            .filter(|n| !n.is_nan() && tf.lookup(*n)[3] > 0.0)
             .count();
         let grid = BrickGrid::new(&v, BRICK, 1);
         let active = grid.active(&tf).iter().filter(|a| **a).count();

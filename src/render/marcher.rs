@@ -10,7 +10,7 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit, MarchCommon};
 use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, Timer, Timings};
 use crate::tf::GpuTransferFunction;
-use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID};
+use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -18,7 +18,7 @@ use std::sync::{Arc, Mutex};
 /// A march kernel: shader name (with its output variant), the structure's
 /// specialization constants, the sample filter, and the frame's mode and
 /// shading constants.
-type KernelKey = (&'static str, &'static [u32], Filter, [u32; 2]);
+type KernelKey = (&'static str, &'static [u32], Filter, [u32; 3]);
 
 /// What a frame shows: the structure (built for `tf`), the volume and the
 /// transfer function on the GPU.
@@ -69,17 +69,18 @@ impl Renderer {
     /// The march kernel `march` sampling with `filter`, for composite
     /// unshaded frames, writing the frame buffer; created on first use.
     pub fn kernel(&self, march: March, filter: Filter) -> Result<Arc<Kernel>> {
-        self.kernel_for(march, filter, [0, 0], None)
+        self.kernel_for(march, filter, [0, 0, 0], None)
     }
 
-    /// As `kernel`, for frames of `look` (`MARCH_MODE`, `MARCH_SHADE`),
+    /// As `kernel`, for frames of `look` (`MARCH_MODE`, `MARCH_SHADE`,
+    /// `VOLUME_NAN`: `look_of`),
     /// writing a storage image of the `variant` format instead
     /// (`march/NAME@rgba8`, ...: build.rs).
     fn kernel_for(
         &self,
         mut march: March,
         filter: Filter,
-        look: [u32; 2],
+        look: [u32; 3],
         variant: Option<&str>,
     ) -> Result<Arc<Kernel>> {
         if let Some(v) = variant {
@@ -98,6 +99,7 @@ impl Renderer {
         constants.push((FILTER_CONSTANT_ID, filter.constant()));
         constants.push((MODE_CONSTANT_ID, look[0]));
         constants.push((SHADE_CONSTANT_ID, look[1]));
+        constants.push((NAN_CONSTANT_ID, look[2]));
         let shader = march.shader;
         let k = Arc::new(Kernel::specialized(
             &self.ctx,
@@ -189,7 +191,7 @@ impl Renderer {
         let filter = desc.filter_for(volume);
         let sampler = volume.sampler_for(filter)?;
         structure.check_mode(desc.mode())?;
-        let kernel = self.kernel_for(structure.march(), filter, look_of(desc), variant)?;
+        let kernel = self.kernel_for(structure.march(), filter, look_of(desc, volume), variant)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
         let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
@@ -289,7 +291,7 @@ impl Renderer {
         let kernel = self.kernel_for(
             scene.structure.march(),
             desc.filter_for(scene.volume),
-            look_of(desc),
+            look_of(desc, scene.volume),
             None,
         )?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
@@ -331,10 +333,12 @@ impl Renderer {
 }
 
 /// The frame's `MARCH_MODE` and `MARCH_SHADE` constants.
-fn look_of(desc: &FrameDesc) -> [u32; 2] {
-    // Only composite frames branch on shading (iso surfaces are always lit).
+/// The specialization constants of a frame's look: its mode, whether it
+/// lights composite samples (iso surfaces are always lit), whether the
+/// volume has NaN voxels.
+fn look_of(desc: &FrameDesc, volume: &GpuVolume) -> [u32; 3] {
     let shade = matches!(desc.mode(), Mode::Composite) && desc.shading().is_some();
-    [desc.mode().constant(), shade as u32]
+    [desc.mode().constant(), shade as u32, volume.has_nan as u32]
 }
 
 impl Drop for Renderer {

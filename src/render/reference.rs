@@ -172,7 +172,7 @@ impl<'a> Tracer<'a> {
         let view = (-dir * spacing).normalize();
         let l = if p.headlight != 0 { view } else { Vec3::from(p.light) };
         let rgb = Vec3::new(c[0], c[1], c[2]);
-        let lit = if len > 0.0 && len.is_finite() {
+        let lit = if len > 0.0 && len < 3.4e38 {
             let n = g / len;
             let h = (l + view).normalize();
             let nd = n.dot(l).abs();

@@ -74,17 +74,21 @@ fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8
     })
 }
 
-/// f32 values normalised over their finite range; non-finite values are an error.
-fn normalized_f32(values: Vec<f64>, path: &Path) -> Result<VoxelData> {
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(Error::format(path, format!("voxel {i} is not a finite number")));
-    }
-    let lo = values.iter().cloned().fold(f64::INFINITY, f64::min);
-    let hi = values.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+/// f32 values normalised over their finite range; NaN and infinities are
+/// kept as they are (`Volume::new` stores them as no data).
+fn normalized_f32(values: Vec<f64>) -> VoxelData {
+    let finite = || values.iter().copied().filter(|v| v.is_finite());
+    let lo = finite().fold(f64::INFINITY, f64::min);
+    let hi = finite().fold(f64::NEG_INFINITY, f64::max);
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
-    Ok(VoxelData::F32(
-        values.into_iter().map(|v| ((v - lo) * scale) as f32).collect(),
-    ))
+    let normalize = |v: f64| {
+        if v.is_finite() {
+            ((v - lo) * scale) as f32
+        } else {
+            v as f32
+        }
+    };
+    VoxelData::F32(values.iter().map(|&v| normalize(v)).collect())
 }
 
 /// Decodes `bytes` (exactly dims x type size) into a volume.
@@ -136,8 +140,7 @@ pub fn decode(
                 words::<4>(bytes, little)
                     .map(|w| u32::from_le_bytes(w) as f64)
                     .collect(),
-                path,
-            )?,
+            ),
             None,
         ),
         VoxelType::I32 => (
@@ -145,8 +148,7 @@ pub fn decode(
                 words::<4>(bytes, little)
                     .map(|w| i32::from_le_bytes(w) as f64)
                     .collect(),
-                path,
-            )?,
+            ),
             None,
         ),
         VoxelType::F32 => (
@@ -154,12 +156,11 @@ pub fn decode(
                 words::<4>(bytes, little)
                     .map(|w| f32::from_le_bytes(w) as f64)
                     .collect(),
-                path,
-            )?,
+            ),
             None,
         ),
         VoxelType::F64 => (
-            normalized_f32(words::<8>(bytes, little).map(f64::from_le_bytes).collect(), path)?,
+            normalized_f32(words::<8>(bytes, little).map(f64::from_le_bytes).collect()),
             None,
         ),
     };
@@ -180,6 +181,9 @@ fn source_range(bytes: &[u8], ty: VoxelType, little: bool) -> [f64; 2] {
         VoxelType::F32 => Box::new(words::<4>(bytes, little).map(|w| f32::from_le_bytes(w) as f64)),
         _ => Box::new(words::<8>(bytes, little).map(f64::from_le_bytes)),
     };
-    let (lo, hi) = super::minmax(values);
-    [lo, hi]
+    // The finite values' range (NaN and infinities are no data).
+    match super::minmax(values.filter(|v| v.is_finite())) {
+        (lo, hi) if lo > hi => [0.0, 0.0],
+        (lo, hi) => [lo, hi],
+    }
 }

@@ -122,7 +122,12 @@ impl<'a> SourceValues<'a> {
     fn first_misfit(&self, ty: VoxelType) -> Option<(usize, String)> {
         (0..self.len()).find_map(|i| {
             let v = self.get(i);
-            let why = if !v.is_finite() {
+            let why = if v.is_nan() && ty == VoxelType::F32 {
+                // No data stays NaN (infinities were stored as NaN).
+                return None;
+            } else if v.is_nan() {
+                format!("without data (NaN), which {ty} cannot hold")
+            } else if !v.is_finite() {
                 "not a finite number".to_string()
             } else if ty == VoxelType::F32 || self.integer_in(v, ty).is_some() {
                 return None;

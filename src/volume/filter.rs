@@ -20,6 +20,10 @@ pub enum Filter {
 /// ids structures use for their own constants (0, 1, ...).
 pub const FILTER_CONSTANT_ID: u32 = 16;
 
+/// `constant_id` of `VOLUME_NAN` in `glsl/common/volume.glsl`: 1 for volumes
+/// with NaN voxels, whose samples the march tests.
+pub const NAN_CONSTANT_ID: u32 = 19;
+
 /// How far an interpolated sample of a volume with texel normalisation
 /// `norm` can lie beyond the normalised range of its eight voxels, under
 /// either filter: the rounding of the trilinear weights and sums (relative

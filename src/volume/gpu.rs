@@ -20,6 +20,9 @@ pub struct GpuVolume {
     pub spacing: [f32; 3],
     /// Texel normalisation, as `Volume::norm`.
     pub norm: [f32; 2],
+    /// It holds NaN voxels (no data): the march kernels test samples for
+    /// NaN, and only the manual filter samples it.
+    pub has_nan: bool,
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -74,6 +77,7 @@ impl GpuVolume {
             dims: volume.dims,
             spacing: volume.spacing,
             norm: volume.norm,
+            has_nan: volume.no_data.total() > 0,
         };
         if ctx.filters_linearly(format) {
             gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
@@ -86,6 +90,13 @@ impl GpuVolume {
     pub fn sampler_for(&self, filter: Filter) -> Result<vk::Sampler> {
         match (filter, self.linear) {
             (Filter::Manual, _) => Ok(self.sampler),
+            // IEEE arithmetic carries a NaN voxel into every sample that
+            // reads it; a filter unit's fixed-point weights need not.
+            (Filter::Hardware, _) if self.has_nan => Err(Error::invalid(
+                "filter",
+                "hardware",
+                "the volume has voxels without data (NaN), which only the manual filter samples exactly; use --filter manual",
+            )),
             (Filter::Hardware, Some(linear)) => Ok(linear),
             (Filter::Hardware, None) => Err(Error::invalid(
                 "filter",
@@ -101,7 +112,7 @@ impl GpuVolume {
 
     /// The faster filter this volume supports on this device (`Filter::device_default`).
     pub fn default_filter(&self) -> Filter {
-        Filter::device_default(self.linear.is_some())
+        Filter::device_default(self.linear.is_some() && !self.has_nan)
     }
 }
 

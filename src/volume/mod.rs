@@ -18,7 +18,7 @@ pub use decode::VoxelType;
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
 };
-pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID};
+pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 pub use gpu::GpuVolume;
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use spec::{LoadOptions, VolumeSpec};
@@ -85,6 +85,41 @@ pub struct Volume {
     pub norm: [f32; 2],
     /// The transfer function spec a generator suggests for this volume.
     pub default_tf: Option<String>,
+    /// The voxels without data (NaN, stored as NaN, infinities included).
+    pub no_data: NoData,
+}
+
+/// Float voxels that hold no value, by what the source held. All are
+/// stored as NaN: a sample that reads one is transparent, and value ranges
+/// ignore them (README, "NaN and infinities"). An infinity is no data too:
+/// no transfer function maps it, and clamping it would invent a value.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoData {
+    pub nan: u64,
+    pub pos_inf: u64,
+    pub neg_inf: u64,
+}
+
+impl NoData {
+    /// Counts the non-finite values of float `data` and stores them as NaN.
+    fn mark(data: &mut VoxelData) -> NoData {
+        let mut counts = NoData::default();
+        if let VoxelData::F32(values) = data {
+            for v in values.iter_mut().filter(|v| !v.is_finite()) {
+                match *v {
+                    f32::INFINITY => counts.pos_inf += 1,
+                    f32::NEG_INFINITY => counts.neg_inf += 1,
+                    _ => counts.nan += 1,
+                }
+                *v = f32::NAN;
+            }
+        }
+        counts
+    }
+
+    pub fn total(&self) -> u64 {
+        self.nan + self.pos_inf + self.neg_inf
+    }
 }
 
 /// Checks dims are non-zero and their product fits memory indexing.
@@ -165,7 +200,13 @@ impl Volume {
                 "every spacing must be finite and > 0",
             ));
         }
-        let (lo, hi) = data.stored_range();
+        let mut data = data;
+        let no_data = NoData::mark(&mut data);
+        let (lo, hi) = match data.stored_range() {
+            // Only no-data voxels: every sample is transparent.
+            (lo, hi) if lo > hi => (0.0, 0.0),
+            r => r,
+        };
         let full = match &data {
             VoxelData::U8(_) => 255.0,
             VoxelData::U16(_) => 65535.0,
@@ -185,6 +226,7 @@ impl Volume {
             value_range: [lo, hi],
             norm,
             default_tf: None,
+            no_data,
         })
     }
 

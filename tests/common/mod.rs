@@ -156,3 +156,41 @@ pub fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
         "{all:?} left a file behind"
     );
 }
+
+/// `spec`'s volume as float32 with voxels without data: NaN in a ball at
+/// the centre (radius a quarter of the smallest dim), +inf on the plane
+/// x = 1 and -inf on y = 2. Its default TF is the generator's.
+pub fn masked(spec: &str) -> Volume {
+    let v = Volume::load(spec, &Default::default()).unwrap();
+    let [w, h, d] = v.dims;
+    let r = w.min(h).min(d) as f32 / 4.0;
+    let c = [w, h, d].map(|n| n as f32 / 2.0);
+    let mut data = Vec::with_capacity(v.voxel_count() as usize);
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                let p = [x, y, z].map(|q| q as f32 + 0.5);
+                let d2: f32 = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum();
+                data.push(if d2 < r * r {
+                    f32::NAN
+                } else if x == 1 {
+                    f32::INFINITY
+                } else if y == 2 {
+                    f32::NEG_INFINITY
+                } else {
+                    v.value(x, y, z)
+                });
+            }
+        }
+    }
+    let mut m = Volume::new(
+        format!("masked {spec}"),
+        v.dims,
+        v.spacing,
+        lacuna::volume::VoxelType::F32,
+        lacuna::volume::VoxelData::F32(data),
+    )
+    .unwrap();
+    m.default_tf = v.default_tf;
+    m
+}
