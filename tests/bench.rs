@@ -218,22 +218,62 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     assert_eq!(frames, records.len());
 }
 
-#[test]
-fn the_hard_case_suite_passes_for_every_structure() {
-    let (code, stdout, stderr) = lacuna(&["bench", "--suite", "hard", "--quiet"]);
+/// Runs `bench --suite hard` in `looks`; asserts every run passed, every
+/// case and structure ran in each look, and the table shows them.
+fn hard_suite_passes(looks: &[&str]) {
+    let mut args = vec!["bench", "--suite", "hard", "--quiet"];
+    for l in looks {
+        args.extend(["--look", l]);
+    }
+    let (code, stdout, stderr) = lacuna(&args);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(
-        stdout.contains("| hard case | filter | lbvh | lbvh collapsed | grid |"),
+        stdout.contains("| hard case | look | filter | lbvh | lbvh collapsed | grid |"),
         "{stdout}"
     );
     assert!(!stdout.contains("FAIL"), "{stdout}");
-    // Every case under both filters: the hard cases are 8-bit, and Vulkan
-    // requires linear filtering of R8 UNORM.
-    let filters = lacuna::render::Filter::ALL.len();
-    let runs = lacuna::bench::hard::cases().unwrap().len() * lacuna::bench::hard::structures().unwrap().len() * filters;
+    let cases = lacuna::bench::hard::cases().unwrap();
+    let structures = lacuna::bench::hard::structures().unwrap().len();
+    let line = stdout.lines().find(|l| l.starts_with("hard cases: ")).unwrap();
+    let numbers: Vec<usize> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    // passed, of total, marched naively; at least one filter per case and look.
+    assert_eq!(numbers[0], numbers[1], "{line}");
+    assert!(numbers[1] >= cases.len() * structures * looks.len(), "{line}");
+    for case in &cases {
+        for look in looks {
+            assert!(
+                stdout.contains(&format!("| {} | {look} | manual |", case.name)),
+                "{} {look}",
+                case.name
+            );
+        }
+    }
+    // Average is marched naively by every structure; the others skip.
+    let naive = structures * cases.len() * usize::from(looks.contains(&"average"));
+    assert_eq!(numbers[2], naive, "{line}");
+}
+
+// The suite in two halves, which the test harness runs side by side.
+#[test]
+fn the_hard_case_suite_passes_in_composite_shaded_and_mip() {
+    hard_suite_passes(&["composite", "shaded, jittered", "mip"]);
+}
+
+#[test]
+fn the_hard_case_suite_passes_in_minip_average_and_iso() {
+    hard_suite_passes(&["minip", "average", "iso, jittered"]);
+}
+
+#[test]
+fn an_unknown_hard_suite_look_is_refused() {
+    let (code, _, stderr) = lacuna(&["bench", "--suite", "hard", "--look", "glow"]);
+    assert_ne!(code, 0);
     assert!(
-        stdout.contains(&format!("hard cases: {runs} of {runs} structure runs passed")),
-        "{stdout}"
+        stderr.contains("invalid look 'glow': expected one of: composite;"),
+        "{stderr}"
     );
 }
 

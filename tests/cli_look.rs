@@ -23,6 +23,14 @@ fn matches_reference(spec: &str, flags: &[&str], desc: FrameDesc) -> Frame {
     let cpu = reference::render_frame(&volume, &tf, &desc).unwrap();
     let d = diff(&frame, &cpu).unwrap();
     assert!(d.max_abs <= 1e-4, "{flags:?}: {d}");
+    // An iso frame's EXR has a Z channel: each surface's distance.
+    assert_eq!(frame.depth.is_some(), cpu.depth.is_some(), "{flags:?}");
+    if let (Some(z), Some(want)) = (&frame.depth, &cpu.depth) {
+        assert!(z.iter().any(|d| d.is_finite()) && z.iter().any(|d| d.is_infinite()));
+        for (g, w) in z.iter().zip(want) {
+            assert!(g == w || (g - w).abs() <= 1e-4 * w.abs(), "Z {g} vs {w}");
+        }
+    }
     assert!(frame.pixels.iter().any(|p| p[3] > 0.01), "{flags:?}: empty frame");
     frame
 }

@@ -386,6 +386,8 @@ fn interfaces_are_read_from_the_spirv() {
             ("volume_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("tf_lut", texels),
             ("frame", d),
+            ("frame_depth", d),
+            ("gradient_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("cells", d)
         ]
     );

@@ -42,6 +42,23 @@ fn check(volume: &Volume, tf: &TransferFunction, s: FrameBuilder) -> Frame {
         desc.mode().name(),
         desc.camera().describe()
     );
+    // Iso frames carry their surfaces' depth (distances here), others none.
+    assert_eq!(frame.depth.is_some(), matches!(desc.mode(), Mode::Iso(_)));
+    if let (Some(gpu), Some(cpu)) = (&frame.depth, &cpu.depth) {
+        for (i, (g, c)) in gpu.iter().zip(cpu).enumerate() {
+            let hit = frame.pixels[i][3] > 0.0;
+            assert_eq!(
+                g.is_finite(),
+                hit,
+                "pixel {i}: depth {g} but alpha {}",
+                frame.pixels[i][3]
+            );
+            assert!(
+                g == c || (g - c).abs() <= 1e-4 * c.abs().max(1.0),
+                "pixel {i}: depth {g} vs {c}"
+            );
+        }
+    }
     frame
 }
 

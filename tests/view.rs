@@ -158,6 +158,60 @@ fn keys_rebuild_for_the_new_tf_and_structure_and_match_render() {
 }
 
 #[test]
+fn look_keys_and_flags_match_render() {
+    // Starts shaded; M four times: mip, minip, average, iso 0.5; '.': iso
+    // 0.52; C: a clip plane facing the camera, PageUp moves it; X: jitter.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("look.exr"), dir.path().join("render.exr"));
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let common = [
+        "shells:32",
+        "--size",
+        "64x48",
+        "--camera",
+        "20,15",
+        "--accel",
+        "grid",
+        "--validate",
+    ];
+    let view = [
+        &["view"],
+        &common[..],
+        &[
+            "--shade",
+            "on",
+            "--keys",
+            "m,m,m,m,.,c,PageUp,x",
+            "--frames",
+            "2",
+            "--screenshot",
+            a_str,
+        ],
+    ]
+    .concat();
+    let r = lacuna_windowed(&view);
+    ok(&r, &format!("{view:?}"));
+    let frame = Frame::read_exr(&a).unwrap();
+    assert_eq!(frame.metadata["mode"], "iso");
+    assert_eq!(frame.metadata["iso"], "0.52");
+    assert_eq!(frame.metadata["jitter"], "on");
+    assert!(frame.depth.is_none(), "the viewer presents colour only");
+    let clip = &frame.metadata["clip0"];
+    let render = [
+        &["render"],
+        &common[..],
+        &[
+            "--mode", "iso", "--iso", "0.52", "--clip", clip, "--jitter", "on", "--out", b_str,
+        ],
+    ]
+    .concat();
+    ok(&lacuna(&render, &[]), &format!("{render:?}"));
+    let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
+    assert!(Frame::read_exr(&b).unwrap().pixels.iter().any(|p| p[3] > 0.5));
+}
+
+#[test]
 fn bad_view_input_is_one_line_before_any_window() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("shot.tiff");

@@ -33,6 +33,7 @@ struct March {
     VolumeRay vr;
     float ert;     // early-termination alpha
     uint tf_n;     // LUT entries per table
+    Lighting lt;   // shaded and iso frames
     float jitter;  // the pixel's lattice offset in steps, [0, 1) (0 without jitter)
     // Mode state: the extreme so far (mip, minip); the sum and count of
     // samples (average); the previous sample's value, whether it is the
@@ -89,6 +90,9 @@ bool march_begin(Ray ray, float dt, out March m) {
     m.vr = volume_ray(ray.org, ray.dir);
     m.ert = params.ert;
     m.tf_n = params.lut_size;
+    if (MARCH_SHADE != 0u || MARCH_MODE == MODE_ISO) {
+        m.lt = lighting_for(ray.dir);
+    }
     m.jitter = 0.0;
     m.best = MARCH_MODE == MODE_MINIP ? 2.0 : -1.0;
     m.sum = 0.0;
@@ -205,7 +209,7 @@ vec4 shade(March m, float v, float w) {
 vec4 composite_sample(March m, float v, float w, vec3 p, bool full) {
     vec4 c = full ? tf_lookup(v, 0u, m.tf_n) : shade(m, v, w);
     if (MARCH_SHADE != 0u && c.a > 0.0) {
-        c = light_sample(m.vr, p, m.ray.dir, c);
+        c = light_sample(m.vr, m.lt, p, c);
     }
     return c;
 }
@@ -310,7 +314,7 @@ vec4 march_result(March m) {
         // Opaque, in the iso colour or the TF's colour at the value, lit.
         vec3 rgb = params.iso_colored != 0u ? params.iso_color : tf_lookup(m.hit_v, m.tf_n, m.tf_n).rgb;
         precise vec3 p = m.vr.org + m.hit_t * m.vr.dir;
-        return vec4(light_sample(m.vr, p, m.ray.dir, vec4(rgb, 1.0)).rgb, 1.0);
+        return vec4(light_sample(m.vr, m.lt, p, vec4(rgb, 1.0)).rgb, 1.0);
     }
     float v = m.best;
     if (MARCH_MODE == MODE_AVERAGE) {
@@ -326,6 +330,19 @@ vec4 march_result(March m) {
     // One value through the raw LUT: its colour and opacity, premultiplied.
     vec4 c = tf_lookup(v, m.tf_n, m.tf_n);
     return vec4(c.rgb * c.a, c.a);
+}
+
+// An iso frame's depth at the surface hit (render_params.glsl, depth_out).
+float march_depth(March m) {
+    if (!m.hit) {
+        return params.no_hit_depth;
+    }
+    precise vec3 p = m.ray.org + m.hit_t * m.ray.dir;
+    if (params.depth_out == 1u) {
+        precise vec4 q = params.voxel_to_ndc * vec4(p, 1.0);
+        return q.z / q.w;
+    }
+    return length((p - m.ray.org) * params.spacing);
 }
 
 // Marches the samples k < stop (stop <= k_end), front to back: the full
@@ -378,7 +395,8 @@ void march_region(inout March m, vec2 span) {
         if (MARCH_MODE == MODE_ISO) {
             // Iso tests pairs of consecutive samples: a pair that straddles
             // the region's entry or exit is the region's too. Pairs wholly
-            // outside active regions cross nothing (README, "Isosurfaces").
+            // outside active regions cross nothing (docs/structures.md,
+            // "Classification under each look").
             span = vec2(span.x - m.dt, span.y + m.dt);
         }
         march_skip_to(m, span.x);

@@ -17,7 +17,9 @@
 #define VOLUME_BINDING 1
 #define TF_BINDING 2
 #define FRAME_BINDING 3
-#define OWN_BINDING 4
+#define DEPTH_BINDING 4
+#define GRADIENT_BINDING 5
+#define OWN_BINDING 6
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -41,6 +43,10 @@ void main() {
         march_ray(m);
     }
     frame_store(px, march_result(m));
+    // Only iso frames hit a surface; the others write the far depth.
+    if (params.depth_out != 0u) {
+        depth_store(px, march_depth(m));
+    }
 }
 
 #endif

@@ -51,6 +51,12 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     // (src/accel/mode.rs). Read by structures that skip per ray.
     float value_bound;
     float value_margin;
+    // Iso frames' surface depth (frame_out.glsl): 0 not written; 1 NDC
+    // depth through voxel_to_ndc (host camera matrices); 2 distance from the
+    // ray's origin in physical units. no_hit_depth where a ray hits nothing.
+    uint depth_out;
+    mat4 voxel_to_ndc;
+    float no_hit_depth;
     // Per pixel (row-major), when depth_limits == 1: the ray's t where the
     // host's opaque surface is, written by glsl/render/depth_limit.comp.
     float t_max[];

@@ -94,6 +94,43 @@ float sample_raw(VolumeRay r, vec3 p) {
     return raw;
 }
 
+#ifdef GRADIENT_BINDING
+// The volume's gradient (src/volume/gradient.rs): per voxel (x, y, z) in
+// normalised value per voxel; bound for shaded and iso frames (the volume
+// image stands in for it otherwise, and nothing reads it).
+layout(set = 0, binding = GRADIENT_BINDING) uniform sampler3D gradient_tex;
+
+// The gradient at p (the filter's coordinates), in normalised value per
+// voxel, by the volume's filter: interpolated by hand with the weights
+// sample_manual uses, or by the sampler.
+vec3 sample_gradient(VolumeRay r, vec3 p) {
+    if (VOLUME_FILTER == 1u) {
+        return textureLod(gradient_tex, p, 0.0).xyz;
+    }
+    precise vec3 q = p - 0.5;
+    vec3 fl = floor(q);
+    precise vec3 f = q - fl;
+    ivec3 i = ivec3(fl);
+    ivec3 hi = r.hi;
+    vec3 c000 = texelFetch(gradient_tex, clamp(i, ivec3(0), hi), 0).xyz;
+    vec3 c100 = texelFetch(gradient_tex, clamp(i + ivec3(1, 0, 0), ivec3(0), hi), 0).xyz;
+    vec3 c010 = texelFetch(gradient_tex, clamp(i + ivec3(0, 1, 0), ivec3(0), hi), 0).xyz;
+    vec3 c110 = texelFetch(gradient_tex, clamp(i + ivec3(1, 1, 0), ivec3(0), hi), 0).xyz;
+    vec3 c001 = texelFetch(gradient_tex, clamp(i + ivec3(0, 0, 1), ivec3(0), hi), 0).xyz;
+    vec3 c101 = texelFetch(gradient_tex, clamp(i + ivec3(1, 0, 1), ivec3(0), hi), 0).xyz;
+    vec3 c011 = texelFetch(gradient_tex, clamp(i + ivec3(0, 1, 1), ivec3(0), hi), 0).xyz;
+    vec3 c111 = texelFetch(gradient_tex, clamp(i + ivec3(1, 1, 1), ivec3(0), hi), 0).xyz;
+    precise vec3 c00 = mix(c000, c100, f.x);
+    precise vec3 c10 = mix(c010, c110, f.x);
+    precise vec3 c01 = mix(c001, c101, f.x);
+    precise vec3 c11 = mix(c011, c111, f.x);
+    precise vec3 c0 = mix(c00, c10, f.y);
+    precise vec3 c1 = mix(c01, c11, f.y);
+    precise vec3 g = mix(c0, c1, f.z);
+    return g;
+}
+#endif
+
 // Normalised value in [0, 1] at the ray's point t (NaN: no data).
 float sample_volume(VolumeRay r, float t) {
     precise vec3 p = r.org + t * r.dir;

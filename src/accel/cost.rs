@@ -305,6 +305,9 @@ impl Probe {
             volume_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
             tf_lut: Binding::TexelBuffer(self.lut.view()),
             frame: Binding::Storage(&self.frame),
+            // Composite frames write no depth and read no gradient.
+            frame_depth: Binding::Storage(&self.frame),
+            gradient_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
         }
         .list();
         bindings.extend(

@@ -5,6 +5,7 @@
 
 use crate::accel::table::params_for;
 use crate::accel::{Accel, Params};
+use crate::desc::{FrameDesc, LookSpec, Shading};
 use crate::error::{Error, Result};
 use crate::volume::Filter;
 use serde::Deserialize;
@@ -48,6 +49,11 @@ pub struct BenchConfig {
     pub filter: Option<String>,
     /// Camera elevation in degrees; the azimuth turns through 360 over the frames.
     pub elevation: f64,
+    /// The frames' look (mode, iso, shade, light, phong, gradient_opacity,
+    /// clip, crop, jitter: `render`'s flags); a data set's own `look`
+    /// replaces what it gives. Default: composite, unshaded, whole box.
+    #[serde(default)]
+    pub look: LookSpec,
     #[serde(rename = "dataset")]
     pub datasets: Vec<DatasetConfig>,
     #[serde(rename = "structure")]
@@ -81,6 +87,36 @@ pub struct DatasetConfig {
     /// Skip (with a note) instead of failing when the file is missing.
     #[serde(default)]
     pub optional: bool,
+    /// This data set's look, over the run's (`BenchConfig::look`).
+    #[serde(default)]
+    pub look: LookSpec,
+}
+
+impl DatasetConfig {
+    /// The look of its frames: its own over the run's.
+    pub fn look(&self, config: &BenchConfig) -> LookSpec {
+        self.look.over(&config.look)
+    }
+
+    /// Its name in reports: the volume, and its look where that is not the
+    /// default (`nbody:96 [mode iso; iso 0.3]`), so one volume can be
+    /// measured in several looks.
+    pub fn label(&self, config: &BenchConfig) -> Result<String> {
+        let desc = self.look(config).apply(FrameDesc::builder(1, 1))?.build()?;
+        let default_light = Shading::default().describe();
+        let look: Vec<String> = desc
+            .describe_look()
+            .into_iter()
+            .map(|(k, v)| match k {
+                "shade" if v == default_light => k.to_string(),
+                _ => format!("{k} {v}"),
+            })
+            .collect();
+        Ok(match look.is_empty() {
+            true => self.volume.clone(),
+            false => format!("{} [{}]", self.volume, look.join("; ")),
+        })
+    }
 }
 
 /// A `[[structure]]`: a label, a structure, and values of its parameters
@@ -98,7 +134,8 @@ pub struct StructureConfig {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorConfig {
-    /// Data sets (by volume spec) to sweep; default: all.
+    /// Data sets (by label: the volume spec, with its look in brackets
+    /// when it has one) to sweep; default: all.
     pub datasets: Option<Vec<String>>,
     pub steps: Vec<f32>,
     /// Early-termination thresholds; 0 means off.
@@ -112,6 +149,10 @@ pub struct ErrorConfig {
     pub frames: u32,
     /// Structure the sweep is timed with (images are identical for all).
     pub accel: String,
+    /// Jitter settings swept (default: the data set's): `[false, true]`
+    /// shows what jitter does to the error against the fine reference.
+    #[serde(default)]
+    pub jitter: Vec<bool>,
 }
 
 /// A structure resolved from its config.
@@ -227,6 +268,10 @@ impl BenchConfig {
         self.timed_filter().map_err(|e| Error::format(origin, e.to_string()))?;
         if self.datasets.is_empty() || self.structures.is_empty() {
             return bad("needs at least one [[dataset]] and one [[structure]]");
+        }
+        for d in &self.datasets {
+            d.label(self)
+                .map_err(|e| Error::format(origin, format!("data set '{}': look: {e}", d.volume)))?;
         }
         let mut labels = std::collections::HashSet::new();
         for s in &self.structures {

@@ -337,31 +337,35 @@ fn error_plot<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, path: &Path, poi
         .label_style((FONT, 13))
         .draw()
         .map_err(|e| err(path, e))?;
-    // A colour per data set and ERT; the hardware filter's line thin, with crosses.
-    let mut series: Vec<(String, Option<f32>, String)> = Vec::new();
+    // A colour per data set, ERT and jitter; the hardware filter's line thin, with crosses.
+    let mut series: Vec<(String, Option<f32>, String, bool)> = Vec::new();
     for p in points {
-        let key = (p.dataset.clone(), p.ert, p.filter.clone());
+        let key = (p.dataset.clone(), p.ert, p.filter.clone(), p.jitter);
         if !series.contains(&key) {
             series.push(key);
         }
     }
-    let mut colours: Vec<(&str, Option<f32>)> = Vec::new();
-    for (d, ert, filter) in &series {
+    let mut colours: Vec<(&str, Option<f32>, bool)> = Vec::new();
+    for (d, ert, filter, jitter) in &series {
         let i = colours
             .iter()
-            .position(|k| *k == (d.as_str(), *ert))
+            .position(|k| *k == (d.as_str(), *ert, *jitter))
             .unwrap_or_else(|| {
-                colours.push((d.as_str(), *ert));
+                colours.push((d.as_str(), *ert, *jitter));
                 colours.len() - 1
             });
         let c = color(i);
         let mut pts: Vec<(f64, f64)> = points
             .iter()
-            .filter(|p| &p.dataset == d && &p.ert == ert && &p.filter == filter)
+            .filter(|p| &p.dataset == d && &p.ert == ert && &p.filter == filter && p.jitter == *jitter)
             .map(|p| (p.frame.median_ms, p.error.rmse.max(1e-9)))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let label = format!("{d}, ERT {}, {filter}", ert.map_or("off".into(), |e| e.to_string()));
+        let label = format!(
+            "{d}, ERT {}, {filter}{}",
+            ert.map_or("off".into(), |e| e.to_string()),
+            if *jitter { ", jitter" } else { "" }
+        );
         let width = if filter == "manual" { 2 } else { 1 };
         chart
             .draw_series(LineSeries::new(pts.clone(), c.stroke_width(width)))

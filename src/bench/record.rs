@@ -157,6 +157,9 @@ pub struct ErrorPoint {
     /// Sample filter of the point's frames; the reference samples by hand.
     #[serde(default = "manual")]
     pub filter: String,
+    /// Jittered samples (the reference is not).
+    #[serde(default)]
+    pub jitter: bool,
     pub frame: FrameTimes,
     pub reference_step: f32,
     pub error: ImageError,

@@ -12,12 +12,11 @@ use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
 use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
-use crate::desc::Mode;
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
 use crate::gpu::{Context, Timer};
-use crate::render::{Filter, FrameDesc, Output, Projection, RenderTarget, Renderer, Scene};
+use crate::render::{Filter, FrameBuilder, FrameDesc, Output, Projection, RenderTarget, Renderer, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
 use crate::Volume;
@@ -73,16 +72,18 @@ impl<'a> FrameTimer<'a> {
     }
 }
 
-/// View `view` of `views` of the orbit the benchmark turns through.
+/// View `view` of `views` of the orbit the benchmark turns through, in
+/// the data set's look (`base`).
 fn orbit(
     config: &BenchConfig,
+    base: FrameBuilder,
     view: u32,
     views: u32,
     step: f32,
     ert: Option<f32>,
     filter: Filter,
 ) -> Result<FrameDesc> {
-    FrameDesc::builder(config.size[0], config.size[1])
+    base.size(config.size[0], config.size[1])
         .orbit(
             360.0 * view as f64 / views as f64,
             config.elevation,
@@ -103,19 +104,20 @@ fn params_of(s: &StructureSpec) -> BTreeMap<String, String> {
 }
 
 struct Loaded {
+    /// The data set's label (`DatasetConfig::label`).
     spec: String,
     volume: Volume,
     tf: TransferFunction,
 }
 
-fn load(ctx: &Context, spec: &str, tf: Option<&str>) -> Result<Loaded> {
+fn load(ctx: &Context, spec: &str, label: String, tf: Option<&str>) -> Result<Loaded> {
     let volume = Volume::load_within(spec, &LoadOptions::default(), Some(ctx.info()))?;
     let tf_spec = tf
         .map(str::to_string)
         .or_else(|| volume.default_tf.clone())
         .unwrap_or_else(|| "ramp:0:1".into());
     Ok(Loaded {
-        spec: spec.to_string(),
+        spec: label,
         tf: TransferFunction::parse(&tf_spec)?,
         volume,
     })
@@ -126,10 +128,14 @@ struct Sweep<'a> {
     config: &'a BenchConfig,
     e: &'a ErrorConfig,
     setup: &'a Setup,
+    /// The data set's label.
     spec: &'a str,
+    /// Its look (the reference drops jitter).
+    base: FrameBuilder,
     /// The structure the sweep is timed with, on the uploaded volume.
     scene: Scene<'a>,
     filters: &'a [Filter],
+    jitters: &'a [bool],
 }
 
 /// The speed-against-error sweep of one data set, on its uploaded volume.
@@ -139,8 +145,10 @@ fn error_sweep(sweep: &Sweep, frames: &mut FrameTimer, progress: &Progress) -> R
         e,
         setup,
         spec,
+        base,
         scene,
         filters,
+        jitters,
     } = *sweep;
     let mut points = Vec::new();
     let mut reference = Vec::new();
@@ -150,7 +158,15 @@ fn error_sweep(sweep: &Sweep, frames: &mut FrameTimer, progress: &Progress) -> R
         ..scene
     };
     for view in 0..e.frames {
-        let desc = orbit(config, view, e.frames, e.reference_step, None, Filter::Manual)?;
+        let desc = orbit(
+            config,
+            base.jitter(false),
+            view,
+            e.frames,
+            e.reference_step,
+            None,
+            Filter::Manual,
+        )?;
         reference.push(
             frames
                 .frame(reference_scene, &desc, true)?
@@ -159,19 +175,24 @@ fn error_sweep(sweep: &Sweep, frames: &mut FrameTimer, progress: &Progress) -> R
         );
         progress.step(1);
     }
-    for (&filter, &step, &ert) in filters
-        .iter()
-        .flat_map(|f| e.steps.iter().flat_map(move |s| e.ert.iter().map(move |t| (f, s, t))))
-    {
+    let settings = jitters.iter().flat_map(|&j| {
+        filters.iter().flat_map(move |&f| {
+            e.steps
+                .iter()
+                .flat_map(move |&s| e.ert.iter().map(move |&t| (j, f, s, t)))
+        })
+    });
+    for (jitter, filter, step, ert) in settings {
         let ert = (ert > 0.0).then_some(ert);
+        let base = base.jitter(jitter);
         // A new step is a new workload: warm up again.
-        let first = orbit(config, 0, e.frames, step, ert, filter)?;
+        let first = orbit(config, base, 0, e.frames, step, ert, filter)?;
         warm_up(config.warmup, config.warmup_cap, config.stable, |_| {
             Ok(frames.frame(scene, &first, false)?.0)
         })?;
         let (mut times, mut sq, mut max_abs, mut differing, mut pixels) = (Vec::new(), 0.0, 0.0f64, 0, 0u64);
         for view in 0..e.frames {
-            let (ms, f) = frames.frame(scene, &orbit(config, view, e.frames, step, ert, filter)?, true)?;
+            let (ms, f) = frames.frame(scene, &orbit(config, base, view, e.frames, step, ert, filter)?, true)?;
             let d = diff(&reference[view as usize], &f.ok_or_else(|| missing("sweep frame"))?)?;
             times.push(ms);
             sq += d.rmse * d.rmse * d.pixels as f64;
@@ -189,6 +210,7 @@ fn error_sweep(sweep: &Sweep, frames: &mut FrameTimer, progress: &Progress) -> R
             sweep_step: step,
             ert,
             filter: filter.to_string(),
+            jitter,
             frame: FrameTimes::of(times),
             reference_step: e.reference_step,
             error: ImageError {
@@ -290,7 +312,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
-        let loaded = match load(ctx, &ds.volume, ds.tf.as_deref()) {
+        let loaded = match load(ctx, &ds.volume, ds.label(config)?, ds.tf.as_deref()) {
             Ok(l) => l,
             Err(Error::Io { path, .. }) if ds.optional => {
                 let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
@@ -302,17 +324,22 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             Err(e) => return Err(e),
         };
         let (v, tf) = (&loaded.volume, &loaded.tf);
-        let gv = GpuVolume::upload(ctx, v)?;
+        let mut gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
         let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
-        let settings = |view: u32| orbit(config, view, config.frames, config.step, config.ert, filter);
+        let base = ds.look(config).apply(FrameDesc::builder(1, 1))?;
+        if base.build()?.lighting().is_some() {
+            gv.add_gradient(v)?;
+        }
+        let settings = |view: u32| orbit(config, base, view, config.frames, config.step, config.ert, filter);
+        let mode = *settings(0)?.mode();
 
         let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
             tf,
             gpu_tf: &lut,
-            mode: Mode::Composite,
+            mode,
         };
         // lacuna info's occupancy figures.
         let n = v.data.len();
@@ -422,8 +449,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     config.stable * 100.0
                 ));
             }
-            // A structure that found nothing to skip says so.
-            let fell_back = |m: &MarchedAs| m.kind == MarchedKind::NothingToSkip;
+            // A structure that found nothing to skip, or does not skip in
+            // the frames' mode, says so.
+            let fell_back = |m: &MarchedAs| matches!(m.kind, MarchedKind::NothingToSkip | MarchedKind::ModeFallback);
             if let Some(m) = run.structure.marched_as_reason().filter(fell_back) {
                 out.notes.push(format!(
                     "{} - {}: marched with the naive kernel ({})",
@@ -499,13 +527,19 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 }
                 usable
             });
+            let jitters = match e.jitter.is_empty() {
+                true => vec![settings(0)?.jitter()],
+                false => e.jitter.clone(),
+            };
             let sweep = Sweep {
                 config,
                 e,
                 setup: &setup,
                 spec: &loaded.spec,
+                base,
                 scene: scene_of(&structure, &gv, &lut),
                 filters: &filters,
+                jitters: &jitters,
             };
             out.errors.extend(error_sweep(&sweep, &mut frames, &progress)?);
         }

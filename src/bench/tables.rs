@@ -198,13 +198,14 @@ pub fn records_csv(records: &[Record]) -> String {
 
 pub fn errors_md(points: &[ErrorPoint]) -> String {
     let mut out = String::from(
-        "Speed against error: time per frame and error against a fine reference (naive, step = reference, no early termination, manual filter)\n\n| data set | filter | step | ERT | ms (median) | rmse | psnr dB | max_abs |\n|---|---|---|---|---|---|---|---|\n",
+        "Speed against error: time per frame and error against a fine reference (naive, step = reference, no early termination, manual filter, no jitter)\n\n| data set | filter | jitter | step | ERT | ms (median) | rmse | psnr dB | max_abs |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for p in points {
         out += &format!(
-            "| {} | {} | {} | {} | {:.2} | {:.3e} | {} | {:.3e} |\n",
+            "| {} | {} | {} | {} | {} | {:.2} | {:.3e} | {} | {:.3e} |\n",
             p.dataset,
             p.filter,
+            if p.jitter { "on" } else { "off" },
             p.sweep_step,
             p.ert.map_or("off".into(), |e| e.to_string()),
             p.frame.median_ms,
@@ -218,14 +219,15 @@ pub fn errors_md(points: &[ErrorPoint]) -> String {
 
 pub fn errors_csv(points: &[ErrorPoint]) -> String {
     let mut out = String::from(
-        "dataset,accel,filter,step,ert,frame_median_ms,frame_min_ms,frame_max_ms,reference_step,rmse,psnr,max_abs\n",
+        "dataset,accel,filter,jitter,step,ert,frame_median_ms,frame_min_ms,frame_max_ms,reference_step,rmse,psnr,max_abs\n",
     );
     for p in points {
         out += &format!(
-            "{},{},{},{},{},{:.4},{:.4},{:.4},{},{:e},{},{:e}\n",
+            "{},{},{},{},{},{},{:.4},{:.4},{:.4},{},{:e},{},{:e}\n",
             csv_escape(&p.dataset),
             p.accel,
             p.filter,
+            p.jitter,
             p.sweep_step,
             p.ert.map_or("off".into(), |e| e.to_string()),
             p.frame.median_ms,

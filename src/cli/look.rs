@@ -1,10 +1,10 @@
 //! The frame's look on the command line: `--mode`, `--iso`, shading, clip
-//! planes, the crop box and jitter. Every flag is checked against the mode:
-//! a flag the frame would not use is an error, not silently ignored.
+//! planes, the crop box and jitter, as a `LookSpec` (which checks every
+//! flag against the mode).
 
 use clap::{Args, ValueEnum};
-use lacuna::render::{Clip, FrameBuilder, Iso, Light, Mode, Shading};
-use lacuna::{Error, Result};
+use lacuna::render::{FrameBuilder, LookSpec};
+use lacuna::Result;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum OnOff {
@@ -47,86 +47,23 @@ pub struct LookArgs {
 }
 
 impl LookArgs {
-    /// The mode, shading, clip and jitter set on `b`; the builder's `build`
-    /// checks them together.
+    /// The mode, shading, clip and jitter set on `b` (`LookSpec::apply`).
     pub fn apply(&self, b: FrameBuilder) -> Result<FrameBuilder> {
-        let mode = self.mode()?;
-        let b = b
-            .mode(mode)
-            .shading(self.shading(&mode)?)
-            .clip(self.clip()?)
-            .jitter(self.jitter == Some(OnOff::On));
-        Ok(b)
+        self.spec().apply(b)
     }
 
-    fn mode(&self) -> Result<Mode> {
-        let iso = self.iso.as_deref().map(Iso::parse).transpose()?;
-        let iso = match (iso, &self.iso_color) {
-            (Some(iso), Some(c)) => Some(iso.parse_color(c)?),
-            (None, Some(c)) => return Err(Error::invalid("iso color", c, "needs --mode iso --iso V")),
-            (iso, None) => iso,
-        };
-        match &self.mode {
-            Some(name) => Mode::parse(name, iso),
-            None if iso.is_some() => Err(Error::invalid(
-                "iso",
-                self.iso.clone().unwrap_or_default(),
-                "iso values need --mode iso",
-            )),
-            None => Ok(Mode::Composite),
+    pub fn spec(&self) -> LookSpec {
+        LookSpec {
+            mode: self.mode.clone(),
+            iso: self.iso.clone(),
+            iso_color: self.iso_color.clone(),
+            shade: self.shade.map(|s| s == OnOff::On),
+            light: self.light.clone(),
+            phong: self.phong.clone(),
+            gradient_opacity: self.gradient_opacity.clone(),
+            clip: self.clip.clone(),
+            crop: self.crop.clone(),
+            jitter: self.jitter.map(|j| j == OnOff::On),
         }
-    }
-
-    /// The shading of a frame of `mode`: `--shade on` (composite), always
-    /// for iso; the lighting flags need one of them.
-    fn shading(&self, mode: &Mode) -> Result<Option<Shading>> {
-        let lit = match (self.shade, mode) {
-            (Some(OnOff::On), _) => true,
-            (Some(OnOff::Off), Mode::Iso(_)) => {
-                return Err(Error::invalid("shade", "off", "iso surfaces are always lit"));
-            }
-            (_, Mode::Iso(_)) => true,
-            _ => false,
-        };
-        let flags = [
-            ("--light", &self.light),
-            ("--phong", &self.phong),
-            ("--gradient-opacity", &self.gradient_opacity),
-        ];
-        if !lit {
-            if let Some((flag, Some(v))) = flags.iter().find(|(_, v)| v.is_some()) {
-                return Err(Error::invalid(
-                    "shade",
-                    format!("{flag} {v}"),
-                    "lighting needs --shade on (or --mode iso)",
-                ));
-            }
-            return Ok(None);
-        }
-        let mut s = Shading::default();
-        if let Some(l) = &self.light {
-            s.light = Light::parse(l)?;
-        }
-        if let Some(p) = &self.phong {
-            s = s.parse_phong(p)?;
-        }
-        if let Some(g) = &self.gradient_opacity {
-            if matches!(mode, Mode::Iso(_)) {
-                return Err(Error::invalid("gradient opacity", g, "iso surfaces are opaque"));
-            }
-            s = s.parse_gradient_opacity(g)?;
-        }
-        Ok(Some(s))
-    }
-
-    fn clip(&self) -> Result<Clip> {
-        let mut clip = Clip::default();
-        for plane in &self.clip {
-            clip = clip.parse_plane(plane)?;
-        }
-        if let Some(c) = &self.crop {
-            clip = clip.parse_crop(c)?;
-        }
-        Ok(clip)
     }
 }

@@ -106,7 +106,10 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     desc.check_for(volume.dims, volume.spacing)?;
 
     let renderer = Renderer::new(&ctx)?;
-    let gpu_volume = GpuVolume::upload(&ctx, &volume)?;
+    let mut gpu_volume = GpuVolume::upload(&ctx, &volume)?;
+    if desc.lighting().is_some() {
+        gpu_volume.add_gradient(&volume)?;
+    }
     gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
     let lut = tf.upload(&ctx)?;
     let input = BuildInput {
@@ -161,9 +164,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         args.accel
     );
     let look: Vec<String> = desc
-        .describe(&gpu_volume)
+        .describe_look()
         .into_iter()
-        .filter(|(k, _)| LOOK_KEYS.contains(k))
         .map(|(k, v)| format!("{k} {v}"))
         .collect();
     if !look.is_empty() {
@@ -203,22 +205,6 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     }
     Ok(validation_verdict(&ctx))
 }
-
-/// The keys of `FrameDesc::describe` past the camera, step, ERT and filter.
-const LOOK_KEYS: [&str; 12] = [
-    "mode",
-    "iso",
-    "iso_color",
-    "shade",
-    "clip0",
-    "clip1",
-    "clip2",
-    "clip3",
-    "clip4",
-    "clip5",
-    "crop",
-    "jitter",
-];
 
 /// What a user may not expect of this frame's look.
 pub(super) fn look_notes(desc: &FrameDesc) -> Vec<String> {

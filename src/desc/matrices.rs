@@ -212,9 +212,9 @@ impl CameraMatrices {
         if !identity {
             world_to_voxel *= world_to_model;
         }
-        rays.ndc_to_voxel = (world_to_voxel * view_to_world * clip_to_view)
-            .as_mat4()
-            .to_cols_array_2d();
+        let ndc_to_voxel = world_to_voxel * view_to_world * clip_to_view;
+        rays.ndc_to_voxel = ndc_to_voxel.as_mat4().to_cols_array_2d();
+        rays.voxel_to_ndc = Some(ndc_to_voxel.inverse().as_mat4().to_cols_array_2d());
         rays.far_depth = far_z as f32;
         Ok(rays)
     }

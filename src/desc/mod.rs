@@ -11,6 +11,7 @@
 //! a member; callers that do not set it keep today's frame.
 
 mod clip;
+mod look;
 mod matrices;
 mod mode;
 mod orbit;
@@ -19,6 +20,7 @@ mod shading;
 
 pub use crate::volume::Filter;
 pub use clip::{Clip, MAX_CLIP};
+pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
 pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 pub use orbit::{Orbit, Projection};
@@ -115,6 +117,9 @@ pub struct Rays {
     pub ndc_to_voxel: [[f32; 4]; 4],
     /// The depth of the far plane (where a host depth image has nothing).
     pub far_depth: f32,
+    /// Voxel space to NDC, where the camera has one (host matrices): where
+    /// iso frames write their surface depth.
+    pub voxel_to_ndc: Option<[[f32; 4]; 4]>,
 }
 
 impl Rays {
@@ -129,6 +134,7 @@ impl Rays {
             perspective: false,
             ndc_to_voxel: [[0.0; 4]; 4],
             far_depth: 0.0,
+            voxel_to_ndc: None,
         }
     }
 
@@ -361,7 +367,20 @@ impl FrameDesc {
             // The TF's: the renderer sets it (`Mode::value_bound`).
             value_bound: self.mode.value_bound(None),
             value_margin: crate::volume::value_margin(norm),
+            // The renderer sets where iso depth goes (`DepthOut`).
+            depth_out: 0,
+            voxel_to_ndc: r.voxel_to_ndc.unwrap_or_default(),
+            no_hit_depth: match self.camera_has_ndc() {
+                true => r.far_depth,
+                false => f32::INFINITY,
+            },
         })
+    }
+
+    /// Whether the camera has NDC (host matrices): iso depth is written as
+    /// NDC depth, else as a distance (`render::HostDepthOut`).
+    pub fn camera_has_ndc(&self) -> bool {
+        matches!(self.camera, Camera::Matrices(_))
     }
 
     /// (name, value) pairs for printouts and frame metadata.
@@ -372,7 +391,14 @@ impl FrameDesc {
             ("ert", self.ert.map_or("off".into(), |e| e.to_string())),
             ("filter", self.filter_for(volume).to_string()),
         ];
-        // What differs from a plain composite frame.
+        out.extend(self.describe_look());
+        out
+    }
+
+    /// (name, value) pairs of what differs from a plain composite frame of
+    /// the whole box, in `render`'s flag syntax.
+    pub fn describe_look(&self) -> Vec<(&'static str, String)> {
+        let mut out = Vec::new();
         if self.mode != Mode::Composite {
             out.push(("mode", self.mode.name().into()));
         }

@@ -6,34 +6,63 @@ use crate::error::Result;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-impl Frame {
-    pub fn write_exr(&self, path: &Path) -> Result<()> {
+/// Writes `channels` of a `size` frame with `frame`'s metadata to `path`,
+/// atomically (a macro: each channel list is its own type).
+macro_rules! write_layer {
+    ($frame:expr, $path:expr, $size:expr, $channels:expr) => {{
         use exr::prelude::*;
-        let (w, h) = (self.width as usize, self.height as usize);
-        let pixels = &self.pixels;
-        let channels = SpecificChannels::rgba(|p: Vec2<usize>| {
-            let c = pixels[p.y() * w + p.x()];
-            (c[0], c[1], c[2], c[3])
-        });
         let layer = Layer::new(
-            (w, h),
+            $size,
             LayerAttributes::named("lacuna"),
             Encoding::SMALL_LOSSLESS,
-            channels,
+            $channels,
         );
         let mut image = Image::from_layer(layer);
-        for (k, v) in &self.metadata {
+        for (k, v) in &$frame.metadata {
             image.attributes.other.insert(
                 Text::from(format!("{PREFIX}{k}").as_str()),
                 AttributeValue::Text(Text::from(v.as_str())),
             );
         }
-        write_atomically(path, |tmp| {
+        write_atomically($path, |tmp| {
             image.write().to_file(tmp).map_err(|e| match e {
-                exr::error::Error::Io(io) => crate::Error::io(path, io),
-                other => crate::Error::format(path, format!("cannot write EXR: {other}")),
+                exr::error::Error::Io(io) => crate::Error::io($path, io),
+                other => crate::Error::format($path, format!("cannot write EXR: {other}")),
             })
         })
+    }};
+}
+
+impl Frame {
+    /// Writes RGBA (and `Z` when the frame has depth) as f32, with the
+    /// metadata, atomically.
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        use exr::prelude::*;
+        let (w, h) = (self.width as usize, self.height as usize);
+        let pixels = &self.pixels;
+        match &self.depth {
+            None => {
+                let channels = SpecificChannels::rgba(|p: Vec2<usize>| {
+                    let c = pixels[p.y() * w + p.x()];
+                    (c[0], c[1], c[2], c[3])
+                });
+                write_layer!(self, path, (w, h), channels)
+            }
+            Some(depth) => {
+                let channels = SpecificChannels::build()
+                    .with_channel("R")
+                    .with_channel("G")
+                    .with_channel("B")
+                    .with_channel("A")
+                    .with_channel("Z")
+                    .with_pixel_fn(|p: Vec2<usize>| {
+                        let i = p.y() * w + p.x();
+                        let c = pixels[i];
+                        (c[0], c[1], c[2], c[3], depth[i])
+                    });
+                write_layer!(self, path, (w, h), channels)
+            }
+        }
     }
 
     pub fn read_exr(path: &Path) -> Result<Frame> {
@@ -96,11 +125,37 @@ impl Frame {
                 metadata.insert(stripped.to_string(), t.to_string());
             }
         }
+        // An iso frame's depth: the first layer's Z channel, when it has one.
+        let has_z = meta
+            .headers
+            .first()
+            .is_some_and(|h| h.channels.list.iter().any(|c| c.name.eq("Z")));
+        let depth = if has_z {
+            let z = read()
+                .no_deep_data()
+                .largest_resolution_level()
+                .specific_channels()
+                .required("Z")
+                .collect_pixels(
+                    |res: Vec2<usize>, _| (res.width(), vec![0f32; res.width() * res.height()]),
+                    |(w, px): &mut (usize, Vec<f32>), p: Vec2<usize>, (z,): (f32,)| {
+                        px[p.y() * *w + p.x()] = z;
+                    },
+                )
+                .first_valid_layer()
+                .all_attributes()
+                .from_buffered(std::io::Cursor::new(bytes))
+                .map_err(unreadable)?;
+            Some(z.layer_data.channel_data.pixels.1)
+        } else {
+            None
+        };
         Ok(Frame {
             width: size.width() as u32,
             height: size.height() as u32,
             pixels: image.layer_data.channel_data.pixels.1,
             metadata,
+            depth,
         })
     }
 }

@@ -34,6 +34,9 @@ pub struct Frame {
     pub pixels: Vec<[f32; 4]>,
     /// Attribute name (without the `lacuna.` prefix) to value.
     pub metadata: BTreeMap<String, String>,
+    /// Per pixel, an iso frame's surface depth (`render::HostDepthOut` says
+    /// what it holds); an EXR's `Z` channel.
+    pub depth: Option<Vec<f32>>,
 }
 
 impl Frame {
@@ -44,6 +47,7 @@ impl Frame {
             height,
             pixels,
             metadata: BTreeMap::new(),
+            depth: None,
         }
     }
 

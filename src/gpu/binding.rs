@@ -9,8 +9,9 @@ use ash::vk;
 #[derive(Clone, Copy)]
 pub enum Binding<'a> {
     Storage(&'a Buffer),
-    /// A byte range of a storage buffer.
-    StorageRange(&'a Buffer, u64, u64),
+    /// A byte range (offset, size) of a storage buffer that may be the
+    /// host's (a raw handle).
+    StorageRange(vk::Buffer, u64, u64),
     Uniform(&'a Buffer),
     /// A sampled image with its sampler (`sampler3D` in GLSL), in
     /// SHADER_READ_ONLY_OPTIMAL.

@@ -30,6 +30,8 @@ pub struct DeviceInfo {
     pub device_local_bytes: u64,
     /// Fractional bits of the sampler's filtering weights (Vulkan requires >= 4).
     pub sub_texel_precision_bits: u32,
+    /// Storage buffer descriptors' offsets are multiples of this.
+    pub min_storage_buffer_offset_alignment: u64,
 }
 
 impl DeviceInfo {
@@ -152,6 +154,7 @@ pub(crate) fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, time
         timestamp_valid_bits,
         device_local_bytes,
         sub_texel_precision_bits: l.sub_texel_precision_bits,
+        min_storage_buffer_offset_alignment: l.min_storage_buffer_offset_alignment,
     }
 }
 

@@ -193,11 +193,7 @@ impl Kernel {
             .iter()
             .map(|b| match *b {
                 Binding::Storage(buf) | Binding::Uniform(buf) => [buf.descriptor()],
-                Binding::StorageRange(buf, offset, range) => [vk::DescriptorBufferInfo {
-                    buffer: buf.raw,
-                    offset,
-                    range,
-                }],
+                Binding::StorageRange(buffer, offset, range) => [vk::DescriptorBufferInfo { buffer, offset, range }],
                 Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) | Binding::TexelBuffer(_) => {
                     [vk::DescriptorBufferInfo::default()]
                 }

@@ -46,6 +46,10 @@ pub struct Renderer {
 struct Destination<'a> {
     variant: Option<&'static str>,
     output: Binding<'a>,
+    /// Where depth goes, and whether it is written (iso frames to the
+    /// target's buffer, every frame to a host's).
+    depth: Binding<'a>,
+    write_depth: bool,
     rows: Option<[u32; 2]>,
 }
 
@@ -159,16 +163,31 @@ impl Renderer {
                 format!("render target is {}x{}", target.width, target.height),
             ));
         }
-        let (variant, output) = match output {
-            Output::Buffer => (None, Binding::Storage(target.frame_buffer()?)),
+        let iso = matches!(desc.mode(), Mode::Iso(_));
+        let own_depth = Binding::Storage(&target.depth);
+        let (variant, output, depth, write_depth) = match output {
+            Output::Buffer => (None, Binding::Storage(target.frame_buffer()?), own_depth, iso),
             Output::Image(image) => {
                 image.check(width, height)?;
-                (Some(image.variant()?), Binding::StorageImage(image.view))
+                (
+                    Some(image.variant()?),
+                    Binding::StorageImage(image.view),
+                    own_depth,
+                    false,
+                )
+            }
+            Output::ImageAndDepth(image, d) => {
+                image.check(width, height)?;
+                d.check(&self.ctx, width, height)?;
+                let depth = Binding::StorageRange(d.buffer, d.offset, d.size);
+                (Some(image.variant()?), Binding::StorageImage(image.view), depth, true)
             }
         };
         let to = Destination {
             variant,
             output,
+            depth,
+            write_depth,
             rows: None,
         };
         self.record_frame(cmd, timer, target, scene, desc, to)
@@ -184,12 +203,36 @@ impl Renderer {
         desc: &FrameDesc,
         to: Destination,
     ) -> Result<()> {
-        let Destination { variant, output, rows } = to;
+        let Destination {
+            variant,
+            output,
+            depth,
+            write_depth,
+            rows,
+        } = to;
         let Scene { structure, volume, tf } = scene;
         let mut params = desc.params(volume)?;
         params.value_bound = desc.mode().value_bound(tf.visible);
+        params.depth_out = match write_depth {
+            false => 0,
+            true if desc.camera_has_ndc() => 1,
+            true => 2,
+        };
         let filter = desc.filter_for(volume);
         let sampler = volume.sampler_for(filter)?;
+        // Lit frames read the volume's gradient; the others bind the volume
+        // in its place (nothing reads it).
+        let gradient = match (desc.lighting().is_some(), volume.gradient_view()) {
+            (false, _) => volume.image.view,
+            (true, Some(view)) => view,
+            (true, None) => {
+                return Err(Error::invalid(
+                    "volume",
+                    "without its gradient",
+                    "shaded and iso frames read the volume's gradient: upload it with GpuVolume::add_gradient (or record_add_gradient)",
+                ))
+            }
+        };
         structure.check_mode(desc.mode())?;
         let kernel = self.kernel_for(structure.march(), filter, look_of(desc, volume), variant)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
@@ -209,6 +252,8 @@ impl Renderer {
             volume_tex: Binding::Sampled(volume.image.view, sampler),
             tf_lut: Binding::TexelBuffer(target.lut.view()),
             frame: output,
+            frame_depth: depth,
+            gradient_tex: Binding::Sampled(gradient, sampler),
         }
         .list();
         bindings.extend(structure.built.bindings());
@@ -247,20 +292,24 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records the copy of the frame buffer to the target's host-visible
-    /// readback buffer, with the barriers before (compute write -> transfer
+    /// Records the copy of the frame buffer and the depth buffer to the
+    /// target's host-visible readback buffer, with the barriers before (compute write -> transfer
     /// read) and after (transfer write -> host read). A target without a
     /// readback buffer is an error.
     pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) -> Result<()> {
         let (frame, readback) = (target.frame_buffer()?, target.readback_buffer()?);
         let device = self.ctx.device();
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
-        let region = [vk::BufferCopy {
-            src_offset: 0,
-            dst_offset: 0,
-            size: frame.size(),
-        }];
-        unsafe { device.cmd_copy_buffer(cmd, frame.raw, readback.raw, &region) };
+        let copy = |src: &crate::gpu::Buffer, dst_offset: u64| {
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset,
+                size: src.size(),
+            }];
+            unsafe { device.cmd_copy_buffer(cmd, src.raw, readback.raw, &region) };
+        };
+        copy(frame, 0);
+        copy(&target.depth, frame.size());
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     }
@@ -287,6 +336,7 @@ impl Renderer {
         }
         let (width, height) = desc.size();
         let target = RenderTarget::new(&self.ctx, width, height)?;
+        let iso = matches!(desc.mode(), Mode::Iso(_));
         let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
         let kernel = self.kernel_for(
             scene.structure.march(),
@@ -309,6 +359,8 @@ impl Renderer {
                 let to = Destination {
                     variant: None,
                     output: Binding::Storage(target.frame_buffer()?),
+                    depth: Binding::Storage(&target.depth),
+                    write_depth: iso,
                     rows: Some([first, rows_per_band]),
                 };
                 self.record_frame(cmd, Some(&mut timer), &target, scene, desc, to)?;
@@ -328,7 +380,8 @@ impl Renderer {
             first += rows_per_band;
             bands += 1;
         }
-        Ok((target.read()?, timings, bands))
+        let frame = if iso { target.read_with_depth()? } else { target.read()? };
+        Ok((frame, timings, bands))
     }
 }
 

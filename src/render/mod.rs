@@ -9,8 +9,8 @@ mod target;
 
 pub use crate::desc::{
     orthographic, parse_size, perspective, Camera, CameraMatrices, Clip, Filter, FrameBuilder, FrameDesc, HostDepth,
-    Iso, Light, Mode, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF,
+    Iso, Light, LookSpec, Mode, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF, MAX_CLIP,
 };
 pub use crate::gpu::shaders::blocks::RenderParams;
 pub use marcher::{Renderer, Scene};
-pub use target::{HostImage, Output, RenderTarget};
+pub use target::{HostDepthOut, HostImage, Output, RenderTarget};

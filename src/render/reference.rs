@@ -38,21 +38,30 @@ pub fn sample(volume: &Volume, p: Vec3) -> f32 {
 /// The stored texel value trilinearly interpolated at voxel-space point `p`
 /// (clamp to edge), as `sample_manual` in `glsl/common/volume.glsl`.
 pub fn sample_raw(volume: &Volume, p: Vec3) -> f32 {
+    trilinear(volume, p, |i| volume.data.texel(i))
+}
+
+/// The values `texel(voxel index)` of `volume`'s voxels trilinearly
+/// interpolated at `p` (clamp to edge), with the shaders' weights and order.
+fn trilinear<T>(volume: &Volume, p: Vec3, texel: impl Fn(usize) -> T) -> T
+where
+    T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>,
+{
     let hi = UVec3::from(volume.dims).as_i64vec3() - 1;
     let q = p - 0.5;
     let fl = q.floor();
     let f = q - fl;
     let i = fl.as_i64vec3();
-    let texel = |dx: i64, dy: i64, dz: i64| {
+    let at = |dx: i64, dy: i64, dz: i64| {
         let c = i + I64Vec3::new(dx, dy, dz);
         let c = [0, 1, 2].map(|a| c[a].clamp(0, hi[a]) as u32);
-        volume.data.texel(volume.index(c[0], c[1], c[2]))
+        texel(volume.index(c[0], c[1], c[2]))
     };
-    let mix = |a: f32, b: f32, t: f32| a * (1.0 - t) + b * t;
-    let c00 = mix(texel(0, 0, 0), texel(1, 0, 0), f.x);
-    let c10 = mix(texel(0, 1, 0), texel(1, 1, 0), f.x);
-    let c01 = mix(texel(0, 0, 1), texel(1, 0, 1), f.x);
-    let c11 = mix(texel(0, 1, 1), texel(1, 1, 1), f.x);
+    let mix = |a: T, b: T, t: f32| a * (1.0 - t) + b * t;
+    let c00 = mix(at(0, 0, 0), at(1, 0, 0), f.x);
+    let c10 = mix(at(0, 1, 0), at(1, 1, 0), f.x);
+    let c01 = mix(at(0, 0, 1), at(1, 0, 1), f.x);
+    let c11 = mix(at(0, 1, 1), at(1, 1, 1), f.x);
     mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z)
 }
 
@@ -79,6 +88,7 @@ const MODE_COMPOSITE: u32 = 0;
 const MODE_MIP: u32 = 1;
 const MODE_MINIP: u32 = 2;
 const MODE_AVERAGE: u32 = 3;
+const MODE_ISO: u32 = 4;
 /// As `ISO_BISECTIONS` in `glsl/common/lattice.glsl`.
 const ISO_BISECTIONS: u32 = 16;
 
@@ -91,6 +101,8 @@ pub struct Tracer<'a> {
     /// `tf.corrected_lut(p.step)`: full-length samples read it, the ray's
     /// shortened last sample corrects the raw LUT's alpha itself.
     corrected: Vec<[f32; 4]>,
+    /// The volume's gradient texels, for lit looks (`volume::gradient_texels`).
+    gradient: Vec<[half::f16; 4]>,
 }
 
 /// As `pixel_jitter` in `glsl/common/lattice.glsl`.
@@ -136,12 +148,18 @@ pub fn clip_interval(p: &RenderParams, org: Vec3, dir: Vec3) -> (f32, f32) {
 
 impl<'a> Tracer<'a> {
     pub fn new(volume: &'a Volume, tf: &'a TransferFunction, p: &'a RenderParams, look: Look) -> Self {
+        let lit = look.shade || look.mode == MODE_ISO;
         Tracer {
             volume,
             tf,
             p,
             look,
             corrected: tf.corrected_lut(p.step),
+            gradient: if lit {
+                crate::volume::gradient_texels(volume)
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -155,18 +173,19 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// As `sample_gradient` in `glsl/common/volume.glsl` (manual filter).
+    fn sample_gradient(&self, p: Vec3) -> Vec3 {
+        trilinear(self.volume, p, |i| {
+            let g = self.gradient[i];
+            Vec3::new(g[0].to_f32(), g[1].to_f32(), g[2].to_f32())
+        })
+    }
+
     /// As `light_sample` in `glsl/common/light.glsl`.
     fn light(&self, pos: Vec3, dir: Vec3, c: [f32; 4]) -> [f32; 4] {
         let p = self.p;
         let spacing = Vec3::from(p.spacing);
-        let mut g = Vec3::ZERO;
-        for a in 0..3 {
-            let mut e = Vec3::ZERO;
-            e[a] = 1.0;
-            let hi = sample_raw(self.volume, pos + e);
-            let lo = sample_raw(self.volume, pos - e);
-            g[a] = (hi - lo) * 0.5 * self.volume.norm[1] / spacing[a];
-        }
+        let g = self.sample_gradient(pos) / spacing;
         let len = g.length();
         let [ka, kd, ks, shininess] = p.shading;
         let view = (-dir * spacing).normalize();
@@ -195,6 +214,12 @@ impl<'a> Tracer<'a> {
     // Negated comparisons mirror the GLSL: a NaN bound stops the march.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     pub fn pixel(&self, x: u32, y: u32, t_limit: Option<f32>) -> [f32; 4] {
+        self.trace(x, y, t_limit).0
+    }
+
+    /// As `pixel`, with the surface hit's point (voxel space) in iso mode.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub fn trace(&self, x: u32, y: u32, t_limit: Option<f32>) -> ([f32; 4], Option<Vec3>) {
         let p = self.p;
         let (org, dir) = camera_ray(p, x, y);
         let hi = UVec3::from(self.volume.dims).as_vec3();
@@ -209,7 +234,7 @@ impl<'a> Tracer<'a> {
         let lattice_t = |k: u32| t_enter + (k as f32 + jitter) * dt;
         let mut k = 0u32;
         if !(t_enter < t_exit) {
-            return [0.0; 4];
+            return ([0.0; 4], None);
         }
         if p.clip_count != 0 || p.crop != 0 {
             let (lo, clip_hi) = clip_interval(p, org, dir);
@@ -280,23 +305,23 @@ impl<'a> Tracer<'a> {
                 _ => {
                     if let Some((t0, v0)) = prev {
                         if let Some((t_hit, iso)) = self.iso_crossing(org, dir, (t0, v0), (t, v)) {
-                            return self.iso_surface(org, dir, t_hit, iso);
+                            return (self.iso_surface(org, dir, t_hit, iso), Some(org + dir * t_hit));
                         }
                     }
                     prev = Some((t, v));
                 }
             }
         }
-        match mode {
+        let rgba = match mode {
             MODE_COMPOSITE => acc,
             MODE_AVERAGE | MODE_MIP | MODE_MINIP => {
                 let v = if mode == MODE_AVERAGE {
                     if count == 0.0 {
-                        return [0.0; 4];
+                        return ([0.0; 4], None);
                     }
                     sum / count
                 } else if !(0.0..=1.0).contains(&best) {
-                    return [0.0; 4];
+                    return ([0.0; 4], None);
                 } else {
                     best
                 };
@@ -304,7 +329,8 @@ impl<'a> Tracer<'a> {
                 [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
             }
             _ => [0.0; 4],
-        }
+        };
+        (rgba, None)
     }
 
     /// As `iso_crossing` in `glsl/common/lattice.glsl`: the smallest refined
@@ -376,10 +402,38 @@ pub fn render_to(volume: &Volume, tf: &TransferFunction, p: &RenderParams, limit
 }
 
 /// Renders frame `desc` of `volume` on the CPU: its mode, shading, clip,
-/// crop and jitter (the sample filter is always the manual one's).
+/// crop and jitter (the sample filter is always the manual one's); an iso
+/// frame with its depth (`render::HostDepthOut`).
 pub fn render_frame(volume: &Volume, tf: &TransferFunction, desc: &FrameDesc) -> crate::Result<Frame> {
     let p = desc.params_for(volume.dims, volume.spacing, volume.norm)?;
-    Ok(render_look(&Tracer::new(volume, tf, &p, Look::of(desc)), None))
+    let tracer = Tracer::new(volume, tf, &p, Look::of(desc));
+    if !matches!(desc.mode(), crate::desc::Mode::Iso(_)) {
+        return Ok(render_look(&tracer, None));
+    }
+    let (w, h) = (p.image[0], p.image[1]);
+    let ndc = desc.camera_has_ndc();
+    let traced: Vec<([f32; 4], f32)> = (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let (rgba, hit) = tracer.trace(x, y, None);
+            (rgba, hit.map_or(p.no_hit_depth, |at| depth_at(&p, x, y, at, ndc)))
+        })
+        .collect();
+    let mut frame = Frame::new(w, h, traced.iter().map(|t| t.0).collect());
+    frame.depth = Some(traced.iter().map(|t| t.1).collect());
+    Ok(frame)
+}
+
+/// As `march_depth` in `glsl/common/lattice.glsl`: the depth of the surface
+/// point `at` (voxel space) seen by pixel (x, y).
+fn depth_at(p: &RenderParams, x: u32, y: u32, at: Vec3, ndc: bool) -> f32 {
+    if ndc {
+        let q = Mat4::from_cols_array_2d(&p.voxel_to_ndc) * at.extend(1.0);
+        return q.z / q.w;
+    }
+    let (org, _) = camera_ray(p, x, y);
+    ((at - org) * Vec3::from(p.spacing)).length()
 }
 
 fn render_look(tracer: &Tracer, limits: Option<&[f32]>) -> Frame {

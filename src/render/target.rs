@@ -16,6 +16,9 @@ pub struct RenderTarget {
     pub height: u32,
     /// RGBA f32 premultiplied, row-major; None for a target of host images.
     pub frame: Option<Buffer>,
+    /// An iso frame's depth, f32 per pixel (`HostDepthOut` says what it
+    /// holds); 16 bytes, never written, for a target of host images.
+    pub depth: Buffer,
     pub params: Buffer,
     pub lut: TexelBuffer,
     readback: Option<Buffer>,
@@ -34,12 +37,54 @@ pub struct HostImage {
     pub height: u32,
 }
 
+/// A host's storage buffer a frame writes its depth to: one f32 per pixel,
+/// row-major, `size` bytes from `offset` (at least width x height x 4; the
+/// offset a multiple of `minStorageBufferOffsetAlignment`). Iso frames write
+/// each surface's depth there, every other frame (and a ray that hits no
+/// surface) the far depth: with host camera matrices NDC depth in the
+/// host's convention (`CameraMatrices`; the far plane's depth where nothing
+/// is hit), else the distance from the ray's origin in physical units
+/// (infinity where nothing is hit). A host copies it into its depth
+/// attachment with `vkCmdCopyBufferToImage` (D32_SFLOAT) to depth-test what
+/// it draws after.
+#[derive(Clone, Copy, Debug)]
+pub struct HostDepthOut {
+    pub buffer: vk::Buffer,
+    pub offset: u64,
+    pub size: u64,
+}
+
 /// The frame's destination.
 #[derive(Clone, Copy, Debug)]
 pub enum Output {
-    /// The target's own frame buffer.
+    /// The target's own frame buffer (and, for iso frames, its depth
+    /// buffer, which the readback carries: `Frame::depth`).
     Buffer,
     Image(HostImage),
+    /// A host image and a host depth buffer.
+    ImageAndDepth(HostImage, HostDepthOut),
+}
+
+impl HostDepthOut {
+    pub(crate) fn check(&self, ctx: &Context, width: u32, height: u32) -> Result<()> {
+        let need = width as u64 * height as u64 * 4;
+        if self.size < need {
+            return Err(Error::invalid(
+                "host depth output",
+                format!("{} bytes", self.size),
+                format!("a {width}x{height} frame needs {need} (one f32 per pixel)"),
+            ));
+        }
+        let align = ctx.info().min_storage_buffer_offset_alignment;
+        if !self.offset.is_multiple_of(align.max(1)) {
+            return Err(Error::invalid(
+                "host depth output offset",
+                self.offset.to_string(),
+                format!("must be a multiple of minStorageBufferOffsetAlignment ({align})"),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl HostImage {
@@ -128,6 +173,12 @@ impl RenderTarget {
             )?),
             false => None,
         };
+        let depth = buffer(
+            "frame depth",
+            if frame.is_some() { pixels * 4 } else { 16 },
+            storage | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+        )?;
         let params = buffer(
             "render params",
             std::mem::size_of::<RenderParams>() as u64 + pixels * 4,
@@ -144,7 +195,7 @@ impl RenderTarget {
         let readback = match readback {
             true => Some(buffer(
                 "frame readback",
-                bytes,
+                bytes + pixels * 4,
                 vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuToCpu,
             )?),
@@ -154,6 +205,7 @@ impl RenderTarget {
             width,
             height,
             frame,
+            depth,
             params,
             lut,
             readback,
@@ -183,9 +235,22 @@ impl RenderTarget {
     /// Reads the frame recorded by `Renderer::record_readback`, after the
     /// submission completed.
     pub fn read(&self) -> Result<Frame> {
+        self.read_frame(false)
+    }
+
+    /// As `read`, with the iso frame's depth (`Frame::depth`).
+    pub fn read_with_depth(&self) -> Result<Frame> {
+        self.read_frame(true)
+    }
+
+    fn read_frame(&self, depth: bool) -> Result<Frame> {
         let bytes = self.readback_buffer()?.host()?;
         let n = self.width as usize * self.height as usize;
         let pixels: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes[..n * 16]);
-        Ok(Frame::new(self.width, self.height, pixels))
+        let mut frame = Frame::new(self.width, self.height, pixels);
+        if depth {
+            frame.depth = Some(bytemuck::pod_collect_to_vec(&bytes[n * 16..n * 20]));
+        }
+        Ok(frame)
     }
 }

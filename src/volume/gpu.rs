@@ -1,12 +1,17 @@
 //! The volume on the GPU: a 3D image (R8/R16 UNORM kept native, else R32
 //! float) with a nearest sampler (`texelFetch`: the manual filter, ranges,
 //! classification) and, where the format filters linearly, a linear one
-//! for `Filter::Hardware`.
+//! for `Filter::Hardware`; and, for shaded and iso frames, the volume's
+//! gradient (`gradient.rs`).
 
 use super::filter::Filter;
+use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{vk, Context, Image3d, Staging};
+use crate::gpu::{check_image3d, vk, Context, Image3d, Staging};
+
+/// The gradient's texel format (x, y, z, unused).
+const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 pub struct GpuVolume {
     ctx: Context,
@@ -23,6 +28,8 @@ pub struct GpuVolume {
     /// It holds NaN voxels (no data): the march kernels test samples for
     /// NaN, and only the manual filter samples it.
     pub has_nan: bool,
+    /// The gradient shaded and iso frames read (`add_gradient`).
+    gradient: Option<Image3d>,
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -78,6 +85,7 @@ impl GpuVolume {
             spacing: volume.spacing,
             norm: volume.norm,
             has_nan: volume.no_data.total() > 0,
+            gradient: None,
         };
         if ctx.filters_linearly(format) {
             gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
@@ -108,6 +116,73 @@ impl GpuVolume {
                 ),
             )),
         }
+    }
+
+    /// Uploads the gradient shaded and iso frames read (`volume`'s, the
+    /// volume this was uploaded from: `volume::gradient_texels`) and waits.
+    /// 8 bytes per voxel; once is enough.
+    pub fn add_gradient(&mut self, volume: &Volume) -> Result<()> {
+        let ctx = self.ctx.clone();
+        self.put_gradient(volume, |bytes, dims| {
+            let image = Image3d::with_data(&ctx, "gradient", GRADIENT_FORMAT, dims, GRADIENT_TEXEL_BYTES, bytes)?;
+            Ok((image, ()))
+        })?;
+        Ok(())
+    }
+
+    /// As `add_gradient`, recorded into `cmd` (see `record_upload`); None
+    /// when it is already there.
+    pub fn record_add_gradient(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
+        let ctx = self.ctx.clone();
+        self.put_gradient(volume, |bytes, dims| {
+            Image3d::record_with_data(
+                &ctx,
+                cmd,
+                "gradient",
+                GRADIENT_FORMAT,
+                dims,
+                GRADIENT_TEXEL_BYTES,
+                bytes,
+            )
+        })
+    }
+
+    /// Computes the gradient and hands its bytes to `upload`, unless it is
+    /// already there.
+    fn put_gradient<R>(
+        &mut self,
+        volume: &Volume,
+        upload: impl FnOnce(&[u8], [u32; 3]) -> Result<(Image3d, R)>,
+    ) -> Result<Option<R>> {
+        if self.gradient.is_some() {
+            return Ok(None);
+        }
+        let texels = self.gradient_texels(volume)?;
+        let (image, extra) = upload(bytemuck::cast_slice(&texels), self.dims)?;
+        self.gradient = Some(image);
+        Ok(Some(extra))
+    }
+
+    fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {
+        if volume.dims != self.dims || volume.norm != self.norm {
+            return Err(Error::invalid(
+                "gradient",
+                volume.name.clone(),
+                "is not the volume this was uploaded from",
+            ));
+        }
+        check_image3d(self.ctx.info(), self.dims, GRADIENT_TEXEL_BYTES)?;
+        crate::limits::check_host(
+            format_args!("gradient of {}", volume.name),
+            volume.voxel_count(),
+            GRADIENT_TEXEL_BYTES,
+        )?;
+        Ok(gradient_texels(volume))
+    }
+
+    /// The gradient's view, where `add_gradient` uploaded it.
+    pub fn gradient_view(&self) -> Option<vk::ImageView> {
+        self.gradient.as_ref().map(|g| g.view)
     }
 
     /// The faster filter this volume supports on this device (`Filter::device_default`).

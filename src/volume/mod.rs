@@ -6,6 +6,7 @@ mod decode;
 mod export;
 mod filter;
 mod gpu;
+mod gradient;
 #[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
@@ -20,6 +21,7 @@ pub use export::{
 };
 pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 pub use gpu::GpuVolume;
+pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use spec::{LoadOptions, VolumeSpec};
 

@@ -76,7 +76,9 @@ impl Fixture {
     /// Uploads the volume and TF and computes the ranges every structure
     /// reads with the `given` values.
     pub fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, given: Given) -> Prepared<'a> {
-        let gv = GpuVolume::upload(&self.ctx, volume).unwrap();
+        let mut gv = GpuVolume::upload(&self.ctx, volume).unwrap();
+        // Shaded and iso views read it.
+        gv.add_gradient(volume).unwrap();
         let lut = tf.upload(&self.ctx).unwrap();
         let sets: Vec<(Accel, Params)> = lacuna::accel::TABLE
             .iter()

@@ -48,7 +48,10 @@ pub fn render_with(
     params: &Params,
 ) -> Frame {
     let renderer = Renderer::new(ctx).unwrap();
-    let gv = GpuVolume::upload(ctx, volume).unwrap();
+    let mut gv = GpuVolume::upload(ctx, volume).unwrap();
+    if desc.lighting().is_some() {
+        gv.add_gradient(volume).unwrap();
+    }
     let lut = tf.upload(ctx).unwrap();
     let builder = Builder::new(ctx).unwrap();
     let (ranges, _) = builder.ranges_for(&[(accel, params)], &gv).unwrap();
@@ -157,40 +160,11 @@ pub fn fails(args: &[&str], env: &[(&str, &str)], needle: &str) {
     );
 }
 
-/// `spec`'s volume as float32 with voxels without data: NaN in a ball at
-/// the centre (radius a quarter of the smallest dim), +inf on the plane
-/// x = 1 and -inf on y = 2. Its default TF is the generator's.
+/// `spec`'s volume as float32 with voxels without data (`bench::hard::masked`:
+/// NaN in a central ball, +inf and -inf on two planes), with the
+/// generator's default TF.
 pub fn masked(spec: &str) -> Volume {
-    let v = Volume::load(spec, &Default::default()).unwrap();
-    let [w, h, d] = v.dims;
-    let r = w.min(h).min(d) as f32 / 4.0;
-    let c = [w, h, d].map(|n| n as f32 / 2.0);
-    let mut data = Vec::with_capacity(v.voxel_count() as usize);
-    for z in 0..d {
-        for y in 0..h {
-            for x in 0..w {
-                let p = [x, y, z].map(|q| q as f32 + 0.5);
-                let d2: f32 = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum();
-                data.push(if d2 < r * r {
-                    f32::NAN
-                } else if x == 1 {
-                    f32::INFINITY
-                } else if y == 2 {
-                    f32::NEG_INFINITY
-                } else {
-                    v.value(x, y, z)
-                });
-            }
-        }
-    }
-    let mut m = Volume::new(
-        format!("masked {spec}"),
-        v.dims,
-        v.spacing,
-        lacuna::volume::VoxelType::F32,
-        lacuna::volume::VoxelData::F32(data),
-    )
-    .unwrap();
-    m.default_tf = v.default_tf;
+    let mut m = lacuna::bench::hard::masked(spec).unwrap();
+    m.default_tf = Volume::load(spec, &Default::default()).unwrap().default_tf;
     m
 }

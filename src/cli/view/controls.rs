@@ -1,7 +1,9 @@
 //! What the user changes in the viewer, and how input changes it: orbit,
 //! zoom and pan (host math through glam), the transfer function's shape,
-//! the structure, early ray termination and the step. Pure state, no GPU.
+//! the structure, early ray termination, the step, and the look
+//! (`look.rs`). Pure state, no GPU.
 
+use super::look::{self, LookControls};
 use glam::{DVec2, Vec3};
 use lacuna::accel::{Accel, TABLE};
 use lacuna::render::{Camera, Filter, FrameDesc, Orbit, Projection};
@@ -14,8 +16,9 @@ const TF_NUDGE: f32 = 0.02;
 /// The ERT threshold the `E` key switches on.
 const ERT: f32 = 0.99;
 
-/// The key names `Controls::key` acts on (either case for letters).
-pub const KEYS: &[&str] = &[
+/// The key names `Controls::key` acts on (either case for letters), the
+/// look's (`look::KEYS`) besides.
+const OWN_KEYS: &[&str] = &[
     "ArrowLeft",
     "ArrowRight",
     "ArrowUp",
@@ -33,9 +36,15 @@ pub const KEYS: &[&str] = &[
     "Escape",
 ];
 
+/// Every key name `Controls::key` acts on.
+pub fn keys() -> Vec<&'static str> {
+    OWN_KEYS.iter().chain(look::KEYS).copied().collect()
+}
+
 /// Whether `Controls::key` acts on `name`.
 pub fn known_key(name: &str) -> bool {
-    KEYS.iter()
+    keys()
+        .iter()
         .any(|k| *k == name || (k.len() == 1 && k.eq_ignore_ascii_case(name)))
 }
 
@@ -118,7 +127,8 @@ impl Shape {
 pub struct Change {
     /// The transfer function: re-upload it and rebuild the structure.
     pub tf: bool,
-    /// The structure: compute its ranges and build it.
+    /// The structure, or the mode it is built for: compute its ranges and
+    /// build it.
     pub structure: bool,
     /// A screenshot was asked for.
     pub screenshot: bool,
@@ -143,6 +153,7 @@ pub struct Controls {
     /// A ParaView JSON file the `J` key loads (read again on every press).
     pub json: Option<String>,
     pub accel: Accel,
+    pub look: LookControls,
 }
 
 impl Controls {
@@ -178,6 +189,7 @@ impl Controls {
             preset: 0,
             json,
             accel,
+            look: LookControls::new(frame),
         }
     }
 
@@ -268,7 +280,7 @@ impl Controls {
             }
             "s" | "S" => change.screenshot = true,
             "Escape" | "q" | "Q" => change.quit = true,
-            _ => {}
+            _ => change.structure = self.look.key(key, &self.orbit).rebuild,
         }
         change
     }
@@ -280,11 +292,16 @@ impl Controls {
     pub fn desc(&self, dims: [u32; 3], spacing: [f32; 3], filter: Filter) -> Result<FrameDesc> {
         let (w, h) = self.size;
         let orbit = Camera::Orbit(self.orbit);
+        // Early termination ends composite rays only.
+        let ert = self
+            .ert
+            .filter(|_| matches!(self.look.mode, lacuna::render::Mode::Composite));
         let frame = FrameDesc::builder(w, h)
             .camera(orbit)
             .step(self.step)
-            .ert(self.ert)
+            .ert(ert)
             .filter(filter);
+        let frame = self.look.apply(frame, dims, spacing)?;
         if self.zoom == 1.0 && self.pan == DVec2::ZERO {
             return frame.build();
         }
@@ -338,16 +355,20 @@ mod tests {
 
     #[test]
     fn every_known_key_does_something_and_others_are_unknown() {
-        for key in KEYS {
+        for key in keys() {
             let mut c = controls("ramp:0.3:1");
             c.zoom = 2.0;
-            let before = state(&c);
+            // The plane keys move a plane that is shown.
+            if key.starts_with("Page") {
+                c.key("c", false);
+            }
+            let before = (state(&c), c.look.clone());
             let change = c.key(key, false);
-            let acted = change != Change::default() || state(&c) != before;
+            let acted = change != Change::default() || (state(&c), c.look.clone()) != before;
             assert!(acted, "{key} did nothing");
             assert!(known_key(key) && (key.len() > 1 || known_key(&key.to_uppercase())));
         }
-        assert!(!known_key("x") && !known_key("Arrowleft") && !known_key(""));
+        assert!(!known_key("z") && !known_key("Arrowleft") && !known_key(""));
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 mod controls;
 mod host;
+mod look;
 mod scene;
 
 use super::args::{AccelParser, FrameArgs};
@@ -103,7 +104,7 @@ impl ViewArgs {
             return Err(Error::invalid(
                 "key",
                 key.clone(),
-                format!("expected one of: {}", controls::KEYS.join(", ")),
+                format!("expected one of: {}", controls::keys().join(", ")),
             ));
         }
         Ok(desc)
@@ -169,7 +170,7 @@ impl App<'_> {
             .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
-        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel)?;
+        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel, *desc.mode())?;
         let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
         let controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
@@ -304,6 +305,9 @@ impl Viewer {
         let shot = last && args.screenshot.is_some();
         let volume = &self.scene.volume;
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
+        if desc.lighting().is_some() {
+            self.scene.ensure_gradient()?;
+        }
         let scene = &mut self.scene;
         let presented = self
             .host
@@ -377,8 +381,10 @@ impl Viewer {
                 }
             }
         }
-        if change.structure {
+        if change.structure && self.scene.accel.name() != self.controls.accel.name() {
             self.scene.set_accel(self.controls.accel)?;
+        } else if change.structure {
+            self.scene.set_mode(self.controls.look.mode)?;
         }
         if change.screenshot {
             self.shots += 1;
@@ -406,9 +412,10 @@ impl Viewer {
         };
         let c = &self.controls;
         format!(
-            "lacuna view · {} · {accel} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
+            "lacuna view · {} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
             scene.volume.name,
             scene.tf.spec,
+            c.look.describe(),
             self.fps,
             scene.march_ms(),
             scene.rebuild_ms(),

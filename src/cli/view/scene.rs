@@ -37,7 +37,7 @@ pub struct Scene {
 }
 
 impl Scene {
-    pub fn new(ctx: &Context, volume: Volume, tf: TransferFunction, accel: Accel) -> Result<Scene> {
+    pub fn new(ctx: &Context, volume: Volume, tf: TransferFunction, accel: Accel, mode: Mode) -> Result<Scene> {
         let gpu_volume = GpuVolume::upload(ctx, &volume)?;
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
@@ -50,7 +50,7 @@ impl Scene {
             lut,
             accel,
             params: accel.defaults(),
-            mode: Mode::Composite,
+            mode,
             ranges: None,
             structure: Structure::naive(),
             target: None,
@@ -75,6 +75,17 @@ impl Scene {
     pub fn set_tf(&mut self, tf: TransferFunction) -> Result<()> {
         self.lut = tf.upload(&self.ctx)?;
         self.tf = tf;
+        self.rebuild()
+    }
+
+    /// Uploads the volume's gradient, once, before the first lit frame.
+    pub fn ensure_gradient(&mut self) -> Result<()> {
+        self.gpu_volume.add_gradient(&self.volume)
+    }
+
+    /// Frames of a new mode: the structure is built for it.
+    pub fn set_mode(&mut self, mode: Mode) -> Result<()> {
+        self.mode = mode;
         self.rebuild()
     }
 
