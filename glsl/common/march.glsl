@@ -41,6 +41,9 @@ void main() {
     March m;
     if (march_pixel(px, m)) {
         march_ray(m);
+        if (MARCH_MODE == MODE_ISO) {
+            iso_refine(m);
+        }
     }
     frame_store(px, march_result(m));
     // Only iso frames hit a surface; the others write the far depth.

@@ -333,7 +333,7 @@ impl<'a> Tracer<'a> {
         (rgba, None)
     }
 
-    /// As `iso_crossing` in `glsl/common/lattice.glsl`: the smallest refined
+    /// As `iso_bracket` and `iso_refine` in `glsl/common/lattice.glsl`: the smallest refined
     /// crossing of an iso value between consecutive lattice samples
     /// (t0, v0) and (t1, v1).
     fn iso_crossing(&self, org: Vec3, dir: Vec3, (t0, v0): (f32, f32), (t1, v1): (f32, f32)) -> Option<(f32, f32)> {
