@@ -3,7 +3,7 @@
 
 mod common;
 use common::{assert_clean, gpu};
-use lacuna::accel::cost::{self, FLOOR_NS};
+use lacuna::accel::cost::{self, CostModel, FLOOR_NS};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Stats};
 use lacuna::render::FrameDesc;
 use lacuna::render::Mode;
@@ -31,6 +31,14 @@ fn the_collapse_plans_for_the_renderers_default_step() {
     assert_eq!(FrameDesc::builder(1, 1).build().unwrap().step(), cost::STEP);
 }
 
+/// A cost model with samples, steps and leaf entries of plausible relative
+/// cost (the measured ones move with the machine's load).
+const FIXED: CostModel = CostModel {
+    sample_ns: 1.0,
+    step_ns: 2.0,
+    entry_ns: 4.0,
+};
+
 /// Runs `f` with a builder, the volume and TF uploaded, and their ranges.
 fn with_input<T>(
     ctx: &lacuna::gpu::Context,
@@ -39,6 +47,8 @@ fn with_input<T>(
     f: impl FnOnce(&Builder, &BuildInput, &Ranges) -> T,
 ) -> T {
     let builder = Builder::new(ctx).unwrap();
+    // Fixed constants: collapse decisions must not follow the VM's load.
+    builder.set_cost_model(FIXED);
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let kinds: Vec<_> = lacuna::accel::TABLE

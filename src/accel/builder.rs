@@ -116,6 +116,14 @@ impl Builder {
         Ok(k)
     }
 
+    /// Uses `value` as this context's `T` from now on (a cost model
+    /// measured earlier, for builds that do not depend on the machine's
+    /// load).
+    pub fn put<T: PerContext>(&self, value: T) {
+        let mut map = self.shared.lock().unwrap_or_else(|p| p.into_inner());
+        map.insert(TypeId::of::<T>(), Arc::new(value));
+    }
+
     /// The `T` of this context if a build made it already (nothing is made).
     pub fn made<T: PerContext>(&self) -> Option<Arc<T>> {
         let map = self.shared.lock().unwrap_or_else(|p| p.into_inner());

@@ -93,6 +93,13 @@ impl Builder {
     pub fn cost_model(&self) -> Result<CostModel> {
         self.shared::<CostModel>().map(|m| *m)
     }
+
+    /// Builds with `model` instead of measuring one: a model kept from an
+    /// earlier run (`results.json`'s `setup.cost_model`) gives the same
+    /// collapsed trees whatever the machine's load.
+    pub fn set_cost_model(&self, model: CostModel) {
+        self.put(model)
+    }
 }
 
 impl CostModel {
