@@ -113,18 +113,10 @@ def parse_args(argv):
 
 def read_rgb(path):
     """An 8-bit PNG's RGB as a numpy array (sRGB values 0..255)."""
-    import numpy as np
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-    from vtkmodules.vtkIOImage import vtkPNGReader
+    from compare import read_png
 
-    r = vtkPNGReader()
-    r.SetFileName(path)
-    r.Update()
-    img = r.GetOutput()
-    w, h, _ = img.GetDimensions()
-    n = img.GetNumberOfScalarComponents()
-    a = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, n).astype(np.float64)
-    return np, a[..., :3]
+    np, a = read_png(path)
+    return np, a[..., :3] * 255.0
 
 
 def compare(lacuna_png, vtk_png):
