@@ -149,6 +149,18 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     assert_eq!(marked(&table2), unstable, "{table2}");
     assert_eq!(marked(&frames_md), unstable, "{frames_md}");
     assert!(stdout.contains("fastest on nbody:32: "), "{stdout}");
+    // Only an exact structure can be the fastest: a faster one whose image
+    // differs from naive's (the paper's classification can) is passed over.
+    let mut fast = records.clone();
+    fast[1].frame.median_ms = 1e-6;
+    let fastest = |rs: &[Record]| -> Vec<(String, String)> {
+        let pick = lacuna::bench::tables::fastest(rs);
+        pick.iter().map(|r| (r.dataset.clone(), r.structure.clone())).collect()
+    };
+    let it = (fast[1].dataset.clone(), fast[1].structure.clone());
+    assert!(fastest(&fast).contains(&it));
+    fast[1].error_vs_naive.differing = 3;
+    assert!(!fastest(&fast).contains(&it));
 
     // The run compared with itself passes; with one median doubled it fails.
     let results = out.join("results.json");
