@@ -76,7 +76,15 @@ const SHARED_STRUCTS: [&str; 5] = ["RenderParams", "BvhNode", "OctNode", "Prim",
 
 /// The bindings every march kernel has (`glsl/common/march.glsl`); the
 /// renderer binds them, the structure the rest.
-const MARCH_COMMON: [&str; 6] = ["params", "volume_tex", "tf_lut", "frame", "frame_depth", "gradient_tex"];
+const MARCH_COMMON: [&str; 7] = [
+    "params",
+    "volume_tex",
+    "tf_lut",
+    "frame",
+    "frame_depth",
+    "gradient_tex",
+    "volume_cells",
+];
 
 /// Rust keywords a GLSL name may collide with.
 fn ident(name: &str) -> String {

@@ -388,6 +388,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("frame", d),
             ("frame_depth", d),
             ("gradient_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("volume_cells", texels),
             ("cells", d)
         ]
     );

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Naive marching's frame time from two or more lacuna binaries, interleaved.
+"""A structure's frame time from two or more lacuna binaries, interleaved.
 
 Measures what changes to the per-sample work bought: run the binaries built
 before and after them (A, B, C, ... in the order given) on the same volumes,
@@ -10,10 +10,14 @@ last binary's median over A's.
 
 Usage (from the repository root):
     python3 bench/peers/naive_ab.py A_BINARY B_BINARY [C_BINARY ...]
-        [--rounds 3] [--b-args "--filter manual"] ...
+        [--rounds 3] [--b-args "--filter manual"] ... [--accel naive]
+        [--cases quick|peers]
 
 Each `--b-args` adds a column running the last binary with those extra
-arguments.
+arguments. `--accel` times another structure than naive marching (every
+binary must know it); `--cases peers` times the peers' data sets
+(bench/peers/compare.py) at 512x512, view 0, ERT on, instead of the quick
+ones.
 """
 
 import argparse
@@ -32,11 +36,20 @@ CASES = [
     ("turbulence:64", None, "256x256", None),
     (CH2, "ramp:0.3:0.6", "512x512", "0.99"),
 ]
+# The peers' data sets, framed as compare.py's view 0.
+PEER_CASES = [
+    ("nbody:256", None, "512x512", "0.99"),
+    ("vessels:192", None, "512x512", "0.99"),
+    ("menger:243", None, "512x512", "0.99"),
+    (CH2, "ramp:0.3:0.6", "512x512", "0.99"),
+]
 
 
-def march_ms(binary, volume, tf, size, ert, extra):
-    cmd = [binary, "render", volume, "--accel", "naive", "--size", size, "--repeat", "3", "--warmup", "2",
+def march_ms(binary, volume, tf, size, ert, extra, accel, camera):
+    cmd = [binary, "render", volume, "--accel", accel, "--size", size, "--repeat", "3", "--warmup", "2",
            "--out", "/tmp/naive_ab.exr"]
+    if camera:
+        cmd += ["--camera", camera]
     if tf:
         cmd += ["--tf", tf]
     if ert:
@@ -56,7 +69,10 @@ def main():
     ap.add_argument("binaries", nargs="+")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--b-args", action="append", default=[])
+    ap.add_argument("--accel", default="naive")
+    ap.add_argument("--cases", choices=["quick", "peers"], default="quick")
     args = ap.parse_args()
+    cases, camera = (PEER_CASES, "0,20") if args.cases == "peers" else (CASES, None)
     if len(args.binaries) < 2:
         sys.exit("give at least two binaries (before and after)")
     names = [chr(ord("A") + i) for i in range(len(args.binaries))]
@@ -66,11 +82,11 @@ def main():
     ]
     print("| volume | ERT | " + " | ".join(f"{name} ms" for name, _, _ in columns) + f" | {last} / A |")
     print("|---|---|" + "---|" * len(columns) + "---|")
-    for volume, tf, size, ert in CASES:
+    for volume, tf, size, ert in cases:
         times = {name: [] for name, _, _ in columns}
         for _ in range(args.rounds):
             for name, binary, extra in columns:
-                times[name].append(march_ms(binary, volume, tf, size, ert, extra))
+                times[name].append(march_ms(binary, volume, tf, size, ert, extra, args.accel, camera))
         cells = []
         for name, _, _ in columns:
             t = times[name]

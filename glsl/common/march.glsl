@@ -19,7 +19,8 @@
 #define FRAME_BINDING 3
 #define DEPTH_BINDING 4
 #define GRADIENT_BINDING 5
-#define OWN_BINDING 6
+#define CELLS_BINDING 6
+#define OWN_BINDING 7
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 

@@ -1,8 +1,13 @@
 // Trilinear volume sampling with clamp-to-edge, by one of two filters chosen
 // per kernel by a specialization constant (src/volume/filter.rs), so no
 // sample branches on it:
-// 0 (manual): by hand from eight texelFetch, so every device (and the CPU
-//   reference) computes the same weights in full float precision;
+// 0 (manual): by hand, in f32, so every device (and the CPU reference)
+//   computes the same weights in full float precision. Integer volumes are
+//   interpolated in their stored units (0..255, 0..65535) and scaled once.
+//   The eight voxels come from the volume's cells copy when it has one
+//   (VOLUME_CELLS: every cell's eight corner voxels in one texel, one fetch;
+//   src/volume/cells.rs), else from eight texelFetch: the same values and
+//   the same arithmetic, so the same sample bit for bit.
 // 1 (hardware): the sampler's linear filtering (a linear sampler bound),
 //   one fetch, weights of the device's subTexelPrecisionBits. Its weights are
 //   still a convex combination of the same eight voxels, so the one-voxel
@@ -20,7 +25,25 @@ layout(constant_id = 16) const uint VOLUME_FILTER = 0u;
 // the manual filter samples such volumes: hardware filtering of NaN is the
 // device's to define.
 layout(constant_id = 19) const uint VOLUME_NAN = 0u;
+// How texels are stored (src/volume/cells.rs `CellsLayout`): 0 float32,
+// 1 unorm8, 2 unorm16. The manual filter interpolates integer texels in
+// their stored units.
+layout(constant_id = 20) const uint VOLUME_KIND = 0u;
+// 1: the manual filter reads the cells copy (CELLS_BINDING).
+layout(constant_id = 21) const uint VOLUME_CELLS = 0u;
+const uint KIND_FLOAT = 0u;
+const uint KIND_UNORM8 = 1u;
+const uint KIND_UNORM16 = 2u;
 
+#ifdef CELLS_BINDING
+// Cell (i, j, k) of the cells copy, i in -1..N-1 per axis, stored at
+// (i + 1) + (W + 1) * ((j + 1) + (H + 1) * (k + 1)), holds the voxels
+// clamp(i + dx, j + dy, k + dz) for dx, dy, dz in {0, 1}, x fastest: unorm8
+// as the bytes of two words (one RG32UI texel), unorm16 as the halves of
+// four (one RGBA32UI texel), float32 as the bits of eight (two RGBA32UI
+// texels, z = k then k + 1).
+layout(set = 0, binding = CELLS_BINDING) uniform usamplerBuffer volume_cells;
+#endif
 // What sampling along one ray needs, loaded once per ray: a storage-buffer
 // read per sample is dear on lavapipe, and the hardware path's coordinates
 // are then a multiply and an add per axis rather than also a division.
@@ -53,33 +76,73 @@ VolumeRay volume_ray(vec3 org, vec3 dir) {
     return v;
 }
 
-float volume_texel(ivec3 i, ivec3 hi) {
-    return texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0).r;
+// The scale from stored units to the texel's value: 1 for float volumes.
+float volume_unit() {
+    return VOLUME_KIND == KIND_UNORM8 ? 255.0 : (VOLUME_KIND == KIND_UNORM16 ? 65535.0 : 1.0);
 }
 
-// The stored texel value at p, trilinearly interpolated by hand.
+// Voxel i (clamped) in stored units: an integer-valued float for unorm
+// volumes (the texel's value rounds back to its integer exactly).
+float volume_texel(ivec3 i, ivec3 hi) {
+    float t = texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0).r;
+    return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+}
+
+// The eight voxels of the cell whose low corner is voxel i (clamped to the
+// volume), in stored units, x fastest: [0] c000, [1] c100, ... [7] c111.
+void cell_voxels(ivec3 i, ivec3 hi, out float c[8]) {
+#ifdef CELLS_BINDING
+    if (VOLUME_CELLS != 0u) {
+        ivec3 n = hi + 2;
+        ivec3 j = clamp(i + 1, ivec3(0), n - 1);
+        int at = j.x + n.x * (j.y + n.y * j.z);
+        if (VOLUME_KIND == KIND_UNORM8) {
+            uvec2 w = texelFetch(volume_cells, at).xy;
+            for (int b = 0; b < 4; ++b) {
+                c[b] = float((w.x >> (8u * uint(b))) & 255u);
+                c[4 + b] = float((w.y >> (8u * uint(b))) & 255u);
+            }
+        } else if (VOLUME_KIND == KIND_UNORM16) {
+            uvec4 w = texelFetch(volume_cells, at);
+            for (int b = 0; b < 4; ++b) {
+                c[2 * b] = float(w[b] & 65535u);
+                c[2 * b + 1] = float(w[b] >> 16u);
+            }
+        } else {
+            uvec4 lo = texelFetch(volume_cells, 2 * at);
+            uvec4 up = texelFetch(volume_cells, 2 * at + 1);
+            for (int b = 0; b < 4; ++b) {
+                c[b] = uintBitsToFloat(lo[b]);
+                c[4 + b] = uintBitsToFloat(up[b]);
+            }
+        }
+        return;
+    }
+#endif
+    for (int b = 0; b < 8; ++b) {
+        c[b] = volume_texel(i + ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1), hi);
+    }
+}
+
+// The texel value at p, trilinearly interpolated by hand.
 float sample_manual(vec3 p, ivec3 hi) {
     // `precise` everywhere on the sampling path: every kernel that inlines this
     // must round identically (no kernel-dependent FMA contraction).
     precise vec3 q = p - 0.5;
     vec3 fl = floor(q);
     precise vec3 f = q - fl;
-    ivec3 i = ivec3(fl);
-    float c000 = volume_texel(i, hi);
-    float c100 = volume_texel(i + ivec3(1, 0, 0), hi);
-    float c010 = volume_texel(i + ivec3(0, 1, 0), hi);
-    float c110 = volume_texel(i + ivec3(1, 1, 0), hi);
-    float c001 = volume_texel(i + ivec3(0, 0, 1), hi);
-    float c101 = volume_texel(i + ivec3(1, 0, 1), hi);
-    float c011 = volume_texel(i + ivec3(0, 1, 1), hi);
-    float c111 = volume_texel(i + ivec3(1, 1, 1), hi);
-    precise float c00 = mix(c000, c100, f.x);
-    precise float c10 = mix(c010, c110, f.x);
-    precise float c01 = mix(c001, c101, f.x);
-    precise float c11 = mix(c011, c111, f.x);
+    float c[8];
+    cell_voxels(ivec3(fl), hi, c);
+    precise float c00 = mix(c[0], c[1], f.x);
+    precise float c10 = mix(c[2], c[3], f.x);
+    precise float c01 = mix(c[4], c[5], f.x);
+    precise float c11 = mix(c[6], c[7], f.x);
     precise float c0 = mix(c00, c10, f.y);
     precise float c1 = mix(c01, c11, f.y);
     precise float raw = mix(c0, c1, f.z);
+    if (VOLUME_KIND != KIND_FLOAT) {
+        raw = raw * (1.0 / volume_unit());
+    }
     return raw;
 }
 

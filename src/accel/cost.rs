@@ -251,6 +251,7 @@ struct Probe {
     volume: GpuVolume,
     /// A frame LUT (glsl/common/tf.glsl): the corrected table, then the raw one.
     lut: TexelBuffer,
+    no_cells: TexelBuffer,
     params: Vec<Buffer>,
     frame: Buffer,
 }
@@ -293,6 +294,7 @@ impl Probe {
             kernel: Kernel::new::<()>(ctx, &shaders::MARCH_BVH)?,
             volume: GpuVolume::upload(ctx, &volume)?,
             lut,
+            no_cells: crate::volume::no_cells(ctx)?,
             params,
             frame,
         })
@@ -315,6 +317,7 @@ impl Probe {
             // Composite frames write no depth and read no gradient.
             frame_depth: Binding::Storage(&self.frame),
             gradient_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
+            volume_cells: Binding::TexelBuffer(self.no_cells.view()),
         }
         .list();
         bindings.extend(

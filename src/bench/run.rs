@@ -326,11 +326,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let mut gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
-        let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
         let base = ds.look(config).apply(FrameDesc::builder(1, 1))?;
-        if base.build()?.lighting().is_some() {
-            gv.add_gradient(v)?;
-        }
+        gv.prepare(v, base.build()?.lighting().is_some(), timed_filter)?;
+        let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
         let settings = |view: u32| orbit(config, base, view, config.frames, config.step, config.ert, filter);
         let mode = *settings(0)?.mode();
 

@@ -107,9 +107,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
     let renderer = Renderer::new(&ctx)?;
     let mut gpu_volume = GpuVolume::upload(&ctx, &volume)?;
-    if desc.lighting().is_some() {
-        gpu_volume.add_gradient(&volume)?;
-    }
+    gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
     gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
     let lut = tf.upload(&ctx)?;
     let input = BuildInput {

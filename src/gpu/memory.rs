@@ -117,7 +117,7 @@ impl Buffer {
     }
 
     /// A device-local buffer of `usage` that copies can write.
-    fn upload_target(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<Self> {
+    pub fn upload_target(ctx: &Context, name: &str, size: u64, usage: vk::BufferUsageFlags) -> Result<Self> {
         Buffer::new(
             ctx,
             name,
@@ -248,6 +248,7 @@ pub struct TexelBuffer {
 fn texel_bytes(format: vk::Format) -> Option<u64> {
     match format {
         vk::Format::R32_UINT | vk::Format::R32_SFLOAT => Some(4),
+        vk::Format::R32G32_UINT => Some(8),
         vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => Some(16),
         _ => None,
     }

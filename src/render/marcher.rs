@@ -8,17 +8,22 @@ use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit, MarchCommon};
-use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, Timer, Timings};
+use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, TexelBuffer, Timer, Timings};
 use crate::tf::GpuTransferFunction;
-use crate::volume::{Filter, GpuVolume, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
+use crate::volume::{Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID};
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 /// A march kernel: shader name (with its output variant), the structure's
-/// specialization constants, the sample filter, and the frame's mode and
-/// shading constants.
-type KernelKey = (&'static str, &'static [u32], Filter, [u32; 3]);
+/// specialization constants, the sample filter, and the frame's and
+/// volume's constants (`look_of`).
+type KernelKey = (&'static str, &'static [u32], Filter, Look);
+
+/// The specialization constants of a frame's look and volume: its mode,
+/// whether it lights composite samples, whether the volume has NaN voxels,
+/// how its texels are stored, whether the manual filter reads its cells copy.
+type Look = [u32; 5];
 
 /// What a frame shows: the structure (built for `tf`), the volume and the
 /// transfer function on the GPU.
@@ -39,6 +44,8 @@ pub struct Renderer {
     depth_limit: Kernel,
     /// Reads host depth images (texelFetch: its filter is irrelevant).
     depth_sampler: vk::Sampler,
+    /// Bound as the cells copy of a volume without one (nothing reads it).
+    no_cells: TexelBuffer,
 }
 
 /// What the march writes: the kernel's output variant (None: the frame
@@ -61,32 +68,28 @@ impl Renderer {
             .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE);
         let depth_sampler = unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")?;
+        let no_cells = crate::volume::no_cells(ctx)?;
         Ok(Renderer {
             ctx: ctx.clone(),
             kernels: Mutex::new(HashMap::new()),
             opacity,
             depth_limit,
             depth_sampler,
+            no_cells,
         })
     }
 
     /// The march kernel `march` sampling with `filter`, for composite
     /// unshaded frames, writing the frame buffer; created on first use.
     pub fn kernel(&self, march: March, filter: Filter) -> Result<Arc<Kernel>> {
-        self.kernel_for(march, filter, [0, 0, 0], None)
+        self.kernel_for(march, filter, [0; 5], None)
     }
 
     /// As `kernel`, for frames of `look` (`MARCH_MODE`, `MARCH_SHADE`,
     /// `VOLUME_NAN`: `look_of`),
     /// writing a storage image of the `variant` format instead
     /// (`march/NAME@rgba8`, ...: build.rs).
-    fn kernel_for(
-        &self,
-        mut march: March,
-        filter: Filter,
-        look: [u32; 3],
-        variant: Option<&str>,
-    ) -> Result<Arc<Kernel>> {
+    fn kernel_for(&self, mut march: March, filter: Filter, look: Look, variant: Option<&str>) -> Result<Arc<Kernel>> {
         if let Some(v) = variant {
             let name = format!("{}@{v}", march.shader.name);
             march.shader = *shaders::ALL
@@ -104,6 +107,8 @@ impl Renderer {
         constants.push((MODE_CONSTANT_ID, look[0]));
         constants.push((SHADE_CONSTANT_ID, look[1]));
         constants.push((NAN_CONSTANT_ID, look[2]));
+        constants.push((KIND_CONSTANT_ID, look[3]));
+        constants.push((CELLS_CONSTANT_ID, look[4]));
         let shader = march.shader;
         let k = Arc::new(Kernel::specialized(
             &self.ctx,
@@ -254,6 +259,7 @@ impl Renderer {
             frame: output,
             frame_depth: depth,
             gradient_tex: Binding::Sampled(gradient, sampler),
+            volume_cells: Binding::TexelBuffer(volume.cells().unwrap_or(&self.no_cells).view()),
         }
         .list();
         bindings.extend(structure.built.bindings());
@@ -385,17 +391,16 @@ impl Renderer {
     }
 }
 
-/// The frame's `MARCH_MODE` and `MARCH_SHADE` constants.
-/// The specialization constants of a frame's look: its mode, whether it
-/// lights composite samples (iso surfaces are always lit), whether the
-/// volume has NaN voxels.
-fn look_of(desc: &FrameDesc, volume: &GpuVolume) -> [u32; 3] {
+/// The specialization constants of a frame on `volume` (see [`Look`]; iso
+/// surfaces are always lit, by their own path).
+fn look_of(desc: &FrameDesc, volume: &GpuVolume) -> Look {
     let shade = matches!(desc.mode(), Mode::Composite) && desc.shading().is_some();
-    [desc.mode().constant(), shade as u32, volume.has_nan as u32]
-}
-
-impl Drop for Renderer {
-    fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
-    }
+    let cells = desc.filter_for(volume) == Filter::Manual && volume.cells().is_some();
+    [
+        desc.mode().constant(),
+        shade as u32,
+        volume.has_nan as u32,
+        volume.kind.constant(),
+        cells as u32,
+    ]
 }

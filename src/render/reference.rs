@@ -7,7 +7,7 @@ use crate::desc::FrameDesc;
 use crate::frame::Frame;
 use crate::gpu::shaders::blocks::RenderParams;
 use crate::tf::{self, TransferFunction};
-use crate::volume::Volume;
+use crate::volume::{Volume, VoxelData};
 use glam::{I64Vec3, Mat4, UVec3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
@@ -36,9 +36,14 @@ pub fn sample(volume: &Volume, p: Vec3) -> f32 {
 }
 
 /// The stored texel value trilinearly interpolated at voxel-space point `p`
-/// (clamp to edge), as `sample_manual` in `glsl/common/volume.glsl`.
+/// (clamp to edge), as `sample_manual` in `glsl/common/volume.glsl`: unorm
+/// voxels are interpolated in their stored units, then scaled once.
 pub fn sample_raw(volume: &Volume, p: Vec3) -> f32 {
-    trilinear(volume, p, |i| volume.data.texel(i))
+    match &volume.data {
+        VoxelData::U8(v) => trilinear(volume, p, |i| v[i] as f32) * (1.0 / 255.0),
+        VoxelData::U16(v) => trilinear(volume, p, |i| v[i] as f32) * (1.0 / 65535.0),
+        VoxelData::F32(v) => trilinear(volume, p, |i| v[i]),
+    }
 }
 
 /// The values `texel(voxel index)` of `volume`'s voxels trilinearly

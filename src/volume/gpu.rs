@@ -1,14 +1,16 @@
 //! The volume on the GPU: a 3D image (R8/R16 UNORM kept native, else R32
 //! float) with a nearest sampler (`texelFetch`: the manual filter, ranges,
 //! classification) and, where the format filters linearly, a linear one
-//! for `Filter::Hardware`; and, for shaded and iso frames, the volume's
-//! gradient (`gradient.rs`).
+//! for `Filter::Hardware`; for shaded and iso frames, the volume's
+//! gradient (`gradient.rs`); and optionally the cells copy the manual
+//! filter reads one texel per sample from (`cells.rs`).
 
+use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{check_image3d, vk, Context, Image3d, Staging};
+use crate::gpu::{check_image3d, vk, Context, Image3d, Staging, TexelBuffer};
 
 /// The gradient's texel format (x, y, z, unused).
 const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -28,8 +30,12 @@ pub struct GpuVolume {
     /// It holds NaN voxels (no data): the march kernels test samples for
     /// NaN, and only the manual filter samples it.
     pub has_nan: bool,
+    /// How texels are stored (the march kernels' `VOLUME_KIND`).
+    pub kind: TexelKind,
     /// The gradient shaded and iso frames read (`add_gradient`).
     gradient: Option<Image3d>,
+    /// The cells copy the manual filter reads (`add_cells`).
+    cells: Option<TexelBuffer>,
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -85,7 +91,9 @@ impl GpuVolume {
             spacing: volume.spacing,
             norm: volume.norm,
             has_nan: volume.no_data.total() > 0,
+            kind: TexelKind::of(&volume.data),
             gradient: None,
+            cells: None,
         };
         if ctx.filters_linearly(format) {
             gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
@@ -164,13 +172,7 @@ impl GpuVolume {
     }
 
     fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {
-        if volume.dims != self.dims || volume.norm != self.norm {
-            return Err(Error::invalid(
-                "gradient",
-                volume.name.clone(),
-                "is not the volume this was uploaded from",
-            ));
-        }
+        self.check_same(volume, "gradient")?;
         check_image3d(self.ctx.info(), self.dims, GRADIENT_TEXEL_BYTES)?;
         crate::limits::check_host(
             format_args!("gradient of {}", volume.name),
@@ -185,8 +187,73 @@ impl GpuVolume {
         self.gradient.as_ref().map(|g| g.view)
     }
 
-    /// The faster filter this volume supports on this device (`Filter::device_default`).
+    /// Uploads the cells copy (`volume`'s, the volume this was uploaded
+    /// from) and waits: the manual filter then fetches one texel per sample
+    /// instead of eight, with the same result bit for bit. Costs
+    /// `TexelKind::bytes_per_voxel` bytes per voxel (checked against the
+    /// device's limits first); once is enough.
+    pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
+        if self.cells.is_none() {
+            self.check_same(volume, "cells copy")?;
+            self.cells = Some(cells::upload_cells(&self.ctx, volume)?);
+        }
+        Ok(())
+    }
+
+    /// As `add_cells`, recorded into `cmd` (see `record_upload`); None when
+    /// it is already there.
+    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
+        if self.cells.is_some() {
+            return Ok(None);
+        }
+        self.check_same(volume, "cells copy")?;
+        let (texels, staging) = cells::record_upload_cells(&self.ctx, cmd, volume)?;
+        self.cells = Some(texels);
+        Ok(Some(staging))
+    }
+
+    /// The cells copy, where `add_cells` uploaded it.
+    pub fn cells(&self) -> Option<&TexelBuffer> {
+        self.cells.as_ref()
+    }
+
+    fn check_same(&self, volume: &Volume, what: &'static str) -> Result<()> {
+        if volume.dims != self.dims || volume.norm != self.norm || TexelKind::of(&volume.data) != self.kind {
+            return Err(Error::invalid(
+                what,
+                volume.name.clone(),
+                "is not the volume this was uploaded from",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Adds what frames will read beyond the voxels: the gradient for lit
+    /// frames, and the cells copy where the manual filter will sample
+    /// (`filter` asks for it, or it is the default: `filter` None on a CPU
+    /// device, where one fetch per sample instead of eight makes it the
+    /// faster filter) and the device holds it (`cells::check_cells`).
+    pub fn prepare(&mut self, volume: &Volume, lit: bool, filter: Option<Filter>) -> Result<()> {
+        if lit {
+            self.add_gradient(volume)?;
+        }
+        let cpu = self.ctx.info().device_type == vk::PhysicalDeviceType::CPU;
+        let manual = match filter {
+            Some(f) => f == Filter::Manual,
+            None => cpu,
+        };
+        if manual && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok() {
+            self.add_cells(volume)?;
+        }
+        Ok(())
+    }
+
+    /// The faster filter this volume supports on this device: manual where
+    /// it has its cells copy (`prepare`), else `Filter::device_default`.
     pub fn default_filter(&self) -> Filter {
+        if self.cells.is_some() {
+            return Filter::Manual;
+        }
         Filter::device_default(self.linear.is_some() && !self.has_nan)
     }
 }

@@ -2,6 +2,7 @@
 //! generators, value ranges over bricks, GPU upload, and raw export.
 
 mod bricks;
+mod cells;
 mod decode;
 mod export;
 mod filter;
@@ -15,6 +16,7 @@ mod raw;
 mod spec;
 
 pub use bricks::{BrickGrid, BRICK};
+pub use cells::{cells_bytes, check_cells, no_cells, TexelKind, CELLS_CONSTANT_ID, KIND_CONSTANT_ID};
 pub use decode::VoxelType;
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,

@@ -77,8 +77,9 @@ impl Fixture {
     /// reads with the `given` values.
     pub fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, given: Given) -> Prepared<'a> {
         let mut gv = GpuVolume::upload(&self.ctx, volume).unwrap();
-        // Shaded and iso views read it.
-        gv.add_gradient(volume).unwrap();
+        // Shaded and iso views read the gradient; the manual filter reads
+        // the cells copy (tests/cells.rs: the same samples as without).
+        gv.prepare(volume, true, Some(Filter::Manual)).unwrap();
         let lut = tf.upload(&self.ctx).unwrap();
         let sets: Vec<(Accel, Params)> = lacuna::accel::TABLE
             .iter()

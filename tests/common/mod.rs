@@ -49,9 +49,7 @@ pub fn render_with(
 ) -> Frame {
     let renderer = Renderer::new(ctx).unwrap();
     let mut gv = GpuVolume::upload(ctx, volume).unwrap();
-    if desc.lighting().is_some() {
-        gv.add_gradient(volume).unwrap();
-    }
+    gv.prepare(volume, desc.lighting().is_some(), desc.filter()).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let builder = Builder::new(ctx).unwrap();
     let (ranges, _) = builder.ranges_for(&[(accel, params)], &gv).unwrap();

@@ -85,8 +85,10 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
         let v = &case.volume;
         let tf = TransferFunction::parse(case.tf)?;
         let mut gv = GpuVolume::upload(ctx, v)?;
-        // The shaded and iso looks read it.
-        gv.add_gradient(v)?;
+        // The shaded and iso looks read the gradient; the manual filter
+        // reads the cells copy where the device holds it, as frames do by
+        // default on a CPU device.
+        gv.prepare(v, true, Some(Filter::Manual))?;
         let lut = tf.upload(ctx)?;
         // The ranges every variant reads, each kind computed once.
         let with: Vec<(Accel, &Params)> = variants.iter().map(|(_, a, p)| (*a, p)).collect();

@@ -170,7 +170,7 @@ impl App<'_> {
             .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
-        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel, *desc.mode())?;
+        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel, *desc.mode(), desc.filter())?;
         let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
         let controls = Controls::new(&desc, &tf.spec, self.args.accel, json);

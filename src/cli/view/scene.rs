@@ -37,8 +37,17 @@ pub struct Scene {
 }
 
 impl Scene {
-    pub fn new(ctx: &Context, volume: Volume, tf: TransferFunction, accel: Accel, mode: Mode) -> Result<Scene> {
-        let gpu_volume = GpuVolume::upload(ctx, &volume)?;
+    /// `filter`: the sample filter asked for (None: the default).
+    pub fn new(
+        ctx: &Context,
+        volume: Volume,
+        tf: TransferFunction,
+        accel: Accel,
+        mode: Mode,
+        filter: Option<Filter>,
+    ) -> Result<Scene> {
+        let mut gpu_volume = GpuVolume::upload(ctx, &volume)?;
+        gpu_volume.prepare(&volume, false, filter)?;
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
             ctx: ctx.clone(),

@@ -1,0 +1,139 @@
+//! The cells copy (src/volume/cells.rs): the manual filter reading one
+//! texel per sample from it gives the frames it gives from eight texel
+//! fetches, bit for bit, for every texel kind (unorm8, unorm16, float32
+//! with NaN), odd dimensions, cameras along axes and inside the volume, and
+//! every mode; and a copy the device cannot hold is refused by the limit.
+
+mod common;
+use common::{assert_clean, gpu};
+use lacuna::accel::{Accel, BuildInput, Builder};
+use lacuna::desc::Iso;
+use lacuna::frame::Frame;
+use lacuna::gpu::Context;
+use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene};
+use lacuna::volume::{check_cells, GpuVolume, TexelKind, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+/// A lumpy field on odd dims in each texel kind, values over the whole range.
+fn volumes() -> Vec<Volume> {
+    let dims = [13u32, 9, 7];
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let field: Vec<f32> = (0..n)
+        .map(|i| {
+            let (x, y, z) = (i % 13, i / 13 % 9, i / 117);
+            (((x * 7 + y * 5 + z * 11) % 17) as f32 / 16.0 * 0.8 + 0.1 * (x % 3) as f32).min(1.0)
+        })
+        .collect();
+    let u8s = field.iter().map(|v| (v * 255.0) as u8).collect();
+    let u16s = field.iter().map(|v| (v * 65535.0) as u16).collect();
+    // Float data with no-data holes: some beside others, one on a face.
+    let mut f32s = field.clone();
+    for i in [0, 14, 15, 200, 201, 330, n - 1] {
+        f32s[i] = f32::NAN;
+    }
+    vec![
+        Volume::new("cells u8", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(u8s)).unwrap(),
+        Volume::new("cells u16", dims, [1.0, 0.5, 2.0], VoxelType::U16, VoxelData::U16(u16s)).unwrap(),
+        Volume::new("cells f32", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(f32s)).unwrap(),
+    ]
+}
+
+fn frame(
+    ctx: &Context,
+    renderer: &Renderer,
+    gv: &GpuVolume,
+    v: &Volume,
+    tf: &TransferFunction,
+    desc: &FrameDesc,
+) -> Frame {
+    let lut = tf.upload(ctx).unwrap();
+    let builder = Builder::new(ctx).unwrap();
+    let accel = Accel::naive();
+    let (ranges, _) = builder.ranges_for(&[(accel, &accel.defaults())], gv).unwrap();
+    let input = BuildInput {
+        volume: v,
+        gpu_volume: gv,
+        tf,
+        gpu_tf: &lut,
+        mode: *desc.mode(),
+    };
+    let (structure, _) = builder.build(accel, &input, &ranges, &accel.defaults()).unwrap();
+    let scene = Scene {
+        structure: &structure,
+        volume: gv,
+        tf: &lut,
+    };
+    renderer.render(scene, desc).unwrap().0
+}
+
+#[test]
+fn cells_give_the_manual_filters_samples_bit_for_bit() {
+    let ctx = gpu();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:0.9").unwrap();
+    let views = [
+        (30.0, 20.0, Projection::Orthographic),
+        (0.0, 0.0, Projection::Orthographic),
+        (90.0, 90.0, Projection::Orthographic),
+        (
+            45.0,
+            30.0,
+            Projection::Perspective {
+                fov_deg: 60.0,
+                distance: Some(0.3),
+            },
+        ),
+    ];
+    let modes = [Mode::Composite, Mode::Mip, Mode::Iso(Iso::new(&[0.45]).unwrap())];
+    for v in volumes() {
+        let mut plain = GpuVolume::upload(&ctx, &v).unwrap();
+        plain.add_gradient(&v).unwrap();
+        let mut cells = GpuVolume::upload(&ctx, &v).unwrap();
+        cells.prepare(&v, true, Some(Filter::Manual)).unwrap();
+        assert!(cells.cells().is_some(), "{}: no cells copy", v.name);
+        assert_eq!(cells.default_filter(), Filter::Manual);
+        for mode in &modes {
+            for &(az, el, projection) in &views {
+                let desc = FrameDesc::builder(40, 32)
+                    .orbit(az, el, projection)
+                    .filter(Filter::Manual)
+                    .mode(*mode)
+                    .build()
+                    .unwrap();
+                let a = frame(&ctx, &renderer, &plain, &v, &tf, &desc);
+                let b = frame(&ctx, &renderer, &cells, &v, &tf, &desc);
+                let visible = a.pixels.iter().filter(|p| p[3] > 0.0).count();
+                assert!(
+                    visible > 50,
+                    "{} {mode:?} {az},{el}: only {visible} visible pixels",
+                    v.name
+                );
+                for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+                    let bits = |c: &[f32; 4]| c.map(f32::to_bits);
+                    assert_eq!(
+                        bits(p),
+                        bits(q),
+                        "{} {mode:?} view {az},{el}: pixel {i} differs with the cells copy",
+                        v.name
+                    );
+                }
+            }
+        }
+    }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn a_cells_copy_past_the_devices_limits_is_refused_by_name() {
+    let ctx = gpu();
+    let info = ctx.info();
+    let err = check_cells(info, [4000, 4000, 4000], TexelKind::Unorm8)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("maxTexelBufferElements") && err.contains("cells copy of volume 4000x4000x4000"),
+        "{err}"
+    );
+    assert!(check_cells(info, [64, 64, 64], TexelKind::Float32).is_ok());
+    assert_eq!(TexelKind::Float32.bytes_per_voxel(), 32);
+}
