@@ -1,14 +1,18 @@
-//! `--accel auto`: a distance map on sparse data (octant maps on small
-//! grids, the cube map on large ones), naive marching on dense data, the
-//! choice re-made on a TF change, and the image of every choice equal to
-//! naive's (the identity tests cover auto with every other entry).
+//! `--accel auto`: its candidates (what the device holds), the counts its
+//! probe frames take (against the lattice), its choice under given kernel
+//! constants (skipping on sparse data, naive on dense data and in average
+//! frames, every candidate timed with `trial always`), the frame of every
+//! choice equal to naive's, and the kernel constants measured once and
+//! read back from the cache (again with `recalibrate`).
 
 mod common;
 use common::{assert_clean, gpu};
-use lacuna::accel::{auto, BuildInput, Builder, Structure};
+use lacuna::accel::auto::{self, choose, Chosen, KernelCost};
+use lacuna::accel::probe::FrameProbe;
+use lacuna::accel::{BuildInput, Builder, Structure};
+use lacuna::bench::hard::lattice;
 use lacuna::frame::diff;
-use lacuna::render::Mode;
-use lacuna::render::{FrameDesc, Renderer};
+use lacuna::render::{FrameDesc, Mode, Renderer};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -16,69 +20,250 @@ fn load(spec: &str) -> Volume {
     Volume::load(spec, &LoadOptions::default()).unwrap()
 }
 
-fn build(builder: &Builder, v: &Volume, gv: &GpuVolume, tf: &TransferFunction, cell: u32) -> Structure {
+fn build(
+    builder: &Builder,
+    v: &Volume,
+    gv: &GpuVolume,
+    tf: &TransferFunction,
+    desc: &FrameDesc,
+    trial: &str,
+) -> Structure {
     let lut = tf.upload(builder.context()).unwrap();
     let auto = common::accel("auto");
-    let params = auto.params(&[("cell", &cell.to_string())]).unwrap();
+    let params = auto.params(&[("trial", trial)]).unwrap();
     let (ranges, _) = builder.ranges_for(&[(auto, &params)], gv).unwrap();
     let input = BuildInput {
         volume: v,
         gpu_volume: gv,
         tf,
         gpu_tf: &lut,
-        mode: Mode::Composite,
+        mode: *desc.mode(),
+        frame: Some(desc),
     };
     builder.build(auto, &input, &ranges, &params).unwrap().0
 }
 
+fn choice(s: &Structure) -> &auto::Choice {
+    &s.built_as::<Chosen>().expect("auto's build is its choice").choice
+}
+
 #[test]
-fn sparse_data_gets_the_distance_map_and_dense_data_naive_marching() {
+fn candidates_are_what_the_device_holds() {
     let ctx = gpu();
-    let builder = Builder::new(&ctx).unwrap();
-    let renderer = Renderer::new(&ctx).unwrap();
-    let desc = FrameDesc::builder(64, 64).build().unwrap();
+    let info = ctx.info();
+    // 64^3: 16^3 cells of 4 and 8^3 of 8, both octant maps; grids of 8 and 16.
+    let (c, notes) = choose::candidates(info, [64; 3], &Mode::Composite).unwrap();
+    let labels: Vec<&str> = c.iter().map(|c| c.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "naive",
+            "distance-octant (cell 4)",
+            "distance-octant (cell 8)",
+            "grid (cell 8)",
+            "grid (cell 16)"
+        ]
+    );
+    assert!(notes.is_empty());
+    // 512^3: 128^3 cells of 4 are past the octant bound: the cube map.
+    let (c, _) = choose::candidates(info, [512; 3], &Mode::Mip).unwrap();
+    assert_eq!(c[1].label, "distance (cell 4)");
+    assert!(128u64.pow(3) >= auto::OCTANT_CELLS && 16u64.pow(3) < auto::OCTANT_CELLS);
+    // Past the device's buffer range (lavapipe: 128 MiB) a candidate is
+    // left out with the limit named, never a failure.
+    let huge = [4096, 4096, 2048];
+    let (c, notes) = choose::candidates(info, huge, &Mode::Composite).unwrap();
+    assert_eq!(c[0].label, "naive");
+    let range = info.max_storage_buffer_range;
+    if 1024u64 * 1024 * 512 * 12 > range {
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.starts_with("no distance map at cell 4") && n.contains("maxStorageBufferRange")),
+            "{notes:?}"
+        );
+    }
+    // Average frames read every sample: naive only.
+    let (c, _) = choose::candidates(info, [64; 3], &Mode::Average).unwrap();
+    assert_eq!(c.len(), 1);
+}
+
+#[test]
+fn probe_counts_are_the_lattices_samples() {
+    let ctx = gpu();
+    let builder = common::builder(&ctx);
+    let v = load("menger:64");
+    let gv = GpuVolume::upload(&ctx, &v).unwrap();
+    // 16x16 rays along +z from z = -1 through the whole box: each takes
+    // every lattice point of [1, 65) at step 0.5, 128 samples.
+    let desc = lattice(
+        16,
+        [0.5, 0.5, -1.0],
+        [4.0, 0.0, 0.0],
+        [0.0, 4.0, 0.0],
+        [0.0, 0.0, 1.0],
+        0.5,
+    )
+    .unwrap();
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let probe = FrameProbe::new(&builder, &gv, &tf, &desc).unwrap();
+    assert_eq!(probe.scale(), 1.0, "a small frame is probed whole");
+    let c = probe.count(&Structure::naive()).unwrap();
+    let group = ctx.info().subgroup_size as u64;
+    assert_eq!(c.rays, 256);
+    assert_eq!(c.ray_samples, 256 * 128);
+    // Every ray of a group takes as many samples: a group iteration each.
+    assert_eq!(c.samples, 256 / group * 128);
+    assert_eq!((c.steps, c.regions), (0, 0));
+    // A distance map over nothing visible: no sample, no region, a walk.
+    let empty = TransferFunction::parse("band:0:1:0").unwrap();
+    let lut = empty.upload(&ctx).unwrap();
+    let distance = common::accel("distance");
+    let params = distance.defaults();
+    let (ranges, _) = builder.ranges_for(&[(distance, &params)], &gv).unwrap();
+    let input = BuildInput {
+        volume: &v,
+        gpu_volume: &gv,
+        tf: &empty,
+        gpu_tf: &lut,
+        mode: Mode::Composite,
+        frame: None,
+    };
+    let (map, _) = builder.build(distance, &input, &ranges, &params).unwrap();
+    let probe = FrameProbe::new(&builder, &gv, &empty, &desc).unwrap();
+    let c = probe.count(&map).unwrap();
+    assert_eq!((c.samples, c.regions, c.ray_samples), (0, 0, 0));
+    assert!(c.steps >= 256 / group, "{c:?}");
+    assert_clean(&ctx);
+}
+
+#[test]
+fn auto_marches_what_it_chose_and_equals_naive() {
+    let ctx = gpu();
+    let builder = common::builder(&ctx);
+    let renderer = Renderer::sharing(&builder).unwrap();
     let v = load("nbody:64");
     let gv = GpuVolume::upload(&ctx, &v).unwrap();
     let sparse = TransferFunction::parse("ramp:0.3:1").unwrap();
-    // Every voxel visible: no empty cell, nothing to skip.
+    // Every voxel visible: nothing to skip.
     let dense = TransferFunction::parse("band:0:1").unwrap();
-    // nbody:64 has 16^3 cells of 4 voxels (octant maps) and 32^3 of 2 (the
-    // cube map: auto::OCTANT_CELLS).
-    assert!(16u64.pow(3) < auto::OCTANT_CELLS && 32u64.pow(3) >= auto::OCTANT_CELLS);
+    let frame = |mode: Mode| FrameDesc::builder(64, 64).mode(mode).build().unwrap();
     let cases = [
-        (&sparse, 4, "distance-octant"),
-        (&dense, 4, "naive"),
-        (&sparse, 4, "distance-octant"),
-        (&sparse, 2, "distance"),
-        (&dense, 2, "naive"),
+        (&sparse, Mode::Composite, "off", Some(false)),
+        (&dense, Mode::Composite, "off", Some(true)),
+        (&sparse, Mode::Mip, "off", None),
+        (&dense, Mode::Average, "near", Some(true)),
+        (&sparse, Mode::Composite, "always", None),
     ];
-    for (tf, cell, expect) in cases {
-        let s = build(&builder, &v, &gv, tf, cell);
-        let choice = &s.built_as::<auto::Chosen>().expect("auto's build is its choice").choice;
-        // Frames are marched with the chosen structure's kernel.
-        assert_eq!(s.marched_as().name(), expect, "{}: {}", tf.spec, choice.reason());
-        assert_eq!(choice.accel, s.marched_as());
-        assert_eq!(s.march().shader.name, choice.accel.method().march().shader.name);
+    for (tf, mode, trial, naive) in cases {
+        let desc = frame(mode);
+        let s = build(&builder, &v, &gv, tf, &desc, trial);
+        if matches!(mode, Mode::Average) {
+            // Average reads every sample: auto, like every structure, is
+            // marched naively and says so.
+            assert!(s.built_as::<Chosen>().is_none());
+            assert!(s.marched_as().is_naive());
+            let why = s.marched_as_reason().unwrap();
+            assert_eq!(why.kind, lacuna::accel::MarchedKind::ModeFallback, "{}", why.reason);
+            continue;
+        }
+        let c = choice(&s);
+        // Frames are marched with the chosen structure's kernel and data.
+        assert_eq!(c.accel, s.marched_as());
+        assert_eq!(s.march().shader.name, c.accel.method().march().shader.name);
         let reported = s.marched_as_reason().expect("auto says what it chose");
-        assert_eq!(reported.label, choice.describe());
-        assert_eq!(reported.reason, choice.reason());
-        assert!(choice.predicted.is_finite() && choice.predicted > 0.0);
-        if expect == "naive" {
-            assert_eq!(choice.summary.active, choice.summary.cells);
-            assert!(choice.predicted >= 1.0);
-        } else {
-            assert!(choice.summary.active_fraction() < 0.5, "{}", choice.reason());
-            assert_eq!(choice.describe(), format!("{expect} (cell {cell})"));
+        assert_eq!(reported.label, c.describe());
+        assert_eq!(reported.reason, c.reason());
+        if let Some(naive) = naive {
+            assert_eq!(c.accel.is_naive(), naive, "{} {mode:?}: {}", tf.spec, c.reason());
+        }
+        assert_eq!(c.priced[0].label, "naive", "naive comes first");
+        assert_eq!(c.priced.len(), 5);
+        assert!(c.priced.iter().all(|p| p.predicted.is_finite() && p.predicted > 0.0));
+        assert!(c.model.iter().all(|m| m == "given"), "{:?}", c.model);
+        if trial == "always" {
+            assert!(c.timed && c.priced.iter().all(|p| p.trial.is_some()));
+            let fastest = c
+                .priced
+                .iter()
+                .min_by(|a, b| a.trial.unwrap().total_cmp(&b.trial.unwrap()))
+                .unwrap();
+            assert_eq!(fastest.label, c.describe(), "{}", c.reason());
+        }
+        if trial == "off" {
+            assert!(!c.timed);
+            // The cheapest prediction wins.
+            let least = c
+                .priced
+                .iter()
+                .min_by(|a, b| a.predicted.total_cmp(&b.predicted))
+                .unwrap();
+            assert_eq!(least.label, c.describe());
         }
         let lut = tf.upload(&ctx).unwrap();
         let frame = common::frame(&renderer, &s, &gv, &lut, &desc);
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &desc);
-        assert_eq!(diff(&naive, &frame).unwrap().differing, 0, "{}", tf.spec);
+        assert_eq!(diff(&naive, &frame).unwrap().differing, 0, "{} {mode:?}", tf.spec);
         assert!(
             frame.pixels.iter().any(|p| p[3] > 0.0),
             "{}: something visible",
             tf.spec
         );
     }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn kernel_constants_are_measured_once_then_read_from_the_cache() {
+    let ctx = gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let v = load("vessels:48");
+    let mut gv = GpuVolume::upload(&ctx, &v).unwrap();
+    gv.prepare(&v, false, None).unwrap();
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let desc = FrameDesc::builder(64, 64).build().unwrap();
+    let measured = {
+        let builder = Builder::new(&ctx).unwrap();
+        builder.use_cost_cache(Some(dir.path().to_path_buf())).unwrap();
+        let s = build(&builder, &v, &gv, &tf, &desc, "off");
+        let c = choice(&s);
+        assert_eq!(c.model, ["measured now"], "{}", c.reason());
+        c.priced.iter().map(|p| p.predicted).collect::<Vec<_>>()
+    };
+    let files: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(files.len(), 1, "one file per device: {files:?}");
+    let text = std::fs::read_to_string(&files[0]).unwrap();
+    assert!(text.starts_with("lacuna kernel cost model 1\n"), "{text}");
+    // One line per kernel priced: naive, the octant map, the grid.
+    let keys: Vec<&str> = text.lines().filter(|l| l.starts_with("march/")).collect();
+    assert_eq!(keys.len(), 3, "{text}");
+    for line in &keys {
+        let values: Vec<f64> = line.split_whitespace().skip(1).map(|x| x.parse().unwrap()).collect();
+        let cost = KernelCost::from_array(values.try_into().unwrap());
+        assert!(cost.is_valid() && cost.sample_ns > 0.0, "{line}");
+    }
+    // A second builder (a later run) reads them: the same predictions.
+    let builder = Builder::new(&ctx).unwrap();
+    builder.use_cost_cache(Some(dir.path().to_path_buf())).unwrap();
+    let s = build(&builder, &v, &gv, &tf, &desc, "off");
+    let c = choice(&s);
+    assert_eq!(c.model, [format!("cached in {}", files[0].display())]);
+    assert_eq!(c.priced.iter().map(|p| p.predicted).collect::<Vec<_>>(), measured);
+    // Recalibrating measures again (and rewrites the file).
+    builder.recalibrate().unwrap();
+    let s = build(&builder, &v, &gv, &tf, &desc, "off");
+    assert_eq!(choice(&s).model, ["measured now"]);
+    // A file of another format is measured over, never an error.
+    std::fs::write(&files[0], "something else\n").unwrap();
+    let builder = Builder::new(&ctx).unwrap();
+    builder.use_cost_cache(Some(dir.path().to_path_buf())).unwrap();
+    let s = build(&builder, &v, &gv, &tf, &desc, "off");
+    assert_eq!(choice(&s).model, ["measured now"]);
+    assert!(std::fs::read_to_string(&files[0])
+        .unwrap()
+        .starts_with("lacuna kernel cost model 1"));
     assert_clean(&ctx);
 }

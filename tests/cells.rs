@@ -56,6 +56,7 @@ fn frame(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
+        frame: None,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, &accel.defaults()).unwrap();
     let scene = Scene {

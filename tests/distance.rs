@@ -1,10 +1,10 @@
 //! The GPU distance maps (cube and octant) against a brute-force CPU
-//! transform, the summary `--accel auto` reads against a CPU count, and the
-//! extremes: no active cell, every cell active, one active cell.
+//! transform, and the extremes: no active cell, every cell active, one
+//! active cell.
 
 mod common;
 use common::{assert_clean, gpu};
-use lacuna::accel::distance::{self, DistanceKernels, DistanceMap, Summary};
+use lacuna::accel::distance::{self, DistanceMap};
 use lacuna::accel::{BuildInput, Builder, RangeKind};
 use lacuna::gpu::{Context, Timer};
 use lacuna::render::Mode;
@@ -32,7 +32,9 @@ struct Built {
     map: DistanceMap,
     flags: Vec<bool>,
     distances: Vec<u32>,
-    summary: Summary,
+    /// Active cells, and cells.
+    active: usize,
+    cells: usize,
     phases: Vec<String>,
 }
 
@@ -41,8 +43,6 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
     let (ranges, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
-    let kernels = builder.shared::<DistanceKernels>().unwrap();
-    let out = DistanceMap::summary_buffer(ctx).unwrap();
     let mut timer = Timer::new(ctx, 8).unwrap();
     let input = BuildInput {
         volume: v,
@@ -50,22 +50,20 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
         tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     let map = ctx
         .submit_and_wait(|cmd| {
             timer.reset(cmd);
-            let map = distance::record(&builder, cmd, Some(&mut timer), &input, ranges.cells(cell)?, octants)?;
-            map.record_summary(ctx, &kernels, cmd, Some(&mut timer), &out)?;
-            Ok(map)
+            distance::record(&builder, cmd, Some(&mut timer), &input, ranges.cells(cell)?, octants)
         })
         .unwrap();
     let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.download(0, map.flags.size()).unwrap());
     let total = map.counts.iter().product::<u32>() as usize;
     let flags: Vec<bool> = flags[..total].iter().map(|&f| f != 0).collect();
     let distances = map.download().unwrap();
-    let summary = map.read_summary(&out).unwrap();
     let timings = timer.results().unwrap();
-    let phases = ["classify", "distance x", "distance y", "distance z", "summary"]
+    let phases = ["classify", "distance x", "distance y", "distance z"]
         .into_iter()
         .filter(|p| timings.get(p).is_some())
         .map(String::from)
@@ -73,53 +71,11 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
     assert_clean(ctx);
     Built {
         map,
-        flags,
         distances,
-        summary,
+        active: flags.iter().filter(|&&f| f).count(),
+        cells: flags.len(),
+        flags,
         phases,
-    }
-}
-
-/// The summary computed on the host from flags and the reference map.
-fn cpu_summary(counts: [u32; 3], flags: &[bool], reference: &[u32], octants: bool) -> Summary {
-    let [nx, ny, nz] = counts.map(|n| n as i64);
-    let at = |x: i64, y: i64, z: i64| flags[(x + nx * (y + ny * z)) as usize];
-    let (mut active, mut faces, mut empty_sum, mut active_sum) = (0u64, 0u64, 0u64, 0u64);
-    let half = distance::channels(octants) / 2;
-    for z in 0..nz {
-        for y in 0..ny {
-            for x in 0..nx {
-                let i = (x + nx * (y + ny * z)) as usize;
-                let cell = &reference[i * 2 * half..(i + 1) * 2 * half];
-                if at(x, y, z) {
-                    active += 1;
-                    active_sum += cell[half..].iter().map(|&d| d as u64).sum::<u64>();
-                    for (dx, dy, dz) in [(-1, 0, 0), (1, 0, 0), (0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)] {
-                        let (a, b, c) = (x + dx, y + dy, z + dz);
-                        if (0..nx).contains(&a) && (0..ny).contains(&b) && (0..nz).contains(&c) && !at(a, b, c) {
-                            faces += 1;
-                        }
-                    }
-                } else {
-                    empty_sum += cell[..half].iter().map(|&d| d as u64).sum::<u64>();
-                }
-            }
-        }
-    }
-    let cells = flags.len() as u64;
-    let mean = |sum: u64, n: u64| {
-        if n == 0 {
-            0.0
-        } else {
-            sum as f64 / (half as f64 * n as f64)
-        }
-    };
-    Summary {
-        cells,
-        active,
-        faces,
-        empty_distance: mean(empty_sum, cells - active),
-        active_distance: mean(active_sum, active),
     }
 }
 
@@ -136,12 +92,7 @@ fn check(what: &str, b: &Built, octants: bool) {
             reference[i]
         );
     }
-    assert_eq!(
-        b.summary,
-        cpu_summary(b.map.counts, &b.flags, &reference, octants),
-        "{what}: summary"
-    );
-    for phase in ["classify", "distance x", "distance y", "distance z", "summary"] {
+    for phase in ["classify", "distance x", "distance y", "distance z"] {
         assert!(b.phases.iter().any(|p| p == phase), "{what}: phase {phase} not timed");
     }
 }
@@ -162,12 +113,9 @@ fn maps_match_the_brute_force_transform() {
         for cell in [2, 4, 8] {
             for octants in [false, true] {
                 let b = build(&ctx, &v, &tf, cell, octants);
-                assert!(b.summary.active > 0, "{dims:?} cell {cell}: some cells active");
+                assert!(b.active > 0, "{dims:?} cell {cell}: some cells active");
                 if cell < 8 {
-                    assert!(
-                        b.summary.active < b.summary.cells,
-                        "{dims:?} cell {cell}: some cells empty"
-                    );
+                    assert!(b.active < b.cells, "{dims:?} cell {cell}: some cells empty");
                 }
                 check(&format!("{dims:?} cell {cell} octants {octants}"), &b, octants);
             }
@@ -195,7 +143,7 @@ fn empty_full_and_single_cell_maps() {
     for octants in [false, true] {
         // No active cell: every distance is the cap (a cap only shortens jumps).
         let b = build(&ctx, &zeros, &invisible, 4, octants);
-        assert_eq!(b.summary.active, 0);
+        assert_eq!(b.active, 0);
         let half = distance::channels(octants) / 2;
         assert!(b
             .distances
@@ -210,7 +158,7 @@ fn empty_full_and_single_cell_maps() {
             4,
             octants,
         );
-        assert_eq!(b.summary.active, b.summary.cells, "all active");
+        assert_eq!(b.active, b.cells, "all active");
         check("full", &b, octants);
         let b = build(&ctx, &one, &visible, 8, octants);
         check("one voxel", &b, octants);

@@ -51,6 +51,7 @@ fn occludes_with(accel: &str) {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     let naive_accel = common::accel("naive");
     let naive = builder

@@ -54,6 +54,7 @@ fn fixture(names: &[&str]) -> Fixture {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     let structures = wanted
         .iter()

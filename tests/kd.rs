@@ -173,6 +173,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
+            frame: None,
         };
         for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {
             for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {

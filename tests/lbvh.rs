@@ -74,6 +74,7 @@ fn gpu_lbvh_with(builder: &Builder, v: &Volume, tf: &TransferFunction, params: &
         tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, params).unwrap();
     let l = s.tree().unwrap();
@@ -275,6 +276,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
+            frame: None,
         };
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);
         let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();

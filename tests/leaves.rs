@@ -62,6 +62,7 @@ fn with_input<T>(
         tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     f(&builder, &input, &ranges)
 }

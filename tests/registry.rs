@@ -24,6 +24,7 @@ use lacuna::{Result, TransferFunction, Volume};
 fn every_entry_is_complete_and_named_wherever_structures_are_listed() {
     let ctx = gpu();
     let renderer = Renderer::new(&ctx).unwrap();
+    let probe_volume = GpuVolume::upload(&ctx, &Volume::load("menger:9", &LoadOptions::default()).unwrap()).unwrap();
     let mut names: Vec<&str> = TABLE.iter().map(|a| a.name()).collect();
     names.sort();
     names.dedup();
@@ -40,7 +41,8 @@ fn every_entry_is_complete_and_named_wherever_structures_are_listed() {
         // Its march kernel is created for each filter (the common bindings
         // are checked by name at creation).
         for filter in Filter::ALL {
-            let kernel = renderer.kernel(m.march(), filter).unwrap();
+            let desc = FrameDesc::builder(8, 8).filter(filter).build().unwrap();
+            let kernel = renderer.kernel(m.march(), &desc, &probe_volume).unwrap();
             assert!(kernel.local_size().iter().product::<u32>() > 0);
         }
         // Every variant the exactness checks build is a valid parameter set.
@@ -73,7 +75,7 @@ fn shared_parameters_agree_and_every_listing_takes_them() {
     // `cell` has a default per structure, and its help lists them.
     let cell = params.iter().find(|p| p.param.name == "cell").unwrap();
     assert!(
-        cell.help().contains("grid 16") && cell.help().contains("auto 4"),
+        cell.help().contains("grid 16") && cell.help().contains("distance 8"),
         "{}",
         cell.help()
     );
@@ -268,6 +270,7 @@ fn a_structure_outside_the_table_builds_records_and_renders_exactly() {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
+        frame: None,
     };
     // Submitted by the default `Method::build`, and recorded into ours.
     let (built, timings) = builder.build(toy, &input, &ranges, &params).unwrap();

@@ -313,6 +313,7 @@ fn frames_split_into_bands_equal_the_whole_frame() {
             tf: &tf,
             gpu_tf: &lut,
             mode: lacuna::render::Mode::Composite,
+            frame: None,
         };
         let (structure, _) = builder.build(accel, &input, &ranges, &params).unwrap();
         assert_eq!(structure.marched_as(), accel, "its own kernel marches");

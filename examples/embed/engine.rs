@@ -470,6 +470,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
+            frame: None,
         };
         let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &params)?;
         record::barrier(device, cmd, record::Access::COMPUTE_WRITE, record::Access::COMPUTE_READ);

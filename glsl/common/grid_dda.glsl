@@ -22,6 +22,7 @@ void march_grid(inout March m, float t0, float t1, float eps) {
     ivec3 stp = ivec3(sign(dir));
     int guard = counts.x + counts.y + counts.z + 4;
     while (guard-- > 0 && !m.done) {
+        count_iteration(COUNT_STEP);
         uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
         if (GRID_CELL_ACTIVE(m, index)) {
             vec3 lo = vec3(cell) * c;

@@ -19,6 +19,30 @@ const uint MODE_MINIP = 2u;
 const uint MODE_AVERAGE = 3u;
 const uint MODE_ISO = 4u;
 
+// Counting frames (src/accel/probe.rs): with MARCH_COUNT set, a kernel
+// writes per pixel what its SIMD group ran instead of the colour: x the
+// iterations of the sample loop, y of the traversal loop (walk, DDA or tree
+// steps), z the regions entered (march_region), each counted once per
+// group iteration by one elected lane (so a group's sum over its lanes is
+// what the group ran, its slowest lane included), and w the ray's own
+// samples. auto prices its candidates from these counts.
+layout(constant_id = 22) const uint MARCH_COUNT = 0u;
+uvec3 count_group = uvec3(0u);
+uint count_lane_samples = 0u;
+#define COUNT_SAMPLE 0
+#define COUNT_STEP 1
+#define COUNT_REGION 2
+void count_iteration(int what) {
+    if (MARCH_COUNT != 0u) {
+        if (what == COUNT_SAMPLE) {
+            count_lane_samples += 1u;
+        }
+        if (subgroupElect()) {
+            count_group[what] += 1u;
+        }
+    }
+}
+
 struct March {
     Ray ray;
     float t_enter; // entry into the volume box (0 when the eye is inside)
@@ -307,6 +331,7 @@ void take_sample(inout March m, float t, float w, bool full) {
 // for [t_k, t_k + dt): all but the last have the full length, so they read
 // the corrected LUT with no branch (a CPU SIMD lane runs both sides of one).
 void march_full_sample(inout March m) {
+    count_iteration(COUNT_SAMPLE);
     float t = lattice_t(m, m.k);
     take_sample(m, t, m.dt, true);
     m.k += 1;
@@ -318,6 +343,7 @@ void march_full_sample(inout March m) {
 // Takes the ray's last sample (k = k_end - 1), weighted by its length up to
 // the box exit, and ends the march.
 void march_last_sample(inout March m) {
+    count_iteration(COUNT_SAMPLE);
     float t = lattice_t(m, m.k);
     precise float w = min(m.dt, m.t_exit - t);
     take_sample(m, t, w, false);
@@ -415,6 +441,7 @@ vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
 // back; k never moves backwards, so overlapping spans take no sample twice.
 void march_region(inout March m, vec2 span) {
     if (span.x < span.y) {
+        count_iteration(COUNT_REGION);
         if (MARCH_MODE == MODE_ISO) {
             // Iso tests pairs of consecutive samples: a pair that straddles
             // the region's entry or exit is the region's too. Pairs wholly

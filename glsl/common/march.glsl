@@ -12,6 +12,7 @@
 // m.t_exit) through the structure on the global lattice (lattice.glsl).
 #ifndef LACUNA_MARCH_GLSL
 #define LACUNA_MARCH_GLSL
+#extension GL_KHR_shader_subgroup_basic : require
 
 #define PARAMS_BINDING 0
 #define VOLUME_BINDING 1
@@ -22,7 +23,22 @@
 #define CELLS_BINDING 6
 #define OWN_BINDING 7
 
+// 8x8: march_pixel_id's Morton order assumes it.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+// Every tile at 1; at S > 1 the frame's blocks of PROBE_BLOCK x PROBE_BLOCK
+// tiles whose block coordinates are multiples of S, for auto's counting and
+// trial frames (src/accel/probe.rs): a sparse sample of the frame in
+// blocks, so neighbouring rays share the caches as in the whole frame.
+layout(constant_id = 23) const uint MARCH_TILE_STRIDE = 1u;
+const uint PROBE_BLOCK = 4u;
+
+// The tile workgroup `wg` marches.
+uvec2 march_tile(uvec2 wg) {
+    if (MARCH_TILE_STRIDE == 1u) {
+        return wg;
+    }
+    return (wg / PROBE_BLOCK) * (PROBE_BLOCK * MARCH_TILE_STRIDE) + wg % PROBE_BLOCK;
+}
 
 #include "render_params.glsl"
 #include "ray.glsl"
@@ -45,7 +61,7 @@ uvec2 march_pixel_id() {
     uint n = gl_LocalInvocationIndex;
     uvec2 in_tile = uvec2((n & 1u) | ((n >> 1u) & 2u) | ((n >> 2u) & 4u),
                           ((n >> 1u) & 1u) | ((n >> 2u) & 2u) | ((n >> 3u) & 4u));
-    return gl_WorkGroupID.xy * gl_WorkGroupSize.xy + in_tile;
+    return march_tile(gl_WorkGroupID.xy) * gl_WorkGroupSize.xy + in_tile;
 }
 
 void main() {
@@ -59,6 +75,10 @@ void main() {
         if (MARCH_MODE == MODE_ISO) {
             iso_refine(m);
         }
+    }
+    if (MARCH_COUNT != 0u) {
+        frame_store(px, vec4(vec3(count_group), float(count_lane_samples)));
+        return;
     }
     frame_store(px, march_result(m));
     // Only iso frames hit a surface; the others write the far depth.

@@ -19,6 +19,7 @@ void traverse_tree(inout March m) {
     int sp = 0;
     stack[sp++] = 0;
     while (sp > 0 && !m.done) {
+        count_iteration(COUNT_STEP);
         int node = stack[--sp];
         vec2 span = node_span(m, node, eps);
         // Missed, or wholly behind the samples already taken.

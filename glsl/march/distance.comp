@@ -45,6 +45,7 @@ struct Walk {
 // or with octants the cells up to d-1 ahead on every axis), then on to the
 // cell past the box's exit. Returns whether the box is active, and its span.
 bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
+    count_iteration(COUNT_STEP);
     float c = float(grid.cell);
     ivec3 counts = ivec3(grid.counts);
     vec3 dir = m.ray.dir;

@@ -27,7 +27,15 @@ impl Builder {
         if !accel.method().marches(&input.mode) {
             return Ok((fallback(accel, params, input), Timings::default()));
         }
-        let (built, t) = match activity(&input.mode, input.tf)? {
+        if let Some(frame) = input.frame.filter(|f| !f.mode().same_classification(&input.mode)) {
+            return Err(crate::error::Error::invalid(
+                "build frame",
+                frame.mode().name(),
+                format!("the build is for {} frames", input.mode.name()),
+            ));
+        }
+        let classifies = accel.method().classifies();
+        let (built, t) = match activity(&input.mode, input.tf)?.filter(|_| classifies) {
             Some(activity) => {
                 let gpu_activity = activity.upload(self.context())?;
                 let classified = BuildInput {
@@ -97,10 +105,10 @@ impl Builder {
     /// The per-volume ranges the structures read (each kind once): once
     /// per volume upload.
     pub fn ranges_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
-        let kinds = structures
-            .iter()
-            .map(|(a, p)| a.method().ranges(p))
-            .collect::<Result<Vec<_>>>()?;
+        let mut kinds = Vec::new();
+        for (a, p) in structures {
+            kinds.extend(a.method().range_kinds(p, volume, self.context().info())?);
+        }
         self.ranges(&kinds, volume)
     }
 }

@@ -136,9 +136,11 @@ impl Builder {
     pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
         let mut t = Timings::default();
         let mut ranges = Ranges::default();
-        for kind in distinct(kinds)? {
+        let kinds = distinct(kinds)?;
+        let several = several_cells(&kinds);
+        for kind in kinds {
             let minmax = self.shared::<BrickMinMax>()?;
-            let (size, pass) = size_and_pass(kind);
+            let (size, pass) = size_and_pass(kind, several);
             let (b, ms) = GpuBricks::compute(&self.ctx, &minmax, volume, size)?;
             t.push(pass, ms);
             ranges.insert(kind, b, ms);
@@ -160,11 +162,13 @@ impl Builder {
         volume: &GpuVolume,
     ) -> Result<Ranges> {
         let mut ranges = Ranges::default();
-        for kind in distinct(kinds)? {
+        let kinds = distinct(kinds)?;
+        let several = several_cells(&kinds);
+        for kind in kinds {
             let minmax = self.shared::<BrickMinMax>()?;
-            let (size, pass) = size_and_pass(kind);
+            let (size, pass) = size_and_pass(kind, several);
             let b = GpuBricks::allocate(&self.ctx, volume, size)?;
-            b.record(cmd, timer.as_deref_mut(), pass, &minmax, volume)?;
+            b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume)?;
             ranges.insert(kind, b, f64::NAN);
         }
         Ok(ranges)
@@ -194,10 +198,19 @@ fn distinct(kinds: &[RangeKind]) -> Result<Vec<RangeKind>> {
     Ok(out)
 }
 
-fn size_and_pass(kind: RangeKind) -> (u32, &'static str) {
+/// Whether `kinds` holds ranges of more than one cell edge (then each
+/// pass is named by its edge).
+fn several_cells(kinds: &[RangeKind]) -> bool {
+    kinds.iter().filter(|k| matches!(k, RangeKind::Cells(_))).count() > 1
+}
+
+/// A kind's brick edge and pass name: "ranges" (8^3 bricks), "cell
+/// ranges", or "cell ranges 4" among several edges.
+fn size_and_pass(kind: RangeKind, several: bool) -> (u32, String) {
     match kind {
-        RangeKind::Cells(cell) => (cell, "cell ranges"),
-        _ => (bricks::BRICK, "ranges"),
+        RangeKind::Cells(cell) if several => (cell, format!("cell ranges {cell}")),
+        RangeKind::Cells(cell) => (cell, "cell ranges".into()),
+        _ => (bricks::BRICK, "ranges".into()),
     }
 }
 

@@ -21,11 +21,9 @@ use super::method::{BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
-use crate::error::{Error, Result};
-use crate::gpu::record::{self, Access};
-use crate::gpu::shaders::{
-    self, build_distance_octant_rows, build_distance_rows, build_distance_summary, march_distance,
-};
+use crate::error::Result;
+use crate::gpu::record;
+use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
 use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
 use crate::prims::entry_barrier;
 
@@ -38,38 +36,25 @@ const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
 /// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
 pub const CAP: u32 = 255;
 
-/// Bytes of the summary `distance_summary.comp` writes.
-const SUMMARY_BYTES: u64 = 24;
-
-/// Cells each summary invocation sums before its workgroup's reduction:
-/// fewer workgroups, fewer barriers (lavapipe's summary of 64^3 cells took
-/// 16 ms with one cell per invocation).
-const SUMMARY_CELLS_PER_INVOCATION: u64 = 64;
-
 /// Longest row whose envelope `distance_rows.comp` keeps in private arrays
 /// (its PRIVATE_ROW).
 const PRIVATE_ROW: u32 = 64;
 
 /// The linear-time distance-transform kernels (two-sided rows for cube
-/// maps, one-sided rows for octant maps) and the summary kernels of both map
-/// kinds (specialization constant 0: octant maps).
+/// maps, one-sided rows for octant maps).
 pub struct DistanceKernels {
     /// Cube-map rows with the envelope in a storage buffer, then in private
     /// arrays (rows of at most [`PRIVATE_ROW`] cells).
     rows: [Kernel; 2],
     octant_rows: Kernel,
-    summary: [Kernel; 2],
 }
 
 impl PerContext for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
-        let summary =
-            |o| Kernel::with_constants::<build_distance_summary::Push>(ctx, &shaders::BUILD_DISTANCE_SUMMARY, &[o]);
         let rows = |p| Kernel::with_constants::<build_distance_rows::Push>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
         Ok(DistanceKernels {
             rows: [rows(0)?, rows(1)?],
             octant_rows: Kernel::new::<build_distance_octant_rows::Push>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
-            summary: [summary(0)?, summary(1)?],
         })
     }
 }
@@ -89,28 +74,6 @@ pub struct DistanceMap {
     active: std::sync::OnceLock<u64>,
 }
 
-/// What `--accel auto` reads from a map (see `distance_summary.comp`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub struct Summary {
-    pub cells: u64,
-    pub active: u64,
-    /// Faces between an active and an empty cell.
-    pub faces: u64,
-    /// Mean distance of the empty cells to an active cell, in cells (octant
-    /// maps: over the octants); 0 without empty cells.
-    pub empty_distance: f64,
-    /// Mean distance of the active cells to an empty cell; 0 without active cells.
-    pub active_distance: f64,
-}
-
-impl Summary {
-    /// Active cells over all cells.
-    pub fn active_fraction(&self) -> f64 {
-        self.active as f64 / self.cells.max(1) as f64
-    }
-}
-
 /// Byte distances per cell: to the nearest active cell, then to the nearest
 /// empty cell, one each (cube maps) or one per octant each (`distance_map.glsl`).
 pub fn channels(octants: bool) -> usize {
@@ -123,6 +86,24 @@ pub fn channels(octants: bool) -> usize {
 
 fn words_per_cell(octants: bool) -> u64 {
     channels(octants).div_ceil(4) as u64
+}
+
+/// The rows' envelope stacks: three words per cell (cube maps), or a deque
+/// word per cell and map word (octant maps).
+fn stack_bytes(cells: u64, octants: bool) -> u64 {
+    cells * if octants { 4 * words_per_cell(true) } else { 12 }
+}
+
+/// Whether a map of `cells` cells fits the device: its largest buffer
+/// within `maxStorageBufferRange` (the error names the limit).
+pub fn check_fits(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) -> Result<()> {
+    let bytes = (cells * 4 * words_per_cell(octants)).max(stack_bytes(cells, octants));
+    info.check(
+        format!("distance map of {cells} cells ({bytes} bytes)"),
+        "maxStorageBufferRange",
+        bytes,
+        info.max_storage_buffer_range,
+    )
 }
 
 /// Records the classification of `cells` for a TF ("classify") and the
@@ -140,20 +121,9 @@ pub fn record(
     let kernels = builder.shared::<DistanceKernels>()?;
     let classifier = builder.shared::<Classifier>()?;
     let info = ctx.info();
+    check_fits(info, cells.total, octants)?;
     let bytes = cells.total * 4 * words_per_cell(octants);
-    // The rows' envelope stacks: three words per cell (cube maps), or a
-    // deque word per cell and map word (octant maps).
-    let stack_bytes = cells.total * if octants { 4 * words_per_cell(true) } else { 12 };
-    info.check(
-        format!(
-            "distance map of {} cells ({} bytes)",
-            cells.total,
-            bytes.max(stack_bytes)
-        ),
-        "maxStorageBufferRange",
-        bytes.max(stack_bytes),
-        info.max_storage_buffer_range,
-    )?;
+    let stack_bytes = stack_bytes(cells.total, octants);
     let flags = Buffer::new(
         ctx,
         "distance cell flags",
@@ -236,95 +206,6 @@ pub fn record(
 }
 
 impl DistanceMap {
-    /// Records the reduction `--accel auto` reads into `out` (host
-    /// visible, [`DistanceMap::summary_buffer`]), after a `record`
-    /// in the same command buffer ("summary"). Ends with a barrier to host reads.
-    pub fn record_summary(
-        &self,
-        ctx: &Context,
-        kernels: &DistanceKernels,
-        cmd: vk::CommandBuffer,
-        mut timer: Option<&mut Timer>,
-        out: &Buffer,
-    ) -> Result<()> {
-        let kernel = &kernels.summary[self.octants as usize];
-        let invocations = self.total.div_ceil(SUMMARY_CELLS_PER_INVOCATION);
-        let groups = record::groups_linear(ctx.info(), "distance summary", invocations, kernel.local_size()[0])?;
-        let device = ctx.device();
-        let pass = timer.begin(cmd, "summary")?;
-        unsafe { device.cmd_fill_buffer(cmd, out.raw, 0, vk::WHOLE_SIZE, 0) };
-        record::barrier(
-            device,
-            cmd,
-            Access {
-                stage: Access::COMPUTE_WRITE.stage | Access::TRANSFER_WRITE.stage,
-                access: Access::COMPUTE_WRITE.access | Access::TRANSFER_WRITE.access,
-            },
-            Access::COMPUTE_READ_WRITE,
-        );
-        let c = self.counts;
-        let push = build_distance_summary::Push {
-            counts: [c[0], c[1], c[2], self.total as u32],
-            groups_x: groups[0],
-            per_invocation: SUMMARY_CELLS_PER_INVOCATION as u32,
-            ..Default::default()
-        };
-        kernel.dispatch(
-            cmd,
-            &build_distance_summary::Bindings {
-                flags: Binding::Storage(&self.flags),
-                distances: Binding::Storage(&self.distances),
-                summary: Binding::Storage(out),
-            }
-            .list(),
-            bytemuck::bytes_of(&push),
-            groups,
-        )?;
-        timer.end(cmd, pass);
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
-        Ok(())
-    }
-
-    /// A host-visible buffer for [`DistanceMap::record_summary`].
-    pub fn summary_buffer(ctx: &Context) -> Result<Buffer> {
-        Buffer::new(
-            ctx,
-            "distance summary",
-            SUMMARY_BYTES,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )
-    }
-
-    /// Reads the summary recorded into `out`, after the submission completed.
-    pub fn read_summary(&self, out: &Buffer) -> Result<Summary> {
-        let bytes = out.mapped().ok_or_else(|| {
-            Error::invalid(
-                "summary buffer",
-                out.name(),
-                "must be host visible (DistanceMap::summary_buffer)",
-            )
-        })?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..SUMMARY_BYTES as usize]);
-        let active = words[0] as u64;
-        let sum = |i: usize| words[i] as u64 | (words[i + 1] as u64) << 32;
-        let half = (channels(self.octants) / 2) as f64;
-        let mean = |sum: u64, cells: u64| {
-            if cells == 0 {
-                0.0
-            } else {
-                sum as f64 / (half * cells as f64)
-            }
-        };
-        Ok(Summary {
-            cells: self.total,
-            active,
-            faces: words[1] as u64,
-            empty_distance: mean(sum(2), self.total - active),
-            active_distance: mean(sum(4), active),
-        })
-    }
-
     /// The distances on the host: [`channels`] per cell, in channel order.
     pub fn download(&self) -> Result<Vec<u32>> {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.distances.download(0, self.distances.size())?);

@@ -8,9 +8,9 @@
 use super::builder::{Builder, RangeKind, Ranges};
 use super::params::{Param, Params};
 use super::stats::Stats;
-use crate::desc::Mode;
+use crate::desc::{FrameDesc, Mode};
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Bound, Shader, Timer, Timings};
+use crate::gpu::{vk, Bound, DeviceInfo, Shader, Timer, Timings};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{GpuVolume, Volume};
 use std::any::Any;
@@ -31,8 +31,10 @@ impl March {
 }
 
 /// What a build reads: the volume and transfer function on the host (for
-/// host-built structures) and on the GPU, and the mode of the frames it is
-/// for (what "empty" means: `accel::mode`).
+/// host-built structures) and on the GPU, the mode of the frames it is
+/// for (what "empty" means: `accel::mode`), and optionally such a frame
+/// itself (camera, step, early termination, filter, size), which `auto`
+/// prices its candidates on (None: the default orbit at 512x512).
 #[derive(Clone, Copy)]
 pub struct BuildInput<'a> {
     pub volume: &'a Volume,
@@ -40,6 +42,7 @@ pub struct BuildInput<'a> {
     pub tf: &'a TransferFunction,
     pub gpu_tf: &'a GpuTransferFunction,
     pub mode: Mode,
+    pub frame: Option<&'a FrameDesc>,
 }
 
 /// When a built structure is marched by another entry's kernel: which, and why.
@@ -110,8 +113,22 @@ pub trait Method: Sync {
     }
     /// The per-volume ranges its build reads with these parameters.
     fn ranges(&self, params: &Params) -> Result<RangeKind>;
+    /// Every kind of ranges its build reads on `volume` and `info`'s device
+    /// (default: `ranges`; a structure that builds others, `auto`, lists
+    /// theirs).
+    fn range_kinds(&self, params: &Params, volume: &GpuVolume, info: &DeviceInfo) -> Result<Vec<RangeKind>> {
+        let _ = (volume, info);
+        Ok(vec![self.ranges(params)?])
+    }
     /// Its march kernel.
     fn march(&self) -> March;
+    /// Whether `Builder::build` hands it the mode's classification (the
+    /// activity function of `accel::mode` in place of the frame's TF in
+    /// MIP, MinIP and iso frames; default). A structure that builds others
+    /// through the builder (`auto`) says no and reads the frame's TF.
+    fn classifies(&self) -> bool {
+        true
+    }
     /// Whether its kernel marches frames of `mode` skipping exactly
     /// (`accel::mode`); in other modes it is marched naively. Default:
     /// every mode but average, each classifying by its activity function.

@@ -35,6 +35,10 @@ pub struct BenchOutput {
 pub struct RunOptions {
     pub quiet: bool,
     pub keep_frames: bool,
+    /// Where auto keeps the device's kernel constants (None: in memory).
+    pub cost_cache: Option<std::path::PathBuf>,
+    /// auto measures its kernel constants again, whatever the cache holds.
+    pub recalibrate: bool,
 }
 
 /// Renders frames into one target, timing the march pass of each.
@@ -269,7 +273,11 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             .collect::<Result<Vec<_>>>()?,
     );
     let builder = Builder::new(ctx)?;
-    let renderer = Renderer::new(ctx)?;
+    builder.use_cost_cache(options.cost_cache.clone())?;
+    if options.recalibrate {
+        builder.recalibrate()?;
+    }
+    let renderer = Renderer::sharing(&builder)?;
     let info = ctx.info();
     let mut setup = Setup {
         config: config.name.clone(),
@@ -330,14 +338,17 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         gv.prepare(v, base.build()?.lighting().is_some(), timed_filter)?;
         let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
         let settings = |view: u32| orbit(config, base, view, config.frames, config.step, config.ert, filter);
-        let mode = *settings(0)?.mode();
+        let first = settings(0)?;
+        let mode = *first.mode();
 
+        // auto prices its candidates on the first view.
         let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,
             tf,
             gpu_tf: &lut,
             mode,
+            frame: Some(&first),
         };
         // lacuna info's occupancy figures.
         let n = v.data.len();

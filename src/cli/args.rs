@@ -6,7 +6,8 @@ use super::look::LookArgs;
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::{Arg, ArgMatches, Args, Command, FromArgMatches};
 use lacuna::accel::table::{params_for, shared_params, SharedParam};
-use lacuna::accel::{Accel, Params, TABLE};
+use lacuna::accel::{Accel, Builder, Params, TABLE};
+use lacuna::gpu::Context;
 use lacuna::render::{Filter, FrameBuilder, FrameDesc, Orbit, Projection, DEFAULT_STEP};
 use lacuna::Result;
 
@@ -172,5 +173,27 @@ impl Args for StructureArgs {
 
     fn augment_args_for_update(cmd: Command) -> Command {
         Self::augment_args(cmd)
+    }
+}
+
+/// How `auto` gets the device's kernel constants.
+#[derive(Args, Clone, Copy, Debug, Default)]
+pub struct ModelArgs {
+    /// auto: measure the device's kernel constants again and rewrite their cache
+    /// ($XDG_CACHE_HOME/lacuna, else ~/.cache/lacuna).
+    #[arg(long)]
+    pub recalibrate: bool,
+}
+
+impl ModelArgs {
+    /// A builder whose auto keeps its kernel constants in the cache folder
+    /// (measured there again with `--recalibrate`).
+    pub fn builder(&self, ctx: &Context) -> Result<Builder> {
+        let builder = Builder::new(ctx)?;
+        builder.use_cost_cache(lacuna::accel::auto::cache::default_folder())?;
+        if self.recalibrate {
+            builder.recalibrate()?;
+        }
+        Ok(builder)
     }
 }

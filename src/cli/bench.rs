@@ -63,6 +63,8 @@ pub struct BenchArgs {
     /// Enable Vulkan validation (the hard-case suite always does).
     #[arg(long)]
     validate: bool,
+    #[command(flatten)]
+    model: super::args::ModelArgs,
 }
 
 pub fn run(args: &BenchArgs) -> Result<ExitCode> {
@@ -162,6 +164,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         &bench::RunOptions {
             quiet: args.quiet,
             keep_frames: args.frames_out,
+            cost_cache: lacuna::accel::auto::cache::default_folder(),
+            recalibrate: args.model.recalibrate,
         },
     )?;
     let written = bench::write_outputs(&out_dir, &output)?;

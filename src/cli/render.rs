@@ -1,6 +1,6 @@
 //! `lacuna render`: one frame with any structure, GPU time per pass, EXR or PNG out.
 
-use super::args::{AccelParser, FrameArgs, StructureArgs};
+use super::args::{AccelParser, FrameArgs, ModelArgs, StructureArgs};
 use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
@@ -24,6 +24,8 @@ pub struct RenderArgs {
     accel: Accel,
     #[command(flatten)]
     structure: StructureArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
     size: (u32, u32),
@@ -72,7 +74,7 @@ impl RenderArgs {
 /// Builds the structure `warmup + repeat` times; returns the last and the
 /// per-phase medians of the timed builds (None for naive).
 fn build(
-    ctx: &Context,
+    builder: &Builder,
     args: &RenderArgs,
     input: &BuildInput,
     params: &Params,
@@ -80,7 +82,6 @@ fn build(
     if args.accel.is_naive() {
         return Ok((Structure::naive(), None));
     }
-    let builder = Builder::new(ctx)?;
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..args.warmup + args.repeat {
@@ -105,7 +106,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
 
-    let renderer = Renderer::new(&ctx)?;
+    let builder = args.model.builder(&ctx)?;
+    let renderer = Renderer::sharing(&builder)?;
     let mut gpu_volume = GpuVolume::upload(&ctx, &volume)?;
     gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
     gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
@@ -116,8 +118,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         tf: &tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
+        frame: Some(&desc),
     };
-    let (structure, build) = build(&ctx, args, &input, &params)?;
+    let (structure, build) = build(&builder, args, &input, &params)?;
     let scene = Scene {
         structure: &structure,
         volume: &gpu_volume,

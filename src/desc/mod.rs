@@ -11,6 +11,7 @@
 //! a member; callers that do not set it keep today's frame.
 
 mod clip;
+mod kernel;
 mod look;
 mod matrices;
 mod mode;
@@ -20,6 +21,7 @@ mod shading;
 
 pub use crate::volume::Filter;
 pub use clip::{Clip, MAX_CLIP};
+pub use kernel::KernelConstants;
 pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
 pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};

@@ -11,6 +11,10 @@ use ash::vk;
 pub struct DeviceInfo {
     pub name: String,
     pub driver: String,
+    /// The driver's version and pipeline cache UUID: what a device-specific
+    /// cache (auto's cost model) is kept under.
+    pub driver_version: u32,
+    pub pipeline_cache_uuid: [u8; 16],
     pub device_type: vk::PhysicalDeviceType,
     pub api_version: u32,
     pub max_storage_buffer_range: u64,
@@ -139,6 +143,8 @@ pub(crate) fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, time
     DeviceInfo {
         name,
         driver: format!("{driver_name} {driver_info}").trim().to_string(),
+        driver_version: p.driver_version,
+        pipeline_cache_uuid: p.pipeline_cache_uuid,
         device_type: p.device_type,
         api_version: p.api_version,
         max_storage_buffer_range: l.max_storage_buffer_range as u64,

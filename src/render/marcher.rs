@@ -2,28 +2,18 @@
 //! the `record` function that only records into a caller's command buffer.
 
 use super::target::{Output, RenderTarget};
-use crate::accel::{March, Structure};
-use crate::desc::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
+use crate::accel::kernels::{MarchKernels, ProbeConstants};
+use crate::accel::{Builder, March, Structure};
+use crate::desc::{FrameDesc, Mode};
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit, MarchCommon};
 use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, TexelBuffer, Timer, Timings};
 use crate::tf::GpuTransferFunction;
-use crate::volume::{Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID};
+use crate::volume::GpuVolume;
 
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
-
-/// A march kernel: shader name (with its output variant), the structure's
-/// specialization constants, the sample filter, and the frame's and
-/// volume's constants (`look_of`).
-type KernelKey = (&'static str, &'static [u32], Filter, Look);
-
-/// The specialization constants of a frame's look and volume: its mode,
-/// whether it lights composite samples, whether the volume has NaN voxels,
-/// how its texels are stored, whether the manual filter reads its cells copy.
-type Look = [u32; 5];
+use std::sync::Arc;
 
 /// What a frame shows: the structure (built for `tf`), the volume and the
 /// transfer function on the GPU.
@@ -39,7 +29,7 @@ pub struct Scene<'a> {
 /// the kernels that write each frame's LUT and depth limits.
 pub struct Renderer {
     ctx: Context,
-    kernels: Mutex<HashMap<KernelKey, Arc<Kernel>>>,
+    kernels: Arc<MarchKernels>,
     opacity: Kernel,
     depth_limit: Kernel,
     /// Reads host depth images (texelFetch: its filter is irrelevant).
@@ -61,7 +51,18 @@ struct Destination<'a> {
 }
 
 impl Renderer {
+    /// A renderer with march kernels of its own.
     pub fn new(ctx: &Context) -> Result<Self> {
+        Self::with_kernels(ctx, Arc::new(MarchKernels::new(ctx)))
+    }
+
+    /// A renderer sharing `builder`'s march kernels (the ones `auto`
+    /// created while choosing are then not compiled again).
+    pub fn sharing(builder: &Builder) -> Result<Self> {
+        Self::with_kernels(builder.context(), builder.shared::<MarchKernels>()?)
+    }
+
+    fn with_kernels(ctx: &Context, kernels: Arc<MarchKernels>) -> Result<Self> {
         let opacity = Kernel::new::<build_opacity_lut::Push>(ctx, &shaders::BUILD_OPACITY_LUT)?;
         let depth_limit = Kernel::new::<()>(ctx, &shaders::RENDER_DEPTH_LIMIT)?;
         let info = vk::SamplerCreateInfo::default()
@@ -71,7 +72,7 @@ impl Renderer {
         let no_cells = crate::volume::no_cells(ctx)?;
         Ok(Renderer {
             ctx: ctx.clone(),
-            kernels: Mutex::new(HashMap::new()),
+            kernels,
             opacity,
             depth_limit,
             depth_sampler,
@@ -79,45 +80,11 @@ impl Renderer {
         })
     }
 
-    /// The march kernel `march` sampling with `filter`, for composite
-    /// unshaded frames, writing the frame buffer; created on first use.
-    pub fn kernel(&self, march: March, filter: Filter) -> Result<Arc<Kernel>> {
-        self.kernel_for(march, filter, [0; 5], None)
-    }
-
-    /// As `kernel`, for frames of `look` (`MARCH_MODE`, `MARCH_SHADE`,
-    /// `VOLUME_NAN`: `look_of`),
-    /// writing a storage image of the `variant` format instead
-    /// (`march/NAME@rgba8`, ...: build.rs).
-    fn kernel_for(&self, mut march: March, filter: Filter, look: Look, variant: Option<&str>) -> Result<Arc<Kernel>> {
-        if let Some(v) = variant {
-            let name = format!("{}@{v}", march.shader.name);
-            march.shader = *shaders::ALL
-                .iter()
-                .find(|s| s.name == name)
-                .ok_or_else(|| Error::Interface(format!("kernel {name}: no such shader variant")))?;
-        }
-        let key = (march.shader.name, march.constants, filter, look);
-        let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(k) = map.get(&key) {
-            return Ok(k.clone());
-        }
-        let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
-        constants.push((FILTER_CONSTANT_ID, filter.constant()));
-        constants.push((MODE_CONSTANT_ID, look[0]));
-        constants.push((SHADE_CONSTANT_ID, look[1]));
-        constants.push((NAN_CONSTANT_ID, look[2]));
-        constants.push((KIND_CONSTANT_ID, look[3]));
-        constants.push((CELLS_CONSTANT_ID, look[4]));
-        let shader = march.shader;
-        let k = Arc::new(Kernel::specialized(
-            &self.ctx,
-            &shader,
-            shader.push_size as usize,
-            &constants,
-        )?);
-        map.insert(key, k.clone());
-        Ok(k)
+    /// The march kernel `march` sampling `volume` for frames of `desc`,
+    /// writing the frame buffer; created on first use.
+    pub fn kernel(&self, march: March, desc: &FrameDesc, volume: &GpuVolume) -> Result<Arc<Kernel>> {
+        self.kernels
+            .get(march, None, desc.kernel_constants(volume), ProbeConstants::PLAIN)
     }
 
     /// Records one frame of `desc` into `cmd` (timed as "march" when `timer`
@@ -239,7 +206,12 @@ impl Renderer {
             }
         };
         structure.check_mode(desc.mode())?;
-        let kernel = self.kernel_for(structure.march(), filter, look_of(desc, volume), variant)?;
+        let kernel = self.kernels.get(
+            structure.march(),
+            variant,
+            desc.kernel_constants(volume),
+            ProbeConstants::PLAIN,
+        )?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
         let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
@@ -344,12 +316,7 @@ impl Renderer {
         let target = RenderTarget::new(&self.ctx, width, height)?;
         let iso = matches!(desc.mode(), Mode::Iso(_));
         let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
-        let kernel = self.kernel_for(
-            scene.structure.march(),
-            desc.filter_for(scene.volume),
-            look_of(desc, scene.volume),
-            None,
-        )?;
+        let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         // Rays in one row of workgroups; at least one row per band.
         let row_rays = target.width as u64 * kernel.local_size()[1] as u64;
@@ -391,16 +358,8 @@ impl Renderer {
     }
 }
 
-/// The specialization constants of a frame on `volume` (see [`Look`]; iso
-/// surfaces are always lit, by their own path).
-fn look_of(desc: &FrameDesc, volume: &GpuVolume) -> Look {
-    let shade = matches!(desc.mode(), Mode::Composite) && desc.shading().is_some();
-    let cells = desc.filter_for(volume) == Filter::Manual && volume.cells().is_some();
-    [
-        desc.mode().constant(),
-        shade as u32,
-        volume.has_nan as u32,
-        volume.kind.constant(),
-        cells as u32,
-    ]
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
+    }
 }

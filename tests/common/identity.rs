@@ -68,7 +68,7 @@ impl Fixture {
         let ctx = super::gpu();
         Fixture {
             renderer: Renderer::new(&ctx).unwrap(),
-            builder: Builder::new(&ctx).unwrap(),
+            builder: super::builder(&ctx),
             ctx,
         }
     }
@@ -104,6 +104,7 @@ impl Fixture {
             tf: p.tf,
             gpu_tf: &p.lut,
             mode: p.mode,
+            frame: None,
         };
         self.builder.build(accel, &scene, &p.ranges, params).unwrap().0
     }

@@ -51,7 +51,7 @@ pub fn render_with(
     let mut gv = GpuVolume::upload(ctx, volume).unwrap();
     gv.prepare(volume, desc.lighting().is_some(), desc.filter()).unwrap();
     let lut = tf.upload(ctx).unwrap();
-    let builder = Builder::new(ctx).unwrap();
+    let builder = builder(ctx);
     let (ranges, _) = builder.ranges_for(&[(accel, params)], &gv).unwrap();
     let input = BuildInput {
         volume,
@@ -59,6 +59,7 @@ pub fn render_with(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
+        frame: None,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, params).unwrap();
     let scene = Scene {
@@ -87,6 +88,16 @@ pub fn frame(
     renderer.render(scene, desc).unwrap().0
 }
 
+/// A builder whose auto prices candidates with nominal constants (what is
+/// tested of auto's choice is in tests/auto.rs; elsewhere only that it is
+/// exact).
+pub fn builder(ctx: &Context) -> Builder {
+    let b = Builder::new(ctx).unwrap();
+    b.set_kernel_costs(Some(lacuna::accel::auto::KernelCost::NOMINAL))
+        .unwrap();
+    b
+}
+
 /// Per-channel max abs difference.
 pub fn max_abs(a: &Frame, b: &Frame) -> f64 {
     lacuna::frame::diff(a, b).unwrap().max_abs
@@ -107,6 +118,12 @@ pub struct Run {
 pub fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_lacuna"));
     cmd.args(args);
+    // auto's measured kernel constants, shared by every test's runs (the
+    // first run of a kind measures them) and kept out of the user's cache.
+    cmd.env(
+        "XDG_CACHE_HOME",
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join("xdg-cache"),
+    );
     for (k, v) in env {
         cmd.env(k, v);
     }

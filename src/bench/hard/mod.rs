@@ -77,6 +77,10 @@ fn views_in(case: &HardCase, look: &HardLook) -> Result<Vec<FrameDesc>> {
 /// every structure and filter on a validated context.
 pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>> {
     let builder = Builder::new(ctx)?;
+    // What is checked is that every structure equals naive; which exact
+    // structure auto marches does not change that, so its candidates are
+    // priced with nominal constants rather than measured ones.
+    builder.set_kernel_costs(Some(crate::accel::auto::KernelCost::NOMINAL))?;
     let renderer = Renderer::new(ctx)?;
     let mut out = Vec::new();
     ctx.take_validation_messages();
@@ -105,6 +109,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
                 tf: &tf,
                 gpu_tf: &lut,
                 mode: *views[0].mode(),
+                frame: Some(&views[0]),
             };
             let mut structures = Vec::new();
             for (label, accel, params) in &variants {

@@ -8,7 +8,7 @@ mod host;
 mod look;
 mod scene;
 
-use super::args::{AccelParser, FrameArgs};
+use super::args::{AccelParser, FrameArgs, ModelArgs};
 use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use controls::{Change, Controls, Shape};
@@ -46,6 +46,8 @@ pub struct ViewArgs {
     size: (u32, u32),
     #[command(flatten)]
     frame: FrameArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Render this many frames, then exit (for tests and scripts).
     #[arg(long)]
     frames: Option<u32>,
@@ -170,7 +172,15 @@ impl App<'_> {
             .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
-        let scene = Scene::new(&ctx, volume, tf.clone(), self.args.accel, *desc.mode(), desc.filter())?;
+        let builder = self.args.model.builder(&ctx)?;
+        let scene = Scene::new(
+            builder,
+            volume,
+            tf.clone(),
+            self.args.accel,
+            *desc.mode(),
+            desc.filter(),
+        )?;
         let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
         let controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
@@ -308,6 +318,7 @@ impl Viewer {
         if desc.lighting().is_some() {
             self.scene.ensure_gradient()?;
         }
+        self.scene.prepare(&desc)?;
         let scene = &mut self.scene;
         let presented = self
             .host
@@ -382,9 +393,9 @@ impl Viewer {
             }
         }
         if change.structure && self.scene.accel.name() != self.controls.accel.name() {
-            self.scene.set_accel(self.controls.accel)?;
+            self.scene.set_accel(self.controls.accel);
         } else if change.structure {
-            self.scene.set_mode(self.controls.look.mode)?;
+            self.scene.set_mode(self.controls.look.mode);
         }
         if change.screenshot {
             self.shots += 1;

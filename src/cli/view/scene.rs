@@ -1,11 +1,12 @@
 //! The viewer's one use of lacuna's renderer: the volume on the GPU, the
-//! transfer function, the structure (rebuilt only when the TF or the
-//! structure changes), and a frame recorded into the host's command buffer
-//! and copied into the host's canvas image. Everything else in the viewer
-//! is the host.
+//! transfer function, the structure (rebuilt only when the TF, the mode or
+//! the structure changes, before the next frame, for that frame: auto
+//! prices its candidates on it), and a frame recorded into the host's
+//! command buffer and copied into the host's canvas image. Everything else
+//! in the viewer is the host.
 
 use super::host::Canvas;
-use lacuna::accel::{Accel, BuildInput, Builder, Params, RangeKind, Ranges, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
@@ -26,9 +27,11 @@ pub struct Scene {
     params: Params,
     /// The frames' mode the structure is built for.
     pub mode: Mode,
-    /// The per-volume ranges the structure reads, and which they are.
-    ranges: Option<(RangeKind, Ranges)>,
+    /// The per-volume ranges the structure reads, and for which structure.
+    ranges: Option<((Accel, Params), Ranges)>,
     pub structure: Structure,
+    /// The structure is to be built before the next frame.
+    stale: bool,
     target: Option<RenderTarget>,
     timer: Timer,
     /// The last build's phases (empty for naive) and frame's passes.
@@ -39,20 +42,21 @@ pub struct Scene {
 impl Scene {
     /// `filter`: the sample filter asked for (None: the default).
     pub fn new(
-        ctx: &Context,
+        builder: Builder,
         volume: Volume,
         tf: TransferFunction,
         accel: Accel,
         mode: Mode,
         filter: Option<Filter>,
     ) -> Result<Scene> {
+        let ctx = &builder.context().clone();
         let mut gpu_volume = GpuVolume::upload(ctx, &volume)?;
         gpu_volume.prepare(&volume, false, filter)?;
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
             ctx: ctx.clone(),
-            renderer: Renderer::new(ctx)?,
-            builder: Builder::new(ctx)?,
+            renderer: Renderer::sharing(&builder)?,
+            builder,
             volume,
             gpu_volume,
             tf,
@@ -62,12 +66,13 @@ impl Scene {
             mode,
             ranges: None,
             structure: Structure::naive(),
+            stale: true,
             target: None,
             timer: Timer::new(ctx, 1)?,
             build: Timings::default(),
             march: Timings::default(),
         };
-        scene.set_accel(accel)?;
+        scene.set_accel(accel);
         Ok(scene)
     }
 
@@ -80,11 +85,12 @@ impl Scene {
         self.gpu_volume.default_filter()
     }
 
-    /// A new transfer function: upload it and rebuild the structure.
+    /// A new transfer function: upload it; the structure is rebuilt for it.
     pub fn set_tf(&mut self, tf: TransferFunction) -> Result<()> {
         self.lut = tf.upload(&self.ctx)?;
         self.tf = tf;
-        self.rebuild()
+        self.stale = true;
+        Ok(())
     }
 
     /// Uploads the volume's gradient, once, before the first lit frame.
@@ -93,30 +99,36 @@ impl Scene {
     }
 
     /// Frames of a new mode: the structure is built for it.
-    pub fn set_mode(&mut self, mode: Mode) -> Result<()> {
+    pub fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
-        self.rebuild()
+        self.stale = true;
     }
 
     /// A new structure, with `render`'s defaults for its parameters.
-    pub fn set_accel(&mut self, accel: Accel) -> Result<()> {
+    pub fn set_accel(&mut self, accel: Accel) {
         self.accel = accel;
         self.params = accel.defaults();
-        self.rebuild()
+        self.stale = true;
     }
 
-    /// Builds the structure for the current TF; ranges only when the
-    /// structure or cell changed (they are per volume).
-    fn rebuild(&mut self) -> Result<()> {
+    /// Builds the structure, if a change asked for it, for frames like
+    /// `desc`; ranges only when the structure changed (they are per volume).
+    pub fn prepare(&mut self, desc: &FrameDesc) -> Result<()> {
+        if !self.stale {
+            return Ok(());
+        }
+        self.stale = false;
         self.build = Timings::default();
         if self.accel.is_naive() {
             self.structure = Structure::naive();
             return Ok(());
         }
-        let kind = self.accel.method().ranges(&self.params)?;
-        if self.ranges.as_ref().map(|(k, _)| *k) != Some(kind) {
-            let (ranges, _) = self.builder.ranges(&[kind], &self.gpu_volume)?;
-            self.ranges = Some((kind, ranges));
+        let which = (self.accel, self.params.clone());
+        if self.ranges.as_ref().map(|(w, _)| w) != Some(&which) {
+            let (ranges, _) = self
+                .builder
+                .ranges_for(&[(self.accel, &self.params)], &self.gpu_volume)?;
+            self.ranges = Some((which, ranges));
         }
         let Some((_, ranges)) = &self.ranges else {
             unreachable!("ranges were just computed")
@@ -127,6 +139,7 @@ impl Scene {
             tf: &self.tf,
             gpu_tf: &self.lut,
             mode: self.mode,
+            frame: Some(desc),
         };
         let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.params)?;
         self.structure = structure;

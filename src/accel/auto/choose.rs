@@ -1,0 +1,205 @@
+//! auto's choice: its candidates (naive marching, the distance maps and
+//! the macro-cell grid at cells the device holds), each built and counted
+//! on the frame's probe tiles, priced by the kernel constants, and, where
+//! the best is close to another, timed on the same tiles.
+
+use super::super::builder::RangeKind;
+use super::super::distance::{self, DistanceMethod};
+use super::super::grid::GridMethod;
+use super::super::method::Accel;
+use super::super::naive::NAIVE;
+use super::super::params::Params;
+use super::super::probe::Counts;
+use crate::desc::Mode;
+use crate::error::Result;
+use crate::gpu::DeviceInfo;
+
+/// Distance map cells (voxels) auto tries; grids of fewer cells than
+/// [`OCTANT_CELLS`] get octant maps.
+pub const DISTANCE_CELLS: [u32; 2] = [4, 8];
+/// Macro-cell grid cells auto tries.
+pub const GRID_CELLS: [u32; 2] = [8, 16];
+
+/// Grids of fewer cells than this (32^3) get octant maps, which march
+/// faster (their boxes reach further ahead) but whose transform costs
+/// several times the cube map's, growing past a quarter of a frame from
+/// here on lavapipe (`docs/results/auto.md`); larger grids get the cube map.
+pub const OCTANT_CELLS: u64 = 1 << 15;
+
+/// A runner-up within this fraction of the best predicted time makes a
+/// close call, settled by timing the candidates within it on the probe
+/// tiles: the model's predictions were within about 20 % of the frames
+/// measured on lavapipe (`docs/results/auto.md`).
+pub const CLOSE: f64 = 0.3;
+/// A skipping structure predicted less than this much faster than naive
+/// marching is timed against it before it is chosen: a wrong prediction
+/// must not leave the default slower than naive.
+pub const NAIVE_GUARD: f64 = 0.5;
+
+const DISTANCE: Accel = Accel(&DistanceMethod { octants: false });
+const OCTANT: Accel = Accel(&DistanceMethod { octants: true });
+const GRID: Accel = Accel(&GridMethod);
+
+/// A structure auto may march with.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    pub accel: Accel,
+    pub params: Params,
+    /// `naive`, `distance-octant (cell 4)`, `grid (cell 16)`.
+    pub label: String,
+}
+
+impl Candidate {
+    fn new(accel: Accel, cell: Option<u32>) -> Result<Self> {
+        match cell {
+            Some(c) => Ok(Candidate {
+                accel,
+                params: accel.params(&[("cell", &c.to_string())])?,
+                label: format!("{accel} (cell {c})"),
+            }),
+            None => Ok(Candidate {
+                accel,
+                params: accel.defaults(),
+                label: accel.to_string(),
+            }),
+        }
+    }
+
+    /// The ranges its build reads.
+    pub fn ranges(&self) -> Result<RangeKind> {
+        self.accel.method().ranges(&self.params)
+    }
+}
+
+fn cells_of(dims: [u32; 3], cell: u32) -> u64 {
+    dims.iter().map(|&d| d.div_ceil(cell) as u64).product()
+}
+
+/// The candidates for a volume of `dims` in `mode` on `info`'s device,
+/// naive first, and a note for each left out because the device cannot
+/// hold it. Average frames read every sample: naive only.
+pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec<Candidate>, Vec<String>)> {
+    let mut out = vec![Candidate::new(NAIVE, None)?];
+    let mut notes = Vec::new();
+    if matches!(mode, Mode::Average) {
+        return Ok((out, notes));
+    }
+    for cell in DISTANCE_CELLS {
+        let n = cells_of(dims, cell);
+        let octants = n < OCTANT_CELLS;
+        match distance::check_fits(info, n, octants) {
+            Ok(()) => out.push(Candidate::new(if octants { OCTANT } else { DISTANCE }, Some(cell))?),
+            Err(e) => notes.push(format!("no distance map at cell {cell}: {e}")),
+        }
+    }
+    for cell in GRID_CELLS {
+        // Value ranges (MIP, MinIP) take 8 bytes a cell, flags 4.
+        let bytes = cells_of(dims, cell) * 8;
+        match info.check(
+            format!("grid of {} cells ({bytes} bytes)", cells_of(dims, cell)),
+            "maxStorageBufferRange",
+            bytes,
+            info.max_storage_buffer_range,
+        ) {
+            Ok(()) => out.push(Candidate::new(GRID, Some(cell))?),
+            Err(e) => notes.push(format!("no grid at cell {cell}: {e}")),
+        }
+    }
+    Ok((out, notes))
+}
+
+/// A candidate as priced: its counts on the probe tiles and its predicted
+/// frame time, and its time on them when it was timed.
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Priced {
+    pub label: String,
+    pub counts: Counts,
+    /// Predicted milliseconds for the whole frame.
+    pub predicted: f64,
+    /// Milliseconds on the probe tiles, when timed.
+    pub trial: Option<f64>,
+}
+
+/// Which of the priced candidates to time, by index: none when the best
+/// prediction stands clear of the others (by [`CLOSE`]) and of naive (by
+/// [`NAIVE_GUARD`]); else every one within `CLOSE` of the best, naive
+/// included when the best is not naive and naive is within the guard.
+pub fn to_time(priced: &[Priced], always: bool) -> Vec<usize> {
+    let best = index_of_min(priced.iter().map(|p| p.predicted));
+    let b = priced[best].predicted;
+    if always {
+        return (0..priced.len()).collect();
+    }
+    let close = priced
+        .iter()
+        .enumerate()
+        .any(|(i, p)| i != best && p.predicted <= b * (1.0 + CLOSE));
+    // Candidate 0 is naive.
+    let naive_near = best != 0 && priced[0].predicted <= b * (1.0 + NAIVE_GUARD);
+    if !close && !naive_near {
+        return Vec::new();
+    }
+    let mut out: Vec<usize> = (0..priced.len())
+        .filter(|&i| priced[i].predicted <= b * (1.0 + CLOSE))
+        .collect();
+    if naive_near && !out.contains(&0) {
+        out.insert(0, 0);
+    }
+    out
+}
+
+/// The index of the least value (the first of equals).
+pub fn index_of_min(values: impl Iterator<Item = f64>) -> usize {
+    let mut best = (0, f64::INFINITY);
+    for (i, v) in values.enumerate() {
+        if v < best.1 {
+            best = (i, v);
+        }
+    }
+    best.0
+}
+
+/// Builder helpers auto's build needs from a candidate list: the ranges
+/// they read, each kind once.
+pub fn range_kinds(candidates: &[Candidate]) -> Result<Vec<RangeKind>> {
+    let mut out = Vec::new();
+    for c in candidates {
+        let k = c.ranges()?;
+        if !out.contains(&k) {
+            out.push(k);
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn priced(times: &[f64]) -> Vec<Priced> {
+        times
+            .iter()
+            .map(|&t| Priced {
+                label: String::new(),
+                counts: Counts::default(),
+                predicted: t,
+                trial: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn only_close_calls_are_timed() {
+        // Far ahead of everything, naive included: no trial.
+        assert!(to_time(&priced(&[100.0, 20.0, 50.0]), false).is_empty());
+        // Two within CLOSE: both timed; naive far behind stays out.
+        assert_eq!(to_time(&priced(&[100.0, 20.0, 25.0, 40.0]), false), vec![1, 2]);
+        // Best ahead of naive by less than the guard: naive is timed against it.
+        assert_eq!(to_time(&priced(&[140.0, 100.0, 200.0]), false), vec![0, 1]);
+        // Naive best and clear: no trial.
+        assert!(to_time(&priced(&[50.0, 90.0, 200.0]), false).is_empty());
+        // Always: everything.
+        assert_eq!(to_time(&priced(&[50.0, 90.0]), true), vec![0, 1]);
+    }
+}

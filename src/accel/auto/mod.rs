@@ -1,0 +1,323 @@
+//! `--accel auto`: the fastest exact structure for this volume, transfer
+//! function and frame. Its candidates are naive marching, the distance
+//! maps (octant maps on small grids, else cube maps) at cells 4 and 8 and
+//! the macro-cell grid at cells 8 and 16, those the device holds
+//! (`choose::candidates`). Each is built, and its kernel counted on a
+//! sparse sample of the frame's tiles (`probe`): iterations of the sample
+//! loop, traversal steps and regions, per SIMD group. The device's kernel
+//! constants (`model`, measured once per device, driver and kernel build:
+//! `calibrate`, `cache`) price each count; the cheapest wins, and a close
+//! call (within 15 %, or a skipping structure within 30 % of naive) is
+//! settled by timing the close ones on the same tiles (`choose::to_time`).
+//!
+//! The frame is the one the build is for (`BuildInput::frame`: camera,
+//! step, early termination, sample filter, size, mode), so the choice
+//! accounts for all of them. Re-made on every build, i.e. every transfer
+//! function change. See `docs/structures.md`, "auto".
+
+pub mod cache;
+pub mod calibrate;
+pub mod choose;
+pub mod model;
+
+use super::builder::{Builder, RangeKind, Ranges};
+use super::method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method, Structure};
+use super::naive::NAIVE;
+use super::params::{Param, Params};
+use super::probe::{time_interleaved, FrameProbe, Statistic};
+use super::stats::Stats;
+use crate::desc::FrameDesc;
+use crate::error::Result;
+use crate::gpu::{Bound, DeviceInfo, Timings};
+use crate::volume::GpuVolume;
+pub use cache::{CostTable, Source};
+pub use choose::{Candidate, Priced, OCTANT_CELLS};
+pub use model::{CostKey, KernelCost};
+use std::time::Instant;
+
+/// Timed rounds of a close call (after one untimed).
+const TRIAL_ROUNDS: usize = 3;
+
+/// The size of the frame auto prices candidates on when the build names
+/// none (`BuildInput::frame` None): the default orbit at this size.
+pub const DEFAULT_FRAME: u32 = 512;
+
+/// What auto chose and why.
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Choice {
+    /// The structure the frames are marched with.
+    pub accel: Accel,
+    /// `distance-octant (cell 4)`, `grid (cell 16)` or `naive`.
+    pub label: String,
+    /// Every candidate as priced, in candidate order (naive first).
+    pub priced: Vec<Priced>,
+    /// Whether a close call was settled by timing.
+    pub timed: bool,
+    /// Where the kernel constants came from (one per distinct source).
+    pub model: Vec<String>,
+    /// Candidates left out, and why.
+    pub notes: Vec<String>,
+}
+
+impl Choice {
+    /// `distance-octant (cell 4)`, `grid (cell 16)` or `naive`.
+    pub fn describe(&self) -> String {
+        self.label.clone()
+    }
+
+    /// The chosen candidate's predicted frame time over naive's.
+    pub fn predicted_vs_naive(&self) -> f64 {
+        let chosen = self.priced.iter().find(|p| p.label == self.label);
+        match (chosen, self.priced.first()) {
+            (Some(c), Some(n)) if n.predicted > 0.0 => c.predicted / n.predicted,
+            _ => 1.0,
+        }
+    }
+
+    /// One line with the figures behind the choice.
+    pub fn reason(&self) -> String {
+        let predicted: Vec<String> = self
+            .priced
+            .iter()
+            .map(|p| format!("{} {:.1}", p.label, p.predicted))
+            .collect();
+        let mut line = format!("predicted ms: {}", predicted.join(", "));
+        if self.timed {
+            let timed: Vec<String> = self
+                .priced
+                .iter()
+                .filter_map(|p| p.trial.map(|t| format!("{} {:.2}", p.label, t)))
+                .collect();
+            line.push_str(&format!("; close, timed on the probe tiles: {}", timed.join(", ")));
+        }
+        line.push_str(&format!("; model {}", self.model.join(", ")));
+        line
+    }
+}
+
+/// The built structure and the choice behind it
+/// (`Structure::built_as::<Chosen>()`).
+pub struct Chosen {
+    pub choice: Choice,
+    inner: Box<dyn Built>,
+}
+
+impl Built for Chosen {
+    fn bindings(&self) -> Vec<Bound<'_>> {
+        self.inner.bindings()
+    }
+    fn push(&self) -> Vec<u8> {
+        self.inner.push()
+    }
+    fn stats(&self) -> Result<Option<Stats>> {
+        self.inner.stats()
+    }
+    fn marched_as(&self) -> Option<MarchedAs> {
+        Some(MarchedAs {
+            accel: self.choice.accel,
+            label: self.choice.describe(),
+            reason: self.choice.reason(),
+            kind: MarchedKind::Choice,
+        })
+    }
+}
+
+/// `--accel auto`.
+pub struct AutoMethod;
+
+const TRIAL: Param = Param::choice(
+    "trial",
+    &["near", "always", "off"],
+    "near",
+    "auto: time the candidates on the frame's probe tiles when their predictions are close (near), always, or never (off)",
+);
+
+impl Method for AutoMethod {
+    fn name(&self) -> &'static str {
+        "auto"
+    }
+    fn description(&self) -> &'static str {
+        "the fastest exact structure for this volume, TF and frame: naive, distance maps or the grid, priced by the device's measured kernel costs"
+    }
+    fn params(&self) -> &'static [Param] {
+        &[TRIAL]
+    }
+    fn ranges(&self, _: &Params) -> Result<RangeKind> {
+        Ok(RangeKind::None)
+    }
+    /// The ranges of every candidate the device holds for this volume.
+    fn range_kinds(&self, _: &Params, volume: &GpuVolume, info: &DeviceInfo) -> Result<Vec<RangeKind>> {
+        let (candidates, _) = choose::candidates(info, volume.dims, &crate::desc::Mode::Composite)?;
+        choose::range_kinds(&candidates)
+    }
+    /// The naive kernel; frames use the chosen structure's
+    /// (`Structure::marched_as`).
+    fn march(&self) -> March {
+        NAIVE.method().march()
+    }
+    /// auto builds its candidates through the builder, each classified for
+    /// the mode: it reads the frame's own transfer function.
+    fn classifies(&self) -> bool {
+        false
+    }
+    /// Host-driven: it reads counts back and may time candidates.
+    fn recordable(&self) -> bool {
+        false
+    }
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        p: &Params,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        let frame = match input.frame {
+            Some(f) => *f,
+            None => FrameDesc::builder(DEFAULT_FRAME, DEFAULT_FRAME)
+                .mode(input.mode)
+                .build()?,
+        };
+        let (choice, inner, timings) = choose(builder, input, ranges, &frame, p.choice("trial")?)?;
+        Ok((Box::new(Chosen { choice, inner }), timings))
+    }
+}
+
+/// Builds, counts and prices the candidates; returns the choice, the
+/// chosen structure's built data and the phases (each candidate's build,
+/// "count", "calibrate" when constants were measured, "trial" when timed).
+fn choose(
+    builder: &Builder,
+    input: &BuildInput,
+    ranges: &Ranges,
+    frame: &FrameDesc,
+    trial: &str,
+) -> Result<(Choice, Box<dyn Built>, Timings)> {
+    let ctx = builder.context();
+    let info = ctx.info();
+    let (all, mut notes) = choose::candidates(info, input.volume.dims, &input.mode)?;
+    let mut timings = Timings::default();
+    let mut candidates = Vec::new();
+    let mut built: Vec<Structure> = Vec::new();
+    for c in all {
+        if !ranges.has(c.ranges()?) {
+            notes.push(format!("{}: its ranges were not computed for this volume", c.label));
+            continue;
+        }
+        let (s, t) = builder.build(c.accel, input, ranges, &c.params)?;
+        timings.push(format!("build {}", c.label), t.total());
+        candidates.push(c);
+        built.push(s);
+    }
+    let mut priced: Vec<Priced> = Vec::new();
+    let mut model = Vec::new();
+    if built.len() > 1 {
+        let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame)?;
+        let start = Instant::now();
+        probe.prepare(&built.iter().collect::<Vec<_>>(), true)?;
+        let counts = built.iter().map(|s| probe.count(s)).collect::<Result<Vec<_>>>()?;
+        timings.push("count", start.elapsed().as_secs_f64() * 1e3);
+        let table = builder.shared::<CostTable>()?;
+        let constants = frame.kernel_constants(input.gpu_volume);
+        let start = Instant::now();
+        let mut calibrated = false;
+        for ((c, s), counts) in candidates.iter().zip(&built).zip(&counts) {
+            let key = CostKey::new(s.march(), constants);
+            let (cost, source) = match table.get(info, &key) {
+                Some(found) => found,
+                None => {
+                    calibrated = true;
+                    let cost = calibrate::calibrate(builder, s.marched_as(), &c.params, frame, input.gpu_volume)?;
+                    notes.extend(table.put(info, &key, cost));
+                    (cost, Source::Measured)
+                }
+            };
+            let source = source.to_string();
+            if !model.contains(&source) {
+                model.push(source);
+            }
+            priced.push(Priced {
+                label: c.label.clone(),
+                counts: *counts,
+                predicted: cost.predict(counts.scaled(probe.scale())),
+                trial: None,
+            });
+        }
+        if calibrated {
+            timings.push("calibrate", start.elapsed().as_secs_f64() * 1e3);
+        }
+        let timed = match trial {
+            "off" => Vec::new(),
+            t => choose::to_time(&priced, t == "always"),
+        };
+        if !timed.is_empty() {
+            let start = Instant::now();
+            let pairs: Vec<(&FrameProbe, &Structure)> = timed.iter().map(|&i| (&probe, &built[i])).collect();
+            probe.prepare(&pairs.iter().map(|p| p.1).collect::<Vec<_>>(), false)?;
+            let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Median)?;
+            for (&i, t) in timed.iter().zip(times) {
+                priced[i].trial = Some(t);
+            }
+            timings.push("trial", start.elapsed().as_secs_f64() * 1e3);
+        }
+    } else {
+        priced.push(Priced {
+            label: candidates[0].label.clone(),
+            counts: Default::default(),
+            predicted: 0.0,
+            trial: None,
+        });
+        model.push("not needed: naive is the only candidate".into());
+    }
+    let timed = priced.iter().any(|p| p.trial.is_some());
+    let pick = if timed {
+        choose::index_of_min(priced.iter().map(|p| p.trial.unwrap_or(f64::INFINITY)))
+    } else {
+        choose::index_of_min(priced.iter().map(|p| p.predicted))
+    };
+    let structure = built.swap_remove(pick);
+    let accel = structure.marched_as();
+    let label = match accel == NAIVE {
+        true => NAIVE.name().to_string(),
+        false => candidates[pick].label.clone(),
+    };
+    let choice = Choice {
+        accel,
+        label,
+        priced,
+        timed,
+        model,
+        notes,
+    };
+    Ok((choice, structure.built, timings))
+}
+
+impl Builder {
+    /// Keeps auto's kernel constants in files under `folder` too (one per
+    /// device, driver and kernel build), read back by later runs; None:
+    /// in memory only (the default).
+    pub fn use_cost_cache(&self, folder: Option<std::path::PathBuf>) -> Result<()> {
+        self.shared::<CostTable>()?.set_folder(folder);
+        Ok(())
+    }
+
+    /// Measures auto's kernel constants again, whatever a cache holds (and
+    /// rewrites it).
+    pub fn recalibrate(&self) -> Result<()> {
+        self.shared::<CostTable>()?.set_recalibrate(true);
+        Ok(())
+    }
+
+    /// Prices every kernel with `cost` instead of measuring (tests, hosts
+    /// that measured their own); None: measure again.
+    pub fn set_kernel_costs(&self, cost: Option<KernelCost>) -> Result<()> {
+        self.shared::<CostTable>()?.set_given(cost);
+        Ok(())
+    }
+}
+
+impl super::builder::PerContext for CostTable {
+    fn new(_: &crate::gpu::Context) -> Result<Self> {
+        Ok(CostTable::default())
+    }
+}

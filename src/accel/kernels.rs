@@ -1,0 +1,111 @@
+//! The march kernels, specialized and created on first use, shared by
+//! everything that marches frames: `render::Renderer` and auto's counting
+//! and trial frames (`probe.rs`). A kernel is a structure's shader (or one
+//! of its output variants, `march/NAME@rgba8`: build.rs) with the
+//! structure's constants (ids 0, 1, ...), the frame's and volume's
+//! (`FrameDesc::kernel_constants`) and the probe's (counting, tile stride).
+
+use super::method::March;
+use crate::desc::KernelConstants;
+use crate::error::{Error, Result};
+use crate::gpu::{shaders, Context, Kernel};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// `constant_id` of `MARCH_COUNT` (glsl/common/lattice.glsl): 1 writes the
+/// loop iterations each pixel's SIMD group ran instead of its colour.
+pub const COUNT_CONSTANT_ID: u32 = 22;
+/// `constant_id` of `MARCH_TILE_STRIDE` (glsl/common/march.glsl): workgroup
+/// (x, y) marches tile (x, y) times this.
+pub const TILE_STRIDE_CONSTANT_ID: u32 = 23;
+
+/// How a probe frame departs from a plain one: counting instead of colour,
+/// and every `tile_stride`-th 8x8 tile along each axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ProbeConstants {
+    pub count: bool,
+    pub tile_stride: u32,
+}
+
+impl ProbeConstants {
+    /// A plain frame: colour, every tile.
+    pub const PLAIN: ProbeConstants = ProbeConstants {
+        count: false,
+        tile_stride: 1,
+    };
+}
+
+type Key = (&'static str, &'static [u32], KernelConstants, ProbeConstants);
+
+/// The march kernels of one context, created on first use.
+pub struct MarchKernels {
+    ctx: Context,
+    kernels: Mutex<HashMap<Key, Arc<Kernel>>>,
+}
+
+impl MarchKernels {
+    pub fn new(ctx: &Context) -> Self {
+        MarchKernels {
+            ctx: ctx.clone(),
+            kernels: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// `march`'s kernel (its output `variant`, or the frame buffer's) for
+    /// frames with `frame` constants and `probe`'s.
+    pub fn get(
+        &self,
+        march: March,
+        variant: Option<&str>,
+        frame: KernelConstants,
+        probe: ProbeConstants,
+    ) -> Result<Arc<Kernel>> {
+        let march = with_variant(march, variant)?;
+        let key = (march.shader.name, march.constants, frame, probe);
+        if let Some(k) = self.kernels.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+            return Ok(k.clone());
+        }
+        // Created without the lock: creating a pipeline compiles it (on
+        // lavapipe about a fifth of a second), and `prepare` creates several
+        // at once.
+        let k = Arc::new(self.create(march, frame, probe)?);
+        let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
+        Ok(map.entry(key).or_insert(k).clone())
+    }
+
+    /// Creates the kernels of `wanted` not yet made, in parallel (one thread
+    /// each): what a probe will dispatch, compiled at once.
+    pub fn prepare(&self, wanted: &[(March, KernelConstants, ProbeConstants)]) -> Result<()> {
+        std::thread::scope(|scope| {
+            let jobs: Vec<_> = wanted
+                .iter()
+                .map(|&(march, frame, probe)| scope.spawn(move || self.get(march, None, frame, probe).map(|_| ())))
+                .collect();
+            jobs.into_iter().try_for_each(|j| {
+                j.join()
+                    .unwrap_or_else(|_| Err(Error::Interface("creating a march kernel panicked".into())))
+            })
+        })
+    }
+
+    fn create(&self, march: March, frame: KernelConstants, probe: ProbeConstants) -> Result<Kernel> {
+        let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
+        constants.extend(frame);
+        constants.push((COUNT_CONSTANT_ID, probe.count as u32));
+        constants.push((TILE_STRIDE_CONSTANT_ID, probe.tile_stride));
+        let shader = march.shader;
+        Kernel::specialized(&self.ctx, &shader, shader.push_size as usize, &constants)
+    }
+}
+
+/// `march` with its shader replaced by its output `variant` (`NAME@rgba8`).
+fn with_variant(mut march: March, variant: Option<&str>) -> Result<March> {
+    if let Some(v) = variant {
+        let name = format!("{}@{v}", march.shader.name);
+        march.shader = *shaders::ALL
+            .iter()
+            .find(|s| s.name == name)
+            .ok_or_else(|| Error::Interface(format!("kernel {name}: no such shader variant")))?;
+    }
+    Ok(march)
+}

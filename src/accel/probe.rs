@@ -1,0 +1,294 @@
+//! Probe frames: a structure's march kernel run on a sparse sample of a
+//! frame's tiles, to count what it does there (`count`) or to time it
+//! (`time`). `auto` prices its candidates from the counts
+//! (`auto::model`) and settles close calls with the times; the cost model
+//! is calibrated on the same counts (`auto::calibrate`).
+//!
+//! A probe frame is the frame's own: its camera, step, early termination,
+//! look, filter and the transfer function (LUT corrected for the step on
+//! the host), on every `stride`-th 8x8 tile along each axis
+//! (`MARCH_TILE_STRIDE`). Counting kernels (`MARCH_COUNT`) write per pixel
+//! the loop iterations its SIMD group ran (glsl/common/lattice.glsl).
+
+use super::builder::{Builder, PerContext};
+use super::kernels::{MarchKernels, ProbeConstants};
+use super::method::Structure;
+use crate::desc::FrameDesc;
+use crate::error::Result;
+use crate::gpu::record::{self, Access};
+use crate::gpu::shaders::MarchCommon;
+use crate::gpu::{vk, Binding, Buffer, Context, MemoryLocation, TexelBuffer, Timer};
+use crate::tf::TransferFunction;
+use crate::volume::GpuVolume;
+use std::sync::Arc;
+
+/// Pixels per tile edge (the march kernels' workgroup).
+const TILE: u32 = 8;
+/// Tiles per probe block edge (`PROBE_BLOCK` in glsl/common/march.glsl).
+const BLOCK: u32 = 4;
+/// Tiles a probe aims to cover: the stride is the largest that leaves at
+/// least this many (every tile of a small frame).
+const TILES_WANTED: u32 = 256;
+
+/// Whether tile `t` (along one axis) is probed at `stride`.
+fn probed(t: u32, stride: u32) -> bool {
+    stride == 1 || t % (BLOCK * stride) < BLOCK
+}
+
+/// Probed tiles along an axis of `tiles`, and workgroups to dispatch.
+fn probed_tiles(tiles: u32, stride: u32) -> (u32, u32) {
+    if stride == 1 {
+        return (tiles, tiles);
+    }
+    let n = (0..tiles).filter(|&t| probed(t, stride)).count() as u32;
+    (n, tiles.div_ceil(BLOCK * stride) * BLOCK)
+}
+
+/// What a structure's kernel did on the probed tiles.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Counts {
+    /// Pixels (rays) probed.
+    pub rays: u64,
+    /// Iterations of the sample loop, summed over SIMD groups.
+    pub samples: u64,
+    /// Iterations of the traversal loop (walk, DDA or tree steps).
+    pub steps: u64,
+    /// Regions entered (spans marched).
+    pub regions: u64,
+    /// Samples taken, summed over rays (each ray's own, not its group's).
+    pub ray_samples: u64,
+}
+
+impl Counts {
+    /// These counts scaled from the probed tiles to the whole frame.
+    pub fn scaled(&self, factor: f64) -> [f64; 4] {
+        [self.rays, self.samples, self.steps, self.regions].map(|c| c as f64 * factor)
+    }
+}
+
+impl PerContext for MarchKernels {
+    fn new(ctx: &Context) -> Result<Self> {
+        Ok(MarchKernels::new(ctx))
+    }
+}
+
+/// One frame's probe: its parameters, LUT and output, ready for any
+/// structure built over `volume`.
+pub struct FrameProbe<'a> {
+    ctx: Context,
+    kernels: Arc<MarchKernels>,
+    volume: &'a GpuVolume,
+    desc: FrameDesc,
+    stride: u32,
+    params: Buffer,
+    lut: TexelBuffer,
+    no_cells: TexelBuffer,
+    out: Buffer,
+    depth: Buffer,
+    readback: Buffer,
+}
+
+impl<'a> FrameProbe<'a> {
+    /// A probe of frames of `desc` over `volume` with the transfer function
+    /// `tf` (the frame's, not a mode's classification).
+    pub fn new(builder: &Builder, volume: &'a GpuVolume, tf: &TransferFunction, desc: &FrameDesc) -> Result<Self> {
+        let ctx = builder.context().clone();
+        let (w, h) = desc.size();
+        let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
+        let mut stride = 1;
+        while probed_tiles(tiles[0], stride * 2).0 * probed_tiles(tiles[1], stride * 2).0 >= TILES_WANTED {
+            stride *= 2;
+        }
+        let mut params = desc.params(volume)?;
+        params.value_bound = desc.mode().value_bound(tf.visible_entries());
+        let params = Buffer::with_data(
+            &ctx,
+            "probe params",
+            bytemuck::bytes_of(&params),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let tables = [tf.corrected_lut(desc.step()), tf.lut().to_vec()].concat();
+        let lut = Buffer::with_data(
+            &ctx,
+            "probe LUT",
+            bytemuck::cast_slice(&tables),
+            vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+        )?;
+        let lut = TexelBuffer::new(&ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
+        let bytes = w as u64 * h as u64 * 16;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        Ok(FrameProbe {
+            kernels: builder.shared::<MarchKernels>()?,
+            volume,
+            desc: *desc,
+            stride,
+            params,
+            lut,
+            no_cells: crate::volume::no_cells(&ctx)?,
+            out: Buffer::new(&ctx, "probe frame", bytes, usage, MemoryLocation::GpuOnly)?,
+            depth: Buffer::new(&ctx, "probe depth", 16, usage, MemoryLocation::GpuOnly)?,
+            readback: Buffer::new(
+                &ctx,
+                "probe readback",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?,
+            ctx,
+        })
+    }
+
+    /// The whole frame's counts over the probed ones' (tiles).
+    pub fn scale(&self) -> f64 {
+        let (w, h) = self.desc.size();
+        let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
+        let probed = tiles.map(|t| probed_tiles(t, self.stride).0);
+        (tiles[0] * tiles[1]) as f64 / (probed[0] * probed[1]) as f64
+    }
+
+    /// The frame this probes.
+    pub fn desc(&self) -> &FrameDesc {
+        &self.desc
+    }
+
+    /// Creates the kernels that counting (or timing) `structures` will
+    /// dispatch, all at once (`MarchKernels::prepare`).
+    pub fn prepare(&self, structures: &[&Structure], count: bool) -> Result<()> {
+        let frame = self.desc.kernel_constants(self.volume);
+        let probe = ProbeConstants {
+            count,
+            tile_stride: self.stride,
+        };
+        let wanted: Vec<_> = structures.iter().map(|s| (s.march(), frame, probe)).collect();
+        self.kernels.prepare(&wanted)
+    }
+
+    /// Records `structure`'s probe dispatch (counting or not) writing the
+    /// output buffer; the caller orders it after earlier writes to it.
+    fn record(&self, cmd: vk::CommandBuffer, structure: &Structure, count: bool) -> Result<()> {
+        let desc = &self.desc;
+        let filter = desc.filter_for(self.volume);
+        let sampler = self.volume.sampler_for(filter)?;
+        let probe = ProbeConstants {
+            count,
+            tile_stride: self.stride,
+        };
+        let kernel = self
+            .kernels
+            .get(structure.march(), None, desc.kernel_constants(self.volume), probe)?;
+        let gradient = match (desc.lighting().is_some(), self.volume.gradient_view()) {
+            (true, Some(view)) => view,
+            _ => self.volume.image.view,
+        };
+        let mut bindings = MarchCommon {
+            params: Binding::Storage(&self.params),
+            volume_tex: Binding::Sampled(self.volume.image.view, sampler),
+            tf_lut: Binding::TexelBuffer(self.lut.view()),
+            frame: Binding::Storage(&self.out),
+            frame_depth: Binding::Storage(&self.depth),
+            gradient_tex: Binding::Sampled(gradient, sampler),
+            volume_cells: Binding::TexelBuffer(self.volume.cells().unwrap_or(&self.no_cells).view()),
+        }
+        .list();
+        bindings.extend(structure.built.bindings());
+        let (w, h) = desc.size();
+        let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
+        let groups = [
+            probed_tiles(tiles[0], self.stride).1,
+            probed_tiles(tiles[1], self.stride).1,
+            1,
+        ];
+        kernel.dispatch(cmd, &bindings, &structure.built.push(), groups)
+    }
+
+    /// What `structure`'s kernel does on the probed tiles.
+    pub fn count(&self, structure: &Structure) -> Result<Counts> {
+        let device = self.ctx.device();
+        self.ctx.submit_and_wait(|cmd| {
+            record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
+            unsafe { device.cmd_fill_buffer(cmd, self.out.raw, 0, vk::WHOLE_SIZE, 0) };
+            record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+            self.record(cmd, structure, true)?;
+            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: self.out.size(),
+            }];
+            unsafe { device.cmd_copy_buffer(cmd, self.out.raw, self.readback.raw, &region) };
+            record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+            Ok(())
+        })?;
+        let pixels: &[[f32; 4]] = bytemuck::cast_slice(&self.readback.host()?[..self.out.size() as usize]);
+        let mut c = Counts::default();
+        let (w, h) = self.desc.size();
+        for (y, row) in pixels.chunks_exact(w as usize).enumerate().take(h as usize) {
+            if !probed(y as u32 / TILE, self.stride) {
+                continue;
+            }
+            for (x, p) in row.iter().enumerate() {
+                if !probed(x as u32 / TILE, self.stride) {
+                    continue;
+                }
+                c.rays += 1;
+                c.samples += p[0] as u64;
+                c.steps += p[1] as u64;
+                c.regions += p[2] as u64;
+                c.ray_samples += p[3] as u64;
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// What one figure of several timed rounds is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Statistic {
+    Median,
+    /// The least: noise on a shared machine only adds time.
+    Least,
+}
+
+/// GPU milliseconds of each (probe, structure) pair's probe frame: one
+/// untimed round, then `rounds` rounds timing each pair in turn
+/// (interleaved, so the machine's load falls on all alike); `statistic` of
+/// each pair's rounds.
+pub fn time_interleaved(
+    ctx: &Context,
+    pairs: &[(&FrameProbe, &Structure)],
+    rounds: usize,
+    statistic: Statistic,
+) -> Result<Vec<f64>> {
+    let device = ctx.device();
+    let mut times = vec![Vec::new(); pairs.len()];
+    for round in 0..=rounds {
+        let mut timer = Timer::new(ctx, pairs.len() as u32)?;
+        ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            for (i, (probe, s)) in pairs.iter().enumerate() {
+                // Dispatches may write the same buffer: order them.
+                record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
+                let pass = timer.begin(cmd, &i.to_string())?;
+                probe.record(cmd, s, false)?;
+                timer.end(cmd, pass);
+            }
+            Ok(())
+        })?;
+        if round > 0 {
+            let t = timer.results()?;
+            for (i, v) in times.iter_mut().enumerate() {
+                v.push(t.phase(&i.to_string())?);
+            }
+        }
+    }
+    Ok(times
+        .into_iter()
+        .map(|t| match statistic {
+            Statistic::Median => crate::gpu::timings::median(t),
+            Statistic::Least => t.into_iter().fold(f64::INFINITY, f64::min),
+        })
+        .collect())
+}

@@ -1,0 +1,32 @@
+//! What a frame fixes in the march kernel that marches it: the
+//! specialization constants of its sample filter, mode and shading, and of
+//! the volume it samples (NaN voxels, texel kind, cells copy). One kernel is
+//! compiled per distinct set (`render::Renderer`, `accel::probe`), so no
+//! sample branches on any of them.
+
+use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
+use crate::volume::{Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID};
+
+/// The frame's and volume's constants, in a fixed order: (constant_id, value).
+pub type KernelConstants = [(u32, u32); 6];
+
+impl FrameDesc {
+    /// The constants of a march kernel for this frame on `volume`: the
+    /// filter (`filter_for`), the mode, whether composite samples are lit
+    /// (iso surfaces are always lit, by their own path), whether the volume
+    /// has NaN voxels, how its texels are stored, and whether the manual
+    /// filter reads its cells copy.
+    pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
+        let filter = self.filter_for(volume);
+        let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
+        let cells = filter == Filter::Manual && volume.cells().is_some();
+        [
+            (FILTER_CONSTANT_ID, filter.constant()),
+            (MODE_CONSTANT_ID, self.mode().constant()),
+            (SHADE_CONSTANT_ID, shade as u32),
+            (NAN_CONSTANT_ID, volume.has_nan as u32),
+            (KIND_CONSTANT_ID, volume.kind.constant()),
+            (CELLS_CONSTANT_ID, cells as u32),
+        ]
+    }
+}
