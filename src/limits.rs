@@ -55,10 +55,26 @@ pub fn zeroed<T: Clone + Default>(what: impl std::fmt::Display, count: u64) -> R
     Ok(v)
 }
 
+/// The longest side of a frame, in pixels: larger is a mistake, refused
+/// before any memory is sought for it.
+pub const MAX_FRAME_SIDE: u32 = 16384;
+
 /// Checks that rays through a `dims` box sampled every `step` voxels take
-/// at most `MAX_SAMPLES_PER_RAY` samples; returns the longest ray's count.
+/// at most `MAX_SAMPLES_PER_RAY` samples, and that the step is no longer
+/// than the box's diagonal (a longer one samples a ray at most once);
+/// returns the longest ray's count.
 pub fn check_samples_per_ray(dims: [u32; 3], step: f32) -> Result<u64> {
     let diagonal = dims.iter().map(|&d| (d as f64).powi(2)).sum::<f64>().sqrt();
+    if step as f64 > diagonal {
+        return Err(Error::invalid(
+            "step",
+            step.to_string(),
+            format!(
+                "is longer than the diagonal of the {}x{}x{} box ({diagonal:.1} voxels): a ray would take at most one sample",
+                dims[0], dims[1], dims[2]
+            ),
+        ));
+    }
     let samples = (diagonal / step as f64).ceil();
     if !(samples.is_finite() && samples <= MAX_SAMPLES_PER_RAY as f64) {
         return Err(Error::invalid(

@@ -8,7 +8,13 @@ use std::path::Path;
 use std::process::Command;
 
 fn lacuna(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_lacuna")).args(args).output().unwrap();
+    // auto's kernel constants in the tests' shared cache (tests/common).
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xdg-cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args(args)
+        .env("XDG_CACHE_HOME", cache)
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stdout).into(),
@@ -317,6 +323,30 @@ fn built_in_configs_parse_and_cover_every_structure() {
 }
 
 #[test]
+fn protocol_fields_have_documented_defaults_and_data_sets_their_own_ert() {
+    // Only data sets and structures: every protocol field takes its default
+    // (README, "Benchmark"), and the file's stem names the run.
+    let c = BenchConfig::parse(
+        "[[dataset]]\nvolume = \"nbody:8\"\n[[dataset]]\nvolume = \"nbody:8\"\nert = 0.99\n\
+         [[structure]]\nlabel = \"n\"\naccel = \"naive\"\n",
+        "/some/where/mine.toml",
+    )
+    .unwrap();
+    assert_eq!(c.name, "mine");
+    assert_eq!(c.size, [512, 512]);
+    assert_eq!((c.frames, c.warmup, c.builds, c.rounds, c.warmup_cap), (6, 2, 3, 3, 30));
+    assert_eq!((c.step, c.elevation, c.ert, c.stable), (0.5, 20.0, None, 0.05));
+    assert_eq!(c.datasets[1].ert, Some(0.99));
+    assert_eq!(c.datasets[1].label(&c).unwrap(), "nbody:8 [ert 0.99]");
+    assert_eq!(c.datasets[0].label(&c).unwrap(), "nbody:8");
+    // The built-in auto suite times every data set with ERT off and on.
+    let auto = BenchConfig::parse(lacuna::bench::config::AUTO, "auto").unwrap();
+    let on = auto.datasets.iter().filter(|d| d.ert.is_some()).count();
+    assert_eq!(2 * on, auto.datasets.len());
+    assert!(auto.structures.iter().any(|s| s.accel == "auto"));
+}
+
+#[test]
 fn bad_bench_input_is_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.toml");
@@ -345,7 +375,7 @@ fn bad_bench_input_is_one_line() {
         ),
         (vec!["bench"], "give exactly one of"),
         (vec!["bench", "--quick", "--paper"], "give exactly one of"),
-        (vec!["bench", "--suite", "soft"], "expected hard"),
+        (vec!["bench", "--suite", "soft"], "expected hard or auto"),
         (vec!["bench", "/no/such.toml"], "/no/such.toml"),
         (vec!["bench", bad.to_str().unwrap()], "unknown field"),
         (vec!["bench", dup.to_str().unwrap()], "appears twice"),
@@ -358,6 +388,7 @@ fn bad_bench_input_is_one_line() {
         (vec!["bench", "--compare", "/no/a.json", "/no/b.json"], "/no/a.json"),
         (vec!["bench", "--quick", "--compare", "a", "b"], "give exactly one of"),
         (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
+        (vec!["bench", "--quick", "--size", "100000x100000"], "1..=16384 pixels"),
     ];
     for (args, needle) in cases {
         let (code, _, stderr) = lacuna(&args);

@@ -547,7 +547,40 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         "expected one of: naive",
     );
     fails(&["render", "menger:16", "--camera", "10"], &[], "AZIMUTH,ELEVATION");
+    // Finite but absurd: no float reduces 1e40 degrees to a turn.
+    fails(
+        &["render", "menger:16", "--camera", "1e40,0"],
+        &[],
+        "azimuth must be in [-360, 360]",
+    );
+    fails(
+        &["render", "menger:16", "--camera", "0,95"],
+        &[],
+        "elevation in [-90, 90]",
+    );
+    fails(
+        &["render", "menger:16", "--shade", "on", "--light", "0,-1e9"],
+        &[],
+        "invalid light '0,-1000000000'",
+    );
     fails(&["render", "menger:16", "--perspective", "0"], &[], "field of view");
+    fails(
+        &["render", "menger:16", "--perspective", "40", "--distance", "1e9"],
+        &[],
+        "bounding-sphere radii",
+    );
+    // A step longer than the box's diagonal (27.7 voxels) samples a ray once.
+    fails(
+        &["render", "menger:16", "--step", "1e30"],
+        &[],
+        "longer than the diagonal",
+    );
+    fails(
+        &["render", "menger:16", "--step", "28"],
+        &[],
+        "longer than the diagonal",
+    );
+    fails(&["render", "menger:16", "--size", "20000x8"], &[], "1..=16384 pixels");
     fails(&["info", "blob:16"], &[], "not a generator");
     fails(&["render", "menger:16", "--unknown-flag"], &[], "--unknown-flag");
     // A missing required argument is named on the one line.

@@ -217,7 +217,7 @@ fn bad_view_input_is_one_line_before_any_window() {
     let shot = dir.path().join("shot.tiff");
     let missing = dir.path().join("no/such/dir/shot.exr");
     let json = dir.path().join("missing.json");
-    let cases: [(Vec<&str>, &str); 6] = [
+    let cases: [(Vec<&str>, &str); 7] = [
         (
             vec!["view", "nbody:16", "--keys", "t,Teleport"],
             "invalid key 'Teleport'",
@@ -246,6 +246,8 @@ fn bad_view_input_is_one_line_before_any_window() {
             vec!["view", "/no/such/volume_8x8x8_uint8.raw"],
             "/no/such/volume_8x8x8_uint8.raw",
         ),
+        // Good input, no display: said so, with no build path in it.
+        (vec!["view", "nbody:8"], "set DISPLAY, or run under xvfb-run"),
     ];
     for (args, message) in cases {
         // No display at all: the input is refused before a window is tried.
@@ -256,6 +258,11 @@ fn bad_view_input_is_one_line_before_any_window() {
         assert!(
             lines[0].starts_with("error: ") && lines[0].contains(message),
             "{args:?}: {}",
+            lines[0]
+        );
+        assert!(
+            !lines[0].contains(".cargo") && !lines[0].contains(".rs:"),
+            "{args:?}: a build path: {}",
             lines[0]
         );
     }

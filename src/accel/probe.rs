@@ -26,9 +26,13 @@ use std::sync::Arc;
 const TILE: u32 = 8;
 /// Tiles per probe block edge (`PROBE_BLOCK` in glsl/common/march.glsl).
 const BLOCK: u32 = 4;
-/// Tiles a probe aims to cover: the stride is the largest that leaves at
-/// least this many (every tile of a small frame).
-const TILES_WANTED: u32 = 256;
+/// Tiles a counting probe aims to cover (the stride is the largest that
+/// leaves at least this many): 8192 rays count what a frame does well.
+pub const COUNT_TILES: u32 = 128;
+/// Tiles a timing probe aims to cover: enough to take a few milliseconds
+/// even on a small frame, so its times are steady (a quarter of a 256x256
+/// frame, an eighth of 512x512).
+pub const TIME_TILES: u32 = 256;
 
 /// Whether tile `t` (along one axis) is probed at `stride`.
 fn probed(t: u32, stride: u32) -> bool {
@@ -91,13 +95,20 @@ pub struct FrameProbe<'a> {
 
 impl<'a> FrameProbe<'a> {
     /// A probe of frames of `desc` over `volume` with the transfer function
-    /// `tf` (the frame's, not a mode's classification).
-    pub fn new(builder: &Builder, volume: &'a GpuVolume, tf: &TransferFunction, desc: &FrameDesc) -> Result<Self> {
+    /// `tf` (the frame's, not a mode's classification), covering at least
+    /// `tiles` tiles (all of a smaller frame).
+    pub fn new(
+        builder: &Builder,
+        volume: &'a GpuVolume,
+        tf: &TransferFunction,
+        desc: &FrameDesc,
+        tiles_wanted: u32,
+    ) -> Result<Self> {
         let ctx = builder.context().clone();
         let (w, h) = desc.size();
         let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
         let mut stride = 1;
-        while probed_tiles(tiles[0], stride * 2).0 * probed_tiles(tiles[1], stride * 2).0 >= TILES_WANTED {
+        while probed_tiles(tiles[0], stride * 2).0 * probed_tiles(tiles[1], stride * 2).0 >= tiles_wanted {
             stride *= 2;
         }
         let mut params = desc.params(volume)?;

@@ -13,18 +13,27 @@ use std::path::Path;
 
 pub const QUICK: &str = include_str!("../../bench/quick.toml");
 pub const PAPER: &str = include_str!("../../bench/paper.toml");
+/// auto's contract (`lacuna bench --suite auto`).
+pub const AUTO: &str = include_str!("../../bench/auto.toml");
 
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BenchConfig {
+    /// The run's name (default: the config file's stem): the output folder
+    /// `bench/out/NAME` and the records' `config`.
+    #[serde(default)]
     pub name: String,
-    /// Frame size [width, height] (the paper: 1024 x 1024).
+    /// Frame size [width, height] (default 512 x 512; the paper: 1024 x 1024).
+    #[serde(default = "default_size")]
     pub size: [u32; 2],
-    /// Views of the rotating orthographic camera (the paper: 36).
+    /// Views of the rotating orthographic camera (default 6; the paper: 36).
+    #[serde(default = "default_frames")]
     pub frames: u32,
-    /// Untimed frames (and builds) at least, per structure, before timing:
-    /// lavapipe compiles on first use. Warm-up goes on until two consecutive
-    /// times agree within `stable`, up to `warmup_cap`.
+    /// Untimed frames (and builds) at least, per structure, before timing
+    /// (default 2, never fewer): lavapipe compiles on first use. Warm-up
+    /// goes on until two consecutive times agree within `stable`, up to
+    /// `warmup_cap`.
+    #[serde(default = "default_warmup")]
     pub warmup: u32,
     /// Most warm-up frames (and builds) per structure; hitting it is reported.
     #[serde(default = "default_warmup_cap")]
@@ -33,7 +42,8 @@ pub struct BenchConfig {
     #[serde(default = "default_stable")]
     pub stable: f64,
     /// Timed builds per structure (the TF-change path), interleaved across
-    /// structures; the median is reported.
+    /// structures; the median is reported (default 3).
+    #[serde(default = "default_builds")]
     pub builds: u32,
     /// Timed rounds per view: each round renders every structure once, in
     /// order, so machine noise falls on all alike.
@@ -42,12 +52,15 @@ pub struct BenchConfig {
     /// Early ray termination threshold for the timed frames (default off, as
     /// in the paper).
     pub ert: Option<f32>,
-    /// Sample step in voxels.
+    /// Sample step in voxels (default `render::DEFAULT_STEP`, 0.5).
+    #[serde(default = "default_step")]
     pub step: f32,
     /// Sample filter of the timed frames, manual or hardware (default: the
     /// faster the device offers for each volume, `GpuVolume::default_filter`).
     pub filter: Option<String>,
-    /// Camera elevation in degrees; the azimuth turns through 360 over the frames.
+    /// Camera elevation in degrees (default 20); the azimuth turns through
+    /// 360 over the frames.
+    #[serde(default = "default_elevation")]
     pub elevation: f64,
     /// The frames' look (mode, iso, shade, light, phong, gradient_opacity,
     /// clip, crop, jitter: `render`'s flags); a data set's own `look`
@@ -59,6 +72,30 @@ pub struct BenchConfig {
     #[serde(rename = "structure")]
     pub structures: Vec<StructureConfig>,
     pub error: Option<ErrorConfig>,
+}
+
+fn default_size() -> [u32; 2] {
+    [512, 512]
+}
+
+fn default_frames() -> u32 {
+    6
+}
+
+fn default_warmup() -> u32 {
+    2
+}
+
+fn default_builds() -> u32 {
+    3
+}
+
+fn default_step() -> f32 {
+    crate::desc::DEFAULT_STEP
+}
+
+fn default_elevation() -> f64 {
+    20.0
 }
 
 fn default_warmup_cap() -> u32 {
@@ -90,6 +127,9 @@ pub struct DatasetConfig {
     /// This data set's look, over the run's (`BenchConfig::look`).
     #[serde(default)]
     pub look: LookSpec,
+    /// Early ray termination threshold for this data set's timed frames
+    /// (default: the run's), so one run can time a volume with and without.
+    pub ert: Option<f32>,
 }
 
 impl DatasetConfig {
@@ -112,6 +152,10 @@ impl DatasetConfig {
                 _ => format!("{k} {v}"),
             })
             .collect();
+        let mut look = look;
+        if let Some(e) = self.ert {
+            look.push(format!("ert {e}"));
+        }
         Ok(match look.is_empty() {
             true => self.volume.clone(),
             false => format!("{} [{}]", self.volume, look.join("; ")),
@@ -208,8 +252,10 @@ impl BenchConfig {
         self.filter.as_deref().map(Filter::parse).transpose()
     }
 
+    /// A config from TOML `text` read from `origin` (a path, or a built-in
+    /// config's name), whose stem names the run when the config does not.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        let c: BenchConfig = toml::from_str(text).map_err(|e| {
+        let mut c: BenchConfig = toml::from_str(text).map_err(|e| {
             Error::format(
                 origin,
                 format!(
@@ -218,6 +264,10 @@ impl BenchConfig {
                 ),
             )
         })?;
+        if c.name.is_empty() {
+            let stem = Path::new(origin.split(' ').next().unwrap_or(origin)).file_stem();
+            c.name = stem.map_or("bench".into(), |s| s.to_string_lossy().into_owned());
+        }
         c.validate(origin)?;
         Ok(c)
     }
@@ -230,8 +280,9 @@ impl BenchConfig {
     /// Checks the protocol; run again after command-line overrides.
     pub fn validate(&self, origin: &str) -> Result<()> {
         let bad = |m: &str| Err(Error::format(origin, m.to_string()));
-        if self.size.contains(&0) {
-            return bad("size must be positive");
+        let side = crate::limits::MAX_FRAME_SIDE;
+        if self.size.iter().any(|&s| s == 0 || s > side) {
+            return bad(&format!("width and height must be in 1..={side} pixels"));
         }
         if self.frames == 0 || self.builds == 0 {
             return bad("frames and builds must be at least 1");

@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod config;
+pub mod contract;
 pub mod hard;
 mod plots;
 mod progress;
@@ -22,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::frame::write_atomically;
 use std::path::Path;
 
-fn write(path: &Path, text: &str) -> Result<()> {
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| Error::io(path, e)))
 }
 
@@ -34,7 +35,7 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput) -> Result<Vec<String>> {
     let mut written = Vec::new();
     let mut put = |name: &str, text: String| -> Result<()> {
         let p = dir.join(name);
-        write(&p, &text)?;
+        write_text(&p, &text)?;
         written.push(p.display().to_string());
         Ok(())
     };

@@ -337,7 +337,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let base = ds.look(config).apply(FrameDesc::builder(1, 1))?;
         gv.prepare(v, base.build()?.lighting().is_some(), timed_filter)?;
         let filter = timed_filter.unwrap_or_else(|| gv.default_filter());
-        let settings = |view: u32| orbit(config, base, view, config.frames, config.step, config.ert, filter);
+        let ert = ds.ert.or(config.ert);
+        setup.timed_ert = ert;
+        let settings = |view: u32| orbit(config, base, view, config.frames, config.step, ert, filter);
         let first = settings(0)?;
         let mode = *first.mode();
 
@@ -433,7 +435,13 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         setup.cost_model = builder.made::<CostModel>().map(|m| *m);
         let naive = runs.first().ok_or_else(|| missing("naive frames"))?;
         for (s, run) in structures.iter().zip(&runs) {
-            let ranges_ms = ranges.ms(s.accel.method().ranges(&s.params)?)?;
+            let ranges_ms = s
+                .accel
+                .method()
+                .range_kinds(&s.params, &gv, info)?
+                .into_iter()
+                .map(|k| ranges.ms(k))
+                .sum::<Result<f64>>()?;
             let totals: Vec<f64> = run.builds.iter().map(Timings::total).collect();
             let build = FrameTimes::of(totals.clone());
             let phases = Timings::median(&run.builds);

@@ -5,7 +5,7 @@
 
 use super::record::{ErrorPoint, Record};
 
-fn datasets(records: &[Record]) -> Vec<String> {
+pub(crate) fn datasets(records: &[Record]) -> Vec<String> {
     let mut v: Vec<String> = Vec::new();
     for r in records {
         if !v.contains(&r.dataset) {
@@ -123,13 +123,17 @@ pub fn frames_md(records: &[Record]) -> String {
 pub fn fastest(records: &[Record]) -> Vec<&Record> {
     datasets(records)
         .iter()
-        .filter_map(|d| {
-            records
-                .iter()
-                .filter(|r| &r.dataset == d && r.error_vs_naive.differing == 0)
-                .min_by(|a, b| a.frame.median_ms.total_cmp(&b.frame.median_ms))
-        })
+        .filter_map(|d| fastest_of(records, d, |r| -r.frame.median_ms))
         .collect()
+}
+
+/// The exact record of data set `d` with the largest `speed` (an image that
+/// differs from naive's is never the fastest).
+pub fn fastest_of<'a>(records: &'a [Record], d: &str, speed: impl Fn(&Record) -> f64) -> Option<&'a Record> {
+    records
+        .iter()
+        .filter(|r| r.dataset == d && r.error_vs_naive.differing == 0)
+        .max_by(|a, b| speed(a).total_cmp(&speed(b)))
 }
 
 /// Error of every structure against naive marching.

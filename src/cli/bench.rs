@@ -23,7 +23,9 @@ pub struct BenchArgs {
     /// Largest relative change of a median --compare accepts.
     #[arg(long, default_value_t = 0.2, requires = "compare")]
     tolerance: f64,
-    /// Run a test suite instead: "hard" (the DESIGN hard cases for every structure; exit 1 on failure).
+    /// Run a suite instead: "hard" (the DESIGN hard cases for every structure; exit 1 on failure) or
+    /// "auto" (bench/auto.toml, then auto's contract per data set: at least 0.95x naive, within 10 % of
+    /// the fastest exact structure; exit 1 when broken).
     #[arg(long)]
     suite: Option<String>,
     /// With --suite hard: only this look (composite, "shaded, jittered", mip, minip, average,
@@ -84,9 +86,10 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if let Some(paths) = &args.compare {
         return compare(&paths[0], &paths[1], args.tolerance);
     }
-    if let Some(suite) = &args.suite {
+    let auto_suite = args.suite.as_deref() == Some("auto");
+    if let Some(suite) = args.suite.as_ref().filter(|_| !auto_suite) {
         if suite != "hard" {
-            return Err(Error::invalid("suite", suite, "expected hard"));
+            return Err(Error::invalid("suite", suite, "expected hard or auto"));
         }
         let names: Vec<&str> = bench::hard::looks("0.5").iter().map(|l| l.name).collect();
         if let Some(bad) = args.look.iter().find(|l| !names.contains(&l.as_str())) {
@@ -125,10 +128,11 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             ExitCode::from(1)
         });
     }
-    let mut config = match (&args.config, args.quick) {
-        (Some(path), _) => BenchConfig::load(path)?,
-        (None, true) => BenchConfig::parse(bench::config::QUICK, "bench/quick.toml (built in)")?,
-        (None, false) => BenchConfig::parse(bench::config::PAPER, "bench/paper.toml (built in)")?,
+    let mut config = match (&args.config, args.quick, auto_suite) {
+        (Some(path), _, _) => BenchConfig::load(path)?,
+        (None, true, _) => BenchConfig::parse(bench::config::QUICK, "bench/quick.toml (built in)")?,
+        (None, _, true) => BenchConfig::parse(bench::config::AUTO, "bench/auto.toml (built in)")?,
+        (None, false, false) => BenchConfig::parse(bench::config::PAPER, "bench/paper.toml (built in)")?,
     };
     if let Some(f) = args.frames {
         config.frames = f;
@@ -204,8 +208,18 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     for note in &output.notes {
         println!("note: {note}");
     }
+    let mut contract_held = true;
+    if auto_suite {
+        let (table, passed) = bench::contract::markdown(&bench::contract::verdicts(&output.records));
+        let path = out_dir.join("contract.md");
+        bench::write_text(&path, &table)?;
+        println!("{table}");
+        println!("wrote {}", path.display());
+        contract_held = passed;
+    }
     println!("wrote {} files to {}", written.len(), out_dir.display());
-    Ok(validation_verdict(&ctx))
+    let verdict = validation_verdict(&ctx);
+    Ok(if contract_held { verdict } else { ExitCode::from(1) })
 }
 
 fn read_records(path: &Path) -> Result<Vec<lacuna::bench::Record>> {

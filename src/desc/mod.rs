@@ -509,11 +509,12 @@ impl FrameBuilder {
     /// The frame, every field checked.
     pub fn build(self) -> Result<FrameDesc> {
         let d = self.0;
-        if d.width == 0 || d.height == 0 {
+        let side = crate::limits::MAX_FRAME_SIDE;
+        if d.width == 0 || d.height == 0 || d.width > side || d.height > side {
             return Err(Error::invalid(
                 "size",
                 format!("{}x{}", d.width, d.height),
-                "width and height must be > 0",
+                format!("width and height must be in 1..={side} pixels"),
             ));
         }
         // The frame buffer's readback and the frame itself.

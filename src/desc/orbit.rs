@@ -17,6 +17,25 @@ pub enum Projection {
     Perspective { fov_deg: f64, distance: Option<f64> },
 }
 
+/// The furthest a perspective eye may sit, in bounding-sphere radii: past
+/// it `t` at the volume is so large that a float no longer resolves the
+/// step between lattice samples.
+pub const MAX_DISTANCE: f64 = 1000.0;
+
+/// Azimuth in [-360, 360] and elevation in [-90, 90] degrees: what names a
+/// direction once. Beyond, a value is a mistake (`--camera 1e40,0` would
+/// turn by an angle no float can reduce to a turn).
+pub fn check_angles(what: &'static str, azimuth_deg: f64, elevation_deg: f64) -> Result<()> {
+    if !((-360.0..=360.0).contains(&azimuth_deg) && (-90.0..=90.0).contains(&elevation_deg)) {
+        return Err(Error::invalid(
+            what,
+            format!("{azimuth_deg},{elevation_deg}"),
+            "azimuth must be in [-360, 360] and elevation in [-90, 90] degrees",
+        ));
+    }
+    Ok(())
+}
+
 /// An orbit about the volume's centre: azimuth about y from +z, elevation
 /// above the xz plane, in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,6 +73,12 @@ fn sincos_deg(deg: f64) -> (f64, f64) {
 impl Orbit {
     /// Parses `AZIMUTH,ELEVATION` in degrees.
     pub fn parse_orbit(s: &str) -> Result<(f64, f64)> {
+        let (a, e) = Self::parse_angles(s)?;
+        check_angles("camera", a, e)?;
+        Ok((a, e))
+    }
+
+    fn parse_angles(s: &str) -> Result<(f64, f64)> {
         let bad = || Error::invalid("camera", s, "expected AZIMUTH,ELEVATION in degrees");
         let (a, e) = s.split_once(',').ok_or_else(bad)?;
         let a: f64 = a.trim().parse().map_err(|_| bad())?;
@@ -64,16 +89,11 @@ impl Orbit {
         Ok((a, e))
     }
 
-    /// Finite angles; a perspective field of view in (0, 180) and a
-    /// distance that is finite and >= 0.
+    /// Angles within a turn (`check_angles`); a perspective field of view
+    /// in (0, 180) and a distance in [0, `MAX_DISTANCE`] bounding-sphere
+    /// radii.
     pub fn validate(&self) -> Result<()> {
-        if !(self.azimuth_deg.is_finite() && self.elevation_deg.is_finite()) {
-            return Err(Error::invalid(
-                "camera",
-                format!("{},{}", self.azimuth_deg, self.elevation_deg),
-                "azimuth and elevation must be finite",
-            ));
-        }
+        check_angles("camera", self.azimuth_deg, self.elevation_deg)?;
         if let Projection::Perspective { fov_deg, distance } = self.projection {
             if !(fov_deg > 0.0 && fov_deg < 180.0) {
                 return Err(Error::invalid(
@@ -82,11 +102,11 @@ impl Orbit {
                     "must be in (0, 180) degrees",
                 ));
             }
-            if distance.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
+            if let Some(d) = distance.filter(|d| !(*d >= 0.0 && *d <= MAX_DISTANCE)) {
                 return Err(Error::invalid(
                     "camera distance",
-                    format!("{distance:?}"),
-                    "must be finite and >= 0",
+                    d.to_string(),
+                    format!("must be in [0, {MAX_DISTANCE}] bounding-sphere radii (further, t loses the precision of the sample lattice)"),
                 ));
             }
         }

@@ -82,13 +82,7 @@ impl Shading {
             elevation_deg,
         } = self.light
         {
-            if !(azimuth_deg.is_finite() && elevation_deg.is_finite()) {
-                return Err(Error::invalid(
-                    "light",
-                    format!("{azimuth_deg},{elevation_deg}"),
-                    "azimuth and elevation must be finite",
-                ));
-            }
+            super::orbit::check_angles("light", azimuth_deg, elevation_deg)?;
         }
         if let Some([lo, hi]) = self.gradient_opacity {
             if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi > lo) {

@@ -186,7 +186,7 @@ pub fn calibrate(
                 .jitter(false)
                 .depth(None)
                 .build()?;
-            probes.push(FrameProbe::new(builder, gpu, &tf, &desc)?);
+            probes.push(FrameProbe::new(builder, gpu, &tf, &desc, u32::MAX)?);
         }
         for p in &variants {
             let (structure, _) = builder.build(accel, &input, ranges, p)?;

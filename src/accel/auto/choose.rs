@@ -14,17 +14,18 @@ use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::DeviceInfo;
 
-/// Distance map cells (voxels) auto tries; grids of fewer cells than
-/// [`OCTANT_CELLS`] get octant maps.
+/// Distance map cells (voxels) auto tries; grids of at most
+/// [`OCTANT_CELLS`] cells get octant maps.
 pub const DISTANCE_CELLS: [u32; 2] = [4, 8];
 /// Macro-cell grid cells auto tries.
 pub const GRID_CELLS: [u32; 2] = [8, 16];
 
-/// Grids of fewer cells than this (32^3) get octant maps, which march
-/// faster (their boxes reach further ahead) but whose transform costs
-/// several times the cube map's, growing past a quarter of a frame from
-/// here on lavapipe (`docs/results/auto.md`); larger grids get the cube map.
-pub const OCTANT_CELLS: u64 = 1 << 15;
+/// Grids of at most this many cells (64^3) get octant maps, which march
+/// faster (their boxes reach further ahead: 30 % at 256^3, cell 4) but
+/// whose transform costs several times the cube map's (91 against 23 ms
+/// there on lavapipe, `docs/results/auto.md`); larger grids get the cube
+/// map, whose rebuild stays a fraction of a frame.
+pub const OCTANT_CELLS: u64 = 1 << 18;
 
 /// A runner-up within this fraction of the best predicted time makes a
 /// close call, settled by timing the candidates within it on the probe
@@ -35,6 +36,10 @@ pub const CLOSE: f64 = 0.3;
 /// marching is timed against it before it is chosen: a wrong prediction
 /// must not leave the default slower than naive.
 pub const NAIVE_GUARD: f64 = 0.5;
+/// A timed skipping structure must beat naive marching by this fraction to
+/// be chosen over it: closer than that the trial is within its noise, and
+/// naive is never slower than itself.
+pub const NAIVE_MARGIN: f64 = 0.03;
 
 const DISTANCE: Accel = Accel(&DistanceMethod { octants: false });
 const OCTANT: Accel = Accel(&DistanceMethod { octants: true });
@@ -86,10 +91,13 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec
     }
     for cell in DISTANCE_CELLS {
         let n = cells_of(dims, cell);
-        let octants = n < OCTANT_CELLS;
+        let octants = n <= OCTANT_CELLS;
         match distance::check_fits(info, n, octants) {
             Ok(()) => out.push(Candidate::new(if octants { OCTANT } else { DISTANCE }, Some(cell))?),
-            Err(e) => notes.push(format!("no distance map at cell {cell}: {e}")),
+            Err(_) => notes.push(format!(
+                "no distance map at cell {cell}: over maxStorageBufferRange ({} cells)",
+                n
+            )),
         }
     }
     for cell in GRID_CELLS {
@@ -102,7 +110,10 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec
             info.max_storage_buffer_range,
         ) {
             Ok(()) => out.push(Candidate::new(GRID, Some(cell))?),
-            Err(e) => notes.push(format!("no grid at cell {cell}: {e}")),
+            Err(_) => notes.push(format!(
+                "no grid at cell {cell}: over maxStorageBufferRange ({} cells)",
+                cells_of(dims, cell)
+            )),
         }
     }
     Ok((out, notes))
@@ -147,6 +158,20 @@ pub fn to_time(priced: &[Priced], always: bool) -> Vec<usize> {
         out.insert(0, 0);
     }
     out
+}
+
+/// The candidate to march with: the fastest on the probe tiles when any
+/// was timed (naive, candidate 0, unless another beats it by
+/// [`NAIVE_MARGIN`]), else the cheapest prediction.
+pub fn pick(priced: &[Priced]) -> usize {
+    if priced.iter().all(|p| p.trial.is_none()) {
+        return index_of_min(priced.iter().map(|p| p.predicted));
+    }
+    let best = index_of_min(priced.iter().map(|p| p.trial.unwrap_or(f64::INFINITY)));
+    match (priced[0].trial, priced[best].trial) {
+        (Some(naive), Some(t)) if best != 0 && t > naive * (1.0 - NAIVE_MARGIN) => 0,
+        _ => best,
+    }
 }
 
 /// The index of the least value (the first of equals).
@@ -201,5 +226,18 @@ mod tests {
         assert!(to_time(&priced(&[50.0, 90.0, 200.0]), false).is_empty());
         // Always: everything.
         assert_eq!(to_time(&priced(&[50.0, 90.0]), true), vec![0, 1]);
+    }
+
+    #[test]
+    fn the_trial_decides_and_naive_keeps_near_ties() {
+        let mut p = priced(&[100.0, 50.0, 60.0]);
+        assert_eq!(pick(&p), 1, "untimed: the cheapest prediction");
+        p[1].trial = Some(9.0);
+        p[2].trial = Some(8.0);
+        assert_eq!(pick(&p), 2, "timed: the fastest, whatever was predicted");
+        p[0].trial = Some(8.1);
+        assert_eq!(pick(&p), 0, "within NAIVE_MARGIN of naive: naive");
+        p[0].trial = Some(9.0);
+        assert_eq!(pick(&p), 2);
     }
 }

@@ -24,7 +24,7 @@ use super::builder::{Builder, RangeKind, Ranges};
 use super::method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method, Structure};
 use super::naive::NAIVE;
 use super::params::{Param, Params};
-use super::probe::{time_interleaved, FrameProbe, Statistic};
+use super::probe::{time_interleaved, FrameProbe, Statistic, COUNT_TILES, TIME_TILES};
 use super::stats::Stats;
 use crate::desc::FrameDesc;
 use crate::error::Result;
@@ -35,7 +35,9 @@ pub use choose::{Candidate, Priced, OCTANT_CELLS};
 pub use model::{CostKey, KernelCost};
 use std::time::Instant;
 
-/// Timed rounds of a close call (after one untimed).
+/// Timed rounds of a close call (after one untimed); the least time of
+/// each candidate counts (noise only adds time, and a cold shader cache
+/// slows more than the first dispatch).
 const TRIAL_ROUNDS: usize = 3;
 
 /// The size of the frame auto prices candidates on when the build names
@@ -92,6 +94,9 @@ impl Choice {
             line.push_str(&format!("; close, timed on the probe tiles: {}", timed.join(", ")));
         }
         line.push_str(&format!("; model {}", self.model.join(", ")));
+        if !self.notes.is_empty() {
+            line.push_str(&format!("; {}", self.notes.join("; ")));
+        }
         line
     }
 }
@@ -212,7 +217,7 @@ fn choose(
     let mut priced: Vec<Priced> = Vec::new();
     let mut model = Vec::new();
     if built.len() > 1 {
-        let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame)?;
+        let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, COUNT_TILES)?;
         let start = Instant::now();
         probe.prepare(&built.iter().collect::<Vec<_>>(), true)?;
         let counts = built.iter().map(|s| probe.count(s)).collect::<Result<Vec<_>>>()?;
@@ -252,9 +257,10 @@ fn choose(
         };
         if !timed.is_empty() {
             let start = Instant::now();
+            let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, TIME_TILES)?;
             let pairs: Vec<(&FrameProbe, &Structure)> = timed.iter().map(|&i| (&probe, &built[i])).collect();
             probe.prepare(&pairs.iter().map(|p| p.1).collect::<Vec<_>>(), false)?;
-            let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Median)?;
+            let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Least)?;
             for (&i, t) in timed.iter().zip(times) {
                 priced[i].trial = Some(t);
             }
@@ -270,11 +276,7 @@ fn choose(
         model.push("not needed: naive is the only candidate".into());
     }
     let timed = priced.iter().any(|p| p.trial.is_some());
-    let pick = if timed {
-        choose::index_of_min(priced.iter().map(|p| p.trial.unwrap_or(f64::INFINITY)))
-    } else {
-        choose::index_of_min(priced.iter().map(|p| p.predicted))
-    };
+    let pick = choose::pick(&priced);
     let structure = built.swap_remove(pick);
     let accel = structure.marched_as();
     let label = match accel == NAIVE {

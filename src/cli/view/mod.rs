@@ -119,6 +119,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
     let event_loop = EventLoop::new().map_err(|e| {
+        let e = without_source_location(&e.to_string());
         Error::NoDevice(format!(
             "cannot open a window ({e}); set DISPLAY, or run under xvfb-run"
         ))
@@ -154,7 +155,12 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     if let Some(e) = app.error {
         return Err(e);
     }
-    ran.map_err(|e| Error::NoDevice(format!("window event loop failed: {e}")))?;
+    ran.map_err(|e| {
+        Error::NoDevice(format!(
+            "window event loop failed: {}",
+            without_source_location(&e.to_string())
+        ))
+    })?;
     Ok(verdict)
 }
 
@@ -167,9 +173,12 @@ impl App<'_> {
         let attributes = Window::default_attributes()
             .with_title("lacuna view")
             .with_inner_size(PhysicalSize::new(width, height));
-        let window = event_loop
-            .create_window(attributes)
-            .map_err(|e| Error::NoDevice(format!("cannot open a window: {e}")))?;
+        let window = event_loop.create_window(attributes).map_err(|e| {
+            Error::NoDevice(format!(
+                "cannot open a window: {}",
+                without_source_location(&e.to_string())
+            ))
+        })?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
         let builder = self.args.model.builder(&ctx)?;
@@ -433,5 +442,38 @@ impl Viewer {
             c.step,
             c.ert.map_or("off".to_string(), |e| e.to_string()),
         )
+    }
+}
+
+/// A windowing error without where in winit's sources it was raised: winit
+/// writes `os error at /path/to/registry/winit-x/src/...rs:765: reason`,
+/// and a user needs the reason, not a build path.
+fn without_source_location(message: &str) -> String {
+    let Some(at) = message.find("os error at ") else {
+        return message.to_string();
+    };
+    let rest = &message[at + "os error at ".len()..];
+    // The location ends at the first ".rs:LINE: ".
+    let reason = rest.find(".rs:").and_then(|i| {
+        let after = &rest[i + 4..];
+        let digits = after.chars().take_while(char::is_ascii_digit).count();
+        after[digits..].strip_prefix(": ").filter(|_| digits > 0)
+    });
+    match reason {
+        Some(reason) => format!("{}{}", &message[..at], reason),
+        None => message.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn window_errors_name_no_build_path() {
+        let winit = "os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set.";
+        assert_eq!(
+            super::without_source_location(winit),
+            "neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set."
+        );
+        assert_eq!(super::without_source_location("no display"), "no display");
     }
 }
