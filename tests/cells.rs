@@ -1,8 +1,10 @@
-//! The cells copy (src/volume/cells.rs): the manual filter reading one
-//! texel per sample from it gives the frames it gives from eight texel
-//! fetches, bit for bit, for every texel kind (unorm8, unorm16, float32
-//! with NaN), odd dimensions, cameras along axes and inside the volume, and
-//! every mode; and a copy the device cannot hold is refused by the limit.
+//! The cells copies (src/volume/cells.rs): the manual filter reading one
+//! texel per sample from the volume's, and three per lit sample from the
+//! gradient's, gives the frames it gives from eight texel fetches each, bit
+//! for bit, for every texel kind (unorm8, unorm16, float32 with NaN), odd
+//! dimensions, cameras along axes and inside the volume, and every mode
+//! (shaded composite and iso read the gradient); and a copy the device
+//! cannot hold is refused by the limit.
 
 mod common;
 use common::{assert_clean, gpu};
@@ -10,8 +12,8 @@ use lacuna::accel::{Accel, BuildInput, Builder};
 use lacuna::desc::Iso;
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
-use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene};
-use lacuna::volume::{check_cells, GpuVolume, TexelKind, VoxelData, VoxelType};
+use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
+use lacuna::volume::{check_cells, check_gradient_cells, GpuVolume, TexelKind, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
 /// A lumpy field on odd dims in each texel kind, values over the whole range.
@@ -85,20 +87,29 @@ fn cells_give_the_manual_filters_samples_bit_for_bit() {
             },
         ),
     ];
-    let modes = [Mode::Composite, Mode::Mip, Mode::Iso(Iso::new(&[0.45]).unwrap())];
+    // (mode, shaded)
+    let modes = [
+        (Mode::Composite, false),
+        (Mode::Composite, true),
+        (Mode::Mip, false),
+        (Mode::Iso(Iso::new(&[0.45]).unwrap()), false),
+    ];
     for v in volumes() {
         let mut plain = GpuVolume::upload(&ctx, &v).unwrap();
         plain.add_gradient(&v).unwrap();
         let mut cells = GpuVolume::upload(&ctx, &v).unwrap();
         cells.prepare(&v, true, Some(Filter::Manual)).unwrap();
         assert!(cells.cells().is_some(), "{}: no cells copy", v.name);
+        assert!(cells.gradient_cells().is_some(), "{}: no gradient cells copy", v.name);
+        assert!(plain.gradient_cells().is_none());
         assert_eq!(cells.default_filter(), Filter::Manual);
-        for mode in &modes {
+        for (mode, shaded) in &modes {
             for &(az, el, projection) in &views {
                 let desc = FrameDesc::builder(40, 32)
                     .orbit(az, el, projection)
                     .filter(Filter::Manual)
                     .mode(*mode)
+                    .shading(shaded.then(Shading::default))
                     .build()
                     .unwrap();
                 let a = frame(&ctx, &renderer, &plain, &v, &tf, &desc);
@@ -136,5 +147,10 @@ fn a_cells_copy_past_the_devices_limits_is_refused_by_name() {
         "{err}"
     );
     assert!(check_cells(info, [64, 64, 64], TexelKind::Float32).is_ok());
+    let err = check_gradient_cells(info, [2000, 2000, 2000]).unwrap_err().to_string();
+    assert!(
+        err.contains("maxTexelBufferElements") && err.contains("gradient cells copy of volume 2000x2000x2000"),
+        "{err}"
+    );
     assert_eq!(TexelKind::Float32.bytes_per_voxel(), 32);
 }

@@ -389,6 +389,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("frame_depth", d),
             ("gradient_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("volume_cells", texels),
+            ("gradient_cells", texels),
             ("cells", d)
         ]
     );

@@ -463,7 +463,10 @@ fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
         frame().camera(Camera::Matrices(CameraMatrices::new(DMat4::ZERO, m.projection))),
         "view matrix",
     );
-    refused(frame().orbit(f64::INFINITY, 0.0, Projection::Orthographic), "azimuth must be in [-360, 360]");
+    refused(
+        frame().orbit(f64::INFINITY, 0.0, Projection::Orthographic),
+        "azimuth must be in [-360, 360]",
+    );
     refused(
         frame().orbit(
             0.0,

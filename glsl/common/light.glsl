@@ -2,7 +2,7 @@
 // light, two-sided, lighting a sample's transfer-function colour by the
 // gradient of the trilinear field (central differences one voxel apart,
 // read from the gradient volume: src/volume/gradient.rs), in normalised
-// value per unit of physical length. A zero or non-finite gradient leaves
+// value per shortest voxel side. A zero or non-finite gradient leaves
 // the colour lit as if facing the light, without the specular term. Needs
 // volume.glsl; src/render/reference.rs mirrors it.
 #ifndef LACUNA_LIGHT_GLSL
@@ -16,7 +16,6 @@ struct Lighting {
     vec3 l;
     vec3 h;
     vec4 ks;       // ambient, diffuse, specular, shininess
-    vec3 spacing;
     bool ramp;     // gradient opacity on
     vec2 ramp_lo_hi;
 };
@@ -29,21 +28,22 @@ Lighting lighting_for(vec3 dir) {
     precise vec3 h = normalize(lt.l + view);
     lt.h = h;
     lt.ks = params.shading;
-    lt.spacing = params.spacing;
     lt.ramp = params.gradient_opacity != 0u;
     lt.ramp_lo_hi = vec2(params.gradient_lo, params.gradient_hi);
     return lt;
 }
 
 // The sample colour c lit at p (the filter's coordinates); its opacity
-// times the gradient-opacity ramp when that is on.
+// times the gradient-opacity ramp when that is on. The gradient volume is
+// scaled by the spacing already (its ramp too), and the normal is the gradient times the
+// inverse square root of its square: no division per sample.
 vec4 light_sample(VolumeRay r, Lighting lt, vec3 p, vec4 c) {
-    precise vec3 g = sample_gradient(r, p) / lt.spacing;
-    precise float len = length(g);
+    precise vec3 g = sample_gradient(r, p);
+    precise float d = dot(g, g);
     vec3 lit;
     // Not finite only where a NaN voxel is read (NaN volumes).
-    if (len > 0.0 && len < 3.4e38) {
-        precise vec3 n = g / len;
+    if (d > 0.0 && d < 3.4e38) {
+        precise vec3 n = g * inversesqrt(d);
         precise float nd = abs(dot(n, lt.l));
         precise float nh = abs(dot(n, lt.h));
         precise vec3 shaded = c.rgb * (lt.ks.x + lt.ks.y * nd) + vec3(lt.ks.z * pow(nh, lt.ks.w));
@@ -54,6 +54,7 @@ vec4 light_sample(VolumeRay r, Lighting lt, vec3 p, vec4 c) {
     }
     float a = c.a;
     if (lt.ramp) {
+        precise float len = sqrt(d);
         precise float ramp = (len - lt.ramp_lo_hi.x) / (lt.ramp_lo_hi.y - lt.ramp_lo_hi.x);
         a *= is_nan(ramp) ? 0.0 : clamp(ramp, 0.0, 1.0);
     }

@@ -163,6 +163,44 @@ float sample_raw(VolumeRay r, vec3 p) {
 // image stands in for it otherwise, and nothing reads it).
 layout(set = 0, binding = GRADIENT_BINDING) uniform sampler3D gradient_tex;
 
+// 1: the manual filter reads the gradient's cells copy (GRADIENT_CELLS_BINDING):
+// per cell its eight corners' (x, y, z) halves, corner-major, two halves a
+// word, in three RGBA32UI texels (src/volume/cells.rs).
+layout(constant_id = 25) const uint GRADIENT_CELLS = 0u;
+#ifdef GRADIENT_CELLS_BINDING
+layout(set = 0, binding = GRADIENT_CELLS_BINDING) uniform usamplerBuffer gradient_cells;
+#endif
+
+// The gradients of the eight voxels of the cell whose low corner is voxel i
+// (clamped), x fastest: from the gradient's cells copy in three fetches, or
+// eight texelFetch: the same halves either way.
+void cell_gradients(ivec3 i, ivec3 hi, out vec3 g[8]) {
+#ifdef GRADIENT_CELLS_BINDING
+    if (GRADIENT_CELLS != 0u) {
+        ivec3 n = hi + 2;
+        ivec3 j = clamp(i + 1, ivec3(0), n - 1);
+        int at = 3 * (j.x + n.x * (j.y + n.y * j.z));
+        uvec4 t0 = texelFetch(gradient_cells, at);
+        uvec4 t1 = texelFetch(gradient_cells, at + 1);
+        uvec4 t2 = texelFetch(gradient_cells, at + 2);
+        uint w[12] = uint[12](t0.x, t0.y, t0.z, t0.w, t1.x, t1.y, t1.z, t1.w, t2.x, t2.y, t2.z, t2.w);
+        for (int b = 0; b < 4; ++b) {
+            // Corners 2b and 2b + 1: six halves in three words.
+            vec2 h0 = unpackHalf2x16(w[3 * b]);
+            vec2 h1 = unpackHalf2x16(w[3 * b + 1]);
+            vec2 h2 = unpackHalf2x16(w[3 * b + 2]);
+            g[2 * b] = vec3(h0.x, h0.y, h1.x);
+            g[2 * b + 1] = vec3(h1.y, h2.x, h2.y);
+        }
+        return;
+    }
+#endif
+    for (int b = 0; b < 8; ++b) {
+        ivec3 c = i + ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1);
+        g[b] = texelFetch(gradient_tex, clamp(c, ivec3(0), hi), 0).xyz;
+    }
+}
+
 // The gradient at p (the filter's coordinates), in normalised value per
 // voxel, by the volume's filter: interpolated by hand with the weights
 // sample_manual uses, or by the sampler.
@@ -173,20 +211,12 @@ vec3 sample_gradient(VolumeRay r, vec3 p) {
     precise vec3 q = p - 0.5;
     vec3 fl = floor(q);
     precise vec3 f = q - fl;
-    ivec3 i = ivec3(fl);
-    ivec3 hi = r.hi;
-    vec3 c000 = texelFetch(gradient_tex, clamp(i, ivec3(0), hi), 0).xyz;
-    vec3 c100 = texelFetch(gradient_tex, clamp(i + ivec3(1, 0, 0), ivec3(0), hi), 0).xyz;
-    vec3 c010 = texelFetch(gradient_tex, clamp(i + ivec3(0, 1, 0), ivec3(0), hi), 0).xyz;
-    vec3 c110 = texelFetch(gradient_tex, clamp(i + ivec3(1, 1, 0), ivec3(0), hi), 0).xyz;
-    vec3 c001 = texelFetch(gradient_tex, clamp(i + ivec3(0, 0, 1), ivec3(0), hi), 0).xyz;
-    vec3 c101 = texelFetch(gradient_tex, clamp(i + ivec3(1, 0, 1), ivec3(0), hi), 0).xyz;
-    vec3 c011 = texelFetch(gradient_tex, clamp(i + ivec3(0, 1, 1), ivec3(0), hi), 0).xyz;
-    vec3 c111 = texelFetch(gradient_tex, clamp(i + ivec3(1, 1, 1), ivec3(0), hi), 0).xyz;
-    precise vec3 c00 = mix(c000, c100, f.x);
-    precise vec3 c10 = mix(c010, c110, f.x);
-    precise vec3 c01 = mix(c001, c101, f.x);
-    precise vec3 c11 = mix(c011, c111, f.x);
+    vec3 c[8];
+    cell_gradients(ivec3(fl), r.hi, c);
+    precise vec3 c00 = mix(c[0], c[1], f.x);
+    precise vec3 c10 = mix(c[2], c[3], f.x);
+    precise vec3 c01 = mix(c[4], c[5], f.x);
+    precise vec3 c11 = mix(c[6], c[7], f.x);
     precise vec3 c0 = mix(c00, c10, f.y);
     precise vec3 c1 = mix(c01, c11, f.y);
     precise vec3 g = mix(c0, c1, f.z);

@@ -318,6 +318,7 @@ impl Probe {
             frame_depth: Binding::Storage(&self.frame),
             gradient_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
             volume_cells: Binding::TexelBuffer(self.no_cells.view()),
+            gradient_cells: Binding::TexelBuffer(self.no_cells.view()),
         }
         .list();
         bindings.extend(

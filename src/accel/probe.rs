@@ -202,6 +202,7 @@ impl<'a> FrameProbe<'a> {
             frame_depth: Binding::Storage(&self.depth),
             gradient_tex: Binding::Sampled(gradient, sampler),
             volume_cells: Binding::TexelBuffer(self.volume.cells().unwrap_or(&self.no_cells).view()),
+            gradient_cells: Binding::TexelBuffer(self.volume.gradient_cells().unwrap_or(&self.no_cells).view()),
         }
         .list();
         bindings.extend(structure.built.bindings());

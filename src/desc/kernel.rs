@@ -5,21 +5,26 @@
 //! sample branches on any of them.
 
 use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
-use crate::volume::{Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID};
+use crate::volume::{
+    Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID,
+    NAN_CONSTANT_ID,
+};
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 6];
+pub type KernelConstants = [(u32, u32); 7];
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
     /// filter (`filter_for`), the mode, whether composite samples are lit
     /// (iso surfaces are always lit, by their own path), whether the volume
     /// has NaN voxels, how its texels are stored, and whether the manual
-    /// filter reads its cells copy.
+    /// filter reads its cells copy and (lit frames) the gradient's.
     pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
         let filter = self.filter_for(volume);
         let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
         let cells = filter == Filter::Manual && volume.cells().is_some();
+        let lit = shade || matches!(self.mode(), Mode::Iso(_));
+        let gradient_cells = filter == Filter::Manual && lit && volume.gradient_cells().is_some();
         [
             (FILTER_CONSTANT_ID, filter.constant()),
             (MODE_CONSTANT_ID, self.mode().constant()),
@@ -27,6 +32,7 @@ impl FrameDesc {
             (NAN_CONSTANT_ID, volume.has_nan as u32),
             (KIND_CONSTANT_ID, volume.kind.constant()),
             (CELLS_CONSTANT_ID, cells as u32),
+            (GRADIENT_CELLS_CONSTANT_ID, gradient_cells as u32),
         ]
     }
 }

@@ -333,7 +333,10 @@ impl FrameDesc {
             _ => ([0.0; MAX_ISO], 0, None),
         };
         let light = self.lighting().unwrap_or_default();
-        let [gradient_lo, gradient_hi] = light.gradient_opacity.unwrap_or_default();
+        // The gradient volume is per shortest voxel side (volume/gradient.rs):
+        // the ramp, given per unit of physical length, is scaled to it.
+        let shortest = spacing.into_iter().fold(f32::INFINITY, f32::min);
+        let [gradient_lo, gradient_hi] = light.gradient_opacity.unwrap_or_default().map(|g| g * shortest);
         Ok(RenderParams {
             base: r.base,
             perspective: r.perspective as u32,

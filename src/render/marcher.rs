@@ -232,6 +232,7 @@ impl Renderer {
             frame_depth: depth,
             gradient_tex: Binding::Sampled(gradient, sampler),
             volume_cells: Binding::TexelBuffer(volume.cells().unwrap_or(&self.no_cells).view()),
+            gradient_cells: Binding::TexelBuffer(volume.gradient_cells().unwrap_or(&self.no_cells).view()),
         }
         .list();
         bindings.extend(structure.built.bindings());

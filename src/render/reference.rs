@@ -190,14 +190,15 @@ impl<'a> Tracer<'a> {
     fn light(&self, pos: Vec3, dir: Vec3, c: [f32; 4]) -> [f32; 4] {
         let p = self.p;
         let spacing = Vec3::from(p.spacing);
-        let g = self.sample_gradient(pos) / spacing;
-        let len = g.length();
+        // The gradient texels are in physical units already.
+        let g = self.sample_gradient(pos);
+        let d = g.dot(g);
         let [ka, kd, ks, shininess] = p.shading;
         let view = (-dir * spacing).normalize();
         let l = if p.headlight != 0 { view } else { Vec3::from(p.light) };
         let rgb = Vec3::new(c[0], c[1], c[2]);
-        let lit = if len > 0.0 && len < 3.4e38 {
-            let n = g / len;
+        let lit = if d > 0.0 && d < 3.4e38 {
+            let n = g * (1.0 / d.sqrt());
             let h = (l + view).normalize();
             let nd = n.dot(l).abs();
             let nh = n.dot(h).abs();
@@ -207,6 +208,7 @@ impl<'a> Tracer<'a> {
         };
         let mut a = c[3];
         if p.gradient_opacity != 0 {
+            let len = d.sqrt();
             let ramp = ((len - p.gradient_lo) / (p.gradient_hi - p.gradient_lo)).clamp(0.0, 1.0);
             a *= if ramp.is_nan() { 0.0 } else { ramp };
         }

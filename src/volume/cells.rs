@@ -30,6 +30,9 @@ pub enum TexelKind {
 pub const KIND_CONSTANT_ID: u32 = 20;
 /// `constant_id` of `VOLUME_CELLS`: 1 when the manual filter reads the cells copy.
 pub const CELLS_CONSTANT_ID: u32 = 21;
+/// `constant_id` of `GRADIENT_CELLS`: 1 when the manual filter reads the
+/// gradient's cells copy.
+pub const GRADIENT_CELLS_CONSTANT_ID: u32 = 25;
 
 impl TexelKind {
     pub fn of(data: &VoxelData) -> TexelKind {
@@ -91,10 +94,22 @@ pub fn cells_bytes(dims: [u32; 3], kind: TexelKind) -> u64 {
 /// the limit.
 pub fn check_cells(info: &DeviceInfo, dims: [u32; 3], kind: TexelKind) -> Result<u64> {
     let (format, per_cell) = kind.format();
+    check_texel_copy(info, "cells copy", dims, per_cell, cells_bytes(dims, kind), format)
+}
+
+/// Checks a per-cell copy of `per_cell` texels of `format` (`bytes` in
+/// all) against the texel-buffer, allocation and heap limits.
+fn check_texel_copy(
+    info: &DeviceInfo,
+    copy: &str,
+    dims: [u32; 3],
+    per_cell: u64,
+    bytes: u64,
+    format: vk::Format,
+) -> Result<u64> {
     let texels = cell_dims(dims).iter().fold(per_cell, |acc, &n| acc.saturating_mul(n));
-    let bytes = cells_bytes(dims, kind);
     let what = format!(
-        "cells copy of volume {}x{}x{} ({bytes} bytes, {texels} texels of {format:?})",
+        "{copy} of volume {}x{}x{} ({bytes} bytes, {texels} texels of {format:?})",
         dims[0], dims[1], dims[2]
     );
     info.check(
@@ -115,12 +130,16 @@ pub fn check_cells(info: &DeviceInfo, dims: [u32; 3], kind: TexelKind) -> Result
     Ok(bytes)
 }
 
-/// The words of cell layers `layers` (k + 1 in 0..=D) of `volume`.
-fn pack_layers(volume: &Volume, layers: std::ops::Range<u64>) -> Vec<u32> {
-    let [w, h, d] = volume.dims.map(|n| n as i64);
-    let [cw, ch, _] = cell_dims(volume.dims);
-    let kind = TexelKind::of(&volume.data);
-    let words = kind.words();
+/// The words of cell layers `layers` (k + 1 in 0..=D) of a volume of
+/// `dims`, `words` a cell, each cell filled by `fill` from the voxel index
+/// of its corner `b` (0..8, x fastest; clamped at the edges as the sampler
+/// clamps).
+fn pack_cells<F>(dims: [u32; 3], words: usize, layers: std::ops::Range<u64>, fill: F) -> Vec<u32>
+where
+    F: Fn(&mut [u32], &dyn Fn(usize) -> usize) + Sync,
+{
+    let [w, h, d] = dims.map(|n| n as i64);
+    let [cw, ch, _] = cell_dims(dims);
     let row = cw as usize * words;
     let rows = (layers.end - layers.start) * ch;
     let mut out = vec![0u32; rows as usize * row];
@@ -134,28 +153,91 @@ fn pack_layers(volume: &Volume, layers: std::ops::Range<u64>) -> Vec<u32> {
         let j = r % ch as i64 - 1;
         for (c, cell) in out.chunks_exact_mut(words).enumerate() {
             let i = c as i64 - 1;
-            // The eight corners, x fastest.
             let corner = |b: usize| index(i + (b & 1) as i64, j + (b >> 1 & 1) as i64, k + (b >> 2 & 1) as i64);
-            match &volume.data {
-                VoxelData::U8(v) => {
-                    for half in 0..2 {
-                        cell[half] = (0..4).fold(0u32, |acc, b| acc | (v[corner(4 * half + b)] as u32) << (8 * b));
-                    }
-                }
-                VoxelData::U16(v) => {
-                    for pair in 0..4 {
-                        cell[pair] = v[corner(2 * pair)] as u32 | (v[corner(2 * pair + 1)] as u32) << 16;
-                    }
-                }
-                VoxelData::F32(v) => {
-                    for (b, word) in cell.iter_mut().enumerate() {
-                        *word = v[corner(b)].to_bits();
-                    }
-                }
-            }
+            fill(cell, &corner);
         }
     });
     out
+}
+
+/// The words of cell layers `layers` of `volume`.
+fn pack_layers(volume: &Volume, layers: std::ops::Range<u64>) -> Vec<u32> {
+    let words = TexelKind::of(&volume.data).words();
+    pack_cells(volume.dims, words, layers, |cell, corner| match &volume.data {
+        VoxelData::U8(v) => {
+            for half in 0..2 {
+                cell[half] = (0..4).fold(0u32, |acc, b| acc | (v[corner(4 * half + b)] as u32) << (8 * b));
+            }
+        }
+        VoxelData::U16(v) => {
+            for pair in 0..4 {
+                cell[pair] = v[corner(2 * pair)] as u32 | (v[corner(2 * pair + 1)] as u32) << 16;
+            }
+        }
+        VoxelData::F32(v) => {
+            for (b, word) in cell.iter_mut().enumerate() {
+                *word = v[corner(b)].to_bits();
+            }
+        }
+    })
+}
+
+/// Words (u32) per cell of the gradient's cells copy: eight corners of three
+/// f16 components, two halves a word.
+const GRADIENT_WORDS: usize = 12;
+
+/// Bytes per voxel of the gradient's cells copy (`GpuVolume::add_gradient`
+/// makes it beside the volume's cells copy): 48.
+pub const GRADIENT_CELL_BYTES: u64 = 4 * GRADIENT_WORDS as u64;
+
+/// Whether the device can hold the gradient's cells copy of a volume of
+/// `dims` (as `check_cells`).
+pub fn check_gradient_cells(info: &DeviceInfo, dims: [u32; 3]) -> Result<u64> {
+    let bytes = cell_dims(dims)
+        .iter()
+        .fold(GRADIENT_CELL_BYTES, |acc, &n| acc.saturating_mul(n));
+    check_texel_copy(
+        info,
+        "gradient cells copy",
+        dims,
+        3,
+        bytes,
+        vk::Format::R32G32B32A32_UINT,
+    )
+}
+
+/// The words of the gradient's cell layers `layers`: per cell the eight
+/// corners' (x, y, z) halves of `gradient` (the volume's gradient texels,
+/// `dims`), corner-major, x fastest, two halves a word (low first).
+fn pack_gradient_layers(gradient: &[[half::f16; 4]], dims: [u32; 3], layers: std::ops::Range<u64>) -> Vec<u32> {
+    pack_cells(dims, GRADIENT_WORDS, layers, |cell, corner| {
+        let halves = (0..8).flat_map(|b| {
+            let g = gradient[corner(b)];
+            [g[0], g[1], g[2]]
+        });
+        let halves: Vec<u16> = halves.map(half::f16::to_bits).collect();
+        for (word, pair) in cell.iter_mut().zip(halves.chunks_exact(2)) {
+            *word = pair[0] as u32 | (pair[1] as u32) << 16;
+        }
+    })
+}
+
+/// The gradient's cells copy on the device, uploaded and waited for, layer
+/// block by layer block.
+pub fn upload_gradient_cells(ctx: &Context, gradient: &[[half::f16; 4]], dims: [u32; 3]) -> Result<TexelBuffer> {
+    let bytes = check_gradient_cells(ctx.info(), dims)?;
+    let buffer = Buffer::upload_target(ctx, "gradient cells", bytes, vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
+    let [cw, ch, cd] = cell_dims(dims);
+    let layer = cw * ch * GRADIENT_CELL_BYTES;
+    let per_upload = (LAYER_BYTES / layer).max(1);
+    let mut k = 0;
+    while k < cd {
+        let end = (k + per_upload).min(cd);
+        let words = pack_gradient_layers(gradient, dims, k..end);
+        buffer.upload(k * layer, bytemuck::cast_slice(&words))?;
+        k = end;
+    }
+    TexelBuffer::new(ctx, buffer, vk::Format::R32G32B32A32_UINT)
 }
 
 /// Cell layers per upload: bounds the host memory packing takes.
@@ -243,6 +325,29 @@ mod tests {
         let blocks: Vec<u32> = (0..3).flat_map(|k| pack_layers(&v, k..k + 1)).collect();
         assert_eq!(blocks, words);
         assert_eq!(cells_bytes(dims, TexelKind::Unorm8), 4 * 3 * 3 * 8);
+    }
+
+    #[test]
+    fn a_gradient_cell_holds_its_corners_halves_in_order() {
+        let dims = [2u32, 2, 1];
+        let g: Vec<[half::f16; 4]> = (0..4)
+            .map(|v| [1.0, 2.0, 3.0].map(|c| half::f16::from_f32(c + 10.0 * v as f32)))
+            .map(|[x, y, z]| [x, y, z, half::f16::ZERO])
+            .collect();
+        let words = pack_gradient_layers(&g, dims, 0..2);
+        // Cell (0, 0, 0): texel 1 + 3 * (1 + 3 * 1) = 13; corner b is voxel
+        // (b & 1, b >> 1 & 1, 0) (z clamps).
+        let cell = &words[13 * GRADIENT_WORDS..14 * GRADIENT_WORDS];
+        let halves: Vec<f32> = cell
+            .iter()
+            .flat_map(|w| [*w as u16, (*w >> 16) as u16])
+            .map(|b| half::f16::from_bits(b).to_f32())
+            .collect();
+        for b in 0..8usize {
+            let v = (b & 1) + 2 * (b >> 1 & 1);
+            let want = [1.0, 2.0, 3.0].map(|c| c + 10.0 * v as f32);
+            assert_eq!(&halves[3 * b..3 * b + 3], &want, "corner {b}");
+        }
     }
 
     #[test]

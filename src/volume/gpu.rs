@@ -36,6 +36,9 @@ pub struct GpuVolume {
     gradient: Option<Image3d>,
     /// The cells copy the manual filter reads (`add_cells`).
     cells: Option<TexelBuffer>,
+    /// The gradient's cells copy the manual filter reads in lit frames
+    /// (`add_gradient`, when the volume has its cells copy).
+    gradient_cells: Option<TexelBuffer>,
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -94,6 +97,7 @@ impl GpuVolume {
             kind: TexelKind::of(&volume.data),
             gradient: None,
             cells: None,
+            gradient_cells: None,
         };
         if ctx.filters_linearly(format) {
             gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
@@ -128,21 +132,50 @@ impl GpuVolume {
 
     /// Uploads the gradient shaded and iso frames read (`volume`'s, the
     /// volume this was uploaded from: `volume::gradient_texels`) and waits.
-    /// 8 bytes per voxel; once is enough.
+    /// 8 bytes per voxel; once is enough. With the volume's cells copy
+    /// (`add_cells` first), also the gradient's (48 bytes per voxel, where
+    /// the device holds it): the manual filter then reads a lit sample's
+    /// eight gradients in three fetches instead of eight.
     pub fn add_gradient(&mut self, volume: &Volume) -> Result<()> {
         let ctx = self.ctx.clone();
-        self.put_gradient(volume, |bytes, dims| {
-            let image = Image3d::with_data(&ctx, "gradient", GRADIENT_FORMAT, dims, GRADIENT_TEXEL_BYTES, bytes)?;
+        let wants_cells = self.cells.is_some()
+            && self.gradient_cells.is_none()
+            && cells::check_gradient_cells(ctx.info(), self.dims).is_ok();
+        let mut texels = None;
+        self.put_gradient(volume, |t, dims| {
+            let image = Image3d::with_data(
+                &ctx,
+                "gradient",
+                GRADIENT_FORMAT,
+                dims,
+                GRADIENT_TEXEL_BYTES,
+                bytemuck::cast_slice(t),
+            )?;
+            if wants_cells {
+                texels = Some(t.to_vec());
+            }
             Ok((image, ()))
         })?;
+        if wants_cells {
+            let t = match texels {
+                Some(t) => t,
+                None => self.gradient_texels(volume)?,
+            };
+            self.gradient_cells = Some(cells::upload_gradient_cells(&ctx, &t, self.dims)?);
+        }
         Ok(())
+    }
+
+    /// The gradient's cells copy, where `add_gradient` made it.
+    pub fn gradient_cells(&self) -> Option<&TexelBuffer> {
+        self.gradient_cells.as_ref()
     }
 
     /// As `add_gradient`, recorded into `cmd` (see `record_upload`); None
     /// when it is already there.
     pub fn record_add_gradient(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
         let ctx = self.ctx.clone();
-        self.put_gradient(volume, |bytes, dims| {
+        self.put_gradient(volume, |t, dims| {
             Image3d::record_with_data(
                 &ctx,
                 cmd,
@@ -150,23 +183,23 @@ impl GpuVolume {
                 GRADIENT_FORMAT,
                 dims,
                 GRADIENT_TEXEL_BYTES,
-                bytes,
+                bytemuck::cast_slice(t),
             )
         })
     }
 
-    /// Computes the gradient and hands its bytes to `upload`, unless it is
+    /// Computes the gradient and hands its texels to `upload`, unless it is
     /// already there.
     fn put_gradient<R>(
         &mut self,
         volume: &Volume,
-        upload: impl FnOnce(&[u8], [u32; 3]) -> Result<(Image3d, R)>,
+        upload: impl FnOnce(&[[half::f16; 4]], [u32; 3]) -> Result<(Image3d, R)>,
     ) -> Result<Option<R>> {
         if self.gradient.is_some() {
             return Ok(None);
         }
         let texels = self.gradient_texels(volume)?;
-        let (image, extra) = upload(bytemuck::cast_slice(&texels), self.dims)?;
+        let (image, extra) = upload(&texels, self.dims)?;
         self.gradient = Some(image);
         Ok(Some(extra))
     }
@@ -229,14 +262,12 @@ impl GpuVolume {
     }
 
     /// Adds what frames will read beyond the voxels: the gradient for lit
-    /// frames, and the cells copy where the manual filter will sample
+    /// frames (and its cells copy beside the volume's), and the cells copy
+    /// where the manual filter will sample
     /// (`filter` asks for it, or it is the default: `filter` None on a CPU
     /// device, where one fetch per sample instead of eight makes it the
     /// faster filter) and the device holds it (`cells::check_cells`).
     pub fn prepare(&mut self, volume: &Volume, lit: bool, filter: Option<Filter>) -> Result<()> {
-        if lit {
-            self.add_gradient(volume)?;
-        }
         let cpu = self.ctx.info().device_type == vk::PhysicalDeviceType::CPU;
         let manual = match filter {
             Some(f) => f == Filter::Manual,
@@ -244,6 +275,10 @@ impl GpuVolume {
         };
         if manual && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok() {
             self.add_cells(volume)?;
+        }
+        // After the cells copy: the gradient's goes with it.
+        if lit {
+            self.add_gradient(volume)?;
         }
         Ok(())
     }

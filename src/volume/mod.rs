@@ -16,7 +16,10 @@ mod raw;
 mod spec;
 
 pub use bricks::{BrickGrid, BRICK};
-pub use cells::{cells_bytes, check_cells, no_cells, TexelKind, CELLS_CONSTANT_ID, KIND_CONSTANT_ID};
+pub use cells::{
+    cells_bytes, check_cells, check_gradient_cells, no_cells, TexelKind, CELLS_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID,
+    GRADIENT_CELL_BYTES, KIND_CONSTANT_ID,
+};
 pub use decode::VoxelType;
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
