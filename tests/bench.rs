@@ -43,12 +43,28 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         "Table 1",
         "Image error against naive",
         "skipped optional data set /no/such/volume.nii.gz",
+        "Time to the first exact frame of a new time step",
     ] {
         assert!(stdout.contains(needle), "'{needle}' missing:\n{stdout}");
     }
     let config = BenchConfig::load(Path::new(TINY)).unwrap();
     let records: Vec<Record> =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    // The series' new steps: every structure, each step exact (but the
+    // paper's classification, which need not be).
+    let steps: Vec<lacuna::bench::series::StepRecord> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("steps.json")).unwrap()).unwrap();
+    assert_eq!(steps.len(), config.structures.len());
+    for r in &steps {
+        assert_eq!((r.dataset.as_str(), r.steps.as_slice()), ("nbody:32", &[3, 4][..]), "{r:?}");
+        if !r.structure.contains("paper classification") {
+            assert_eq!(r.differing_pixels, 0, "{r:?}");
+        }
+        let parts = r.upload_ms + r.ranges_ms + r.build_ms + r.frame_ms;
+        assert!(r.new_step_ms > 0.0 && r.load_ms > 0.0, "{r:?}");
+        // Medians of sums are not sums of medians, but they bound each other.
+        assert!(r.new_step_ms <= 4.0 * parts && parts <= 4.0 * r.new_step_ms, "{r:?}");
+    }
     let datasets = ["nbody:32", "menger:27"];
     assert_eq!(records.len(), datasets.len() * config.structures.len());
     for d in datasets {

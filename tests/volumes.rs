@@ -2,6 +2,7 @@
 //! procedural generators, brick ranges, and every bad-input error.
 
 mod common;
+use common::gzip;
 use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions, RawLayout, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
 use std::io::Write;
@@ -161,12 +162,6 @@ fn raw_errors_name_what_is_wrong() {
     assert!(v.value(1, 0, 0).is_nan());
 }
 
-fn gzip(bytes: &[u8]) -> Vec<u8> {
-    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    e.write_all(bytes).unwrap();
-    e.finish().unwrap()
-}
-
 fn nrrd_header(ty: &str, dims: [u32; 3], encoding: &str, extra: &str) -> String {
     format!(
         "NRRD0004\n# written by a test\ntype: {ty}\ndimension: 3\nsizes: {} {} {}\nendian: little\nencoding: {encoding}\n{extra}",
@@ -252,25 +247,8 @@ fn nrrd_errors_name_what_is_wrong() {
     assert!(matches!(load(&p), Err(Error::Io { .. })));
 }
 
-/// A NIfTI-1 single file (.nii) of `datatype`, written by hand.
 fn nifti_bytes(dims: [u32; 3], datatype: i16, bitpix: i16, pixdim: [f32; 3], data: &[u8]) -> Vec<u8> {
-    let mut h = vec![0u8; 352];
-    h[0..4].copy_from_slice(&348i32.to_le_bytes());
-    let dim: [i16; 8] = [3, dims[0] as i16, dims[1] as i16, dims[2] as i16, 1, 1, 1, 1];
-    for (i, d) in dim.iter().enumerate() {
-        h[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
-    }
-    h[70..72].copy_from_slice(&datatype.to_le_bytes());
-    h[72..74].copy_from_slice(&bitpix.to_le_bytes());
-    let pd = [1.0f32, pixdim[0], pixdim[1], pixdim[2], 1.0, 1.0, 1.0, 1.0];
-    for (i, p) in pd.iter().enumerate() {
-        h[76 + 4 * i..80 + 4 * i].copy_from_slice(&p.to_le_bytes());
-    }
-    h[108..112].copy_from_slice(&352f32.to_le_bytes());
-    h[112..116].copy_from_slice(&1f32.to_le_bytes());
-    h[344..348].copy_from_slice(b"n+1\0");
-    h.extend_from_slice(data);
-    h
+    common::nifti_bytes(&dims, datatype, bitpix, pixdim, data)
 }
 
 #[test]

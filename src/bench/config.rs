@@ -130,9 +130,18 @@ pub struct DatasetConfig {
     /// Early ray termination threshold for this data set's timed frames
     /// (default: the run's), so one run can time a volume with and without.
     pub ert: Option<f32>,
+    /// A time series' steps `[FIRST, LAST]`: the data set is step FIRST,
+    /// and each later step is timed to its first exact frame (upload,
+    /// ranges, build, frame) per structure; FIRST warms up.
+    pub time: Option<[u32; 2]>,
 }
 
 impl DatasetConfig {
+    /// Frames its `time` range renders per structure (0 without one).
+    pub fn new_steps(&self) -> u64 {
+        self.time.map_or(0, |[first, last]| last.saturating_sub(first) as u64 + 1)
+    }
+
     /// The look of its frames: its own over the run's.
     pub fn look(&self, config: &BenchConfig) -> LookSpec {
         self.look.over(&config.look)

@@ -12,6 +12,7 @@ mod progress;
 pub mod record;
 pub mod run;
 pub mod schedule;
+pub mod series;
 pub mod tables;
 
 pub use config::BenchConfig;
@@ -49,6 +50,10 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput) -> Result<Vec<String>> {
         put("error.json", json(&out.errors))?;
         put("error.csv", tables::errors_csv(&out.errors))?;
         put("error.md", tables::errors_md(&out.errors))?;
+    }
+    if !out.steps.is_empty() {
+        put("steps.json", json(&out.steps))?;
+        put("steps.md", out.steps_md())?;
     }
     if !out.notes.is_empty() {
         put("notes.txt", out.notes.join("\n") + "\n")?;

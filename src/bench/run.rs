@@ -11,6 +11,7 @@ use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
+use super::series::{steps_md, StepBench, StepRecord};
 use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
@@ -18,7 +19,7 @@ use crate::gpu::timings::{median, Timings};
 use crate::gpu::{Context, Timer};
 use crate::render::{Filter, FrameBuilder, FrameDesc, Output, Projection, RenderTarget, Renderer, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
-use crate::volume::{BrickGrid, GpuVolume, LoadOptions, BRICK};
+use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
 use crate::Volume;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -30,6 +31,20 @@ pub struct BenchOutput {
     /// Frame 0 of each run, when asked for.
     pub frames: Vec<(String, Frame)>,
     pub notes: Vec<String>,
+    /// New-step times of the data sets with a `time` range.
+    pub steps: Vec<StepRecord>,
+}
+
+impl BenchOutput {
+    /// The new-step table, beside each structure's median frame time.
+    pub fn steps_md(&self) -> String {
+        steps_md(&self.steps, |d, s| {
+            self.records
+                .iter()
+                .find(|r| r.dataset == d && r.structure == s)
+                .map(|r| r.frame.median_ms)
+        })
+    }
 }
 
 pub struct RunOptions {
@@ -114,8 +129,9 @@ struct Loaded {
     tf: TransferFunction,
 }
 
-fn load(ctx: &Context, spec: &str, label: String, tf: Option<&str>) -> Result<Loaded> {
-    let volume = Volume::load_within(spec, &LoadOptions::default(), Some(ctx.info()))?;
+/// The data set: its step `time` when it is a series.
+fn load(ctx: &Context, series: &Series, time: Option<[u32; 2]>, label: String, tf: Option<&str>) -> Result<Loaded> {
+    let volume = series.load(time.map_or(0, |[first, _]| first), Some(ctx.info()))?;
     let tf_spec = tf
         .map(str::to_string)
         .or_else(|| volume.default_tf.clone())
@@ -306,8 +322,9 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         n * e.frames as u64 * (1 + (filters * e.steps.len() * e.ert.len()) as u64)
     });
     let timed_filter = config.timed_filter()?;
+    let new_steps: u64 = config.datasets.iter().map(|d| d.new_steps()).sum();
     let progress = Progress::new(
-        config.datasets.len() as u64 * structures.len() as u64 * per_structure + sweep,
+        (config.datasets.len() as u64 * per_structure + new_steps) * structures.len() as u64 + sweep,
         options.quiet,
     );
     let mut out = BenchOutput {
@@ -315,22 +332,25 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         errors: Vec::new(),
         frames: Vec::new(),
         notes: Vec::new(),
+        steps: Vec::new(),
     };
     let mut frames = FrameTimer::new(ctx, &renderer, config.size[0], config.size[1])?;
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
-        let loaded = match load(ctx, &ds.volume, ds.label(config)?, ds.tf.as_deref()) {
+        let series = Series::open(&ds.volume, &LoadOptions::default());
+        let loaded = match series.and_then(|s| load(ctx, &s, ds.time, ds.label(config)?, ds.tf.as_deref()).map(|l| (s, l))) {
             Ok(l) => l,
             Err(Error::Io { path, .. }) if ds.optional => {
                 let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
                 progress.note(&note);
                 out.notes.push(note);
-                progress.step(structures.len() as u64 * per_structure);
+                progress.step(structures.len() as u64 * (per_structure + ds.new_steps()));
                 continue;
             }
             Err(e) => return Err(e),
         };
+        let (series, loaded) = loaded;
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let mut gv = GpuVolume::upload(ctx, v)?;
         let lut = tf.upload(ctx)?;
@@ -519,6 +539,21 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             if let Some(first) = &run.first {
                 out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));
             }
+        }
+        // New time steps: the first exact frame of each, per structure.
+        if let Some(range) = ds.time {
+            let first = settings(0)?;
+            let bench = StepBench {
+                ctx,
+                builder: &builder,
+                structures: &structures,
+                tf,
+                lut: &lut,
+                desc: &first,
+                filter: timed_filter,
+            };
+            let step_frame = |scene: Scene, desc: &FrameDesc, read: bool| frames.frame(scene, desc, read);
+            out.steps.extend(bench.run(&loaded.spec, &series, range, step_frame, &progress)?);
         }
         // Speed against error, on the volume and ranges already uploaded.
         if let Some(e) = config

@@ -195,6 +195,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     println!("{}", bench::tables::frames_md(&output.records));
     println!("{}", bench::tables::table1_md(&output.records));
     println!("{}", bench::tables::exactness_md(&output.records));
+    if !output.steps.is_empty() {
+        println!("{}", output.steps_md());
+    }
     for r in bench::tables::fastest(&output.records) {
         println!(
             "fastest on {}: {} ({:.2} ms median, {:.2}x naive{})",

@@ -29,7 +29,7 @@ pub struct ExportArgs {
 pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     // The output's folder is checked before a (possibly long) load.
     check_raw_out(&args.out)?;
-    let volume = load_volume(&args.volume, args.dims, args.source_type, None)?;
+    let volume = load_volume(&args.volume, args.dims, args.source_type)?;
     let written = write_raw(&volume, &args.out, args.ty)?;
     println!("{}", written.path.display());
     let [sx, sy, sz] = volume.spacing;

@@ -16,8 +16,12 @@ pub struct InfoArgs {
 }
 
 pub fn run(args: &InfoArgs) -> Result<ExitCode> {
-    let v = args.volume.load()?;
+    let series = args.volume.series()?;
+    let v = series.load(args.volume.time, None)?;
     println!("volume   {}", v.name);
+    if let Some(step) = args.volume.step_line(&series) {
+        println!("time     {step}; every step normalised as step 0");
+    }
     println!(
         "dims     {}x{}x{} ({} voxels)",
         v.dims[0],

@@ -15,15 +15,15 @@ pub mod view;
 
 use clap::Args;
 pub use lacuna::frame::check_parent;
-use lacuna::gpu::{Context, ContextOptions, DeviceInfo};
-use lacuna::volume::{LoadOptions, RawLayout, VoxelType};
+use lacuna::gpu::{Context, ContextOptions};
+use lacuna::volume::{LoadOptions, RawLayout, Series, VoxelType};
 use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
 
 /// A volume on the command line: a file or a generator spec.
 #[derive(Args)]
 pub struct VolumeArgs {
-    /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
+    /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz), a printf pattern of files (run_%04d_64x64x64_float32.raw: a time series) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
     pub volume: String,
     /// Dimensions of a raw file whose name does not give them (WxHxD).
     #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
@@ -31,6 +31,9 @@ pub struct VolumeArgs {
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
     #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     pub voxel_type: Option<VoxelType>,
+    /// Time step of a series (a file pattern, a NIfTI time axis, or a generator's animation), from 0.
+    #[arg(long, default_value_t = 0)]
+    pub time: u32,
 }
 
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
@@ -42,28 +45,38 @@ pub fn parse_type(s: &str) -> Result<VoxelType> {
 }
 
 impl VolumeArgs {
-    pub fn load(&self) -> Result<Volume> {
-        load_volume(&self.volume, self.dims, self.voxel_type, None)
+    /// Its series (one step unless the spec names several).
+    pub fn series(&self) -> Result<Series> {
+        Series::open(&self.volume, &self.options())
     }
 
-    /// As `load`, checking the volume's size against `ctx`'s device first.
-    pub fn load_for(&self, ctx: &Context) -> Result<Volume> {
-        load_volume(&self.volume, self.dims, self.voxel_type, Some(ctx.info()))
+    pub fn load(&self) -> Result<Volume> {
+        self.series()?.load(self.time, None)
+    }
+
+    /// "step K of N (what)" for a series, None for one volume.
+    pub fn step_line(&self, series: &Series) -> Option<String> {
+        (series.steps() > 1).then(|| {
+            format!(
+                "step {} of {} ({})",
+                self.time,
+                series.steps(),
+                series.step_name(self.time)
+            )
+        })
+    }
+
+    fn options(&self) -> LoadOptions {
+        LoadOptions {
+            raw: self.dims.zip(self.voxel_type).map(|(dims, ty)| RawLayout { dims, ty }),
+        }
     }
 }
 
 /// Loads a volume spec; `dims` and `ty` (given together) are a raw file's layout.
-pub fn load_volume(
-    spec: &str,
-    dims: Option<[u32; 3]>,
-    ty: Option<VoxelType>,
-    device: Option<&DeviceInfo>,
-) -> Result<Volume> {
-    let raw = match (dims, ty) {
-        (Some(dims), Some(ty)) => Some(RawLayout { dims, ty }),
-        _ => None,
-    };
-    Volume::load_within(spec, &LoadOptions { raw }, device)
+pub fn load_volume(spec: &str, dims: Option<[u32; 3]>, ty: Option<VoxelType>) -> Result<Volume> {
+    let raw = dims.zip(ty).map(|(dims, ty)| RawLayout { dims, ty });
+    Volume::load_within(spec, &LoadOptions { raw }, None)
 }
 
 /// A headless context; `validate` adds validation with synchronization validation.

@@ -102,7 +102,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     // The device first: the volume's size is checked against its limits
     // from the spec or header, before any voxel is read or made.
     let ctx = context(args.validate)?;
-    let volume = args.volume.load_for(&ctx)?;
+    let series = args.volume.series()?;
+    let volume = series.load(args.volume.time, Some(ctx.info()))?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
 
@@ -151,6 +152,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         "volume  {} ({}x{}x{} {})",
         volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
     );
+    if let Some(step) = args.volume.step_line(&series) {
+        println!("time    {step}");
+    }
     println!("tf      {}", tf.spec);
     println!(
         "frame   {width}x{height}, {}, step {}, filter {}{}, accel {}",
@@ -198,6 +202,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     println!("render GPU time per pass:\n{timings}");
     if let (Some(out), Some(format)) = (&args.out, format) {
         describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
+        if series.steps() > 1 {
+            frame.metadata.insert("time".into(), args.volume.time.to_string());
+        }
         match &args.background {
             Some(background) => frame.write_png_over(out, background)?,
             None => frame.write(out, format)?,

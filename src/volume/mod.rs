@@ -13,6 +13,7 @@ mod nifti;
 mod nrrd;
 pub mod procedural;
 mod raw;
+mod series;
 mod spec;
 
 pub use bricks::{BrickGrid, BRICK};
@@ -28,6 +29,7 @@ pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 pub use gpu::GpuVolume;
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 pub use raw::{parse_dims, parse_type, RawLayout};
+pub use series::{Series, StepNorm};
 pub use spec::{LoadOptions, VolumeSpec};
 
 use crate::error::{Error, Result};
@@ -235,6 +237,12 @@ impl Volume {
             default_tf: None,
             no_data,
         })
+    }
+
+    /// Normalises its texels with `norm` instead of its own range (a time
+    /// series normalises every step as its first: `Series`).
+    pub fn set_norm(&mut self, norm: [f32; 2]) {
+        self.norm = norm;
     }
 
     pub fn voxel_count(&self) -> u64 {

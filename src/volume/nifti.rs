@@ -11,14 +11,43 @@ use std::io::Read;
 use std::path::Path;
 
 pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse(path, &bytes, device)
+    load_step(path, 0, device)
+}
+
+/// Step `step` of a file whose 4th dimension is time (step 0 of a 3-D
+/// file), reading or inflating no further than that step's voxels.
+pub fn load_step(path: &Path, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+    parse(path, open(path)?, step, device)
+}
+
+/// The time steps of a NIfTI file (its 4th dimension; 1 for a 3-D file),
+/// from its header.
+pub fn steps(path: &Path) -> Result<u32> {
+    Ok(layout(path, &header(path, open(path)?)?)?.steps)
+}
+
+/// The file's bytes, inflated when it starts with the gzip magic.
+fn open(path: &Path) -> Result<Box<dyn Read>> {
+    let file = || std::fs::File::open(path).map_err(|e| Error::io(path, e));
+    let mut magic = [0u8; 2];
+    let n = file()?.read(&mut magic).map_err(|e| Error::io(path, e))?;
+    Ok(match n == 2 && magic == [0x1f, 0x8b] {
+        true => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file()?))),
+        false => Box::new(std::io::BufReader::new(file()?)),
+    })
 }
 
 /// A `.nii` from memory, or a `.nii.gz` when `bytes` start with the gzip magic.
 pub fn from_bytes(origin: &Path, bytes: &[u8]) -> Result<Volume> {
-    parse(origin, bytes, None)
+    let reader: Box<dyn Read + '_> = match bytes.starts_with(&[0x1f, 0x8b]) {
+        true => Box::new(flate2::read::MultiGzDecoder::new(bytes)),
+        false => Box::new(bytes),
+    };
+    parse(origin, reader, 0, None)
 }
+
+/// The NIfTI-1 header's size: the voxels' offset is counted from the start.
+const HEADER_BYTES: u64 = 348;
 
 fn unreadable(path: &Path, e: std::io::Error) -> Error {
     Error::format(
@@ -27,30 +56,33 @@ fn unreadable(path: &Path, e: std::io::Error) -> Error {
     )
 }
 
-fn parse(path: &Path, bytes: &[u8], device: Option<&DeviceInfo>) -> Result<Volume> {
-    let gz = bytes.starts_with(&[0x1f, 0x8b]);
-    let stream = || -> Box<dyn Read + '_> {
-        if gz {
-            Box::new(flate2::read::MultiGzDecoder::new(bytes))
-        } else {
-            Box::new(bytes)
-        }
-    };
-    let header = NiftiHeader::from_reader(stream()).map_err(|e| match e {
+fn header(path: &Path, reader: impl Read) -> Result<NiftiHeader> {
+    // Exactly the header's bytes, so what follows is where the caller is.
+    NiftiHeader::from_reader(reader.take(HEADER_BYTES)).map_err(|e| match e {
         nifti::NiftiError::Io(io) => unreadable(path, io),
         // The crate's index and value do not name the offending field reliably.
         nifti::NiftiError::InconsistentDim(..) => {
             Error::format(path, "NIfTI header has a zero dimension or an invalid rank")
         }
         other => Error::format(path, format!("not a readable NIfTI-1 file: {other}")),
-    })?;
+    })
+}
+
+/// A file's grid and time steps, as its header gives them.
+struct Layout {
+    ty: VoxelType,
+    dims: [u32; 3],
+    steps: u32,
+}
+
+fn layout(path: &Path, header: &NiftiHeader) -> Result<Layout> {
     if &header.magic != b"n+1\0" {
         return Err(Error::format(
             path,
             "not a single-file NIfTI-1 (magic is not 'n+1'; .hdr/.img pairs are not supported)",
         ));
     }
-    let ty = voxel_type(path, &header)?;
+    let ty = voxel_type(path, header)?;
     let rank = header.dim[0] as usize;
     if !(1..=7).contains(&rank) {
         return Err(Error::format(
@@ -65,14 +97,28 @@ fn parse(path: &Path, bytes: &[u8], device: Option<&DeviceInfo>) -> Result<Volum
             "NIfTI header has a zero dimension or an invalid rank",
         ));
     }
-    // Trailing singleton dimensions (a 3-D volume stored as 4-D with t = 1) are fine.
-    if header.dim[4..=rank.max(3)].iter().any(|&d| d > 1) {
+    // The 4th dimension is time; trailing singletons (t = 1) are fine.
+    if header.dim[5..=rank.max(4)].iter().any(|&d| d > 1) {
         return Err(Error::format(
             path,
-            format!("NIfTI volume has {rank} dimensions with more than one 3-D frame"),
+            format!("NIfTI volume has {rank} dimensions: beyond x, y, z and time (dim[5..]) are not supported"),
         ));
     }
     let dims = [1, 2, 3].map(|i| if i <= rank { header.dim[i] as u32 } else { 1 });
+    let steps = if rank >= 4 { header.dim[4] as u32 } else { 1 };
+    Ok(Layout { ty, dims, steps })
+}
+
+fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+    let header = header(path, &mut reader)?;
+    let Layout { ty, dims, steps } = layout(path, &header)?;
+    if step >= steps {
+        return Err(Error::invalid(
+            "time",
+            step.to_string(),
+            format!("{} has {steps} time step(s), 0 to {}", path.display(), steps - 1),
+        ));
+    }
     super::check_size(dims, ty, &path.display().to_string(), device)?;
     let offset = header.vox_offset;
     if !(offset.is_finite() && (348.0..=(1u64 << 32) as f32).contains(&offset)) {
@@ -81,24 +127,18 @@ fn parse(path: &Path, bytes: &[u8], device: Option<&DeviceInfo>) -> Result<Volum
             format!("NIfTI vox_offset {offset} is not a byte offset past the header"),
         ));
     }
-    let offset = offset as u64;
     let voxel_bytes = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
-    let end = offset + voxel_bytes;
-    let inflated;
-    let file: &[u8] = if gz {
-        let mut out = Vec::new();
-        stream()
-            .take(end)
-            .read_to_end(&mut out)
+    // Skip to this step's voxels (time is the slowest axis), then read them.
+    let skip = offset as u64 - HEADER_BYTES + step as u64 * voxel_bytes;
+    let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
+    let mut data = Vec::new();
+    if skipped == skip {
+        (&mut reader)
+            .take(voxel_bytes)
+            .read_to_end(&mut data)
             .map_err(|e| unreadable(path, e))?;
-        inflated = out;
-        &inflated
-    } else {
-        bytes
-    };
+    }
     // Data past the voxels (none in a well-formed file) is ignored, as the crate did.
-    let data = file.get(offset as usize..).unwrap_or_default();
-    let data = &data[..data.len().min(voxel_bytes as usize)];
     let spacing = [1, 2, 3].map(|i| {
         let s = header.pixdim[i].abs();
         if s.is_finite() && s > 0.0 {
@@ -108,7 +148,7 @@ fn parse(path: &Path, bytes: &[u8], device: Option<&DeviceInfo>) -> Result<Volum
         }
     });
     let little = header.endianness == nifti::Endianness::Little;
-    let mut volume = decode(path, data, ty, little, dims, spacing)?;
+    let mut volume = decode(path, &data, ty, little, dims, spacing)?;
     // scl_slope/scl_inter rescale linearly; normalised values are unchanged
     // for a positive slope, so only the reported range moves.
     let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);

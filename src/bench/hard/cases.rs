@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::render::{Camera, FrameDesc, LookSpec, Projection, Rays};
-use crate::volume::{LoadOptions, VoxelData, VoxelType};
+use crate::volume::{LoadOptions, StepNorm, VoxelData, VoxelType};
 use crate::Volume;
 
 pub struct HardCase {
@@ -148,6 +148,33 @@ pub fn masked(spec: &str) -> Result<Volume> {
     )
 }
 
+/// Three steps of a float time series on 40^3, normalised as step 0 (a
+/// ball of values 0 to 1 inside one brick): step 1 holds only values below
+/// the cases' ramp (nothing visible), step 2 a ball centred on a brick
+/// corner, its peak beyond step 0's range (it clamps).
+pub fn series_steps() -> Result<[Volume; 3]> {
+    let n = 40u32;
+    let ball = |centre: f32, radius: f32, peak: f32, floor: f32| -> Result<Volume> {
+        let mut data = Vec::with_capacity((n * n * n) as usize);
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let r2 = [x, y, z].map(|c| (c as f32 - centre).powi(2)).iter().sum::<f32>();
+                    data.push(floor + peak * (1.0 - r2.sqrt() / radius).max(0.0));
+                }
+            }
+        }
+        Volume::new("ball series", [n; 3], [1.0; 3], VoxelType::F32, VoxelData::F32(data))
+    };
+    let first = ball(4.0, 3.5, 1.0, 0.0)?;
+    let norm = StepNorm::of(&first);
+    let mut quiet = ball(20.0, 12.0, 0.15, 0.05)?;
+    norm.apply(&mut quiet, "step 1")?;
+    let mut moved = ball(16.0, 6.0, 1.5, 0.0)?;
+    norm.apply(&mut moved, "step 2")?;
+    Ok([first, quiet, moved])
+}
+
 /// The cases, at sizes a CPU driver renders in seconds.
 pub fn cases() -> Result<Vec<HardCase>> {
     let persp = |d: Option<f64>, fov: f64| Projection::Perspective {
@@ -157,6 +184,7 @@ pub fn cases() -> Result<Vec<HardCase>> {
     let mut dot = vec![0u8; 40 * 40 * 40];
     dot[16 + 40 * (16 + 40 * 16)] = 255;
     let halves: Vec<u8> = (0..24 * 24 * 24).map(|i| if (i % 24) < 12 { 0 } else { 255 }).collect();
+    let [_, quiet, moved] = series_steps()?;
     let long: Vec<u8> = (0..4 * 4 * 3000)
         .map(|i| if (i / 16) % 97 < 3 { 255 } else { 0 })
         .collect();
@@ -403,6 +431,32 @@ pub fn cases() -> Result<Vec<HardCase>> {
                 cam(32, 0.0, 0.0, persp(None, 50.0), 0.5, None)?,
             ],
             iso: "0.4",
+            look: LookSpec::default(),
+        },
+        HardCase {
+            name: "a time step with nothing visible",
+            volume: quiet,
+            tf: "ramp:0.3:1",
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)?],
+            iso: "0.5",
+            look: LookSpec::default(),
+        },
+        HardCase {
+            name: "a time step whose visible set crossed brick faces",
+            volume: moved,
+            tf: "ramp:0.3:1",
+            views: vec![
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None)?,
+                lattice(
+                    33,
+                    [0.0, 0.0, -5.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                    0.5,
+                )?,
+            ],
+            iso: "0.5",
             look: LookSpec::default(),
         },
         HardCase {

@@ -1,6 +1,9 @@
 //! Deterministic procedural volumes, analogs of the paper's data sets, at any
 //! size. Each generator has a default transfer function under which its
-//! occupancy resembles the data set it imitates.
+//! occupancy resembles the data set it imitates, and animates over
+//! `STEPS` time steps (`generate_at`): particles move, tubes grow,
+//! turbulence evolves, the sponge slides, shells expand. Step 0 is the
+//! still volume.
 
 mod menger;
 mod nbody;
@@ -25,6 +28,9 @@ pub enum Generator {
     /// Thin concentric spherical shells (PARAM: count, default 4).
     Shells,
 }
+
+/// Time steps of every generator's animation (`generate_at`).
+pub const STEPS: u32 = 64;
 
 impl Generator {
     pub const ALL: [Generator; 5] = [
@@ -64,7 +70,20 @@ impl Generator {
         }
     }
 
+    /// The still volume (step 0 of its animation).
     pub fn generate(self, dims: [u32; 3], param: Option<f64>) -> Result<Volume> {
+        self.generate_at(dims, param, 0)
+    }
+
+    /// Step `time` (below `STEPS`) of its animation.
+    pub fn generate_at(self, dims: [u32; 3], param: Option<f64>, time: u32) -> Result<Volume> {
+        if time >= STEPS {
+            return Err(Error::invalid(
+                "time",
+                time.to_string(),
+                format!("a generator has {STEPS} steps, 0 to {}", STEPS - 1),
+            ));
+        }
         let n = super::check_dims(dims, self.name())?;
         // The u8 voxels, and the n-body's f32 density field beside them.
         let peak = if self == Generator::Nbody { 5 } else { 1 };
@@ -90,17 +109,17 @@ impl Generator {
                 if !((0.0..=12.0).contains(&level) && level.fract() == 0.0) {
                     return Err(bad("the Menger level must be an integer in 0..=12"));
                 }
-                menger::generate(dims, level as u32)
+                menger::generate(dims, level as u32, time)
             }
-            Generator::Nbody => nbody::generate(dims, seed(param)?),
-            Generator::Vessels => vessels::generate(dims, seed(param)?),
-            Generator::Turbulence => turbulence::generate(dims, seed(param)?),
+            Generator::Nbody => nbody::generate(dims, seed(param)?, time),
+            Generator::Vessels => vessels::generate(dims, seed(param)?, time),
+            Generator::Turbulence => turbulence::generate(dims, seed(param)?, time),
             Generator::Shells => {
                 let count = param.unwrap_or(4.0);
                 if !((1.0..=64.0).contains(&count) && count.fract() == 0.0) {
                     return Err(bad("the shell count must be an integer in 1..=64"));
                 }
-                shells::generate(dims, count as u32)
+                shells::generate(dims, count as u32, time)
             }
         };
         let name = match param {

@@ -1,6 +1,8 @@
 //! N-body analog: particles in Plummer-like clusters, deposited with
 //! cloud-in-cell weights into a density field, stored as log density. Sizes
 //! and counts scale with the volume, so occupancy does not depend on size.
+//! Over time each cluster drifts at its own velocity (up to about 0.6 % of
+//! the volume a step), so the visible set crosses brick faces.
 
 use super::Rng;
 
@@ -8,7 +10,7 @@ const CLUSTERS: usize = 48;
 /// Particles per voxel of the volume (spread over all clusters).
 const PARTICLES_PER_VOXEL: f64 = 0.03;
 
-pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
+pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
     let n = dims.map(|d| d as f64);
     let size = n[0].max(n[1]).max(n[2]);
     let voxels = n[0] * n[1] * n[2];
@@ -18,9 +20,15 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
     // Cluster masses follow a steep power law: a few big, many small.
     let weights: Vec<f64> = (0..CLUSTERS).map(|_| rng.uniform().powf(3.0) + 0.02).collect();
     let sum: f64 = weights.iter().sum();
+    // Velocities from their own stream, so step 0 is the still volume.
+    let mut motion = Rng::new(seed ^ 0x5EED_0F_71AE);
+    let velocities: Vec<[f64; 3]> = (0..CLUSTERS)
+        .map(|_| [motion.normal(), motion.normal(), motion.normal()].map(|v| v * size * 0.0035 * time as f64))
+        .collect();
     let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * z);
-    for w in &weights {
-        let centre = n.map(|d| d * (0.15 + 0.7 * rng.uniform()));
+    for (w, shift) in weights.iter().zip(&velocities) {
+        let start = n.map(|d| d * (0.15 + 0.7 * rng.uniform()));
+        let centre = [0, 1, 2].map(|a| start[a] + shift[a]);
         let scale = size * (0.004 + 0.012 * rng.uniform());
         let count = (total as f64 * w / sum).round() as usize;
         for _ in 0..count {

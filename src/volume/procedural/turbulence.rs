@@ -1,5 +1,7 @@
 //! Turbulence: four octaves of smooth value noise (fBm). The sum is symmetric
 //! about 0.5, so its default ramp starting at 0.5 shows about half the voxels.
+//! Over time each octave drifts through the noise, finer ones faster, so
+//! the field evolves rather than slides.
 
 fn hash(x: i64, y: i64, z: i64, seed: u64) -> f32 {
     let mut h = seed
@@ -34,13 +36,18 @@ fn value_noise(p: [f32; 3], seed: u64) -> f32 {
     acc
 }
 
-pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
+/// How far octave 0 drifts a step, in noise cells (4 across the volume).
+const DRIFT: [f32; 3] = [0.05, 0.03, 0.02];
+
+pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
     let n = dims.into_iter().max().unwrap_or(1) as f32;
     super::fill(dims, |x, y, z| {
         let p = [x, y, z].map(|c| (c as f32 + 0.5) / n * 4.0);
         let (mut sum, mut amp, mut norm, mut freq) = (0.0f32, 1.0f32, 0.0f32, 1.0f32);
         for octave in 0..4u64 {
-            sum += amp * value_noise(p.map(|c| c * freq), seed.wrapping_add(octave * 0x1000_0001));
+            let drift = DRIFT.map(|d| d * time as f32 * (octave + 1) as f32);
+            let q = [0, 1, 2].map(|a| p[a] * freq + drift[a]);
+            sum += amp * value_noise(q, seed.wrapping_add(octave * 0x1000_0001));
             norm += amp;
             amp *= 0.5;
             freq *= 2.0;

@@ -1,5 +1,6 @@
 //! Vessel tree analog: a branching random walk of tapered tubes grown from
-//! the bottom of the volume, rasterised with a soft radial profile.
+//! the bottom of the volume, rasterised with a soft radial profile. Over
+//! time the tubes grow thicker, 5 % of their radius a step.
 
 use super::Rng;
 
@@ -34,7 +35,8 @@ fn grow(rng: &mut Rng, out: &mut Vec<Segment>, start: [f32; 3], dir: [f32; 3], r
     }
 }
 
-pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
+pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
+    let growth = 1.0 + 0.05 * time as f32;
     let mut rng = Rng::new(seed);
     let mut segments = Vec::new();
     for _ in 0..3 {
@@ -52,7 +54,7 @@ pub fn generate(dims: [u32; 3], seed: u64) -> Vec<u8> {
             let a = [0, 1, 2].map(|i| s.a[i] * scale[i]);
             let b = [0, 1, 2].map(|i| s.b[i] * scale[i]);
             // At least a voxel thick at any size.
-            (a, b, (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0))
+            (a, b, (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0) * growth)
         })
         .collect();
     let [w, h, _] = dims;

@@ -1,0 +1,180 @@
+//! The time to the first exact frame of a new time step, per structure:
+//! the step's voxels are in host memory (loading or generating them is
+//! timed apart), then its upload (with the cells copy and gradient the
+//! frames read), its ranges, the structure's build and one frame, each
+//! timed, interleaved across the structures step by step. Every frame is
+//! compared with naive's on the same step.
+
+use super::config::StructureSpec;
+use super::progress::Progress;
+use crate::accel::{BuildInput, Builder};
+use crate::error::{Error, Result};
+use crate::frame::{diff, Frame};
+use crate::gpu::timings::median;
+use crate::gpu::Context;
+use crate::render::{FrameDesc, Scene};
+use crate::tf::{GpuTransferFunction, TransferFunction};
+use crate::volume::{Filter, GpuVolume, Series};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// One structure's new-step figures on one data set: medians over steps.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct StepRecord {
+    pub dataset: String,
+    pub structure: String,
+    /// Steps timed (the first is the warm-up step and is not among them).
+    pub steps: Vec<u32>,
+    /// Reading or generating a step on the host (the same for every
+    /// structure; overlapped with the previous step's frames by `view`).
+    pub load_ms: f64,
+    /// Upload, with the cells copy and gradient the frames read (wall).
+    pub upload_ms: f64,
+    /// The ranges the structure reads (GPU).
+    pub ranges_ms: f64,
+    /// The structure's build (GPU phases, host phases in wall time).
+    pub build_ms: f64,
+    /// The step's first frame (GPU).
+    pub frame_ms: f64,
+    /// upload + ranges + build + frame: the first exact frame of a new step.
+    pub new_step_ms: f64,
+    /// Pixels of its frames that differ from naive's on the same step.
+    pub differing_pixels: u64,
+}
+
+/// What `steps` measures with.
+pub struct StepBench<'a> {
+    pub ctx: &'a Context,
+    pub builder: &'a Builder,
+    pub structures: &'a [StructureSpec],
+    pub tf: &'a TransferFunction,
+    pub lut: &'a GpuTransferFunction,
+    /// The frame timed on every step (the orbit's view 0, its filter set).
+    pub desc: &'a FrameDesc,
+    /// The filter the run asked for (None: the device's default), for
+    /// what the upload adds.
+    pub filter: Option<Filter>,
+}
+
+impl StepBench<'_> {
+    /// Times steps `first..=last` of `series` (`first` warms up untimed).
+    pub fn run(
+        &self,
+        label: &str,
+        series: &Series,
+        [first, last]: [u32; 2],
+        mut frame: impl FnMut(Scene, &FrameDesc, bool) -> Result<(f64, Option<Frame>)>,
+        progress: &Progress,
+    ) -> Result<Vec<StepRecord>> {
+        series.check_step(last)?;
+        if first >= last {
+            return Err(Error::invalid(
+                "time",
+                format!("[{first}, {last}]"),
+                "expected [FIRST, LAST] with FIRST < LAST: the first step warms up, the rest are timed",
+            ));
+        }
+        let n = self.structures.len();
+        let mut times: Vec<[Vec<f64>; 5]> = vec![Default::default(); n];
+        let mut loads = Vec::new();
+        let mut differing = vec![0u64; n];
+        for k in first..=last {
+            progress.at(&format!("{label} - new step {k}"));
+            let t = Instant::now();
+            let volume = series.load(k, Some(self.ctx.info()))?;
+            let load_ms = ms_since(t);
+            let mut naive: Option<Frame> = None;
+            for (i, s) in self.structures.iter().enumerate() {
+                let t = Instant::now();
+                let mut gv = GpuVolume::upload(self.ctx, &volume)?;
+                gv.prepare(&volume, self.desc.lighting().is_some(), self.filter)?;
+                let upload = ms_since(t);
+                let input = BuildInput {
+                    volume: &volume,
+                    gpu_volume: &gv,
+                    tf: self.tf,
+                    gpu_tf: self.lut,
+                    mode: *self.desc.mode(),
+                    frame: Some(self.desc),
+                };
+                let (ranges, ranges_t) = self.builder.ranges_for(&[(s.accel, &s.params)], &gv)?;
+                let (structure, build_t) = self.builder.build(s.accel, &input, &ranges, &s.params)?;
+                let scene = Scene {
+                    structure: &structure,
+                    volume: &gv,
+                    tf: self.lut,
+                };
+                let (frame_ms, image) = frame(scene, self.desc, true)?;
+                let image = image.ok_or_else(|| Error::Unsupported("a frame read back was not returned".into()))?;
+                match &naive {
+                    None => naive = Some(image),
+                    Some(reference) => differing[i] += diff(reference, &image)?.differing as u64,
+                }
+                if k > first {
+                    let parts = [upload, ranges_t.total(), build_t.total(), frame_ms];
+                    let total = parts.iter().sum();
+                    for (series, v) in times[i].iter_mut().zip(parts.into_iter().chain([total])) {
+                        series.push(v);
+                    }
+                }
+                progress.step(1);
+            }
+            if k > first {
+                loads.push(load_ms);
+            }
+        }
+        let load_ms = median(loads);
+        for (s, d) in self.structures.iter().zip(&differing).filter(|(_, d)| **d > 0) {
+            progress.note(&format!("{label} - {}: {d} pixels of its new-step frames differ from naive's", s.label));
+        }
+        Ok(self
+            .structures
+            .iter()
+            .zip(times)
+            .zip(differing)
+            .map(|((s, [upload, ranges, build, frame, total]), differing_pixels)| StepRecord {
+                dataset: label.to_string(),
+                structure: s.label.clone(),
+                steps: (first + 1..=last).collect(),
+                load_ms,
+                upload_ms: median(upload),
+                ranges_ms: median(ranges),
+                build_ms: median(build),
+                frame_ms: median(frame),
+                new_step_ms: median(total),
+                differing_pixels,
+            })
+            .collect())
+    }
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1000.0
+}
+
+/// The new-step table: per data set and structure, the parts and the
+/// total, and the total over the structure's frame time in the run's
+/// timed frames (`frame_of`), where it has one.
+pub fn steps_md(records: &[StepRecord], frame_of: impl Fn(&str, &str) -> Option<f64>) -> String {
+    let mut out = String::from(
+        "Time to the first exact frame of a new time step (ms, medians over the timed steps; the step's voxels already in host memory)\n\n\
+         | data set | structure | load (host) | upload | ranges | build | frame | new step | new step / frame | differing px |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in records {
+        let ratio = frame_of(&r.dataset, &r.structure).map_or("-".to_string(), |f| format!("{:.2}", r.new_step_ms / f));
+        out += &format!(
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {ratio} | {} |\n",
+            r.dataset,
+            r.structure,
+            r.load_ms,
+            r.upload_ms,
+            r.ranges_ms,
+            r.build_ms,
+            r.frame_ms,
+            r.new_step_ms,
+            r.differing_pixels
+        );
+    }
+    out
+}

@@ -1,0 +1,291 @@
+//! Time series: a volume spec that names several steps on one grid.
+//!
+//! - a printf pattern of files (`run_%04d_64x64x64_float32.raw`): the steps
+//!   are the numbers that exist, which must run without a gap; step K is
+//!   the file numbered first + K;
+//! - a NIfTI file whose 4th dimension is time;
+//! - a generator, which animates over `procedural::STEPS` steps;
+//! - anything else is one step.
+//!
+//! Every step is normalised as step 0 is (`Volume::norm`), so a transfer
+//! function means the same values in every step; values beyond step 0's
+//! range clamp, as the sampler clamps. Every step must have step 0's
+//! dimensions and voxel type.
+
+use super::procedural::{self, Generator};
+use super::spec::{LoadOptions, VolumeSpec};
+use super::{Volume, VoxelType};
+use crate::error::{Error, Result};
+use crate::gpu::DeviceInfo;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// A volume spec's steps, loaded one at a time.
+pub struct Series {
+    spec: String,
+    source: Source,
+    options: LoadOptions,
+    /// Step 0's grid, type and normalisation, once a step has been loaded.
+    first: OnceLock<StepNorm>,
+}
+
+/// How every step of a series is normalised: as its step 0 (`of`), so a
+/// transfer function means the same values in every step. A host that
+/// makes its own steps (a running simulation) normalises each with
+/// `apply`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepNorm {
+    dims: [u32; 3],
+    ty: VoxelType,
+    /// Step 0's normalisation of integer texels (stored as they are).
+    norm: [f32; 2],
+    /// Step 0's range in source units: float texels are stored normalised
+    /// to their own step's range, and are mapped back onto this one.
+    range: [f64; 2],
+}
+
+enum Source {
+    /// One step.
+    Still(VolumeSpec),
+    Generator {
+        generator: Generator,
+        dims: [u32; 3],
+        param: Option<f64>,
+    },
+    /// The files of a pattern, step K at index K.
+    Files(Vec<PathBuf>),
+    #[cfg(feature = "loaders")]
+    Nifti { path: PathBuf, steps: u32 },
+}
+
+impl Series {
+    /// The steps `spec` names (see the module's doc); files are listed and
+    /// headers read, no voxels.
+    pub fn open(spec: &str, options: &LoadOptions) -> Result<Series> {
+        let source = if let Some(pattern) = Pattern::parse(spec) {
+            Source::Files(pattern.files()?)
+        } else {
+            match VolumeSpec::parse(spec, options)? {
+                VolumeSpec::Procedural { generator, dims, param } => Source::Generator { generator, dims, param },
+                #[cfg(feature = "loaders")]
+                VolumeSpec::File(path) if is_nifti(&path) && path.exists() => {
+                    let steps = super::nifti::steps(&path)?;
+                    Source::Nifti { path, steps }
+                }
+                still => Source::Still(still),
+            }
+        };
+        Ok(Series {
+            spec: spec.to_string(),
+            source,
+            options: options.clone(),
+            first: OnceLock::new(),
+        })
+    }
+
+    /// How many steps it has (at least 1).
+    pub fn steps(&self) -> u32 {
+        match &self.source {
+            Source::Still(_) => 1,
+            Source::Generator { .. } => procedural::STEPS,
+            Source::Files(files) => files.len() as u32,
+            #[cfg(feature = "loaders")]
+            Source::Nifti { steps, .. } => *steps,
+        }
+    }
+
+    /// What step `k` is, for messages: the file of a pattern, else the spec
+    /// and the step.
+    pub fn step_name(&self, k: u32) -> String {
+        match &self.source {
+            Source::Files(files) => files.get(k as usize).map_or(self.spec.clone(), |f| f.display().to_string()),
+            _ if self.steps() == 1 => self.spec.clone(),
+            _ => format!("{} step {k}", self.spec),
+        }
+    }
+
+    /// An error unless step `k` exists.
+    pub fn check_step(&self, k: u32) -> Result<()> {
+        let n = self.steps();
+        if k >= n {
+            let why = match n {
+                1 => format!("{} is one volume, not a time series (step 0 only)", self.spec),
+                _ => format!("{} has {n} steps, 0 to {}", self.spec, n - 1),
+            };
+            return Err(Error::invalid("time", k.to_string(), why));
+        }
+        Ok(())
+    }
+
+    /// Step `k`, its size checked against `device` before it is read or
+    /// made, normalised as step 0.
+    pub fn load(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+        self.check_step(k)?;
+        let mut volume = self.load_raw(k, device)?;
+        let first = match self.first.get() {
+            Some(first) => *first,
+            None if k == 0 => *self.first.get_or_init(|| StepNorm::of(&volume)),
+            None => {
+                let step0 = self.load_raw(0, device)?;
+                *self.first.get_or_init(|| StepNorm::of(&step0))
+            }
+        };
+        first.apply(&mut volume, &self.step_name(k))?;
+        Ok(volume)
+    }
+
+    fn load_raw(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+        match &self.source {
+            Source::Still(spec) => spec.load_within(&self.options, device),
+            Source::Generator { generator, dims, param } => {
+                let [w, h, d] = dims;
+                let what = format!("{}:{w}x{h}x{d}", generator.name());
+                super::check_size(*dims, VoxelType::U8, &what, device)?;
+                generator.generate_at(*dims, *param, k)
+            }
+            Source::Files(files) => VolumeSpec::File(files[k as usize].clone()).load_within(&self.options, device),
+            #[cfg(feature = "loaders")]
+            Source::Nifti { path, .. } => super::nifti::load_step(path, k, device),
+        }
+    }
+}
+
+impl StepNorm {
+    /// Step 0's grid, type and range; a step 0 with one value throughout
+    /// (nothing to normalise by) gives the full texel range, or one unit
+    /// above its value for floats, so later steps still map.
+    pub fn of(v: &Volume) -> StepNorm {
+        let norm = match v.norm[1] > 0.0 {
+            true => v.norm,
+            false => [v.norm[0].min(0.0), 1.0],
+        };
+        let [lo, hi] = v.value_range;
+        StepNorm {
+            dims: v.dims,
+            ty: v.source_type,
+            norm,
+            range: [lo, if hi > lo { hi } else { lo + 1.0 }],
+        }
+    }
+
+    /// Normalises `step` as step 0 (`Volume::set_norm`); an error naming
+    /// `what` when its grid or voxel type is not step 0's.
+    pub fn apply(&self, step: &mut Volume, what: &str) -> Result<()> {
+        if (step.dims, step.source_type) != (self.dims, self.ty) {
+            let [w, h, d] = step.dims;
+            let [w0, h0, d0] = self.dims;
+            return Err(Error::invalid(
+                "time step",
+                what.to_string(),
+                format!(
+                    "is {w}x{h}x{d} {}, where step 0 is {w0}x{h0}x{d0} {}: every step must share one grid and type",
+                    step.source_type, self.ty
+                ),
+            ));
+        }
+        step.set_norm(self.norm_for(step));
+        Ok(())
+    }
+
+    /// The normalisation that maps `step`'s texels as step 0's: integer
+    /// texels are absolute; float texels are `(v - lo) / (hi - lo)` of
+    /// their own step's range, so `v` is recovered and mapped onto step 0's.
+    fn norm_for(&self, step: &Volume) -> [f32; 2] {
+        if !matches!(step.data, super::VoxelData::F32(_)) {
+            return self.norm;
+        }
+        let [lo0, hi0] = self.range;
+        let [lo, hi] = step.value_range;
+        match hi > lo {
+            true => [((lo0 - lo) / (hi - lo)) as f32, ((hi - lo) / (hi0 - lo0)) as f32],
+            // Texels all 0: the offset alone carries the value.
+            false => [(-(lo - lo0) / (hi0 - lo0)) as f32, 1.0],
+        }
+    }
+}
+
+#[cfg(feature = "loaders")]
+fn is_nifti(path: &Path) -> bool {
+    let name = path.to_string_lossy().to_lowercase();
+    name.ends_with(".nii") || name.ends_with(".nii.gz")
+}
+
+/// A printf pattern: the text before and after one `%d` or `%0Nd`.
+struct Pattern {
+    dir: PathBuf,
+    prefix: String,
+    width: usize,
+    suffix: String,
+    spec: String,
+}
+
+impl Pattern {
+    /// The pattern in `spec`, None when it has no `%d` / `%0Nd`.
+    fn parse(spec: &str) -> Option<Pattern> {
+        let path = Path::new(spec);
+        let name = path.file_name()?.to_str()?;
+        let at = name.find('%')?;
+        let rest = &name[at + 1..];
+        let digits = rest.chars().take_while(char::is_ascii_digit).count();
+        if rest[digits..].chars().next() != Some('d') {
+            return None;
+        }
+        let width = match &rest[..digits] {
+            "" => 0,
+            w if w.starts_with('0') => w.parse().ok()?,
+            _ => return None,
+        };
+        Some(Pattern {
+            dir: path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf(),
+            prefix: name[..at].to_string(),
+            width,
+            suffix: rest[digits + 1..].to_string(),
+            spec: spec.to_string(),
+        })
+    }
+
+    /// The number a file name carries, None when it does not match.
+    fn number(&self, name: &str) -> Option<u64> {
+        let digits = name.strip_prefix(&self.prefix)?.strip_suffix(&self.suffix)?;
+        let printed = !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit());
+        let n: u64 = digits.parse().ok().filter(|_| printed)?;
+        // Exactly what printf writes for n: at least `width` digits.
+        (format!("{n:0width$}", width = self.width) == digits).then_some(n)
+    }
+
+    /// The matching files in step order; an error when none match or the
+    /// numbers have a gap.
+    fn files(&self) -> Result<Vec<PathBuf>> {
+        let entries = std::fs::read_dir(&self.dir).map_err(|e| Error::io(&self.dir, e))?;
+        let mut found: Vec<(u64, PathBuf)> = entries
+            .filter_map(|e| e.ok())
+            .filter_map(|e| {
+                let name = e.file_name().into_string().ok()?;
+                Some((self.number(&name)?, e.path()))
+            })
+            .collect();
+        found.sort();
+        let Some(&(first, _)) = found.first() else {
+            return Err(Error::invalid(
+                "volume",
+                self.spec.clone(),
+                format!("the pattern matches no file in {}", self.dir.display()),
+            ));
+        };
+        if let Some(missing) = found.iter().enumerate().find(|(i, (n, _))| *n != first + *i as u64) {
+            let want = first + missing.0 as u64;
+            return Err(Error::invalid(
+                "volume",
+                self.spec.clone(),
+                format!(
+                    "the steps have a gap: {}{want:0width$}{} is missing between {first} and {}",
+                    self.prefix,
+                    self.suffix,
+                    found[found.len() - 1].0,
+                    width = self.width
+                ),
+            ));
+        }
+        Ok(found.into_iter().map(|(_, p)| p).collect())
+    }
+}
