@@ -56,7 +56,11 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         serde_json::from_str(&std::fs::read_to_string(out.join("steps.json")).unwrap()).unwrap();
     assert_eq!(steps.len(), config.structures.len());
     for r in &steps {
-        assert_eq!((r.dataset.as_str(), r.steps.as_slice()), ("nbody:32", &[3, 4][..]), "{r:?}");
+        assert_eq!(
+            (r.dataset.as_str(), r.steps.as_slice()),
+            ("nbody:32", &[3, 4][..]),
+            "{r:?}"
+        );
         if !r.structure.contains("paper classification") {
             assert_eq!(r.differing_pixels, 0, "{r:?}");
         }

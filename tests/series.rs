@@ -60,7 +60,11 @@ fn a_pattern_of_files_is_a_series_in_number_order() {
     let spec = dir.path().join("run_%03d_4x3x2_uint8.raw");
     let series = open(spec.to_str().unwrap());
     assert_eq!(series.steps(), 3);
-    assert!(series.step_name(1).ends_with("run_008_4x3x2_uint8.raw"), "{}", series.step_name(1));
+    assert!(
+        series.step_name(1).ends_with("run_008_4x3x2_uint8.raw"),
+        "{}",
+        series.step_name(1)
+    );
     let step0 = series.load(0, None).unwrap();
     let step2 = series.load(2, None).unwrap();
     assert_eq!(u8s(&step0)[5], 5);
@@ -80,7 +84,9 @@ fn float_steps_are_mapped_onto_the_first_steps_range() {
     // Step 0 spans -2..2, step 1 spans 0..4 (stored normalised to its own
     // range): its value 2 is step 0's maximum.
     for (k, offset) in [(0, -2.0f32), (1, 0.0)] {
-        let values: Vec<u8> = (0..8).flat_map(|i| (offset + i as f32 * 4.0 / 7.0).to_le_bytes()).collect();
+        let values: Vec<u8> = (0..8)
+            .flat_map(|i| (offset + i as f32 * 4.0 / 7.0).to_le_bytes())
+            .collect();
         std::fs::write(dir.path().join(format!("f{k}_2x2x2_float32.raw")), values).unwrap();
     }
     let series = open(dir.path().join("f%d_2x2x2_float32.raw").to_str().unwrap());
@@ -96,13 +102,21 @@ fn float_steps_are_mapped_onto_the_first_steps_range() {
 fn bad_patterns_and_steps_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
     let none = dir.path().join("none_%04d_4x4x4_uint8.raw");
-    let err = Series::open(none.to_str().unwrap(), &LoadOptions::default()).err().unwrap();
+    let err = Series::open(none.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("the pattern matches no file"), "{err}");
 
     write_u8_steps(dir.path(), &[1, 2, 4], [4, 4, 4], |_, i| i as u8);
     let gap = dir.path().join("run_%03d_4x4x4_uint8.raw");
-    let err = Series::open(gap.to_str().unwrap(), &LoadOptions::default()).err().unwrap();
-    assert!(err.to_string().contains("run_003_4x4x4_uint8.raw is missing between 1 and 4"), "{err}");
+    let err = Series::open(gap.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string()
+            .contains("run_003_4x4x4_uint8.raw is missing between 1 and 4"),
+        "{err}"
+    );
 
     // A step shorter than the layout given for every step.
     let other = dir.path().join("grid_%d.raw");
@@ -123,7 +137,11 @@ fn bad_patterns_and_steps_are_one_line_errors() {
     let err = open("nbody:16").load(64, None).unwrap_err().to_string();
     assert!(err.contains("has 64 steps"), "{err}");
     let still = dir.path().join("grid_0.raw");
-    let err = Series::open(still.to_str().unwrap(), &layout).unwrap().load(1, None).unwrap_err().to_string();
+    let err = Series::open(still.to_str().unwrap(), &layout)
+        .unwrap()
+        .load(1, None)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("is one volume, not a time series"), "{err}");
 }
 
@@ -151,14 +169,22 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
     let bytes = nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data);
     for name in ["t.nii", "t.nii.gz"] {
         let p = dir.path().join(name);
-        let written = if name.ends_with(".gz") { gzip(&bytes) } else { bytes.clone() };
+        let written = if name.ends_with(".gz") {
+            gzip(&bytes)
+        } else {
+            bytes.clone()
+        };
         std::fs::write(&p, written).unwrap();
         let series = open(p.to_str().unwrap());
         assert_eq!(series.steps(), 3, "{name}");
         for k in 0..3u32 {
             let step = series.load(k, None).unwrap();
             assert_eq!(step.dims, dims);
-            assert_eq!(u8s(&step), &data[12 * k as usize..12 * (k as usize + 1)], "{name} step {k}");
+            assert_eq!(
+                u8s(&step),
+                &data[12 * k as usize..12 * (k as usize + 1)],
+                "{name} step {k}"
+            );
         }
         let err = series.load(3, None).unwrap_err().to_string();
         assert!(err.contains("has 3 steps, 0 to 2"), "{err}");
@@ -169,7 +195,9 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
     // Beyond time (a 5th dimension) is refused, as is a truncated step.
     let p = dir.path().join("five.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
-    let err = Series::open(p.to_str().unwrap(), &LoadOptions::default()).err().unwrap();
+    let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
     assert!(err.to_string().contains("beyond x, y, z and time"), "{err}");
     let p = dir.path().join("short.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data[..30])).unwrap();
@@ -217,7 +245,11 @@ fn render_takes_a_time_step() {
         &[],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
-    assert!(r.stdout.contains("time    step 12 of 64 (vessels:24 step 12)"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("time    step 12 of 64 (vessels:24 step 12)"),
+        "{}",
+        r.stdout
+    );
     let frame = Frame::read_exr(&out).unwrap();
     assert_eq!(frame.metadata["time"], "12");
     fails(

@@ -132,7 +132,12 @@ fn keys_rebuild_for_the_new_tf_and_structure_and_match_render() {
         .lines()
         .find(|l| l.starts_with("frames 2: "))
         .unwrap_or_default();
-    assert!(summary.ends_with(&format!("({accel})")), "{}", r.stdout);
+    // A generator is a time series: the summary ends with the step shown.
+    assert!(
+        summary.contains(&format!("({accel}), time step 0 of 64")),
+        "{}",
+        r.stdout
+    );
     let frame = Frame::read_exr(&a).unwrap();
     assert_eq!(frame.metadata["tf"], "ramp:0.32:1.02");
     assert_eq!(frame.metadata["accel"], accel);
@@ -181,7 +186,7 @@ fn look_keys_and_flags_match_render() {
             "--shade",
             "on",
             "--keys",
-            "m,m,m,m,.,c,PageUp,x",
+            "m,m,m,m,>,c,PageUp,x",
             "--frames",
             "2",
             "--screenshot",
@@ -279,4 +284,44 @@ fn without_a_display_the_viewer_says_so_in_one_line() {
     let lines: Vec<&str> = r.stderr.lines().collect();
     assert_eq!(lines.len(), 1, "{}", r.stderr);
     assert!(lines[0].starts_with("error: cannot open a window"), "{}", lines[0]);
+}
+
+/// A series in the viewer: `.` steps forward, Space plays (a new step each
+/// frame, the next loading while this one renders); the screenshot equals
+/// `render --time` of the step shown.
+#[test]
+fn the_viewer_steps_and_plays_a_series_and_matches_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = ["--size", "64x48", "--validate"];
+    for (keys, frames, step) in [(".,.", "2", "2"), ("Space", "4", "3")] {
+        let a = dir.path().join(format!("view-{frames}.exr"));
+        let b = dir.path().join(format!("render-{frames}.exr"));
+        let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+        let view = [
+            &[
+                "view",
+                "vessels:32",
+                "--keys",
+                keys,
+                "--frames",
+                frames,
+                "--screenshot",
+                a_str,
+            ][..],
+            &size,
+        ]
+        .concat();
+        let r = lacuna_windowed(&view);
+        ok(&r, &format!("{view:?}"));
+        let summary = r.stdout.lines().find(|l| l.starts_with("frames ")).unwrap_or_default();
+        assert!(
+            summary.contains(&format!("time step {step} of 64 (load ")) && summary.contains(" ms, upload "),
+            "{view:?}: {summary}"
+        );
+        let render = [&["render", "vessels:32", "--time", step, "--out", b_str][..], &size].concat();
+        ok(&lacuna(&render, &[]), &format!("{render:?}"));
+        let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+        assert_eq!(diff.code, 0, "{keys}: {}{}", diff.stdout, diff.stderr);
+        assert!(diff.stdout.contains("differing 0 of 3072"), "{}", diff.stdout);
+    }
 }

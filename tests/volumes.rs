@@ -5,7 +5,6 @@ mod common;
 use common::gzip;
 use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions, RawLayout, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 fn load(path: &Path) -> lacuna::Result<Volume> {

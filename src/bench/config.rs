@@ -139,7 +139,8 @@ pub struct DatasetConfig {
 impl DatasetConfig {
     /// Frames its `time` range renders per structure (0 without one).
     pub fn new_steps(&self) -> u64 {
-        self.time.map_or(0, |[first, last]| last.saturating_sub(first) as u64 + 1)
+        self.time
+            .map_or(0, |[first, last]| last.saturating_sub(first) as u64 + 1)
     }
 
     /// The look of its frames: its own over the run's.

@@ -8,16 +8,17 @@
 //! and early-termination thresholds, against a manually filtered reference.
 
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
+use super::frame_timer::FrameTimer;
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
-use super::series::{steps_md, StepBench, StepRecord};
+use super::series::{StepBench, StepRecord};
 use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
-use crate::gpu::{Context, Timer};
-use crate::render::{Filter, FrameBuilder, FrameDesc, Output, Projection, RenderTarget, Renderer, Scene};
+use crate::gpu::Context;
+use crate::render::{Filter, FrameBuilder, FrameDesc, Projection, Renderer, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
 use crate::Volume;
@@ -35,18 +36,6 @@ pub struct BenchOutput {
     pub steps: Vec<StepRecord>,
 }
 
-impl BenchOutput {
-    /// The new-step table, beside each structure's median frame time.
-    pub fn steps_md(&self) -> String {
-        steps_md(&self.steps, |d, s| {
-            self.records
-                .iter()
-                .find(|r| r.dataset == d && r.structure == s)
-                .map(|r| r.frame.median_ms)
-        })
-    }
-}
-
 pub struct RunOptions {
     pub quiet: bool,
     pub keep_frames: bool,
@@ -54,41 +43,6 @@ pub struct RunOptions {
     pub cost_cache: Option<std::path::PathBuf>,
     /// auto measures its kernel constants again, whatever the cache holds.
     pub recalibrate: bool,
-}
-
-/// Renders frames into one target, timing the march pass of each.
-struct FrameTimer<'a> {
-    ctx: &'a Context,
-    renderer: &'a Renderer,
-    target: RenderTarget,
-    timer: Timer,
-}
-
-impl<'a> FrameTimer<'a> {
-    fn new(ctx: &'a Context, renderer: &'a Renderer, width: u32, height: u32) -> Result<Self> {
-        Ok(FrameTimer {
-            ctx,
-            renderer,
-            target: RenderTarget::new(ctx, width, height)?,
-            timer: Timer::new(ctx, 2)?,
-        })
-    }
-
-    /// One frame: GPU ms of the march pass, and the frame when `read`.
-    fn frame(&mut self, scene: Scene, desc: &FrameDesc, read: bool) -> Result<(f64, Option<Frame>)> {
-        let (renderer, target, timer) = (self.renderer, &self.target, &mut self.timer);
-        self.ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            renderer.record(cmd, Some(timer), target, scene, desc, Output::Buffer)?;
-            if read {
-                renderer.record_readback(cmd, target)?;
-            }
-            Ok(())
-        })?;
-        let ms = self.timer.results()?.phase("march")?;
-        let frame = if read { Some(self.target.read()?) } else { None };
-        Ok((ms, frame))
-    }
 }
 
 /// View `view` of `views` of the orbit the benchmark turns through, in
@@ -339,17 +293,18 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
         let series = Series::open(&ds.volume, &LoadOptions::default());
-        let loaded = match series.and_then(|s| load(ctx, &s, ds.time, ds.label(config)?, ds.tf.as_deref()).map(|l| (s, l))) {
-            Ok(l) => l,
-            Err(Error::Io { path, .. }) if ds.optional => {
-                let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
-                progress.note(&note);
-                out.notes.push(note);
-                progress.step(structures.len() as u64 * (per_structure + ds.new_steps()));
-                continue;
-            }
-            Err(e) => return Err(e),
-        };
+        let loaded =
+            match series.and_then(|s| load(ctx, &s, ds.time, ds.label(config)?, ds.tf.as_deref()).map(|l| (s, l))) {
+                Ok(l) => l,
+                Err(Error::Io { path, .. }) if ds.optional => {
+                    let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
+                    progress.note(&note);
+                    out.notes.push(note);
+                    progress.step(structures.len() as u64 * (per_structure + ds.new_steps()));
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
         let (series, loaded) = loaded;
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let mut gv = GpuVolume::upload(ctx, v)?;
@@ -553,7 +508,8 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 filter: timed_filter,
             };
             let step_frame = |scene: Scene, desc: &FrameDesc, read: bool| frames.frame(scene, desc, read);
-            out.steps.extend(bench.run(&loaded.spec, &series, range, step_frame, &progress)?);
+            out.steps
+                .extend(bench.run(&loaded.spec, &series, range, step_frame, &progress)?);
         }
         // Speed against error, on the volume and ranges already uploaded.
         if let Some(e) = config

@@ -125,26 +125,43 @@ impl StepBench<'_> {
         }
         let load_ms = median(loads);
         for (s, d) in self.structures.iter().zip(&differing).filter(|(_, d)| **d > 0) {
-            progress.note(&format!("{label} - {}: {d} pixels of its new-step frames differ from naive's", s.label));
+            progress.note(&format!(
+                "{label} - {}: {d} pixels of its new-step frames differ from naive's",
+                s.label
+            ));
         }
         Ok(self
             .structures
             .iter()
             .zip(times)
             .zip(differing)
-            .map(|((s, [upload, ranges, build, frame, total]), differing_pixels)| StepRecord {
-                dataset: label.to_string(),
-                structure: s.label.clone(),
-                steps: (first + 1..=last).collect(),
-                load_ms,
-                upload_ms: median(upload),
-                ranges_ms: median(ranges),
-                build_ms: median(build),
-                frame_ms: median(frame),
-                new_step_ms: median(total),
-                differing_pixels,
-            })
+            .map(
+                |((s, [upload, ranges, build, frame, total]), differing_pixels)| StepRecord {
+                    dataset: label.to_string(),
+                    structure: s.label.clone(),
+                    steps: (first + 1..=last).collect(),
+                    load_ms,
+                    upload_ms: median(upload),
+                    ranges_ms: median(ranges),
+                    build_ms: median(build),
+                    frame_ms: median(frame),
+                    new_step_ms: median(total),
+                    differing_pixels,
+                },
+            )
             .collect())
+    }
+}
+
+impl super::BenchOutput {
+    /// The new-step table, beside each structure's median frame time.
+    pub fn steps_md(&self) -> String {
+        steps_md(&self.steps, |d, s| {
+            self.records
+                .iter()
+                .find(|r| r.dataset == d && r.structure == s)
+                .map(|r| r.frame.median_ms)
+        })
     }
 }
 

@@ -50,10 +50,6 @@ impl VolumeArgs {
         Series::open(&self.volume, &self.options())
     }
 
-    pub fn load(&self) -> Result<Volume> {
-        self.series()?.load(self.time, None)
-    }
-
     /// "step K of N (what)" for a series, None for one volume.
     pub fn step_line(&self, series: &Series) -> Option<String> {
         (series.steps() > 1).then(|| {

@@ -130,7 +130,8 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
     let voxel_bytes = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
     // Skip to this step's voxels (time is the slowest axis), then read them.
     let skip = offset as u64 - HEADER_BYTES + step as u64 * voxel_bytes;
-    let skipped = std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
+    let skipped =
+        std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
     let mut data = Vec::new();
     if skipped == skip {
         (&mut reader)

@@ -98,7 +98,9 @@ impl Series {
     /// and the step.
     pub fn step_name(&self, k: u32) -> String {
         match &self.source {
-            Source::Files(files) => files.get(k as usize).map_or(self.spec.clone(), |f| f.display().to_string()),
+            Source::Files(files) => files
+                .get(k as usize)
+                .map_or(self.spec.clone(), |f| f.display().to_string()),
             _ if self.steps() == 1 => self.spec.clone(),
             _ => format!("{} step {k}", self.spec),
         }
@@ -227,7 +229,7 @@ impl Pattern {
         let at = name.find('%')?;
         let rest = &name[at + 1..];
         let digits = rest.chars().take_while(char::is_ascii_digit).count();
-        if rest[digits..].chars().next() != Some('d') {
+        if !rest[digits..].starts_with('d') {
             return None;
         }
         let width = match &rest[..digits] {
@@ -236,7 +238,11 @@ impl Pattern {
             _ => return None,
         };
         Some(Pattern {
-            dir: path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf(),
+            dir: path
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .to_path_buf(),
             prefix: name[..at].to_string(),
             width,
             suffix: rest[digits + 1..].to_string(),

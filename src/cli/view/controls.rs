@@ -34,6 +34,9 @@ const OWN_KEYS: &[&str] = &[
     "s",
     "q",
     "Escape",
+    "Space",
+    "<",
+    ">",
 ];
 
 /// Every key name `Controls::key` acts on.
@@ -132,6 +135,8 @@ pub struct Change {
     pub structure: bool,
     /// A screenshot was asked for.
     pub screenshot: bool,
+    /// The time step changed: load it, upload it, rebuild.
+    pub time: bool,
     pub quit: bool,
 }
 
@@ -154,6 +159,11 @@ pub struct Controls {
     pub json: Option<String>,
     pub accel: Accel,
     pub look: LookControls,
+    /// The time step shown, of `steps` (1: one volume).
+    pub time: u32,
+    pub steps: u32,
+    /// Space plays the series: a new step every frame.
+    pub playing: bool,
 }
 
 impl Controls {
@@ -190,7 +200,19 @@ impl Controls {
             json,
             accel,
             look: LookControls::new(frame),
+            time: 0,
+            steps: 1,
+            playing: false,
         }
+    }
+
+    /// Moves `by` steps through the series, wrapping around.
+    pub fn step_time(&mut self, by: i64) -> bool {
+        let n = self.steps.max(1) as i64;
+        let next = (self.time as i64 + by).rem_euclid(n) as u32;
+        let moved = next != self.time;
+        self.time = next;
+        moved
     }
 
     /// The current transfer function's spec.
@@ -279,6 +301,14 @@ impl Controls {
                 self.pan = DVec2::ZERO;
             }
             "s" | "S" => change.screenshot = true,
+            "Space" => self.playing = !self.playing && self.steps > 1,
+            // In a series `,` and `.` step through time; `<` and `>` (and,
+            // in one volume, `,` and `.`) move the iso value.
+            "," | "." if self.steps > 1 => change.time = self.step_time(if key == "," { -1 } else { 1 }),
+            "<" | ">" => {
+                let nudge = if key == "<" { "," } else { "." };
+                change.structure = self.look.key(nudge, &self.orbit).rebuild;
+            }
             "Escape" | "q" | "Q" => change.quit = true,
             _ => change.structure = self.look.key(key, &self.orbit).rebuild,
         }
@@ -331,9 +361,40 @@ mod tests {
         Controls::new(&frame, spec, Accel::naive(), Some("cool.json".into()))
     }
 
-    /// What a control changes: TF, structure, camera, step, ERT, zoom.
-    fn state(c: &Controls) -> (String, &'static str, Orbit, f32, Option<f32>, f64) {
-        (c.tf_spec(), c.accel.name(), c.orbit, c.step, c.ert, c.zoom)
+    /// What a control changes: TF, structure, camera, step, ERT, zoom,
+    /// time step, play.
+    #[allow(clippy::type_complexity)]
+    fn state(c: &Controls) -> (String, &'static str, Orbit, f32, Option<f32>, f64, u32, bool) {
+        (
+            c.tf_spec(),
+            c.accel.name(),
+            c.orbit,
+            c.step,
+            c.ert,
+            c.zoom,
+            c.time,
+            c.playing,
+        )
+    }
+
+    #[test]
+    fn comma_and_period_step_a_series_and_nudge_the_iso_value_of_one_volume() {
+        let mut one = controls("ramp:0.3:1");
+        let iso = one.look.iso.values()[0];
+        assert!(!one.key(",", false).time);
+        assert!(one.look.iso.values()[0] < iso);
+        one.key("Space", false);
+        assert!(!one.playing, "one volume does not play");
+        let mut series = controls("ramp:0.3:1");
+        series.steps = 3;
+        assert!(series.key(",", false).time);
+        assert_eq!(series.time, 2, "wraps to the last step");
+        assert!(series.key(".", false).time);
+        assert_eq!((series.time, series.look.iso.values()[0]), (0, iso));
+        series.key(">", false);
+        assert!(series.look.iso.values()[0] > iso);
+        series.key("Space", false);
+        assert!(series.playing);
     }
 
     #[test]
@@ -358,6 +419,8 @@ mod tests {
         for key in keys() {
             let mut c = controls("ramp:0.3:1");
             c.zoom = 2.0;
+            // A series, for the time keys.
+            c.steps = 4;
             // The plane keys move a plane that is shown.
             if key.starts_with("Page") {
                 c.key("c", false);

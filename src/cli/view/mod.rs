@@ -16,10 +16,13 @@ use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
 use lacuna::render::{self, Filter, FrameDesc};
+use lacuna::volume::Series;
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::thread::JoinHandle;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -79,11 +82,21 @@ struct Viewer {
     buttons: (bool, bool),
     /// What the last key's rebuild failed with.
     key_result: Option<Error>,
+    /// The volume's time steps, the step on the GPU, and the next step
+    /// loading on a host thread while this one renders (when playing).
+    series: Arc<Series>,
+    shown: u32,
+    prefetch: Option<(u32, Loading)>,
+    /// The last step's host load (read or generate), ms.
+    load_ms: f64,
 }
+
+/// A time step loading on a host thread: the volume and its load time.
+type Loading = JoinHandle<Result<(lacuna::Volume, f64)>>;
 
 struct App<'a> {
     args: &'a ViewArgs,
-    setup: Option<(lacuna::Volume, TransferFunction, FrameDesc)>,
+    setup: Option<(Arc<Series>, lacuna::Volume, TransferFunction, FrameDesc)>,
     viewer: Option<Viewer>,
     error: Option<Error>,
 }
@@ -115,7 +128,8 @@ impl ViewArgs {
 
 pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let desc = args.desc()?;
-    let volume = args.volume.load()?;
+    let series = Arc::new(args.volume.series()?);
+    let volume = series.load(args.volume.time, None)?;
     let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
     let event_loop = EventLoop::new().map_err(|e| {
@@ -127,7 +141,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         args,
-        setup: Some((volume, tf, desc)),
+        setup: Some((series, volume, tf, desc)),
         viewer: None,
         error: None,
     };
@@ -166,7 +180,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
 
 impl App<'_> {
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let Some((volume, tf, desc)) = self.setup.take() else {
+        let Some((series, volume, tf, desc)) = self.setup.take() else {
             return Ok(());
         };
         let (width, height) = desc.size();
@@ -192,7 +206,9 @@ impl App<'_> {
         )?;
         let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
-        let controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
+        let mut controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
+        controls.steps = series.steps();
+        controls.time = self.args.volume.time;
         self.viewer = Some(Viewer {
             scene,
             host,
@@ -208,6 +224,10 @@ impl App<'_> {
             cursor: None,
             buttons: (false, false),
             key_result: None,
+            shown: self.args.volume.time,
+            series,
+            prefetch: None,
+            load_ms: 0.0,
         });
         if let Some(viewer) = self.viewer.as_mut() {
             for key in &self.args.keys {
@@ -324,7 +344,25 @@ impl Viewer {
         let shot = last && args.screenshot.is_some();
         let volume = &self.scene.volume;
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
-        if desc.lighting().is_some() {
+        let lit = desc.lighting().is_some();
+        if self.shown != self.controls.time {
+            let (volume, load_ms) = self.take_step(self.controls.time)?;
+            self.load_ms = load_ms;
+            self.scene.set_volume(volume, lit)?;
+            self.shown = self.controls.time;
+        }
+        // The next step loads while this one uploads, builds and renders.
+        if self.controls.playing && self.prefetch.is_none() {
+            let next = (self.shown + 1) % self.series.steps();
+            let series = self.series.clone();
+            let load = std::thread::spawn(move || {
+                let t = Instant::now();
+                let volume = series.load(next, None)?;
+                Ok((volume, t.elapsed().as_secs_f64() * 1000.0))
+            });
+            self.prefetch = Some((next, load));
+        }
+        if lit {
             self.scene.ensure_gradient()?;
         }
         self.scene.prepare(&desc)?;
@@ -338,6 +376,9 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
+        if self.controls.playing {
+            self.controls.step_time(1);
+        }
         let now = Instant::now();
         let dt = now.duration_since(self.last).as_secs_f64();
         self.last = now;
@@ -367,6 +408,35 @@ impl Viewer {
             self.write(&stem.with_extension("png"), FrameFormat::Png)?;
         }
         Ok(last)
+    }
+
+    /// Step `k`: the one loading on the host thread when it is `k` (a
+    /// step that failed to load fails here), else loaded now.
+    fn take_step(&mut self, k: u32) -> Result<(lacuna::Volume, f64)> {
+        if let Some((next, load)) = self.prefetch.take() {
+            let loaded = load
+                .join()
+                .map_err(|_| Error::Unsupported(format!("loading step {next} panicked")))?;
+            if next == k {
+                return loaded;
+            }
+        }
+        let t = Instant::now();
+        let volume = self.series.load(k, None)?;
+        Ok((volume, t.elapsed().as_secs_f64() * 1000.0))
+    }
+
+    /// "time step K of N" for a series; empty for one volume.
+    fn step_text(&self) -> String {
+        match self.series.steps() {
+            1 => String::new(),
+            n => format!(
+                "time step {} of {n} (load {:.1} ms, upload {:.1} ms)",
+                self.shown,
+                self.load_ms,
+                self.scene.upload_ms()
+            ),
+        }
     }
 
     fn write(&self, path: &Path, format: FrameFormat) -> Result<()> {
@@ -414,13 +484,15 @@ impl Viewer {
 
     /// The `--frames` run's last line: what the title showed last.
     fn summary(&self) -> String {
+        let step = self.step_text();
         format!(
-            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({})",
+            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}){}{step}",
             self.drawn,
             self.fps,
             self.scene.march_ms(),
             self.scene.rebuild_ms(),
-            self.scene.accel
+            self.scene.accel,
+            if step.is_empty() { "" } else { ", " },
         )
     }
 
@@ -431,9 +503,11 @@ impl Viewer {
             None => scene.accel.to_string(),
         };
         let c = &self.controls;
+        let step = self.step_text();
         format!(
-            "lacuna view · {} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
+            "lacuna view · {}{}{step} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
             scene.volume.name,
+            if step.is_empty() { "" } else { " · " },
             scene.tf.spec,
             c.look.describe(),
             self.fps,

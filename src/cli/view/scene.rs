@@ -37,6 +37,10 @@ pub struct Scene {
     /// The last build's phases (empty for naive) and frame's passes.
     build: Timings,
     march: Timings,
+    /// The sample filter asked for (None: the default), for new steps.
+    filter: Option<Filter>,
+    /// The last new time step's upload (with what its frames read), ms.
+    upload_ms: f64,
 }
 
 impl Scene {
@@ -71,6 +75,8 @@ impl Scene {
             timer: Timer::new(ctx, 1)?,
             build: Timings::default(),
             march: Timings::default(),
+            filter,
+            upload_ms: 0.0,
         };
         scene.set_accel(accel);
         Ok(scene)
@@ -91,6 +97,26 @@ impl Scene {
         self.tf = tf;
         self.stale = true;
         Ok(())
+    }
+
+    /// A new time step on the same grid: upload it (with its gradient when
+    /// frames are lit) in place of the last; its ranges and structure are
+    /// computed before the next frame.
+    pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
+        let t = std::time::Instant::now();
+        let mut gpu_volume = GpuVolume::upload(&self.ctx, &volume)?;
+        gpu_volume.prepare(&volume, lit, self.filter)?;
+        self.upload_ms = t.elapsed().as_secs_f64() * 1000.0;
+        self.gpu_volume = gpu_volume;
+        self.volume = volume;
+        self.ranges = None;
+        self.stale = true;
+        Ok(())
+    }
+
+    /// The last new step's upload time, ms (0 before any).
+    pub fn upload_ms(&self) -> f64 {
+        self.upload_ms
     }
 
     /// Uploads the volume's gradient, once, before the first lit frame.

@@ -21,7 +21,7 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
     let weights: Vec<f64> = (0..CLUSTERS).map(|_| rng.uniform().powf(3.0) + 0.02).collect();
     let sum: f64 = weights.iter().sum();
     // Velocities from their own stream, so step 0 is the still volume.
-    let mut motion = Rng::new(seed ^ 0x5EED_0F_71AE);
+    let mut motion = Rng::new(seed ^ 0x005E_ED0F_71AE);
     let velocities: Vec<[f64; 3]> = (0..CLUSTERS)
         .map(|_| [motion.normal(), motion.normal(), motion.normal()].map(|v| v * size * 0.0035 * time as f64))
         .collect();

@@ -54,7 +54,11 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
             let a = [0, 1, 2].map(|i| s.a[i] * scale[i]);
             let b = [0, 1, 2].map(|i| s.b[i] * scale[i]);
             // At least a voxel thick at any size.
-            (a, b, (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0) * growth)
+            (
+                a,
+                b,
+                (s.radius * scale.iter().cloned().fold(0.0, f32::max)).max(1.0) * growth,
+            )
         })
         .collect();
     let [w, h, _] = dims;
