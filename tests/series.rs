@@ -241,7 +241,17 @@ fn render_takes_a_time_step() {
     let out = dir.path().join("t.exr");
     let o = out.to_str().unwrap();
     let r = lacuna(
-        &["render", "vessels:24", "--time", "12", "--size", "32x24", "--out", o],
+        &[
+            "render",
+            "vessels:24",
+            "--time",
+            "12",
+            "--size",
+            "32x24",
+            "--out",
+            o,
+            "--validate",
+        ],
         &[],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);

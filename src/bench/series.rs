@@ -1,8 +1,9 @@
 //! The time to the first exact frame of a new time step, per structure:
 //! the step's voxels are in host memory (loading or generating them is
 //! timed apart), then its upload (with the cells copy and gradient the
-//! frames read), its ranges, the structure's build and one frame, each
-//! timed, interleaved across the structures step by step. Every frame is
+//! frames read; once a step, the same for every structure), the ranges the
+//! structure reads, its build and one frame, each timed, interleaved
+//! across the structures step by step. Every frame is
 //! compared with naive's on the same step.
 
 use super::config::StructureSpec;
@@ -28,7 +29,8 @@ pub struct StepRecord {
     /// Reading or generating a step on the host (the same for every
     /// structure; overlapped with the previous step's frames by `view`).
     pub load_ms: f64,
-    /// Upload, with the cells copy and gradient the frames read (wall).
+    /// Upload, with the cells copy and gradient the frames read (wall;
+    /// once a step, shared by every structure).
     pub upload_ms: f64,
     /// The ranges the structure reads (GPU).
     pub ranges_ms: f64,
@@ -83,12 +85,13 @@ impl StepBench<'_> {
             let t = Instant::now();
             let volume = series.load(k, Some(self.ctx.info()))?;
             let load_ms = ms_since(t);
+            // One upload a step: every structure reads the same one.
+            let t = Instant::now();
+            let mut gv = GpuVolume::upload(self.ctx, &volume)?;
+            gv.prepare(&volume, self.desc.lighting().is_some(), self.filter)?;
+            let upload = ms_since(t);
             let mut naive: Option<Frame> = None;
             for (i, s) in self.structures.iter().enumerate() {
-                let t = Instant::now();
-                let mut gv = GpuVolume::upload(self.ctx, &volume)?;
-                gv.prepare(&volume, self.desc.lighting().is_some(), self.filter)?;
-                let upload = ms_since(t);
                 let input = BuildInput {
                     volume: &volume,
                     gpu_volume: &gv,

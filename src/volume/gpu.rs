@@ -137,31 +137,26 @@ impl GpuVolume {
     /// the device holds it): the manual filter then reads a lit sample's
     /// eight gradients in three fetches instead of eight.
     pub fn add_gradient(&mut self, volume: &Volume) -> Result<()> {
-        let ctx = self.ctx.clone();
         let wants_cells = self.cells.is_some()
             && self.gradient_cells.is_none()
-            && cells::check_gradient_cells(ctx.info(), self.dims).is_ok();
-        let mut texels = None;
-        self.put_gradient(volume, |t, dims| {
-            let image = Image3d::with_data(
-                &ctx,
+            && cells::check_gradient_cells(self.ctx.info(), self.dims).is_ok();
+        if self.gradient.is_some() && !wants_cells {
+            return Ok(());
+        }
+        // One gradient computed for both copies.
+        let texels = self.gradient_texels(volume)?;
+        if self.gradient.is_none() {
+            self.gradient = Some(Image3d::with_data(
+                &self.ctx,
                 "gradient",
                 GRADIENT_FORMAT,
-                dims,
+                self.dims,
                 GRADIENT_TEXEL_BYTES,
-                bytemuck::cast_slice(t),
-            )?;
-            if wants_cells {
-                texels = Some(t.to_vec());
-            }
-            Ok((image, ()))
-        })?;
+                bytemuck::cast_slice(&texels),
+            )?);
+        }
         if wants_cells {
-            let t = match texels {
-                Some(t) => t,
-                None => self.gradient_texels(volume)?,
-            };
-            self.gradient_cells = Some(cells::upload_gradient_cells(&ctx, &t, self.dims)?);
+            self.gradient_cells = Some(cells::upload_gradient_cells(&self.ctx, &texels, self.dims)?);
         }
         Ok(())
     }
@@ -174,34 +169,21 @@ impl GpuVolume {
     /// As `add_gradient`, recorded into `cmd` (see `record_upload`); None
     /// when it is already there.
     pub fn record_add_gradient(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
-        let ctx = self.ctx.clone();
-        self.put_gradient(volume, |t, dims| {
-            Image3d::record_with_data(
-                &ctx,
-                cmd,
-                "gradient",
-                GRADIENT_FORMAT,
-                dims,
-                GRADIENT_TEXEL_BYTES,
-                bytemuck::cast_slice(t),
-            )
-        })
-    }
-
-    /// Computes the gradient and hands its texels to `upload`, unless it is
-    /// already there.
-    fn put_gradient<R>(
-        &mut self,
-        volume: &Volume,
-        upload: impl FnOnce(&[[half::f16; 4]], [u32; 3]) -> Result<(Image3d, R)>,
-    ) -> Result<Option<R>> {
         if self.gradient.is_some() {
             return Ok(None);
         }
         let texels = self.gradient_texels(volume)?;
-        let (image, extra) = upload(&texels, self.dims)?;
+        let (image, staging) = Image3d::record_with_data(
+            &self.ctx,
+            cmd,
+            "gradient",
+            GRADIENT_FORMAT,
+            self.dims,
+            GRADIENT_TEXEL_BYTES,
+            bytemuck::cast_slice(&texels),
+        )?;
         self.gradient = Some(image);
-        Ok(Some(extra))
+        Ok(Some(staging))
     }
 
     fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {

@@ -239,12 +239,6 @@ impl Volume {
         })
     }
 
-    /// Normalises its texels with `norm` instead of its own range (a time
-    /// series normalises every step as its first: `Series`).
-    pub fn set_norm(&mut self, norm: [f32; 2]) {
-        self.norm = norm;
-    }
-
     pub fn voxel_count(&self) -> u64 {
         self.dims.iter().map(|&d| d as u64).product()
     }

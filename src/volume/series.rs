@@ -170,7 +170,7 @@ impl StepNorm {
         }
     }
 
-    /// Normalises `step` as step 0 (`Volume::set_norm`); an error naming
+    /// Normalises `step` as step 0 (its `norm`); an error naming
     /// `what` when its grid or voxel type is not step 0's.
     pub fn apply(&self, step: &mut Volume, what: &str) -> Result<()> {
         if (step.dims, step.source_type) != (self.dims, self.ty) {
@@ -185,7 +185,7 @@ impl StepNorm {
                 ),
             ));
         }
-        step.set_norm(self.norm_for(step));
+        step.norm = self.norm_for(step);
         Ok(())
     }
 

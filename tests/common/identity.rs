@@ -264,16 +264,7 @@ pub fn standard_views() -> Vec<FrameDesc> {
 /// volume's faces.
 pub fn lattice_views() -> Vec<FrameDesc> {
     vec![
-        // Along z through x, y = 0 .. 32: faces at multiples of 8, edges where both are.
-        lattice(
-            33,
-            [0.0, 0.0, -5.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            0.5,
-        )
-        .unwrap(),
+        hard::along_z_through_brick_faces().unwrap(),
         // Along -x, grazing the y = 0 and y = 32 faces.
         lattice(
             33,

@@ -110,6 +110,19 @@ pub fn lattice(size: u32, start: [f32; 3], du: [f32; 3], dv: [f32; 3], dir: [f32
         .build()
 }
 
+/// 33x33 rays along +z through x, y = 0 .. 32: through brick faces at
+/// multiples of 8 and edges where both are.
+pub fn along_z_through_brick_faces() -> Result<FrameDesc> {
+    lattice(
+        33,
+        [0.0, 0.0, -5.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        0.5,
+    )
+}
+
 fn gen(spec: &str) -> Result<Volume> {
     Volume::load(spec, &LoadOptions::default())
 }
@@ -205,14 +218,7 @@ pub fn cases() -> Result<Vec<HardCase>> {
             name: "rays through brick faces and edges",
             volume: gen("turbulence:32")?,
             tf: "ramp:0.55:1:0.5",
-            views: vec![lattice(
-                33,
-                [0.0, 0.0, -5.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                0.5,
-            )?],
+            views: vec![along_z_through_brick_faces()?],
             iso: "0.5",
             look: LookSpec::default(),
         },
@@ -445,17 +451,7 @@ pub fn cases() -> Result<Vec<HardCase>> {
             name: "a time step whose visible set crossed brick faces",
             volume: moved,
             tf: "ramp:0.3:1",
-            views: vec![
-                cam(32, 30.0, 20.0, ORTHO, 0.5, None)?,
-                lattice(
-                    33,
-                    [0.0, 0.0, -5.0],
-                    [1.0, 0.0, 0.0],
-                    [0.0, 1.0, 0.0],
-                    [0.0, 0.0, 1.0],
-                    0.5,
-                )?,
-            ],
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)?, along_z_through_brick_faces()?],
             iso: "0.5",
             look: LookSpec::default(),
         },

@@ -7,7 +7,7 @@
 
 mod cases;
 
-pub use cases::{cam, cases, lattice, looks, masked, HardCase, HardLook};
+pub use cases::{along_z_through_brick_faces, cam, cases, lattice, looks, masked, series_steps, HardCase, HardLook};
 
 use crate::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
 use crate::error::Result;
