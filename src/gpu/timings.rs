@@ -54,8 +54,9 @@ impl Timings {
         })
     }
 
+    /// The phases' sum; 0 (not the -0 of an empty f64 sum) without any.
     pub fn total(&self) -> f64 {
-        self.phases.iter().map(|(_, ms)| ms).sum()
+        self.phases.iter().fold(0.0, |sum, (_, ms)| sum + ms)
     }
 
     pub fn extend(&mut self, other: Timings) {
@@ -81,5 +82,14 @@ impl fmt::Display for Timings {
             writeln!(f, "  {name:<width$}  {ms:>10.3} ms")?;
         }
         write!(f, "  {:<width$}  {:>10.3} ms", "total", self.total())
+    }
+}
+
+#[cfg(test)]
+mod total_tests {
+    #[test]
+    fn no_phases_total_positive_zero() {
+        let t = super::Timings::default().total();
+        assert!(t == 0.0 && t.is_sign_positive(), "{t}");
     }
 }

@@ -254,8 +254,7 @@ impl Scene {
 
     /// The last build's time, ms (0 for naive).
     pub fn rebuild_ms(&self) -> f64 {
-        // A fold from +0: an empty sum of f64 is -0.
-        self.build.phases.iter().fold(0.0, |sum, (_, ms)| sum + ms)
+        self.build.total()
     }
 
     /// The last frame's march time, ms.
