@@ -89,6 +89,10 @@ pub fn check_samples_per_ray(dims: [u32; 3], step: f32) -> Result<u64> {
     Ok(samples as u64)
 }
 
+/// Channels a volume can have (one texel of up to four components per
+/// voxel on the GPU), and so transfer functions per frame.
+pub const MAX_CHANNELS: usize = 4;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -48,6 +48,9 @@ pub struct TransferFunction {
     lut: Vec<[f32; 4]>,
     /// Sparse table: `max_table[k][i]` = max alpha of entries i .. i + 2^k.
     max_table: Vec<Vec<f32>>,
+    /// The transfer functions of channels 2 and up (`per_channel`); this
+    /// one is channel 1's. Empty: one transfer function for every channel.
+    other_channels: Vec<TransferFunction>,
 }
 
 /// The default colour ramp (dark violet through orange to pale yellow).
@@ -101,7 +104,12 @@ impl TransferFunction {
             max_table.push(next);
             k += 1;
         }
-        Ok(TransferFunction { spec, lut, max_table })
+        Ok(TransferFunction {
+            spec,
+            lut,
+            max_table,
+            other_channels: Vec::new(),
+        })
     }
 
     /// Parses a spec, or reads a ParaView JSON file when `spec` names one.
@@ -301,6 +309,80 @@ impl TransferFunction {
         Self::from_lut(path.display().to_string(), lut)
     }
 
+    /// One transfer function per channel of a multi-channel volume, in
+    /// channel order (1 to `volume::MAX_CHANNELS`, each itself one).
+    pub fn per_channel(tfs: Vec<TransferFunction>) -> Result<Self> {
+        let spec = tfs.iter().map(|t| t.spec.as_str()).collect::<Vec<_>>().join(" | ");
+        if tfs.is_empty() || tfs.len() > crate::limits::MAX_CHANNELS || tfs.iter().any(|t| t.channel_count() > 1) {
+            return Err(Error::invalid(
+                "transfer function",
+                spec,
+                format!(
+                    "{} per-channel transfer functions: 1 to {}, each one",
+                    tfs.len(),
+                    crate::limits::MAX_CHANNELS
+                ),
+            ));
+        }
+        let mut tfs = tfs.into_iter();
+        let Some(mut first) = tfs.next() else {
+            return Err(Error::invalid("transfer function", spec, "no transfer function"));
+        };
+        first.other_channels = tfs.collect();
+        first.spec = spec;
+        Ok(first)
+    }
+
+    /// One spec per channel separated by `|` (`ramp:0.3:1 | spike:0.6:0.2`,
+    /// as `spec` prints them), or one spec (`parse`).
+    pub fn parse_channels(spec: &str) -> Result<Self> {
+        match spec.contains('|') {
+            true => Self::per_channel(
+                spec.split('|')
+                    .map(|s| Self::parse(s.trim()))
+                    .collect::<Result<Vec<_>>>()?,
+            ),
+            false => Self::parse(spec),
+        }
+    }
+
+    /// How many channels it gives transfer functions for; 1 applies to
+    /// every channel.
+    pub fn channel_count(&self) -> usize {
+        1 + self.other_channels.len()
+    }
+
+    /// Channel `c`'s transfer function (0-based): its own, or the only one.
+    pub fn channel(&self, c: usize) -> &TransferFunction {
+        match c {
+            0 => self,
+            _ if self.other_channels.is_empty() => self,
+            _ => &self.other_channels[c - 1],
+        }
+    }
+
+    /// An error unless it suits a volume of `channels` channels: one
+    /// transfer function for all of them, or one each.
+    pub fn check_channels(&self, channels: usize) -> Result<()> {
+        let n = self.channel_count();
+        if n != 1 && n != channels {
+            return Err(Error::invalid(
+                "transfer function",
+                self.spec.clone(),
+                format!(
+                    "{n} transfer functions for a volume of {channels} channel{}: give one for every channel, or one each",
+                    if channels == 1 { "" } else { "s" }
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Each channel's transfer function (`channel_count` of them).
+    pub fn channels(&self) -> impl Iterator<Item = &TransferFunction> {
+        std::iter::once(self).chain(self.other_channels.iter())
+    }
+
     pub fn lut(&self) -> &[[f32; 4]] {
         &self.lut
     }
@@ -314,6 +396,15 @@ impl TransferFunction {
     /// rgb unchanged: what `glsl/build/opacity_lut.comp` writes per frame.
     pub fn corrected_lut(&self, dt: f32) -> Vec<[f32; 4]> {
         self.lut.iter().map(|&[r, g, b, a]| [r, g, b, opacity(a, dt)]).collect()
+    }
+
+    /// The march kernels' LUT for a frame of step `dt`, as
+    /// `glsl/build/opacity_lut.comp` writes it: per channel's transfer
+    /// function, `corrected_lut(dt)` then the raw LUT.
+    pub fn frame_tables(&self, dt: f32) -> Vec<[f32; 4]> {
+        self.channels()
+            .flat_map(|t| [t.corrected_lut(dt), t.lut.clone()].concat())
+            .collect()
     }
 
     /// Max of alpha over entries `i..=j`.
@@ -353,32 +444,37 @@ impl TransferFunction {
     /// submission completed.
     pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<(GpuTransferFunction, Staging)> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let (lut, a) = Buffer::record_with_data(ctx, cmd, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
-        let table = self.max_table_flat();
+        let (luts, tables) = self.channel_tables();
+        let (lut, a) = Buffer::record_with_data(ctx, cmd, "transfer function", bytemuck::cast_slice(&luts), usage)?;
         let name = "transfer function max table";
-        let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&table), usage)?;
-        let visible = self.visible_entries();
-        Ok((
-            GpuTransferFunction {
-                lut,
-                max_table,
-                visible,
-            },
-            a.join(b),
-        ))
+        let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&tables), usage)?;
+        Ok((self.on_gpu(lut, max_table), a.join(b)))
     }
 
     /// Uploads the LUT (`vec4` per entry) and the max-alpha table and waits.
     pub fn upload(&self, ctx: &Context) -> Result<GpuTransferFunction> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&self.lut), usage)?;
-        let table = self.max_table_flat();
-        let max_table = Buffer::with_data(ctx, "transfer function max table", bytemuck::cast_slice(&table), usage)?;
-        Ok(GpuTransferFunction {
+        let (luts, tables) = self.channel_tables();
+        let lut = Buffer::with_data(ctx, "transfer function", bytemuck::cast_slice(&luts), usage)?;
+        let max_table = Buffer::with_data(ctx, "transfer function max table", bytemuck::cast_slice(&tables), usage)?;
+        Ok(self.on_gpu(lut, max_table))
+    }
+
+    /// Every channel's LUT and flattened max table, channel after channel.
+    fn channel_tables(&self) -> (Vec<[f32; 4]>, Vec<f32>) {
+        let luts = self.channels().flat_map(|t| t.lut.iter().copied()).collect();
+        let tables = self.channels().flat_map(|t| t.max_table_flat()).collect();
+        (luts, tables)
+    }
+
+    fn on_gpu(&self, lut: Buffer, max_table: Buffer) -> GpuTransferFunction {
+        GpuTransferFunction {
             lut,
             max_table,
             visible: self.visible_entries(),
-        })
+            channels: self.channel_count() as u32,
+            max_stride: self.max_table_flat().len() as u32,
+        }
     }
 
     /// The first and last LUT entries with alpha > 0; None if every entry
@@ -396,8 +492,33 @@ impl TransferFunction {
 pub struct GpuTransferFunction {
     pub lut: Buffer,
     pub max_table: Buffer,
-    /// `TransferFunction::visible_entries` (MIP and MinIP skip by it).
+    /// `TransferFunction::visible_entries` of channel 1 (MIP and MinIP of
+    /// one channel skip by it).
     pub visible: Option<[u32; 2]>,
+    /// Transfer functions held, channel after channel (1: one for every
+    /// channel of the volume).
+    pub channels: u32,
+    /// Entries of one channel's max table (`tf_range.glsl`).
+    pub max_stride: u32,
+}
+
+impl GpuTransferFunction {
+    /// An error unless it suits `volume` (`TransferFunction::check_channels`).
+    pub fn check_channels(&self, volume_channels: u32) -> Result<()> {
+        if self.channels != 1 && self.channels != volume_channels {
+            return Err(Error::invalid(
+                "transfer function",
+                format!("{} channels", self.channels),
+                format!("the volume has {volume_channels}: give one transfer function for every channel, or one each"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// How far apart channels' tables are, in tables (0: one for all).
+    pub fn channel_step(&self) -> u32 {
+        (self.channels > 1) as u32
+    }
 }
 
 impl std::str::FromStr for TransferFunction {

@@ -286,9 +286,17 @@ fn hard_suite_passes(looks: &[&str]) {
         .collect();
     // passed, of total, marched naively; at least one filter per case and look.
     assert_eq!(numbers[0], numbers[1], "{line}");
-    assert!(numbers[1] >= cases.len() * structures * looks.len(), "{line}");
+    // Several channels are not rendered lit (README, "Channels").
+    let lit = |look: &str| look.starts_with("shaded") || look.starts_with("iso");
+    let applies = |case: &lacuna::bench::hard::HardCase, look: &str| case.volume.channel_count() == 1 || !lit(look);
+    let runs: usize = cases
+        .iter()
+        .map(|c| looks.iter().filter(|l| applies(c, l)).count())
+        .sum();
+    assert!(numbers[1] >= runs * structures, "{line}");
+    assert!(cases.iter().any(|c| c.volume.channel_count() > 1));
     for case in &cases {
-        for look in looks {
+        for look in looks.iter().filter(|l| applies(case, l)) {
             assert!(
                 stdout.contains(&format!("| {} | {look} | manual |", case.name)),
                 "{} {look}",

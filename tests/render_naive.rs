@@ -182,7 +182,8 @@ fn the_frame_lut_is_corrected_for_the_step_on_the_gpu() {
             .unwrap();
         let gpu_lut: Vec<[f32; 4]> =
             bytemuck::pod_collect_to_vec(&target.lut.buffer().download(0, target.lut.buffer().size()).unwrap());
-        let (corrected, raw) = gpu_lut.split_at(lacuna::tf::LUT_SIZE);
+        // One channel's two tables (the buffer has room for every channel's).
+        let (corrected, raw) = gpu_lut[..2 * lacuna::tf::LUT_SIZE].split_at(lacuna::tf::LUT_SIZE);
         assert_eq!(raw, tf.lut(), "the raw half");
         let expected = tf.corrected_lut(step);
         for (i, (g, c)) in corrected.iter().zip(&expected).enumerate() {

@@ -192,13 +192,14 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
         let still = Volume::load(p.to_str().unwrap(), &LoadOptions::default()).unwrap();
         assert_eq!(u8s(&still), &data[..12]);
     }
-    // Beyond time (a 5th dimension) is refused, as is a truncated step.
-    let p = dir.path().join("five.nii");
-    std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
+    // Beyond time and components (a 6th dimension) is refused, as is a
+    // truncated step (dim[5], components, are channels: tests/channels.rs).
+    let p = dir.path().join("six.nii");
+    std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
     let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())
         .err()
         .unwrap();
-    assert!(err.to_string().contains("beyond x, y, z and time"), "{err}");
+    assert!(err.to_string().contains("beyond x, y, z, time and components"), "{err}");
     let p = dir.path().join("short.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data[..30])).unwrap();
     let series = open(p.to_str().unwrap());

@@ -46,6 +46,17 @@ pub fn volume_spec(data: &[u8]) -> bool {
             dims.iter().map(|&d| d as u64).product::<u64>() > 4096 || one_line(generator.generate(dims, param))
         }
         Ok(VolumeSpec::File(_)) => false,
+        // Joined channels of small generators: the join checks their grids.
+        Ok(spec @ VolumeSpec::Channels(_)) => {
+            let small = |s: &VolumeSpec| match s {
+                VolumeSpec::Procedural { dims, .. } => dims.iter().map(|&d| d as u64).product::<u64>() <= 4096,
+                _ => false,
+            };
+            match &spec {
+                VolumeSpec::Channels(parts) if parts.iter().all(small) => one_line(spec.load(&LoadOptions::default())),
+                _ => false,
+            }
+        }
         Err(e) => one_line::<()>(Err(e)),
     }
 }

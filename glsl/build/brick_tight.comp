@@ -1,7 +1,8 @@
 #version 460
 // Per-8^3-brick tight box of the active voxel footprints (k-d tree on the
 // GPU). A footprint [i, i+1]^3 is active iff the TF's max alpha over the 27
-// voxels its samples can read is > 0 (DESIGN invariant 2), NaN voxels ignored. The brick and its
+// voxels its samples can read is > 0 (DESIGN invariant 2), NaN voxels ignored,
+// in any channel (each by its own TF; one channel staged at a time). The brick and its
 // one-voxel apron are staged in shared memory; the box is reduced there with
 // atomics. An empty brick writes an inverted box (lo = INT_MAX, hi = INT_MIN).
 #extension GL_GOOGLE_include_directive : require
@@ -15,9 +16,12 @@ layout(std430, set = 0, binding = 2) writeonly buffer Boxes { ivec4 boxes[]; }; 
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge (8)
     uvec4 counts; // xyz: bricks per axis; w: total bricks
-    vec2 norm;
+    vec4 lo;      // per channel: v = (texel - lo) * scale
+    vec4 scale;
     uint groups_x;
     uint lut_size;
+    uint channels;
+    uint tf_stride; // entries between channels' max tables (0: one for all)
 } pc;
 
 #define TF_MAX_BINDING 1
@@ -29,26 +33,9 @@ const int S = B + 2; // staged edge: brick plus apron
 shared float staged[S * S * S];
 shared int box[6];
 
-void main() {
-    uint b = linear_group(pc.groups_x);
-    if (b >= pc.counts.w) {
-        return;
-    }
-    uint lid = gl_LocalInvocationID.x;
-    uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
-    ivec3 origin = ivec3(bc) * B;
-    ivec3 hi = ivec3(pc.dims.xyz) - 1;
-    for (uint i = lid; i < uint(S * S * S); i += 64u) {
-        ivec3 l = ivec3(int(i) % S, (int(i) / S) % S, int(i) / (S * S));
-        ivec3 v = clamp(origin + l - 1, ivec3(0), hi);
-        precise float n = (texelFetch(volume_tex, v, 0).r - pc.norm.x) * pc.norm.y;
-        staged[i] = is_nan(n) ? n : clamp(n, 0.0, 1.0);
-    }
-    if (lid < 3u) {
-        box[lid] = 0x7FFFFFFF;
-        box[lid + 3u] = int(0x80000000);
-    }
-    barrier();
+// Widens the brick's box by every voxel whose footprint is active in the
+// staged channel (its max table at `table`).
+void mark_active(ivec3 origin, ivec3 hi, uint lid, uint table) {
     for (uint i = lid; i < uint(B * B * B); i += 64u) {
         ivec3 l = ivec3(int(i) % B, (int(i) / B) % B, int(i) / (B * B));
         ivec3 v = origin + l;
@@ -70,7 +57,7 @@ void main() {
                 }
             }
         }
-        if (tf_max_alpha(mn, mx) > 0.0) {
+        if (tf_max_alpha_at(table, mn, mx) > 0.0) {
             atomicMin(box[0], v.x);
             atomicMin(box[1], v.y);
             atomicMin(box[2], v.z);
@@ -78,6 +65,33 @@ void main() {
             atomicMax(box[4], v.y + 1);
             atomicMax(box[5], v.z + 1);
         }
+    }
+}
+
+void main() {
+    uint b = linear_group(pc.groups_x);
+    if (b >= pc.counts.w) {
+        return;
+    }
+    uint lid = gl_LocalInvocationID.x;
+    uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
+    ivec3 origin = ivec3(bc) * B;
+    ivec3 hi = ivec3(pc.dims.xyz) - 1;
+    if (lid < 3u) {
+        box[lid] = 0x7FFFFFFF;
+        box[lid + 3u] = int(0x80000000);
+    }
+    for (uint ch = 0u; ch < pc.channels; ++ch) {
+        // The previous channel's reads of the staged voxels come first.
+        barrier();
+        for (uint i = lid; i < uint(S * S * S); i += 64u) {
+            ivec3 l = ivec3(int(i) % S, (int(i) / S) % S, int(i) / (S * S));
+            ivec3 v = clamp(origin + l - 1, ivec3(0), hi);
+            precise float n = (texelFetch(volume_tex, v, 0)[ch] - pc.lo[ch]) * pc.scale[ch];
+            staged[i] = is_nan(n) ? n : clamp(n, 0.0, 1.0);
+        }
+        barrier();
+        mark_active(origin, hi, lid, ch * pc.tf_stride);
     }
     barrier();
     if (lid == 0u) {

@@ -73,6 +73,12 @@ struct March {
     bool hit;
     float hit_t;
     float hit_v;
+    // Several channels (VOLUME_CHANNELS > 1): entries between channels'
+    // tables (0: one for all), and per channel the extreme, sum and count.
+    uint tf_stride;
+    vec4 best4;
+    vec4 sum4;
+    vec4 count4;
 };
 
 // Bisection steps refining an iso crossing: the step over 2^16.
@@ -134,6 +140,12 @@ bool march_begin(Ray ray, float dt, out March m) {
     m.hit_t = 0.0;
     m.hit_v = 0.0;
     m.bracket = vec4(0.0);
+    if (VOLUME_CHANNELS > 1u) {
+        m.tf_stride = params.tf_channel_step * 2u * m.tf_n;
+        m.best4 = vec4(m.best);
+        m.sum4 = vec4(0.0);
+        m.count4 = vec4(0.0);
+    }
     march_set_exit(m, hit.y);
     return !m.done;
 }
@@ -297,8 +309,84 @@ void iso_refine(inout March m) {
     m.hit_v = best_v;
 }
 
+// Channels mix as densities (README, "Channels"): opacity
+// 1 - prod(1 - a_c), the colour each channel's weighted by its opacity a_c.
+// A channel of opacity 0 adds nothing, and where one channel alone shows,
+// the mix is that channel's colour and opacity bit for bit.
+vec4 mix_channels(vec4 col[4]) {
+    precise float keep = 1.0;
+    precise vec3 sum = vec3(0.0);
+    precise float weight = 0.0;
+    uint shown = 0u;
+    vec4 only = vec4(0.0);
+    for (uint c = 0u; c < VOLUME_CHANNELS; ++c) {
+        float a = min(col[c].a, 1.0);
+        if (a > 0.0) {
+            shown += 1u;
+            only = col[c];
+            keep = keep * (1.0 - a);
+            sum = sum + a * col[c].rgb;
+            weight = weight + a;
+        }
+    }
+    if (shown <= 1u) {
+        return only;
+    }
+    precise vec3 rgb = sum / weight;
+    return vec4(rgb, 1.0 - keep);
+}
+
+// Channel table `base`'s colour at v standing for w voxels (as shade).
+vec4 channel_shade(March m, uint base, float v, float w, bool full) {
+    if (!full && w < m.dt) {
+        vec4 c = tf_lookup(v, base + m.tf_n, m.tf_n);
+        return vec4(c.rgb, opacity(c.a, w));
+    }
+    return tf_lookup(v, base, m.tf_n);
+}
+
+// take_sample for several channels: composite mixes the channels' colours;
+// mip, minip and average keep an extreme, sum and count per channel.
+void take_channels(inout March m, float t, float w, bool full) {
+    vec4 v = sample_channels(m.vr, t);
+    if (MARCH_MODE == MODE_COMPOSITE) {
+        vec4 col[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+        for (uint c = 0u; c < VOLUME_CHANNELS; ++c) {
+            if (!(VOLUME_NAN != 0u && is_nan(v[c]))) {
+                col[c] = channel_shade(m, c * m.tf_stride, v[c], w, full);
+            }
+        }
+        composite(m, mix_channels(col));
+        return;
+    }
+    bool all_done = true;
+    for (uint c = 0u; c < VOLUME_CHANNELS; ++c) {
+        if (VOLUME_NAN != 0u && is_nan(v[c])) {
+            all_done = all_done && (MARCH_MODE == MODE_MIP ? m.best4[c] >= 1.0 : m.best4[c] <= 0.0);
+            continue;
+        }
+        if (MARCH_MODE == MODE_MIP) {
+            m.best4[c] = max(m.best4[c], v[c]);
+            all_done = all_done && m.best4[c] >= 1.0;
+        } else if (MARCH_MODE == MODE_MINIP) {
+            m.best4[c] = min(m.best4[c], v[c]);
+            all_done = all_done && m.best4[c] <= 0.0;
+        } else if (MARCH_MODE == MODE_AVERAGE) {
+            m.sum4[c] += v[c];
+            m.count4[c] += 1.0;
+        }
+    }
+    if (MARCH_MODE == MODE_MIP || MARCH_MODE == MODE_MINIP) {
+        m.done = all_done;
+    }
+}
+
 // Takes the sample at t (value v) standing for w voxels; `full`: w == dt.
 void take_sample(inout March m, float t, float w, bool full) {
+    if (VOLUME_CHANNELS > 1u) {
+        take_channels(m, t, w, full);
+        return;
+    }
     float v = sample_volume(m.vr, t);
     if (VOLUME_NAN != 0u && is_nan(v)) {
         m.has_prev = false;
@@ -364,6 +452,22 @@ vec4 march_result(March m) {
         vec3 rgb = params.iso_colored != 0u ? params.iso_color : tf_lookup(m.hit_v, m.tf_n, m.tf_n).rgb;
         precise vec3 p = m.vr.org + m.hit_t * m.vr.dir;
         return vec4(light_sample(m.vr, m.lt, p, vec4(rgb, 1.0)).rgb, 1.0);
+    }
+    if (VOLUME_CHANNELS > 1u) {
+        // Each channel's value through its raw table, mixed, premultiplied.
+        vec4 col[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+        for (uint c = 0u; c < VOLUME_CHANNELS; ++c) {
+            float x = m.best4[c];
+            if (MARCH_MODE == MODE_AVERAGE) {
+                precise float mean = m.sum4[c] / m.count4[c];
+                x = m.count4[c] == 0.0 ? -1.0 : mean;
+            }
+            if (x >= 0.0 && x <= 1.0) {
+                col[c] = tf_lookup(x, c * m.tf_stride + m.tf_n, m.tf_n);
+            }
+        }
+        vec4 mixed = mix_channels(col);
+        return vec4(mixed.rgb * mixed.a, mixed.a);
     }
     float v = m.best;
     if (MARCH_MODE == MODE_AVERAGE) {

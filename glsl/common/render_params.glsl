@@ -57,6 +57,14 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     uint depth_out;
     mat4 voxel_to_ndc;
     float no_hit_depth;
+    // Several channels (VOLUME_CHANNELS > 1): how far apart channels' LUT
+    // tables are, in tables (0: one transfer function for every channel),
+    // and each channel's normalisation, v = (texel - lo) * scale.
+    uint tf_channel_step;
+    uint channel_pad0;
+    uint channel_pad1;
+    vec4 channel_lo;
+    vec4 channel_scale;
     // Per pixel (row-major), when depth_limits == 1: the ray's t where the
     // host's opaque surface is, written by glsl/render/depth_limit.comp.
     float t_max[];

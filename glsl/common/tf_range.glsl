@@ -9,7 +9,8 @@ layout(std430, set = 0, binding = TF_MAX_BINDING) readonly buffer TransferMax {
     float tf_max[];
 };
 
-float tf_max_alpha(float lo, float hi) {
+// As tf_max_alpha, in the table at entry `base` (a channel's).
+float tf_max_alpha_at(uint base, float lo, float hi) {
     if (lo > hi) {
         return 0.0;
     }
@@ -19,7 +20,11 @@ float tf_max_alpha(float lo, float hi) {
     int j = min(int(ceil(clamp(hi, 0.0, 1.0) * scale)) + 1, int(n) - 1);
     uint len = uint(j - i + 1);
     uint k = uint(findMSB(len));
-    return max(tf_max[k * n + uint(i)], tf_max[k * n + uint(j + 1) - (1u << k)]);
+    return max(tf_max[base + k * n + uint(i)], tf_max[base + k * n + uint(j + 1) - (1u << k)]);
+}
+
+float tf_max_alpha(float lo, float hi) {
+    return tf_max_alpha_at(0u, lo, hi);
 }
 
 #endif

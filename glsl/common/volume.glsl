@@ -31,6 +31,10 @@ layout(constant_id = 19) const uint VOLUME_NAN = 0u;
 layout(constant_id = 20) const uint VOLUME_KIND = 0u;
 // 1: the manual filter reads the cells copy (CELLS_BINDING).
 layout(constant_id = 21) const uint VOLUME_CELLS = 0u;
+// Channels per texel, 1 to 4 (src/volume/channels.rs): with more than one,
+// every channel sits in one texel of the widest kind among them, and the
+// march samples them all at once (sample_channels).
+layout(constant_id = 26) const uint VOLUME_CHANNELS = 1u;
 const uint KIND_FLOAT = 0u;
 const uint KIND_UNORM8 = 1u;
 const uint KIND_UNORM16 = 2u;
@@ -53,6 +57,8 @@ struct VolumeRay {
     vec3 unit; // one voxel along each axis in those coordinates
     ivec3 hi;  // the last voxel per axis
     vec2 norm; // v = (texel - norm.x) * norm.y
+    vec4 lo;   // per channel (VOLUME_CHANNELS > 1): v = (texel - lo) * scale
+    vec4 scale;
 };
 
 VolumeRay volume_ray(vec3 org, vec3 dir) {
@@ -73,6 +79,10 @@ VolumeRay volume_ray(vec3 org, vec3 dir) {
     }
     v.hi = ivec3(params.dims) - 1;
     v.norm = params.norm;
+    if (VOLUME_CHANNELS > 1u) {
+        v.lo = params.channel_lo;
+        v.scale = params.channel_scale;
+    }
     return v;
 }
 
@@ -155,6 +165,55 @@ float sample_raw(VolumeRay r, vec3 p) {
         raw = sample_manual(p, r.hi);
     }
     return raw;
+}
+
+// Every channel's voxel i (clamped) in stored units (VOLUME_CHANNELS > 1).
+vec4 volume_texels(ivec3 i, ivec3 hi) {
+    vec4 t = texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0);
+    return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+}
+
+// Every channel's texel value at p, trilinearly interpolated by hand with
+// sample_manual's weights: eight fetches read every channel.
+vec4 sample_manual_channels(vec3 p, ivec3 hi) {
+    precise vec3 q = p - 0.5;
+    vec3 fl = floor(q);
+    precise vec3 f = q - fl;
+    ivec3 i = ivec3(fl);
+    vec4 c[8];
+    for (int b = 0; b < 8; ++b) {
+        c[b] = volume_texels(i + ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1), hi);
+    }
+    precise vec4 c00 = mix(c[0], c[1], f.x);
+    precise vec4 c10 = mix(c[2], c[3], f.x);
+    precise vec4 c01 = mix(c[4], c[5], f.x);
+    precise vec4 c11 = mix(c[6], c[7], f.x);
+    precise vec4 c0 = mix(c00, c10, f.y);
+    precise vec4 c1 = mix(c01, c11, f.y);
+    precise vec4 raw = mix(c0, c1, f.z);
+    if (VOLUME_KIND != KIND_FLOAT) {
+        raw = raw * (1.0 / volume_unit());
+    }
+    return raw;
+}
+
+// Each channel's normalised value in [0, 1] at the ray's point t (NaN: no
+// data in that channel; channels past VOLUME_CHANNELS read 0).
+vec4 sample_channels(VolumeRay r, float t) {
+    precise vec3 p = r.org + t * r.dir;
+    precise vec4 raw;
+    if (VOLUME_FILTER == 1u) {
+        raw = textureLod(volume_tex, p, 0.0);
+    } else {
+        raw = sample_manual_channels(p, r.hi);
+    }
+    precise vec4 v = (raw - r.lo) * r.scale;
+    for (int c = 0; c < 4; ++c) {
+        if (!(VOLUME_NAN != 0u && is_nan(v[c]))) {
+            v[c] = clamp(v[c], 0.0, 1.0);
+        }
+    }
+    return v;
 }
 
 #ifdef GRADIENT_BINDING

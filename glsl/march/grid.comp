@@ -18,12 +18,13 @@ layout(push_constant) uniform Grid {
 // A cell can change a MIP pixel only if some sample in it can exceed both
 // the running max and every value the TF maps to transparent; samples lie
 // within the cell's range widened by value_margin (src/accel/mode.rs).
+// Several channels classify by flags in every mode (src/accel/grid.rs).
 bool grid_cell_active(March m, uint i) {
-    if (MARCH_MODE == MODE_MIP) {
+    if (MARCH_MODE == MODE_MIP && VOLUME_CHANNELS == 1u) {
         float hi = uintBitsToFloat(cells[2u * i + 1u]);
         return hi + params.value_margin > max(m.best, params.value_bound);
     }
-    if (MARCH_MODE == MODE_MINIP) {
+    if (MARCH_MODE == MODE_MINIP && VOLUME_CHANNELS == 1u) {
         float lo = uintBitsToFloat(cells[2u * i]);
         return lo - params.value_margin < min(m.best, params.value_bound);
     }

@@ -1,8 +1,9 @@
 #version 460
 // Min/max of normalised voxel values per brick of `brick`^3 voxels, widened by
 // an apron of `apron` voxels per side (clamped to the volume). One invocation
-// per brick; output vec2(min, max) per brick, x fastest. NaN voxels are
-// ignored; a brick of NaN only gets an empty range (min > max).
+// per brick; output vec2(min, max) per brick and channel, at
+// brick * channels + channel, bricks x fastest. NaN voxels are ignored; a
+// brick of NaN only gets an empty range (min > max).
 #extension GL_GOOGLE_include_directive : require
 
 layout(local_size_x = 64) in;
@@ -13,9 +14,12 @@ layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
     uvec4 counts; // xyz: bricks per axis; w: total bricks
-    vec2 norm;    // texel normalisation (lo, scale)
+    vec4 lo;      // per channel: texel normalisation v = (texel - lo) * scale
+    vec4 scale;
     uint apron;
     uint groups_x;
+    uint channels;
+    uint pad;
 } pc;
 
 void main() {
@@ -26,21 +30,26 @@ void main() {
     uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     ivec3 lo = max(ivec3(bc * pc.dims.w) - int(pc.apron), ivec3(0));
     ivec3 hi = min(ivec3(bc * pc.dims.w + pc.dims.w - 1u) + int(pc.apron), ivec3(pc.dims.xyz) - 1);
-    float mn = 3.4e38;
-    float mx = -3.4e38;
+    vec4 mn = vec4(3.4e38);
+    vec4 mx = vec4(-3.4e38);
     for (int z = lo.z; z <= hi.z; ++z) {
         for (int y = lo.y; y <= hi.y; ++y) {
             for (int x = lo.x; x <= hi.x; ++x) {
-                float t = texelFetch(volume_tex, ivec3(x, y, z), 0).r;
-                if (!is_nan(t)) {
-                    mn = min(mn, t);
-                    mx = max(mx, t);
+                vec4 t = texelFetch(volume_tex, ivec3(x, y, z), 0);
+                for (int c = 0; c < 4; ++c) {
+                    if (!is_nan(t[c])) {
+                        mn[c] = min(mn[c], t[c]);
+                        mx[c] = max(mx[c], t[c]);
+                    }
                 }
             }
         }
     }
-    // Normalise the extremes exactly as sample_volume normalises a sample.
-    precise float a = (mn - pc.norm.x) * pc.norm.y;
-    precise float c = (mx - pc.norm.x) * pc.norm.y;
-    ranges[b] = vec2(clamp(a, 0.0, 1.0), clamp(c, 0.0, 1.0));
+    // Normalise the extremes exactly as sample_volume (sample_channels)
+    // normalises a sample.
+    for (uint c = 0u; c < pc.channels; ++c) {
+        precise float a = (mn[c] - pc.lo[c]) * pc.scale[c];
+        precise float d = (mx[c] - pc.lo[c]) * pc.scale[c];
+        ranges[b * pc.channels + c] = vec2(clamp(a, 0.0, 1.0), clamp(d, 0.0, 1.0));
+    }
 }

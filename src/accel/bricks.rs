@@ -14,8 +14,11 @@ pub struct GpuBricks {
     pub brick: u32,
     pub counts: [u32; 3],
     pub total: u64,
-    /// vec2(min, max) of normalised values per brick, apron included.
+    /// vec2(min, max) of normalised values per brick and channel (at
+    /// `brick * channels + channel`), apron included.
     pub ranges: Buffer,
+    /// The volume's channels.
+    pub channels: u32,
 }
 
 impl GpuBricks {
@@ -69,7 +72,7 @@ impl GpuBricks {
         let ranges = Buffer::new(
             ctx,
             "brick ranges",
-            total * 8,
+            total * 8 * volume.channels as u64,
             // A grid's MIP frames copy them (src/accel/grid.rs).
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
@@ -79,6 +82,7 @@ impl GpuBricks {
             counts,
             total,
             ranges,
+            channels: volume.channels,
         })
     }
 }

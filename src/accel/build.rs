@@ -24,6 +24,7 @@ impl Builder {
         params: &Params,
     ) -> Result<(Structure, Timings)> {
         accel.method().check(params)?;
+        input.tf.check_channels(input.gpu_volume.channels as usize)?;
         if !accel.method().marches(&input.mode) {
             return Ok((fallback(accel, params, input), Timings::default()));
         }
@@ -72,6 +73,7 @@ impl Builder {
         params: &Params,
     ) -> Result<Structure> {
         accel.method().check(params)?;
+        input.tf.check_channels(input.gpu_volume.channels as usize)?;
         if !accel.method().marches(&input.mode) {
             return Ok(fallback(accel, params, input));
         }

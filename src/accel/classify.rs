@@ -85,6 +85,7 @@ impl Classifier {
         flags: &Buffer,
     ) -> Result<()> {
         entry_barrier(self.ctx.device(), cmd);
+        tf.check_channels(volume.channels)?;
         let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.range.local_size()[0])?;
         match mode {
             Classify::Range => {
@@ -92,7 +93,8 @@ impl Classifier {
                     bricks: bricks.total as u32,
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
-                    pad: 0,
+                    channels: bricks.channels,
+                    tf_stride: tf.channel_step() * tf.max_stride,
                 };
                 self.range.dispatch(
                     cmd,
@@ -112,10 +114,14 @@ impl Classifier {
                 let push = build_classify_voxel::Push {
                     dims: [volume.dims[0], volume.dims[1], volume.dims[2], bricks.brick],
                     counts: [c[0], c[1], c[2], bricks.total as u32],
-                    norm: volume.norm,
+                    lo: volume.norms.map(|n| n[0]),
+                    scale: volume.norms.map(|n| n[1]),
                     apron: apron as u32,
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
+                    channels: volume.channels,
+                    tf_stride: tf.channel_step(),
+                    max_stride: tf.max_stride,
                     ..Default::default()
                 };
                 self.voxel.dispatch(

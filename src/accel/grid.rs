@@ -177,7 +177,10 @@ impl Method for GridMethod {
     ) -> Result<Box<dyn Built>> {
         let cells = ranges.cells(p.int("cell")?)?;
         let grid = match input.mode {
-            Mode::Mip | Mode::MinIp => record_ranges(builder, cmd, timer, cells)?,
+            // Several channels classify by the union of their activity
+            // functions instead: per-channel running extremes per cell
+            // would need per-channel ranges and bounds in the march.
+            Mode::Mip | Mode::MinIp if input.gpu_volume.channels == 1 => record_ranges(builder, cmd, timer, cells)?,
             _ => record(builder, cmd, timer, input, cells)?,
         };
         Ok(Box::new(grid))

@@ -22,6 +22,13 @@
 //!
 //! A structure that does not march a mode is marched naively in it, saying
 //! so (`MarchedKind::ModeFallback`).
+//!
+//! Several channels: a region is active iff it is active in any channel,
+//! each classified by its own transfer function's activity function. In
+//! mip (minip) this stays exact: a channel whose values in a region all map
+//! to transparent shows nothing whether or not the region raises its
+//! extreme, and a transparent channel adds nothing to the mix. The grid's
+//! per-ray running extreme is kept for one channel only.
 
 use super::method::{Accel, Built, MarchedAs, MarchedKind};
 use super::naive::NAIVE;
@@ -35,6 +42,22 @@ use crate::tf::{TransferFunction, LUT_SIZE};
 /// classify by; None: `tf` itself (composite, and average, which skips
 /// nothing).
 pub fn activity(mode: &Mode, tf: &TransferFunction) -> Result<Option<TransferFunction>> {
+    if tf.channel_count() > 1 {
+        // One activity function per channel's transfer function.
+        let mut per_channel = Vec::new();
+        for t in tf.channels() {
+            match channel_activity(mode, t)? {
+                Some(a) => per_channel.push(a),
+                None => return Ok(None),
+            }
+        }
+        return TransferFunction::per_channel(per_channel).map(Some);
+    }
+    channel_activity(mode, tf)
+}
+
+/// `activity` of one channel's transfer function.
+fn channel_activity(mode: &Mode, tf: &TransferFunction) -> Result<Option<TransferFunction>> {
     let n = LUT_SIZE;
     let opaque_where = |name: &str, keep: &dyn Fn(usize) -> bool| {
         let lut = (0..n).map(|i| if keep(i) { [1.0; 4] } else { [0.0; 4] }).collect();

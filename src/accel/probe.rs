@@ -113,13 +113,15 @@ impl<'a> FrameProbe<'a> {
         }
         let mut params = desc.params(volume)?;
         params.value_bound = desc.mode().value_bound(tf.visible_entries());
+        tf.check_channels(volume.channels as usize)?;
+        params.tf_channel_step = (tf.channel_count() > 1) as u32;
         let params = Buffer::with_data(
             &ctx,
             "probe params",
             bytemuck::bytes_of(&params),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        let tables = [tf.corrected_lut(desc.step()), tf.lut().to_vec()].concat();
+        let tables = tf.frame_tables(desc.step());
         let lut = Buffer::with_data(
             &ctx,
             "probe LUT",

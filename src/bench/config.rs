@@ -119,7 +119,7 @@ pub const UNSTABLE_SPREAD: f64 = 1.5;
 pub struct DatasetConfig {
     /// A volume spec (file or NAME:SIZE[:PARAM]).
     pub volume: String,
-    /// Transfer function spec (default: the generator's).
+    /// Transfer function spec, one per channel separated by `|` (default: each channel's generator's).
     pub tf: Option<String>,
     /// Skip (with a note) instead of failing when the file is missing.
     #[serde(default)]

@@ -86,13 +86,14 @@ struct Loaded {
 /// The data set: its step `time` when it is a series.
 fn load(ctx: &Context, series: &Series, time: Option<[u32; 2]>, label: String, tf: Option<&str>) -> Result<Loaded> {
     let volume = series.load(time.map_or(0, |[first, _]| first), Some(ctx.info()))?;
-    let tf_spec = tf
-        .map(str::to_string)
-        .or_else(|| volume.default_tf.clone())
-        .unwrap_or_else(|| "ramp:0:1".into());
+    let tf = match tf {
+        Some(spec) => TransferFunction::parse_channels(spec)?,
+        None => volume.default_transfer_function()?,
+    };
+    tf.check_channels(volume.channel_count())?;
     Ok(Loaded {
         spec: label,
-        tf: TransferFunction::parse(&tf_spec)?,
+        tf,
         volume,
     })
 }

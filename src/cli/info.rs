@@ -11,8 +11,9 @@ pub struct InfoArgs {
     #[command(flatten)]
     volume: VolumeArgs,
     /// Transfer function for occupancy (default: the generator's, if any).
+    /// Several channels: one --tf per channel in order, or one for all.
     #[arg(long)]
-    tf: Option<TransferFunction>,
+    tf: Vec<TransferFunction>,
 }
 
 pub fn run(args: &InfoArgs) -> Result<ExitCode> {
@@ -68,7 +69,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     for row in cells.chunks(5) {
         println!("  {}", row.join("  "));
     }
-    if let Some(tf) = tf_for(args.tf.as_ref(), &v)? {
+    if let Some(tf) = tf_for(&args.tf, &v)? {
         let visible = (0..v.data.len())
             .map(|i| v.normalize(v.data.texel(i)))
             .filter(|n| !n.is_nan() && tf.lookup(*n)[3] > 0.0)

@@ -95,11 +95,24 @@ pub fn validation_verdict(ctx: &Context) -> ExitCode {
     ExitCode::from(1)
 }
 
-/// The transfer function given, else the volume's default (generators have one).
-pub fn tf_for(spec: Option<&TransferFunction>, volume: &Volume) -> Result<Option<TransferFunction>> {
-    match (spec, &volume.default_tf) {
-        (Some(tf), _) => Ok(Some(tf.clone())),
-        (None, Some(s)) => Ok(Some(TransferFunction::parse(s)?)),
-        (None, None) => Ok(None),
+/// The transfer functions given (`--tf` once for every channel, or once per
+/// channel), else each channel's default (generators have one; a
+/// multi-channel volume's channels without one take `ramp:0:1`).
+pub fn tf_for(given: &[TransferFunction], volume: &Volume) -> Result<Option<TransferFunction>> {
+    let channels = volume.channel_count();
+    if given.len() > 1 || (given.len() == 1 && channels > 1) {
+        let tf = match given {
+            [one] => one.clone(),
+            _ => TransferFunction::per_channel(given.to_vec())?,
+        };
+        tf.check_channels(channels)?;
+        return Ok(Some(tf));
     }
+    if let [one] = given {
+        return Ok(Some(one.clone()));
+    }
+    if channels == 1 {
+        return volume.default_tf.as_deref().map(TransferFunction::parse).transpose();
+    }
+    volume.default_transfer_function().map(Some)
 }

@@ -17,8 +17,9 @@ pub struct RenderArgs {
     #[command(flatten)]
     volume: VolumeArgs,
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
+    /// Several channels: one --tf per channel in order, or one for all.
     #[arg(long)]
-    tf: Option<TransferFunction>,
+    tf: Vec<TransferFunction>,
     /// Empty space skipping structure (default auto: chosen per volume and TF).
     #[arg(long, default_value = "auto", value_parser = AccelParser)]
     accel: Accel,
@@ -104,7 +105,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let volume = series.load(args.volume.time, Some(ctx.info()))?;
-    let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
+    let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
 
     let builder = args.model.builder(&ctx)?;

@@ -1,17 +1,17 @@
 //! What a frame fixes in the march kernel that marches it: the
 //! specialization constants of its sample filter, mode and shading, and of
-//! the volume it samples (NaN voxels, texel kind, cells copy). One kernel is
+//! the volume it samples (NaN voxels, texel kind, cells copy, channels). One kernel is
 //! compiled per distinct set (`render::Renderer`, `accel::probe`), so no
 //! sample branches on any of them.
 
 use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 use crate::volume::{
-    Filter, GpuVolume, CELLS_CONSTANT_ID, FILTER_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID,
-    NAN_CONSTANT_ID,
+    Filter, GpuVolume, CELLS_CONSTANT_ID, CHANNELS_CONSTANT_ID, FILTER_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID,
+    KIND_CONSTANT_ID, NAN_CONSTANT_ID,
 };
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 7];
+pub type KernelConstants = [(u32, u32); 8];
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
@@ -33,6 +33,7 @@ impl FrameDesc {
             (KIND_CONSTANT_ID, volume.kind.constant()),
             (CELLS_CONSTANT_ID, cells as u32),
             (GRADIENT_CELLS_CONSTANT_ID, gradient_cells as u32),
+            (CHANNELS_CONSTANT_ID, volume.channels),
         ]
     }
 }

@@ -306,7 +306,10 @@ impl FrameDesc {
     /// The shader parameter block for `volume` (the volume-dependent checks:
     /// the samples-per-ray cap, rays that stay finite).
     pub fn params(&self, volume: &GpuVolume) -> Result<RenderParams> {
-        self.params_for(volume.dims, volume.spacing, volume.norm)
+        let mut p = self.params_for(volume.dims, volume.spacing, volume.norm)?;
+        p.channel_lo = volume.norms.map(|n| n[0]);
+        p.channel_scale = volume.norms.map(|n| n[1]);
+        Ok(p)
     }
 
     /// The checks that need the volume (the samples-per-ray cap, finite
@@ -379,6 +382,12 @@ impl FrameDesc {
                 true => r.far_depth,
                 false => f32::INFINITY,
             },
+            // Several channels: the volume's and the TF's (`params`, the renderer).
+            tf_channel_step: 0,
+            channel_pad0: 0,
+            channel_pad1: 0,
+            channel_lo: [norm[0], 0.0, 0.0, 0.0],
+            channel_scale: [norm[1], 0.0, 0.0, 0.0],
         })
     }
 

@@ -26,8 +26,9 @@ impl BrickMinMax {
         })
     }
 
-    /// Records `out[b] = vec2(min, max)` for every `brick`^3 brick with an
-    /// apron of `apron` voxels. Ends with compute writes.
+    /// Records `out[b * channels + c] = vec2(min, max)` for every `brick`^3
+    /// brick and channel with an apron of `apron` voxels. Ends with compute
+    /// writes.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -38,16 +39,19 @@ impl BrickMinMax {
     ) -> Result<()> {
         let counts = brick_counts(volume.dims, brick);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
-        check_range(self.ctx.info(), "brick ranges", total * 8)?;
+        check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
         entry_barrier(self.ctx.device(), cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.kernel.local_size()[0])?;
         // dims.w: brick edge; counts.w: total bricks.
         let push = k::Push {
             dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
             counts: [counts[0], counts[1], counts[2], total as u32],
-            norm: volume.norm,
+            lo: volume.norms.map(|n| n[0]),
+            scale: volume.norms.map(|n| n[1]),
             apron,
             groups_x: groups[0],
+            channels: volume.channels,
+            pad: 0,
         };
         self.kernel.dispatch(
             cmd,

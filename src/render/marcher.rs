@@ -183,7 +183,12 @@ impl Renderer {
             rows,
         } = to;
         let Scene { structure, volume, tf } = scene;
+        tf.check_channels(volume.channels)?;
+        if desc.lighting().is_some() {
+            volume.check_one_channel("shaded and iso frames")?;
+        }
         let mut params = desc.params(volume)?;
+        params.tf_channel_step = tf.channel_step();
         params.value_bound = desc.mode().value_bound(tf.visible);
         params.depth_out = match write_depth {
             false => 0,
@@ -214,8 +219,12 @@ impl Renderer {
         )?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
-        let lut_groups = self.opacity.groups("frame LUT", [n, 1, 1])?;
-        let lut_push = build_opacity_lut::Push { dt: params.step, n };
+        let lut_groups = self.opacity.groups("frame LUT", [n * tf.channels, 1, 1])?;
+        let lut_push = build_opacity_lut::Push {
+            dt: params.step,
+            n,
+            channels: tf.channels,
+        };
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.

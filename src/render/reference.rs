@@ -3,6 +3,7 @@
 //! sampling is the manual filter's; against `Filter::Hardware` it differs by
 //! the device's filtering precision (README, "Sample filter").
 
+use super::mix::mix_channels;
 use crate::desc::FrameDesc;
 use crate::frame::Frame;
 use crate::gpu::shaders::blocks::RenderParams;
@@ -103,9 +104,10 @@ pub struct Tracer<'a> {
     pub tf: &'a TransferFunction,
     pub p: &'a RenderParams,
     pub look: Look,
-    /// `tf.corrected_lut(p.step)`: full-length samples read it, the ray's
-    /// shortened last sample corrects the raw LUT's alpha itself.
-    corrected: Vec<[f32; 4]>,
+    /// `tf.corrected_lut(p.step)` per channel: full-length samples read
+    /// it, the ray's shortened last sample corrects the raw LUT's alpha
+    /// itself.
+    corrected: Vec<Vec<[f32; 4]>>,
     /// The volume's gradient texels, for lit looks (`volume::gradient_texels`).
     gradient: Vec<[half::f16; 4]>,
 }
@@ -159,7 +161,9 @@ impl<'a> Tracer<'a> {
             tf,
             p,
             look,
-            corrected: tf.corrected_lut(p.step),
+            corrected: (0..volume.channel_count())
+                .map(|c| tf.channel(c).corrected_lut(p.step))
+                .collect(),
             gradient: if lit {
                 crate::volume::gradient_texels(volume)
             } else {
@@ -170,12 +174,95 @@ impl<'a> Tracer<'a> {
 
     /// The normalised sample at voxel-space point `pos` (NaN: no data).
     fn sample(&self, pos: Vec3) -> f32 {
-        let v = (sample_raw(self.volume, pos) - self.volume.norm[0]) * self.volume.norm[1];
+        self.sample_channel(0, pos)
+    }
+
+    /// Channel `c`'s normalised sample at `pos` (NaN: no data).
+    fn sample_channel(&self, c: usize, pos: Vec3) -> f32 {
+        let channel = self.volume.channel(c);
+        let v = (sample_raw(channel, pos) - channel.norm[0]) * channel.norm[1];
         if v.is_nan() {
             v
         } else {
             v.clamp(0.0, 1.0)
         }
+    }
+
+    /// As `trace` for a volume of several channels (composite, mip, minip,
+    /// average), as `take_channels` and `mix_channels` in
+    /// `glsl/common/lattice.glsl`.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    fn trace_channels(&self, org: Vec3, dir: Vec3, t_enter: f32, t_exit: f32, mut k: u32, jitter: f32) -> [f32; 4] {
+        let p = self.p;
+        let n = self.volume.channel_count();
+        let dt = p.step;
+        let lattice_t = |k: u32| t_enter + (k as f32 + jitter) * dt;
+        let mode = self.look.mode;
+        let mut acc = [0f32; 4];
+        let mut best = vec![if mode == MODE_MINIP { 2.0f32 } else { -1.0 }; n];
+        let (mut sum, mut count) = (vec![0f32; n], vec![0f32; n]);
+        loop {
+            let t = lattice_t(k);
+            if !(t < t_exit) {
+                break;
+            }
+            let last = !(lattice_t(k + 1) < t_exit);
+            let w = if last { dt.min(t_exit - t) } else { dt };
+            let pos = org + dir * t;
+            k += 1;
+            let values: Vec<f32> = (0..n).map(|c| self.sample_channel(c, pos)).collect();
+            if mode == MODE_COMPOSITE {
+                let colours: Vec<[f32; 4]> = values
+                    .iter()
+                    .enumerate()
+                    .map(|(c, &v)| match v.is_nan() {
+                        true => [0.0; 4],
+                        false if w < dt => {
+                            let x = self.tf.channel(c).lookup(v);
+                            [x[0], x[1], x[2], tf::opacity(x[3], w)]
+                        }
+                        false => tf::lookup_in(&self.corrected[c], v),
+                    })
+                    .collect();
+                composite(&mut acc, mix_channels(&colours));
+                if acc[3] >= p.ert {
+                    break;
+                }
+                continue;
+            }
+            for (c, &v) in values.iter().enumerate().filter(|(_, v)| !v.is_nan()) {
+                match mode {
+                    MODE_MIP => best[c] = best[c].max(v),
+                    MODE_MINIP => best[c] = best[c].min(v),
+                    _ => {
+                        sum[c] += v;
+                        count[c] += 1.0;
+                    }
+                }
+            }
+            let done = |b: &f32| if mode == MODE_MIP { *b >= 1.0 } else { *b <= 0.0 };
+            if (mode == MODE_MIP || mode == MODE_MINIP) && best.iter().all(done) {
+                break;
+            }
+        }
+        if mode == MODE_COMPOSITE {
+            return acc;
+        }
+        let colours: Vec<[f32; 4]> = (0..n)
+            .map(|c| {
+                let x = match mode {
+                    MODE_AVERAGE if count[c] == 0.0 => -1.0,
+                    MODE_AVERAGE => sum[c] / count[c],
+                    _ => best[c],
+                };
+                match (0.0..=1.0).contains(&x) {
+                    true => self.tf.channel(c).lookup(x),
+                    false => [0.0; 4],
+                }
+            })
+            .collect();
+        let c = mix_channels(&colours);
+        [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
     }
 
     /// As `sample_gradient` in `glsl/common/volume.glsl` (manual filter).
@@ -250,6 +337,9 @@ impl<'a> Tracer<'a> {
                 k += 1;
             }
         }
+        if self.volume.channel_count() > 1 {
+            return (self.trace_channels(org, dir, t_enter, t_exit, k, jitter), None);
+        }
         let mode = self.look.mode;
         let mut acc = [0f32; 4];
         let mut best = if mode == MODE_MINIP { 2.0f32 } else { -1.0 };
@@ -276,19 +366,12 @@ impl<'a> Tracer<'a> {
                         let c = self.tf.lookup(v);
                         [c[0], c[1], c[2], tf::opacity(c[3], w)]
                     } else {
-                        tf::lookup_in(&self.corrected, v)
+                        tf::lookup_in(&self.corrected[0], v)
                     };
                     if self.look.shade && c[3] > 0.0 {
                         c = self.light(pos, dir, c);
                     }
-                    if c[3] > 0.0 {
-                        let a = c[3].min(1.0);
-                        let transmit = 1.0 - acc[3];
-                        for ch in 0..3 {
-                            acc[ch] += transmit * a * c[ch];
-                        }
-                        acc[3] += transmit * a;
-                    }
+                    composite(&mut acc, c);
                     if acc[3] >= p.ert {
                         break;
                     }
@@ -376,6 +459,19 @@ impl<'a> Tracer<'a> {
         };
         let lit = self.light(org + dir * t, dir, [rgb[0], rgb[1], rgb[2], 1.0]);
         [lit[0], lit[1], lit[2], 1.0]
+    }
+}
+
+/// As `composite` in `glsl/common/lattice.glsl`: sample `c` over `acc`,
+/// front to back.
+fn composite(acc: &mut [f32; 4], c: [f32; 4]) {
+    if c[3] > 0.0 {
+        let a = c[3].min(1.0);
+        let transmit = 1.0 - acc[3];
+        for ch in 0..3 {
+            acc[ch] += transmit * a * c[ch];
+        }
+        acc[3] += transmit * a;
     }
 }
 

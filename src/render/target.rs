@@ -187,7 +187,7 @@ impl RenderTarget {
         )?;
         let lut = buffer(
             "frame LUT",
-            (2 * crate::tf::LUT_SIZE * 16) as u64,
+            (2 * crate::tf::LUT_SIZE * 16 * crate::volume::MAX_CHANNELS) as u64,
             storage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;

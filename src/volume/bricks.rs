@@ -14,17 +14,32 @@ pub struct BrickGrid {
     pub brick: u32,
     /// Bricks per axis (ceil(dims / brick)).
     pub counts: [u32; 3],
-    /// Normalised [min, max] per brick, x fastest.
+    /// Normalised [min, max] per brick, x fastest (channel 1's).
     pub ranges: Vec<[f32; 2]>,
+    /// The same for channels 2 and up.
+    pub other_channels: Vec<Vec<[f32; 2]>>,
 }
 
 impl BrickGrid {
     /// Ranges of `brick`^3 bricks; `apron` = 1 widens each by one voxel per side
     /// (0 reproduces the paper's per-voxel classification).
     pub fn new(volume: &Volume, brick: u32, apron: u32) -> Self {
+        BrickGrid {
+            brick,
+            counts: volume.dims.map(|d| d.div_ceil(brick)),
+            ranges: Self::channel(volume, brick, apron),
+            other_channels: volume
+                .other_channels
+                .iter()
+                .map(|c| Self::channel(c, brick, apron))
+                .collect(),
+        }
+    }
+
+    fn channel(volume: &Volume, brick: u32, apron: u32) -> Vec<[f32; 2]> {
         let counts = volume.dims.map(|d| d.div_ceil(brick));
         let n = counts.iter().map(|&c| c as usize).product();
-        let ranges = (0..n)
+        (0..n)
             .into_par_iter()
             .map(|i| {
                 let b = [
@@ -46,8 +61,7 @@ impl BrickGrid {
                 }
                 r
             })
-            .collect();
-        BrickGrid { brick, counts, ranges }
+            .collect()
     }
 
     pub fn len(&self) -> usize {
@@ -58,8 +72,17 @@ impl BrickGrid {
         self.ranges.is_empty()
     }
 
-    /// Active flags under `tf`: max alpha over the brick's range > 0.
+    /// Active flags under `tf`: max alpha over the brick's range > 0 in
+    /// any channel (each by its own transfer function).
     pub fn active(&self, tf: &TransferFunction) -> Vec<bool> {
-        self.ranges.iter().map(|r| tf.max_alpha(r[0], r[1]) > 0.0).collect()
+        let channels: Vec<&Vec<[f32; 2]>> = std::iter::once(&self.ranges).chain(&self.other_channels).collect();
+        (0..self.ranges.len())
+            .map(|b| {
+                channels
+                    .iter()
+                    .enumerate()
+                    .any(|(c, r)| tf.channel(c).max_alpha(r[b][0], r[b][1]) > 0.0)
+            })
+            .collect()
     }
 }

@@ -8,9 +8,10 @@
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
-use super::{Volume, VoxelData};
+use super::{channels, Volume, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::{check_image3d, vk, Context, Image3d, Staging, TexelBuffer};
+use std::borrow::Cow;
 
 /// The gradient's texel format (x, y, z, unused).
 const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -25,8 +26,12 @@ pub struct GpuVolume {
     linear: Option<vk::Sampler>,
     pub dims: [u32; 3],
     pub spacing: [f32; 3],
-    /// Texel normalisation, as `Volume::norm`.
+    /// Texel normalisation, as `Volume::norm` (channel 1's).
     pub norm: [f32; 2],
+    /// How many channels each texel holds (`Volume::channel_count`).
+    pub channels: u32,
+    /// Each channel's texel normalisation (unused channels: [0, 0]).
+    pub norms: [[f32; 2]; MAX_CHANNELS],
     /// It holds NaN voxels (no data): the march kernels test samples for
     /// NaN, and only the manual filter samples it.
     pub has_nan: bool,
@@ -55,21 +60,23 @@ fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
     unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")
 }
 
-/// The image format and texel bytes of a volume (R8/R16 kept native).
-fn texels(volume: &Volume) -> (vk::Format, &[u8]) {
-    match &volume.data {
-        VoxelData::U8(v) => (vk::Format::R8_UNORM, v),
-        VoxelData::U16(v) => (vk::Format::R16_UNORM, bytemuck::cast_slice(v)),
-        VoxelData::F32(v) => (vk::Format::R32_SFLOAT, bytemuck::cast_slice(v)),
-    }
+/// The image format, texel size and bytes of a volume (R8/R16 kept
+/// native; several channels interleaved, `channels.rs`).
+fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
+    let (kind, n) = (channels::common_kind(volume), volume.channel_count());
+    (
+        channels::format(kind, n),
+        channels::texel_bytes(kind, n),
+        channels::texel_data(volume),
+    )
 }
 
 impl GpuVolume {
     /// Uploads `volume` and waits; checks `maxImageDimension3D` and memory
     /// limits first.
     pub fn upload(ctx: &Context, volume: &Volume) -> Result<Self> {
-        let (format, bytes) = texels(volume);
-        let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
+        let (format, texel, bytes) = texels(volume);
+        let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, texel, &bytes)?;
         Self::with_image(ctx, volume, image)
     }
 
@@ -77,9 +84,8 @@ impl GpuVolume {
     /// SHADER_READ_ONLY_OPTIMAL behind a barrier to compute-shader reads.
     /// Keep the returned `Staging` until the submission completed.
     pub fn record_upload(ctx: &Context, cmd: vk::CommandBuffer, volume: &Volume) -> Result<(Self, Staging)> {
-        let (format, bytes) = texels(volume);
-        let (image, staging) =
-            Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, volume.texel_bytes(), bytes)?;
+        let (format, texel, bytes) = texels(volume);
+        let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
         Ok((Self::with_image(ctx, volume, image)?, staging))
     }
 
@@ -93,8 +99,10 @@ impl GpuVolume {
             dims: volume.dims,
             spacing: volume.spacing,
             norm: volume.norm,
-            has_nan: volume.no_data.total() > 0,
-            kind: TexelKind::of(&volume.data),
+            channels: volume.channel_count() as u32,
+            norms: std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm)),
+            has_nan: volume.no_data_total() > 0,
+            kind: channels::common_kind(volume),
             gradient: None,
             cells: None,
             gradient_cells: None,
@@ -188,6 +196,7 @@ impl GpuVolume {
 
     fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {
         self.check_same(volume, "gradient")?;
+        self.check_one_channel("shaded and iso frames")?;
         check_image3d(self.ctx.info(), self.dims, GRADIENT_TEXEL_BYTES)?;
         crate::limits::check_host(
             format_args!("gradient of {}", volume.name),
@@ -210,6 +219,7 @@ impl GpuVolume {
     pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
         if self.cells.is_none() {
             self.check_same(volume, "cells copy")?;
+            self.check_one_channel("the cells copy")?;
             self.cells = Some(cells::upload_cells(&self.ctx, volume)?);
         }
         Ok(())
@@ -222,6 +232,7 @@ impl GpuVolume {
             return Ok(None);
         }
         self.check_same(volume, "cells copy")?;
+        self.check_one_channel("the cells copy")?;
         let (texels, staging) = cells::record_upload_cells(&self.ctx, cmd, volume)?;
         self.cells = Some(texels);
         Ok(Some(staging))
@@ -232,8 +243,25 @@ impl GpuVolume {
         self.cells.as_ref()
     }
 
+    /// An error naming `what` unless the volume has one channel: shading
+    /// and isosurfaces read one field's gradient.
+    pub fn check_one_channel(&self, what: &str) -> Result<()> {
+        if self.channels > 1 {
+            return Err(Error::invalid(
+                "volume",
+                format!("of {} channels", self.channels),
+                format!("{what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode"),
+            ));
+        }
+        Ok(())
+    }
+
     fn check_same(&self, volume: &Volume, what: &'static str) -> Result<()> {
-        if volume.dims != self.dims || volume.norm != self.norm || TexelKind::of(&volume.data) != self.kind {
+        if volume.dims != self.dims
+            || volume.norm != self.norm
+            || volume.channel_count() as u32 != self.channels
+            || channels::common_kind(volume) != self.kind
+        {
             return Err(Error::invalid(
                 what,
                 volume.name.clone(),
@@ -255,7 +283,8 @@ impl GpuVolume {
             Some(f) => f == Filter::Manual,
             None => cpu,
         };
-        if manual && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok() {
+        // The cells copy holds one channel (`cells.rs`).
+        if manual && self.channels == 1 && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok() {
             self.add_cells(volume)?;
         }
         // After the cells copy: the gradient's goes with it.

@@ -3,6 +3,7 @@
 
 mod bricks;
 mod cells;
+mod channels;
 mod decode;
 mod export;
 mod filter;
@@ -21,6 +22,7 @@ pub use cells::{
     cells_bytes, check_cells, check_gradient_cells, no_cells, TexelKind, CELLS_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID,
     GRADIENT_CELL_BYTES, KIND_CONSTANT_ID,
 };
+pub use channels::{common_kind, stored_texel, CHANNELS_CONSTANT_ID};
 pub use decode::VoxelType;
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
@@ -96,7 +98,14 @@ pub struct Volume {
     pub default_tf: Option<String>,
     /// The voxels without data (NaN, stored as NaN, infinities included).
     pub no_data: NoData,
+    /// Channels 2 and up (at most `MAX_CHANNELS` in all), each on this
+    /// volume's grid with its own type, range and normalisation: this
+    /// volume's own fields are channel 1. Empty for a one-channel volume.
+    /// `Volume::join` makes them.
+    pub other_channels: Vec<Volume>,
 }
+
+pub use crate::limits::MAX_CHANNELS;
 
 /// Float voxels that hold no value, by what the source held. All are
 /// stored as NaN: a sample that reads one is transparent, and value ranges
@@ -236,7 +245,111 @@ impl Volume {
             norm,
             default_tf: None,
             no_data,
+            other_channels: Vec::new(),
         })
+    }
+
+    /// A volume of several channels on one grid: `channels[0]` is channel 1.
+    /// They must share dims and spacing; 1 to `MAX_CHANNELS` of them, each
+    /// itself one channel.
+    pub fn join(channels: Vec<Volume>) -> Result<Volume> {
+        let names: Vec<&str> = channels.iter().map(|c| c.name.as_str()).collect();
+        let name = names.join("+");
+        if channels.is_empty() || channels.len() > MAX_CHANNELS {
+            return Err(Error::invalid(
+                "channels",
+                name,
+                format!("{} channels: a volume has 1 to {MAX_CHANNELS}", channels.len()),
+            ));
+        }
+        let mut channels = channels.into_iter();
+        let Some(mut first) = channels.next() else {
+            return Err(Error::invalid("channels", name, "no channel"));
+        };
+        if first.channel_count() > 1 {
+            return Err(Error::invalid(
+                "channels",
+                name,
+                "each joined volume must be one channel",
+            ));
+        }
+        for (i, c) in channels.enumerate() {
+            let [w, h, d] = c.dims;
+            let [w0, h0, d0] = first.dims;
+            if c.dims != first.dims {
+                return Err(Error::invalid(
+                    "channels",
+                    c.name.clone(),
+                    format!(
+                        "channel {} is {w}x{h}x{d} where channel 1 ({}) is {w0}x{h0}x{d0}: channels share one grid",
+                        i + 2,
+                        first.name
+                    ),
+                ));
+            }
+            if c.spacing != first.spacing {
+                return Err(Error::invalid(
+                    "channels",
+                    c.name.clone(),
+                    format!(
+                        "channel {} has spacing {:?} where channel 1 ({}) has {:?}: channels share one grid",
+                        i + 2,
+                        c.spacing,
+                        first.name,
+                        first.spacing
+                    ),
+                ));
+            }
+            if c.channel_count() > 1 {
+                return Err(Error::invalid(
+                    "channels",
+                    c.name.clone(),
+                    "each joined volume must be one channel",
+                ));
+            }
+            first.other_channels.push(c);
+        }
+        first.name = name;
+        Ok(first)
+    }
+
+    /// How many channels it has (1 to `MAX_CHANNELS`).
+    pub fn channel_count(&self) -> usize {
+        1 + self.other_channels.len()
+    }
+
+    /// Channel `c` (0-based; 0 is this volume's own data) as a one-channel
+    /// volume: its data, type, range and normalisation.
+    pub fn channel(&self, c: usize) -> &Volume {
+        if c == 0 {
+            self
+        } else {
+            &self.other_channels[c - 1]
+        }
+    }
+
+    /// Every channel, channel 1 first.
+    pub fn channels(&self) -> impl Iterator<Item = &Volume> {
+        std::iter::once(self).chain(self.other_channels.iter())
+    }
+
+    /// Each channel's suggested transfer function (a generator's, else
+    /// `ramp:0:1`), one per channel.
+    pub fn default_transfer_function(&self) -> Result<crate::tf::TransferFunction> {
+        let spec = |c: &Volume| c.default_tf.clone().unwrap_or_else(|| "ramp:0:1".into());
+        if self.channel_count() == 1 {
+            return crate::tf::TransferFunction::parse(&spec(self));
+        }
+        let tfs = self
+            .channels()
+            .map(|c| crate::tf::TransferFunction::parse(&spec(c)))
+            .collect::<Result<Vec<_>>>()?;
+        crate::tf::TransferFunction::per_channel(tfs)
+    }
+
+    /// Voxels without data, over every channel.
+    pub fn no_data_total(&self) -> u64 {
+        self.channels().map(|c| c.no_data.total()).sum()
     }
 
     pub fn voxel_count(&self) -> u64 {

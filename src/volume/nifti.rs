@@ -73,6 +73,8 @@ struct Layout {
     ty: VoxelType,
     dims: [u32; 3],
     steps: u32,
+    /// dim[5], NIfTI's vector (component) axis: the volume's channels.
+    channels: u32,
 }
 
 fn layout(path: &Path, header: &NiftiHeader) -> Result<Layout> {
@@ -97,21 +99,44 @@ fn layout(path: &Path, header: &NiftiHeader) -> Result<Layout> {
             "NIfTI header has a zero dimension or an invalid rank",
         ));
     }
-    // The 4th dimension is time; trailing singletons (t = 1) are fine.
-    if header.dim[5..=rank.max(4)].iter().any(|&d| d > 1) {
+    // The 4th dimension is time, the 5th components (channels); trailing
+    // singletons are fine.
+    if header.dim[6..=rank.max(5)].iter().any(|&d| d > 1) {
         return Err(Error::format(
             path,
-            format!("NIfTI volume has {rank} dimensions: beyond x, y, z and time (dim[5..]) are not supported"),
+            format!(
+                "NIfTI volume has {rank} dimensions: beyond x, y, z, time and components (dim[6..]) are not supported"
+            ),
         ));
     }
     let dims = [1, 2, 3].map(|i| if i <= rank { header.dim[i] as u32 } else { 1 });
     let steps = if rank >= 4 { header.dim[4] as u32 } else { 1 };
-    Ok(Layout { ty, dims, steps })
+    let channels = if rank >= 5 { header.dim[5] as u32 } else { 1 };
+    if channels > super::MAX_CHANNELS as u32 {
+        return Err(Error::format(
+            path,
+            format!(
+                "NIfTI dim[5] has {channels} components: a volume has 1 to {} channels",
+                super::MAX_CHANNELS
+            ),
+        ));
+    }
+    Ok(Layout {
+        ty,
+        dims,
+        steps,
+        channels,
+    })
 }
 
 fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
     let header = header(path, &mut reader)?;
-    let Layout { ty, dims, steps } = layout(path, &header)?;
+    let Layout {
+        ty,
+        dims,
+        steps,
+        channels,
+    } = layout(path, &header)?;
     if step >= steps {
         return Err(Error::invalid(
             "time",
@@ -119,7 +144,9 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
             format!("{} has {steps} time step(s), 0 to {}", path.display(), steps - 1),
         ));
     }
-    super::check_size(dims, ty, &path.display().to_string(), device)?;
+    for _ in 0..channels {
+        super::check_size(dims, ty, &path.display().to_string(), device)?;
+    }
     let offset = header.vox_offset;
     if !(offset.is_finite() && (348.0..=(1u64 << 32) as f32).contains(&offset)) {
         return Err(Error::format(
@@ -128,16 +155,24 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
         ));
     }
     let voxel_bytes = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
-    // Skip to this step's voxels (time is the slowest axis), then read them.
-    let skip = offset as u64 - HEADER_BYTES + step as u64 * voxel_bytes;
-    let skipped =
-        std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
-    let mut data = Vec::new();
-    if skipped == skip {
-        (&mut reader)
-            .take(voxel_bytes)
-            .read_to_end(&mut data)
-            .map_err(|e| unreadable(path, e))?;
+    // Each channel's block of this step (x, y, z, then time, then
+    // components, slowest): skip to it and read it, in file order.
+    let mut at = HEADER_BYTES;
+    let mut blocks = Vec::new();
+    for c in 0..channels as u64 {
+        let start = offset as u64 + (c * steps as u64 + step as u64) * voxel_bytes;
+        let skip = start - at;
+        let skipped =
+            std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
+        let mut data = Vec::new();
+        if skipped == skip {
+            (&mut reader)
+                .take(voxel_bytes)
+                .read_to_end(&mut data)
+                .map_err(|e| unreadable(path, e))?;
+        }
+        at = start + data.len() as u64;
+        blocks.push(data);
     }
     // Data past the voxels (none in a well-formed file) is ignored, as the crate did.
     let spacing = [1, 2, 3].map(|i| {
@@ -149,15 +184,27 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
         }
     });
     let little = header.endianness == nifti::Endianness::Little;
-    let mut volume = decode(path, &data, ty, little, dims, spacing)?;
-    // scl_slope/scl_inter rescale linearly; normalised values are unchanged
-    // for a positive slope, so only the reported range moves.
-    let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
-    if slope != 0.0 && slope.is_finite() && inter.is_finite() {
-        let [a, b] = volume.value_range.map(|v| v * slope + inter);
-        volume.value_range = [a.min(b), a.max(b)];
+    let mut volumes = Vec::new();
+    for (c, data) in blocks.iter().enumerate() {
+        let mut volume = decode(path, data, ty, little, dims, spacing)?;
+        // scl_slope/scl_inter rescale linearly; normalised values are unchanged
+        // for a positive slope, so only the reported range moves.
+        let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
+        if slope != 0.0 && slope.is_finite() && inter.is_finite() {
+            let [a, b] = volume.value_range.map(|v| v * slope + inter);
+            volume.value_range = [a.min(b), a.max(b)];
+        }
+        if channels > 1 {
+            volume.name = format!("{}[{c}]", path.display());
+        }
+        volumes.push(volume);
     }
-    Ok(volume)
+    if volumes.len() == 1 {
+        return Ok(volumes.remove(0));
+    }
+    let mut joined = Volume::join(volumes)?;
+    joined.name = path.display().to_string();
+    Ok(joined)
 }
 
 fn voxel_type(path: &Path, header: &NiftiHeader) -> Result<VoxelType> {

@@ -1,5 +1,8 @@
 //! NRRD reader (attached or detached header; raw or gzip encoding; 3-D).
-//! Honours `spacings` or the lengths of `space directions`.
+//! Honours `spacings` or the lengths of `space directions`. A 4-D NRRD
+//! holds channels on a component axis first (`kinds: vector domain domain
+//! domain`, or any non-domain kind: up to `MAX_CHANNELS`), or a time series
+//! on a `time` axis last.
 
 use super::decode::{decode, VoxelType};
 use super::Volume;
@@ -59,18 +62,125 @@ fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
 }
 
 pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
+    load_step(path, 0, device)
+}
+
+/// Time step `step` of a NRRD (step 0 of one without a time axis).
+pub fn load_step(path: &Path, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse(path, &bytes, true, device)
+    stepped(path, parse(path, &bytes, true, device, Some(step)))
+}
+
+/// The volume `parse` read for the step asked for.
+fn stepped(path: &Path, parsed: Result<(Option<Volume>, u32)>) -> Result<Volume> {
+    parsed?.0.ok_or_else(|| Error::format(path, "NRRD step not read"))
+}
+
+/// How many time steps a NRRD holds (1 without a time axis); reads its header.
+pub fn steps(path: &Path) -> Result<u32> {
+    // Headers are short: the first 64 KiB hold one, else read it all.
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut head = Vec::new();
+    file.take(1 << 16)
+        .read_to_end(&mut head)
+        .map_err(|e| Error::io(path, e))?;
+    match parse(path, &head, true, None, None) {
+        Ok((_, steps)) => Ok(steps),
+        Err(_) if head.len() == 1 << 16 => {
+            let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+            parse(path, &bytes, true, None, None).map(|v| v.1)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// A NRRD with attached data from memory (detached data files are an error).
 pub fn from_bytes(origin: &Path, bytes: &[u8]) -> Result<Volume> {
-    parse(origin, bytes, false, None)
+    stepped(origin, parse(origin, bytes, false, None, Some(0)))
 }
 
-/// Parses the header of `bytes`, checks the volume's size, then reads its
-/// data: attached, or (when `detached` allows) from the named file.
-fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>) -> Result<Volume> {
+/// Where a NRRD's axes put its channels and time steps.
+struct Axes {
+    /// The spatial axes' indices among `sizes`.
+    spatial: [usize; 3],
+    /// Channels on axis 0 (1: none).
+    channels: u32,
+    /// Time steps on the last axis (1: none).
+    steps: u32,
+}
+
+/// The axes of a `dimension`-D NRRD of `sizes`, by its `kinds`.
+fn axes(path: &Path, dimension: usize, sizes: &[f64], kinds: Option<&str>) -> Result<Axes> {
+    if dimension == 3 && sizes.len() == 3 {
+        return Ok(Axes {
+            spatial: [0, 1, 2],
+            channels: 1,
+            steps: 1,
+        });
+    }
+    if dimension != 4 || sizes.len() != 4 {
+        return Err(Error::format(
+            path,
+            format!("NRRD has dimension {dimension}; lacuna reads 3-D volumes, with channels or time as a 4th axis"),
+        ));
+    }
+    let kinds: Vec<String> = kinds.unwrap_or("").split_whitespace().map(str::to_lowercase).collect();
+    if kinds.len() != 4 {
+        return Err(Error::format(
+            path,
+            "a 4-D NRRD needs 'kinds' naming its component axis (first) or time axis (last)",
+        ));
+    }
+    if let Some(i) = kinds.iter().position(|k| k == "time") {
+        if i != 3 {
+            return Err(Error::format(
+                path,
+                format!("NRRD time axis is not contiguous: it is axis {i} of 4, and lacuna reads time as the slowest (last) axis"),
+            ));
+        }
+        return Ok(Axes {
+            spatial: [0, 1, 2],
+            channels: 1,
+            steps: sizes[3] as u32,
+        });
+    }
+    let spatial = |k: &str| matches!(k, "domain" | "space");
+    if !spatial(&kinds[0]) && kinds[1..].iter().all(|k| spatial(k)) {
+        let channels = sizes[0] as u32;
+        if !(1..=super::MAX_CHANNELS as u32).contains(&channels) {
+            return Err(Error::format(
+                path,
+                format!(
+                    "NRRD component axis has {channels} channels: a volume has 1 to {}",
+                    super::MAX_CHANNELS
+                ),
+            ));
+        }
+        return Ok(Axes {
+            spatial: [1, 2, 3],
+            channels,
+            steps: 1,
+        });
+    }
+    Err(Error::format(
+        path,
+        format!(
+            "NRRD kinds '{}': expected a component axis first (vector, list, RGB-color, ...) or a time axis last",
+            kinds.join(" ")
+        ),
+    ))
+}
+
+/// Parses the header of `bytes`, checks the volume's size, then reads step
+/// `step`'s data (None: the header only): attached, or (when `detached`
+/// allows) from the named file. Returns the volume and the time steps.
+fn parse(
+    path: &Path,
+    bytes: &[u8],
+    detached: bool,
+    device: Option<&DeviceInfo>,
+    step: Option<u32>,
+) -> Result<(Option<Volume>, u32)> {
     if !bytes.starts_with(b"NRRD000") {
         return Err(Error::format(path, "not a NRRD file (no NRRD000x magic)"));
     }
@@ -114,30 +224,45 @@ fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>)
         .parse()
         .map_err(|_| Error::format(path, "NRRD 'dimension' is not an integer"))?;
     let sizes = numbers(path, "sizes", require("sizes")?)?;
-    if dimension != 3 || sizes.len() != 3 {
-        return Err(Error::format(
-            path,
-            format!("NRRD has dimension {dimension}; lacuna reads 3-D scalar volumes"),
-        ));
-    }
-    let mut dims = [0u32; 3];
-    for (d, &size) in dims.iter_mut().zip(&sizes) {
+    for &size in &sizes {
         if !(size.fract() == 0.0 && (1.0..=u32::MAX as f64).contains(&size)) {
             return Err(Error::format(
                 path,
                 format!("NRRD size '{size}' is not a positive 32-bit integer"),
             ));
         }
-        *d = size as u32;
     }
-    super::check_size(dims, ty, &path.display().to_string(), device)?;
+    let axes = axes(path, dimension, &sizes, get("kinds"))?;
+    let dims = axes.spatial.map(|a| sizes[a] as u32);
+    let Some(step) = step else {
+        return Ok((None, axes.steps));
+    };
+    if step >= axes.steps {
+        return Err(Error::invalid(
+            "time",
+            step.to_string(),
+            format!(
+                "{} has {} time step(s), 0 to {}",
+                path.display(),
+                axes.steps,
+                axes.steps - 1
+            ),
+        ));
+    }
+    for _ in 0..axes.channels {
+        super::check_size(dims, ty, &path.display().to_string(), device)?;
+    }
     let little = match get("endian") {
         None | Some("little") => true,
         Some("big") => false,
         Some(e) => return Err(Error::format(path, format!("NRRD endian '{e}' is not little or big"))),
     };
     let spacing = if let Some(s) = get("spacings") {
-        numbers(path, "spacings", s)?
+        let all = numbers(path, "spacings", s)?;
+        match all.len() == sizes.len() {
+            true => axes.spatial.iter().map(|&a| all[a]).collect(),
+            false => all,
+        }
     } else if let Some(d) = get("space directions") {
         direction_lengths(path, d)?
     } else {
@@ -164,7 +289,9 @@ fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>)
     };
     // The bytes the header describes: nothing reads or inflates beyond them
     // (one more tells a longer input), so no input expands without bound.
-    let wanted = skip.saturating_add(dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64);
+    let one = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
+    let block = one * axes.channels as u64;
+    let wanted = skip.saturating_add(block * axes.steps as u64);
     let datafile = get("data file").or_else(|| get("datafile"));
     let (source, raw): (PathBuf, Cow<[u8]>) = match datafile {
         Some(name) => {
@@ -205,9 +332,47 @@ fn parse(path: &Path, bytes: &[u8], detached: bool, device: Option<&DeviceInfo>)
         &raw
     };
     let payload = data.get(skip.min(usize::MAX as u64) as usize..).unwrap_or_default();
-    let mut volume = decode(&source, payload, ty, little, dims, spacing)?;
-    volume.name = path.display().to_string();
-    Ok(volume)
+    if payload.len() as u64 != block * axes.steps as u64 {
+        return Err(Error::format(
+            &source,
+            format!(
+                "holds {} bytes of voxel data but {}x{}x{} {ty} ({} channels, {} steps) needs {}",
+                payload.len(),
+                dims[0],
+                dims[1],
+                dims[2],
+                axes.channels,
+                axes.steps,
+                block * axes.steps as u64
+            ),
+        ));
+    }
+    // This step's block: voxels with their channels interleaved, fastest.
+    let at = (block * step as u64) as usize;
+    let payload = &payload[at..at + block as usize];
+    let name = path.display().to_string();
+    if axes.channels == 1 {
+        let mut volume = decode(&source, payload, ty, little, dims, spacing)?;
+        volume.name = name;
+        return Ok((Some(volume), axes.steps));
+    }
+    let (c_all, b) = (axes.channels as usize, ty.bytes());
+    let channels = (0..c_all)
+        .map(|c| {
+            let bytes: Vec<u8> = payload
+                .chunks_exact(b * c_all)
+                .flat_map(|v| &v[c * b..(c + 1) * b])
+                .copied()
+                .collect();
+            let mut v = decode(&source, &bytes, ty, little, dims, spacing)?;
+            v.name = format!("{name}[{c}]");
+            Ok(v)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Volume::join(channels).map(|mut v| {
+        v.name = name;
+        (Some(v), axes.steps)
+    })
 }
 
 /// Reads `path`, or fails (without reading on) when it holds more than

@@ -3,7 +3,7 @@
 //! - a printf pattern of files (`run_%04d_64x64x64_float32.raw`): the steps
 //!   are the numbers that exist, which must run without a gap; step K is
 //!   the file numbered first + K;
-//! - a NIfTI file whose 4th dimension is time;
+//! - a NIfTI file whose 4th dimension is time, or a NRRD whose last axis is;
 //! - a generator, which animates over `procedural::STEPS` steps;
 //! - anything else is one step.
 //!
@@ -55,18 +55,50 @@ enum Source {
     /// The files of a pattern, step K at index K.
     Files(Vec<PathBuf>),
     #[cfg(feature = "loaders")]
-    Nifti { path: PathBuf, steps: u32 },
+    Nifti {
+        path: PathBuf,
+        steps: u32,
+    },
+    Nrrd {
+        path: PathBuf,
+        steps: u32,
+    },
+    /// Channels joined with `+`, each a series of its own (normalised as
+    /// its own step 0); a one-step channel stands in every step.
+    Channels(Vec<Series>),
 }
 
 impl Series {
     /// The steps `spec` names (see the module's doc); files are listed and
     /// headers read, no voxels.
     pub fn open(spec: &str, options: &LoadOptions) -> Result<Series> {
-        let source = if let Some(pattern) = Pattern::parse(spec) {
+        let source = if spec.contains('+') && options.raw.is_none() && !Path::new(spec).exists() {
+            // Each channel's spec, checked as a volume spec first.
+            VolumeSpec::parse(spec, options)?;
+            let channels = spec
+                .split('+')
+                .map(|part| Series::open(part, options))
+                .collect::<Result<Vec<_>>>()?;
+            let mut steps = channels.iter().map(|c| c.steps()).filter(|&n| n > 1);
+            if let Some(n) = steps.next() {
+                if let Some(m) = steps.find(|&m| m != n) {
+                    return Err(Error::invalid(
+                        "volume",
+                        spec,
+                        format!("its channels have {n} and {m} time steps: every channel with steps must have as many"),
+                    ));
+                }
+            }
+            Source::Channels(channels)
+        } else if let Some(pattern) = Pattern::parse(spec) {
             Source::Files(pattern.files()?)
         } else {
             match VolumeSpec::parse(spec, options)? {
                 VolumeSpec::Procedural { generator, dims, param } => Source::Generator { generator, dims, param },
+                VolumeSpec::File(path) if is_nrrd(&path) && path.exists() => {
+                    let steps = super::nrrd::steps(&path)?;
+                    Source::Nrrd { path, steps }
+                }
                 #[cfg(feature = "loaders")]
                 VolumeSpec::File(path) if is_nifti(&path) && path.exists() => {
                     let steps = super::nifti::steps(&path)?;
@@ -91,6 +123,8 @@ impl Series {
             Source::Files(files) => files.len() as u32,
             #[cfg(feature = "loaders")]
             Source::Nifti { steps, .. } => *steps,
+            Source::Channels(channels) => channels.iter().map(|c| c.steps()).max().unwrap_or(1),
+            Source::Nrrd { steps, .. } => *steps,
         }
     }
 
@@ -123,6 +157,13 @@ impl Series {
     /// made, normalised as step 0.
     pub fn load(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
         self.check_step(k)?;
+        if let Source::Channels(channels) = &self.source {
+            let loaded = channels
+                .iter()
+                .map(|c| c.load(k.min(c.steps() - 1), device))
+                .collect::<Result<Vec<_>>>()?;
+            return Volume::join(loaded);
+        }
         let mut volume = self.load_raw(k, device)?;
         let first = match self.first.get() {
             Some(first) => *first,
@@ -148,6 +189,8 @@ impl Series {
             Source::Files(files) => VolumeSpec::File(files[k as usize].clone()).load_within(&self.options, device),
             #[cfg(feature = "loaders")]
             Source::Nifti { path, .. } => super::nifti::load_step(path, k, device),
+            Source::Nrrd { path, .. } => super::nrrd::load_step(path, k, device),
+            Source::Channels(_) => unreachable!("Series::load joins channels' steps"),
         }
     }
 }
@@ -207,6 +250,11 @@ impl StepNorm {
 }
 
 #[cfg(feature = "loaders")]
+fn is_nrrd(path: &Path) -> bool {
+    let name = path.to_string_lossy().to_lowercase();
+    name.ends_with(".nrrd") || name.ends_with(".nhdr")
+}
+
 fn is_nifti(path: &Path) -> bool {
     let name = path.to_string_lossy().to_lowercase();
     name.ends_with(".nii") || name.ends_with(".nii.gz")

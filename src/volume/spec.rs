@@ -1,4 +1,5 @@
-//! Volume specs: a file path, or a procedural `NAME:SIZE[:PARAM]`.
+//! Volume specs: a file path, or a procedural `NAME:SIZE[:PARAM]`, or
+//! several of them joined with `+` as the channels of one volume.
 
 use super::procedural::Generator;
 use super::raw::RawLayout;
@@ -23,6 +24,8 @@ pub enum VolumeSpec {
         dims: [u32; 3],
         param: Option<f64>,
     },
+    /// Channels on one grid (`a.nii.gz+b.nii.gz`, `vessels:128+nbody:128`).
+    Channels(Vec<VolumeSpec>),
 }
 
 impl VolumeSpec {
@@ -30,6 +33,24 @@ impl VolumeSpec {
         let path = Path::new(spec);
         if options.raw.is_some() || path.exists() {
             return Ok(VolumeSpec::File(path.to_path_buf()));
+        }
+        if spec.contains('+') {
+            let parts: Vec<&str> = spec.split('+').collect();
+            if parts.len() > super::MAX_CHANNELS || parts.iter().any(|p| p.is_empty()) {
+                return Err(Error::invalid(
+                    "volume",
+                    spec,
+                    format!(
+                        "expected 1 to {} channels joined with '+', each a file or NAME:SIZE",
+                        super::MAX_CHANNELS
+                    ),
+                ));
+            }
+            let channels = parts
+                .iter()
+                .map(|p| VolumeSpec::parse(p, options))
+                .collect::<Result<Vec<_>>>()?;
+            return Ok(VolumeSpec::Channels(channels));
         }
         let mut parts = spec.split(':');
         let name = parts.next().unwrap_or("");
@@ -94,6 +115,13 @@ impl VolumeSpec {
                 generator.generate(*dims, *param)
             }
             VolumeSpec::File(path) => load_file(path, options, device),
+            VolumeSpec::Channels(channels) => {
+                let loaded = channels
+                    .iter()
+                    .map(|c| c.load_within(options, device))
+                    .collect::<Result<Vec<_>>>()?;
+                Volume::join(loaded)
+            }
         }
     }
 }

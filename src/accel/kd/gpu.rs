@@ -272,9 +272,12 @@ impl KdGpuBuilder {
             let push = build_brick_tight::Push {
                 dims: [gv.dims[0], gv.dims[1], gv.dims[2], brick],
                 counts: [counts[0], counts[1], counts[2], total as u32],
-                norm: gv.norm,
+                lo: gv.norms.map(|n| n[0]),
+                scale: gv.norms.map(|n| n[1]),
                 groups_x: groups[0],
                 lut_size: LUT_SIZE as u32,
+                channels: gv.channels,
+                tf_stride: tf.channel_step() * tf.max_stride,
             };
             self.tight.dispatch(
                 cmd,

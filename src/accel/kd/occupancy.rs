@@ -43,7 +43,8 @@ fn filter3(src: &[f32], dims: [usize; 3], axis: usize, pick: fn(f32, f32) -> f32
 }
 
 impl Occupancy {
-    /// Classifies every footprint of `volume` under `tf` and builds the tables.
+    /// Classifies every footprint of `volume` under `tf` (active in any
+    /// channel, each by its own TF) and builds the tables.
     pub fn new(volume: &Volume, tf: &TransferFunction) -> Self {
         let dims = volume.dims.map(|d| d as i32);
         let counts = dims.map(|d| (d + SVT_BRICK - 1) / SVT_BRICK);
@@ -57,24 +58,32 @@ impl Occupancy {
                     b as i32 / (counts[0] * counts[1]),
                 ];
                 let origin = bc.map(|c| c * SVT_BRICK);
-                // Stage the brick plus a one-voxel apron, clamped like the sampler.
+                // Per channel, each footprint's range over the voxels its
+                // samples read: the brick plus a one-voxel apron, clamped
+                // like the sampler.
                 let s = SVT_BRICK as usize + 2;
-                let mut staged = Vec::with_capacity(s * s * s);
-                for z in 0..s as i32 {
-                    for y in 0..s as i32 {
-                        for x in 0..s as i32 {
-                            let v = [x, y, z].map(|c| c - 1);
-                            let p = [0, 1, 2].map(|a| (origin[a] + v[a]).clamp(0, dims[a] - 1) as u32);
-                            staged.push(volume.value(p[0], p[1], p[2]));
+                let ranges: Vec<(Vec<f32>, Vec<f32>)> = volume
+                    .channels()
+                    .map(|channel| {
+                        let mut staged = Vec::with_capacity(s * s * s);
+                        for z in 0..s as i32 {
+                            for y in 0..s as i32 {
+                                for x in 0..s as i32 {
+                                    let v = [x, y, z].map(|c| c - 1);
+                                    let p = [0, 1, 2].map(|a| (origin[a] + v[a]).clamp(0, dims[a] - 1) as u32);
+                                    staged.push(channel.value(p[0], p[1], p[2]));
+                                }
+                            }
                         }
-                    }
-                }
-                let mut lo = (staged.clone(), [s; 3]);
-                let mut hi = (staged, [s; 3]);
-                for axis in 0..3 {
-                    lo = filter3(&lo.0, lo.1, axis, f32::min);
-                    hi = filter3(&hi.0, hi.1, axis, f32::max);
-                }
+                        let mut lo = (staged.clone(), [s; 3]);
+                        let mut hi = (staged, [s; 3]);
+                        for axis in 0..3 {
+                            lo = filter3(&lo.0, lo.1, axis, f32::min);
+                            hi = filter3(&hi.0, hi.1, axis, f32::max);
+                        }
+                        (lo.0, hi.0)
+                    })
+                    .collect();
                 let b = SVT_BRICK as usize;
                 Sat3::<u16>::new([b; 3], |x, y, z| {
                     let inside = [x, y, z]
@@ -83,7 +92,11 @@ impl Occupancy {
                         .zip(&dims)
                         .all(|((c, o), d)| o + (*c as i32) < *d);
                     let i = x + b * (y + b * z);
-                    inside && tf.max_alpha(lo.0[i], hi.0[i]) > 0.0
+                    inside
+                        && ranges
+                            .iter()
+                            .enumerate()
+                            .any(|(c, (lo, hi))| tf.channel(c).max_alpha(lo[i], hi[i]) > 0.0)
                 })
             })
             .collect();

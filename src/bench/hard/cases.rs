@@ -456,6 +456,33 @@ pub fn cases() -> Result<Vec<HardCase>> {
             look: LookSpec::default(),
         },
         HardCase {
+            name: "two channels, one transparent",
+            volume: Volume::join(vec![gen("nbody:40")?, gen("vessels:40")?])?,
+            tf: "ramp:0.35:1 | ramp:0:1:0",
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)?, along_z_through_brick_faces()?],
+            iso: "0.5",
+            look: LookSpec::default(),
+        },
+        HardCase {
+            name: "two channels, one dense and one sparse",
+            volume: Volume::join(vec![gen("menger:27")?, gen("nbody:27")?])?,
+            tf: "ramp:0.5:1:0.2 | ramp:0.35:1",
+            views: vec![cam(32, 30.0, 20.0, ORTHO, 0.5, None)?],
+            iso: "0.5",
+            look: LookSpec::default(),
+        },
+        HardCase {
+            name: "channels of other types and ranges (u8 with float32 NaN-masked)",
+            volume: Volume::join(vec![gen("vessels:40")?, masked("nbody:40")?])?,
+            tf: "ramp:0.3:1 | ramp:0.35:1",
+            views: vec![
+                cam(32, 30.0, 20.0, ORTHO, 0.5, None)?,
+                cam(32, 0.0, 0.0, persp(None, 50.0), 0.5, None)?,
+            ],
+            iso: "0.5",
+            look: LookSpec::default(),
+        },
+        HardCase {
             name: "a volume of NaN only",
             volume: Volume::new(
                 "all NaN",

@@ -87,12 +87,14 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
     let variants = structures()?;
     for case in cases()? {
         let v = &case.volume;
-        let tf = TransferFunction::parse(case.tf)?;
+        let tf = TransferFunction::parse_channels(case.tf)?;
         let mut gv = GpuVolume::upload(ctx, v)?;
         // The shaded and iso looks read the gradient; the manual filter
         // reads the cells copy where the device holds it, as frames do by
-        // default on a CPU device.
-        gv.prepare(v, true, Some(Filter::Manual))?;
+        // default on a CPU device. Several channels are not lit (README,
+        // "Channels").
+        let one_channel = v.channel_count() == 1;
+        gv.prepare(v, one_channel, Some(Filter::Manual))?;
         let lut = tf.upload(ctx)?;
         // The ranges every variant reads, each kind computed once.
         let with: Vec<(Accel, &Params)> = variants.iter().map(|(_, a, p)| (*a, p)).collect();
@@ -100,6 +102,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
         for look in looks(case.iso)
             .into_iter()
             .filter(|l| only.is_empty() || only.iter().any(|o| o == l.name))
+            .filter(|l| one_channel || !(l.spec.shade == Some(true) || l.spec.mode.as_deref() == Some("iso")))
         {
             on_case(&format!("{} ({})", case.name, look.name));
             let views = views_in(&case, &look)?;

@@ -36,8 +36,9 @@ pub struct ViewArgs {
     #[command(flatten)]
     volume: VolumeArgs,
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
+    /// Several channels: one --tf per channel in order, or one for all.
     #[arg(long)]
-    tf: Option<TransferFunction>,
+    tf: Vec<TransferFunction>,
     /// Empty space skipping structure to start with (Tab switches).
     #[arg(long, default_value = "auto", value_parser = AccelParser)]
     accel: Accel,
@@ -130,7 +131,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let desc = args.desc()?;
     let series = Arc::new(args.volume.series()?);
     let volume = series.load(args.volume.time, None)?;
-    let tf = tf_for(args.tf.as_ref(), &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
+    let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
     let event_loop = EventLoop::new().map_err(|e| {
         let e = without_source_location(&e.to_string());
