@@ -473,7 +473,8 @@ impl TransferFunction {
             max_table,
             visible: self.visible_entries(),
             channels: self.channel_count() as u32,
-            max_stride: self.max_table_flat().len() as u32,
+            // Every channel's table has the same levels (`max_table_flat`).
+            max_stride: (self.max_table.len() * LUT_SIZE) as u32,
         }
     }
 

@@ -190,7 +190,7 @@ fn render_takes_a_tf_per_channel_and_equals_naive() {
     let mut frames = Vec::new();
     for accel in ["naive", "auto", "distance"] {
         let path = out(&format!("{accel}.exr"));
-        let mut args = vec!["render", spec, "--accel", accel, "--out", &path];
+        let mut args = vec!["render", spec, "--accel", accel, "--out", &path, "--validate"];
         args.extend(common);
         let run = lacuna(&args, &[]);
         assert_eq!(run.code, 0, "{accel}: {}", run.stderr);

@@ -23,7 +23,7 @@ layout(push_constant) uniform Push {
     uint groups_x;
     uint lut_size;
     uint channels;
-    uint tf_stride;  // 1: a table per channel; 0: one for all
+    uint tf_step;    // 1: a table per channel; 0: one for all
     uint max_stride; // entries of one channel's max table
     uint pad0;
     uint pad1;
@@ -49,8 +49,8 @@ float lut_alpha(uint base, float v) {
 }
 
 bool brick_hit(ivec3 first, ivec3 last, uint ch) {
-    uint lut = ch * pc.tf_stride * TF_SIZE;
-    uint table = ch * pc.tf_stride * pc.max_stride;
+    uint lut = ch * pc.tf_step * TF_SIZE;
+    uint table = ch * pc.tf_step * pc.max_stride;
     bool hit = false;
     if (pc.apron == 0u) {
         for (int z = first.z; z <= last.z && !hit; ++z) {

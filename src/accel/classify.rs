@@ -120,7 +120,7 @@ impl Classifier {
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
                     channels: volume.channels,
-                    tf_stride: tf.channel_step(),
+                    tf_step: tf.channel_step(),
                     max_stride: tf.max_stride,
                     ..Default::default()
                 };

@@ -177,6 +177,17 @@ impl<'a> Tracer<'a> {
         self.sample_channel(0, pos)
     }
 
+    /// Channel `c`'s colour at value `v` for a sample standing for `w`
+    /// voxels, as `shade` in `glsl/common/lattice.glsl`: the corrected LUT
+    /// for a full-length sample, else the raw one's alpha corrected for `w`.
+    fn colour(&self, c: usize, v: f32, w: f32) -> [f32; 4] {
+        if w < self.p.step {
+            let x = self.tf.channel(c).lookup(v);
+            return [x[0], x[1], x[2], tf::opacity(x[3], w)];
+        }
+        tf::lookup_in(&self.corrected[c], v)
+    }
+
     /// Channel `c`'s normalised sample at `pos` (NaN: no data).
     fn sample_channel(&self, c: usize, pos: Vec3) -> f32 {
         let channel = self.volume.channel(c);
@@ -191,38 +202,21 @@ impl<'a> Tracer<'a> {
     /// As `trace` for a volume of several channels (composite, mip, minip,
     /// average), as `take_channels` and `mix_channels` in
     /// `glsl/common/lattice.glsl`.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    fn trace_channels(&self, org: Vec3, dir: Vec3, t_enter: f32, t_exit: f32, mut k: u32, jitter: f32) -> [f32; 4] {
+    fn trace_channels(&self, org: Vec3, dir: Vec3, samples: LatticeSamples) -> [f32; 4] {
         let p = self.p;
         let n = self.volume.channel_count();
-        let dt = p.step;
-        let lattice_t = |k: u32| t_enter + (k as f32 + jitter) * dt;
         let mode = self.look.mode;
         let mut acc = [0f32; 4];
         let mut best = vec![if mode == MODE_MINIP { 2.0f32 } else { -1.0 }; n];
         let (mut sum, mut count) = (vec![0f32; n], vec![0f32; n]);
-        loop {
-            let t = lattice_t(k);
-            if !(t < t_exit) {
-                break;
-            }
-            let last = !(lattice_t(k + 1) < t_exit);
-            let w = if last { dt.min(t_exit - t) } else { dt };
+        for (t, w) in samples {
             let pos = org + dir * t;
-            k += 1;
             let values: Vec<f32> = (0..n).map(|c| self.sample_channel(c, pos)).collect();
             if mode == MODE_COMPOSITE {
                 let colours: Vec<[f32; 4]> = values
                     .iter()
                     .enumerate()
-                    .map(|(c, &v)| match v.is_nan() {
-                        true => [0.0; 4],
-                        false if w < dt => {
-                            let x = self.tf.channel(c).lookup(v);
-                            [x[0], x[1], x[2], tf::opacity(x[3], w)]
-                        }
-                        false => tf::lookup_in(&self.corrected[c], v),
-                    })
+                    .map(|(c, &v)| if v.is_nan() { [0.0; 4] } else { self.colour(c, v, w) })
                     .collect();
                 composite(&mut acc, mix_channels(&colours));
                 if acc[3] >= p.ert {
@@ -337,37 +331,31 @@ impl<'a> Tracer<'a> {
                 k += 1;
             }
         }
+        let samples = LatticeSamples {
+            t_enter,
+            t_exit,
+            dt,
+            jitter,
+            k,
+        };
         if self.volume.channel_count() > 1 {
-            return (self.trace_channels(org, dir, t_enter, t_exit, k, jitter), None);
+            return (self.trace_channels(org, dir, samples), None);
         }
         let mode = self.look.mode;
         let mut acc = [0f32; 4];
         let mut best = if mode == MODE_MINIP { 2.0f32 } else { -1.0 };
         let (mut sum, mut count) = (0f32, 0f32);
         let mut prev: Option<(f32, f32)> = None;
-        loop {
-            let t = lattice_t(k);
-            if !(t < t_exit) {
-                break;
-            }
-            // Only the ray's last sample is shortened (glsl/common/lattice.glsl).
-            let last = !(lattice_t(k + 1) < t_exit);
-            let w = if last { dt.min(t_exit - t) } else { dt };
+        for (t, w) in samples {
             let pos = org + dir * t;
             let v = self.sample(pos);
-            k += 1;
             if v.is_nan() {
                 prev = None;
                 continue;
             }
             match mode {
                 MODE_COMPOSITE => {
-                    let mut c = if w < dt {
-                        let c = self.tf.lookup(v);
-                        [c[0], c[1], c[2], tf::opacity(c[3], w)]
-                    } else {
-                        tf::lookup_in(&self.corrected[0], v)
-                    };
+                    let mut c = self.colour(0, v, w);
                     if self.look.shade && c[3] > 0.0 {
                         c = self.light(pos, dir, c);
                     }
@@ -459,6 +447,39 @@ impl<'a> Tracer<'a> {
         };
         let lit = self.light(org + dir * t, dir, [rgb[0], rgb[1], rgb[2], 1.0]);
         [lit[0], lit[1], lit[2], 1.0]
+    }
+}
+
+/// A ray's lattice samples from index `k` on, as the GLSL march takes
+/// them: (t_k, the path length it stands for). Only the ray's last sample
+/// is shortened (`glsl/common/lattice.glsl`).
+struct LatticeSamples {
+    t_enter: f32,
+    t_exit: f32,
+    dt: f32,
+    jitter: f32,
+    k: u32,
+}
+
+impl LatticeSamples {
+    fn t(&self, k: u32) -> f32 {
+        self.t_enter + (k as f32 + self.jitter) * self.dt
+    }
+}
+
+impl Iterator for LatticeSamples {
+    type Item = (f32, f32);
+
+    // Negated comparisons mirror the GLSL: a NaN bound stops the march.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    fn next(&mut self) -> Option<(f32, f32)> {
+        let t = self.t(self.k);
+        if !(t < self.t_exit) {
+            return None;
+        }
+        let last = !(self.t(self.k + 1) < self.t_exit);
+        self.k += 1;
+        Some((t, if last { self.dt.min(self.t_exit - t) } else { self.dt }))
     }
 }
 
