@@ -85,10 +85,14 @@ impl Generator {
             ));
         }
         let n = super::check_dims(dims, self.name())?;
-        // The u8 voxels, and the n-body's f32 density field beside them.
-        let peak = if self == Generator::Nbody { 5 } else { 1 };
+        // The u8 voxels, and the n-body's slabs of f32 density beside them.
+        let peak = if self == Generator::Nbody {
+            nbody::peak_bytes(n)
+        } else {
+            n
+        };
         let [w, h, d] = dims;
-        crate::limits::check_host(format_args!("volume {}:{w}x{h}x{d}", self.name()), n, peak)?;
+        crate::limits::check_host(format_args!("volume {}:{w}x{h}x{d}", self.name()), peak, 1)?;
         let bad = |why: &str| {
             Error::invalid(
                 "generator parameter",
@@ -149,11 +153,18 @@ pub(crate) fn fill(dims: [u32; 3], f: impl Fn(u32, u32, u32) -> u8 + Sync) -> Ve
 
 /// SplitMix64: small, fast, and stable across versions (unlike crate RNGs
 /// whose streams may change), so volumes are reproducible forever.
+#[derive(Clone)]
 pub(crate) struct Rng(u64);
 
 impl Rng {
     pub fn new(seed: u64) -> Self {
         Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
+    }
+
+    /// Jumps `draws` draws ahead (a SplitMix64 state only adds a constant
+    /// a draw).
+    pub fn skip(&mut self, draws: u64) {
+        self.0 = self.0.wrapping_add(draws.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     }
 
     pub fn next_u64(&mut self) -> u64 {

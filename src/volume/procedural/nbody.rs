@@ -3,19 +3,49 @@
 //! and counts scale with the volume, so occupancy does not depend on size.
 //! Over time each cluster drifts at its own velocity (up to about 0.6 % of
 //! the volume a step), so the visible set crosses brick faces.
+//!
+//! The density field is made one z-slab at a time, so its f32 values never
+//! exist for the whole volume (nbody:2048 would need 32 GiB of them): a
+//! first pass lists, per slab, the particles that deposit into it; a second
+//! recomputes each listed particle (its random draws are found by jumping
+//! the generator ahead: every particle takes the same draws) and deposits
+//! it. Each voxel receives its particles in the same order as one pass over
+//! the whole volume, so the values are the same bit for bit.
 
 use super::Rng;
+use rayon::prelude::*;
 
 const CLUSTERS: usize = 48;
 /// Particles per voxel of the volume (spread over all clusters).
 const PARTICLES_PER_VOXEL: f64 = 0.03;
+/// Random draws per particle: a uniform and three normals.
+const DRAWS_PER_PARTICLE: u64 = 7;
+/// The largest Plummer radius over `scale`: u capped at 0.99.
+const MAX_RADIUS: f64 = 12.5;
+/// Bytes of f32 density one slab holds at most (two are made at once).
+const SLAB_BYTES: u64 = 256 << 20;
 
-pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
+struct Cluster {
+    centre: [f64; 3],
+    scale: f64,
+    count: usize,
+    /// The generator before the cluster's first particle.
+    rng: Rng,
+}
+
+/// Host bytes the generation takes at its peak for `voxels` voxels: the u8
+/// volume, the slab lists (a u32 per particle, 0.03 a voxel, some twice)
+/// and two slabs of f32 density at once.
+pub fn peak_bytes(voxels: u64) -> u64 {
+    let slabs = (2 * SLAB_BYTES).min(4 * voxels);
+    voxels + voxels / 4 + slabs
+}
+
+fn clusters(dims: [u32; 3], seed: u64, time: u32) -> Vec<Cluster> {
     let n = dims.map(|d| d as f64);
     let size = n[0].max(n[1]).max(n[2]);
     let voxels = n[0] * n[1] * n[2];
     let mut rng = Rng::new(seed);
-    let mut density = vec![0f32; voxels as usize];
     let total = (voxels * PARTICLES_PER_VOXEL).ceil() as usize;
     // Cluster masses follow a steep power law: a few big, many small.
     let weights: Vec<f64> = (0..CLUSTERS).map(|_| rng.uniform().powf(3.0) + 0.02).collect();
@@ -25,41 +55,123 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
     let velocities: Vec<[f64; 3]> = (0..CLUSTERS)
         .map(|_| [motion.normal(), motion.normal(), motion.normal()].map(|v| v * size * 0.0035 * time as f64))
         .collect();
-    let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * z);
+    let mut out = Vec::with_capacity(CLUSTERS);
     for (w, shift) in weights.iter().zip(&velocities) {
         let start = n.map(|d| d * (0.15 + 0.7 * rng.uniform()));
         let centre = [0, 1, 2].map(|a| start[a] + shift[a]);
         let scale = size * (0.004 + 0.012 * rng.uniform());
         let count = (total as f64 * w / sum).round() as usize;
-        for _ in 0..count {
-            // Plummer radius from the inverse CDF, capped to keep halos bounded.
-            let u = rng.uniform().clamp(1e-6, 0.99);
-            let r = scale / (u.powf(-2.0 / 3.0) - 1.0).sqrt();
-            let dir = [rng.normal(), rng.normal(), rng.normal()];
-            let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-12);
-            let p: [f64; 3] = [0, 1, 2].map(|a| centre[a] + r * dir[a] / len - 0.5);
-            if (0..3).any(|a| p[a] < 0.0 || p[a] > n[a] - 1.0) {
-                continue;
+        out.push(Cluster {
+            centre,
+            scale,
+            count,
+            rng: rng.clone(),
+        });
+        rng.skip(count as u64 * DRAWS_PER_PARTICLE);
+    }
+    out
+}
+
+/// Particle `j` of cluster `c`: its position (voxel units, minus 0.5), or
+/// None where it falls outside the volume.
+fn particle(c: &Cluster, j: usize, n: [f64; 3]) -> Option<[f64; 3]> {
+    let mut rng = c.rng.clone();
+    rng.skip(j as u64 * DRAWS_PER_PARTICLE);
+    // Plummer radius from the inverse CDF, capped to keep halos bounded.
+    let u = rng.uniform().clamp(1e-6, 0.99);
+    let r = c.scale / (u.powf(-2.0 / 3.0) - 1.0).sqrt();
+    let dir = [rng.normal(), rng.normal(), rng.normal()];
+    let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt().max(1e-12);
+    let p: [f64; 3] = [0, 1, 2].map(|a| c.centre[a] + r * dir[a] / len - 0.5);
+    (!(0..3).any(|a| p[a] < 0.0 || p[a] > n[a] - 1.0)).then_some(p)
+}
+
+pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
+    generate_in_slabs(dims, seed, time, SLAB_BYTES)
+}
+
+/// As `generate`, with slabs of at most `slab_bytes` of density.
+fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> Vec<u8> {
+    let n = dims.map(|d| d as f64);
+    let clusters = clusters(dims, seed, time);
+    let layer = dims[0] as usize * dims[1] as usize;
+    let depth = ((slab_bytes / (4 * layer as u64)) as u32).clamp(1, dims[2]);
+    let slabs = dims[2].div_ceil(depth) as usize;
+    // Pass 1, per cluster: the particles depositing into each slab (a
+    // particle at z deposits into layers floor(z) and floor(z) + 1).
+    let lists: Vec<Vec<Vec<u32>>> = clusters
+        .par_iter()
+        .map(|c| {
+            let mut per_slab = vec![Vec::new(); slabs];
+            // A cluster far from every layer lists nothing; skipping it
+            // here only saves the draws.
+            let reach = c.scale * MAX_RADIUS + 2.0;
+            if c.centre[2] + reach < 0.0 || c.centre[2] - reach > n[2] {
+                return per_slab;
             }
-            let i = p.map(|c| c.floor() as usize);
-            let f = [0, 1, 2].map(|a| p[a] - i[a] as f64);
-            for dz in 0..2 {
-                for dy in 0..2 {
-                    for dx in 0..2 {
-                        let (x, y, z) = (i[0] + dx, i[1] + dy, i[2] + dz);
-                        if x < dims[0] as usize && y < dims[1] as usize && z < dims[2] as usize {
-                            let wgt = (if dx == 1 { f[0] } else { 1.0 - f[0] })
-                                * (if dy == 1 { f[1] } else { 1.0 - f[1] })
-                                * (if dz == 1 { f[2] } else { 1.0 - f[2] });
-                            density[idx(x, y, z)] += wgt as f32;
+            for j in 0..c.count {
+                if let Some(p) = particle(c, j, n) {
+                    let z = p[2].floor() as u32;
+                    let (a, b) = ((z / depth) as usize, ((z + 1).min(dims[2] - 1) / depth) as usize);
+                    per_slab[a].push(j as u32);
+                    if b != a {
+                        per_slab[b].push(j as u32);
+                    }
+                }
+            }
+            per_slab
+        })
+        .collect();
+    // Pass 2, per slab: deposit its particles in cluster and particle
+    // order, then store the log density.
+    let mut out = vec![0u8; layer * dims[2] as usize];
+    out.par_chunks_mut(layer * depth as usize)
+        .enumerate()
+        .for_each(|(s, out)| {
+            let z0 = s * depth as usize;
+            let mut density = vec![0f32; out.len()];
+            let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * (z - z0));
+            let layers = z0..z0 + out.len() / layer;
+            for (c, per_slab) in clusters.iter().zip(&lists) {
+                // Listed particles are inside: pass 1 found them so.
+                for p in per_slab[s].iter().filter_map(|&j| particle(c, j as usize, n)) {
+                    let i = p.map(|c| c.floor() as usize);
+                    let f = [0, 1, 2].map(|a| p[a] - i[a] as f64);
+                    for dz in 0..2 {
+                        for dy in 0..2 {
+                            for dx in 0..2 {
+                                let (x, y, z) = (i[0] + dx, i[1] + dy, i[2] + dz);
+                                if x < dims[0] as usize && y < dims[1] as usize && layers.contains(&z) {
+                                    let wgt = (if dx == 1 { f[0] } else { 1.0 - f[0] })
+                                        * (if dy == 1 { f[1] } else { 1.0 - f[1] })
+                                        * (if dz == 1 { f[2] } else { 1.0 - f[2] });
+                                    density[idx(x, y, z)] += wgt as f32;
+                                }
+                            }
                         }
                     }
                 }
             }
+            for (o, &d) in out.iter_mut().zip(&density) {
+                *o = ((1.0 + d).log2() * 48.0).round().min(255.0) as u8;
+            }
+        });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slabs_of_any_depth_make_the_same_volume() {
+        let dims = [37, 30, 41];
+        let whole = generate_in_slabs(dims, 3, 4, u64::MAX);
+        assert!(whole.iter().filter(|&&v| v > 0).count() > 500, "particles landed");
+        // One layer, three (41 is not a multiple), and a slab past the end.
+        for layers in [1, 3, 40] {
+            let slabs = generate_in_slabs(dims, 3, 4, layers * 4 * 37 * 30);
+            assert!(slabs == whole, "slabs of {layers} layers");
         }
     }
-    density
-        .iter()
-        .map(|&d| ((1.0 + d).log2() * 48.0).round().min(255.0) as u8)
-        .collect()
 }
