@@ -76,7 +76,7 @@ const SHARED_STRUCTS: [&str; 5] = ["RenderParams", "BvhNode", "OctNode", "Prim",
 
 /// The bindings every march kernel has (`glsl/common/march.glsl`); the
 /// renderer binds them, the structure the rest.
-const MARCH_COMMON: [&str; 8] = [
+const MARCH_COMMON: [&str; 9] = [
     "params",
     "volume_tex",
     "tf_lut",
@@ -85,6 +85,7 @@ const MARCH_COMMON: [&str; 8] = [
     "gradient_tex",
     "volume_cells",
     "gradient_cells",
+    "brick_table",
 ];
 
 /// Rust keywords a GLSL name may collide with.

@@ -390,6 +390,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("gradient_tex", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("volume_cells", texels),
             ("gradient_cells", texels),
+            ("brick_table", texels),
             ("cells", d)
         ]
     );

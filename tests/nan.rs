@@ -7,20 +7,11 @@ mod common;
 use common::identity::{standard_views, Fixture, Kernels, DEFAULTS};
 use common::{gpu, lacuna, masked, max_abs, render};
 use lacuna::accel::Accel;
-use lacuna::render::{reference, Filter, FrameDesc, Iso, Mode, Projection, Shading};
+use lacuna::render::{reference, Filter, FrameDesc, Projection};
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
-fn modes() -> Vec<(Mode, Option<Shading>)> {
-    vec![
-        (Mode::Composite, None),
-        (Mode::Composite, Some(Shading::default())),
-        (Mode::Mip, None),
-        (Mode::MinIp, None),
-        (Mode::Average, None),
-        (Mode::Iso(Iso::new(&[0.4]).unwrap()), None),
-    ]
-}
+use common::identity::every_look as modes;
 
 #[test]
 fn raw_float_files_with_nan_and_infinities_load_and_count_them() {

@@ -400,7 +400,7 @@ fn volume_spec_errors() {
 }
 
 #[test]
-fn a_volume_over_the_3d_image_limit_is_refused_naming_the_limit() {
+fn a_volume_over_the_3d_image_limit_is_refused_dense_and_bricked_by_auto() {
     let ctx = common::gpu();
     let max = ctx.info().max_image_dimension_3d;
     let v = Volume::new(
@@ -411,7 +411,9 @@ fn a_volume_over_the_3d_image_limit_is_refused_naming_the_limit() {
         VoxelData::U8(vec![1; max as usize + 1]),
     )
     .unwrap();
-    let err = GpuVolume::upload(&ctx, &v).err().unwrap();
+    let err = GpuVolume::upload_as(&ctx, &v, lacuna::volume::Storage::Dense)
+        .err()
+        .unwrap();
     assert!(
         matches!(
             err,
@@ -423,6 +425,9 @@ fn a_volume_over_the_3d_image_limit_is_refused_naming_the_limit() {
         "{err}"
     );
     assert!(err.to_string().contains(&max.to_string()));
+    // Auto storage takes bricks where the dense image does not fit.
+    let gv = GpuVolume::upload(&ctx, &v).unwrap();
+    assert_eq!(gv.pool.map(|p| p.edge), Some(lacuna::volume::POOL_BRICK));
     common::assert_clean(&ctx);
 }
 

@@ -13,6 +13,8 @@ layout(local_size_x = 64) in;
 
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 2) writeonly buffer Boxes { ivec4 boxes[]; }; // lo, hi (exclusive) per brick
+#define BRICK_TABLE_BINDING 3
+#include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge (8)
     uvec4 counts; // xyz: bricks per axis; w: total bricks
@@ -22,6 +24,10 @@ layout(push_constant) uniform Push {
     uint lut_size;
     uint channels;
     uint tf_stride; // entries between channels' max tables (0: one for all)
+    uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 } pc;
 
 #define TF_MAX_BINDING 1
@@ -86,7 +92,7 @@ void main() {
         barrier();
         for (uint i = lid; i < uint(S * S * S); i += 64u) {
             ivec3 l = ivec3(int(i) % S, (int(i) / S) % S, int(i) / (S * S));
-            ivec3 v = clamp(origin + l - 1, ivec3(0), hi);
+            ivec3 v = stored_texel(origin + l - 1, hi, int(pc.pool_brick));
             precise float n = (texelFetch(volume_tex, v, 0)[ch] - pc.lo[ch]) * pc.scale[ch];
             staged[i] = is_nan(n) ? n : clamp(n, 0.0, 1.0);
         }

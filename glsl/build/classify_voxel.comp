@@ -14,6 +14,8 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) readonly buffer TransferLut { vec4 tf_lut[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Flags { uint flags[]; };
+#define BRICK_TABLE_BINDING 4
+#include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
     uvec4 counts; // xyz: bricks per axis; w: total bricks
@@ -25,8 +27,8 @@ layout(push_constant) uniform Push {
     uint channels;
     uint tf_step;    // 1: a table per channel; 0: one for all
     uint max_stride; // entries of one channel's max table
-    uint pad0;
-    uint pad1;
+    uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
+    uint pad;
 } pc;
 
 #define TF_MAX_BINDING 2
@@ -34,7 +36,7 @@ layout(push_constant) uniform Push {
 #include "tf_range.glsl"
 
 float value_at(ivec3 i, uint ch) {
-    ivec3 c = clamp(i, ivec3(0), ivec3(pc.dims.xyz) - 1);
+    ivec3 c = stored_texel(i, ivec3(pc.dims.xyz) - 1, int(pc.pool_brick));
     precise float v = (texelFetch(volume_tex, c, 0)[ch] - pc.lo[ch]) * pc.scale[ch];
     return is_nan(v) ? v : clamp(v, 0.0, 1.0);
 }

@@ -35,10 +35,17 @@ layout(constant_id = 21) const uint VOLUME_CELLS = 0u;
 // every channel sits in one texel of the widest kind among them, and the
 // march samples them all at once (sample_channels).
 layout(constant_id = 26) const uint VOLUME_CHANNELS = 1u;
+// Bricked storage: bricks of this edge in the pool image bound as the
+// volume, found through the brick table (bricks.glsl); 0: dense storage.
+// Only the manual filter samples it (src/volume/pool.rs).
+layout(constant_id = 27) const uint VOLUME_BRICK = 0u;
 const uint KIND_FLOAT = 0u;
 const uint KIND_UNORM8 = 1u;
 const uint KIND_UNORM16 = 2u;
 
+#ifdef BRICK_TABLE_BINDING
+#include "bricks.glsl"
+#endif
 #ifdef CELLS_BINDING
 // Cell (i, j, k) of the cells copy, i in -1..N-1 per axis, stored at
 // (i + 1) + (W + 1) * ((j + 1) + (H + 1) * (k + 1)), holds the voxels
@@ -98,9 +105,42 @@ float volume_texel(ivec3 i, ivec3 hi) {
     return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
 }
 
+// Every channel's voxel i (clamped) in stored units (VOLUME_CHANNELS > 1).
+vec4 volume_texels(ivec3 i, ivec3 hi) {
+    vec4 t = texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0);
+    return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+}
+
+#ifdef BRICK_TABLE_BINDING
+// The eight pool texels of the cell whose low corner is voxel i (clamped):
+// each voxel's clamped index lies in the slot of the brick of the first,
+// one table read per cell. Texel b is at[0].xyz + at[1].xyz * corner(b).
+void cell_pool_texels(ivec3 i, ivec3 hi, out ivec3 at[2]) {
+    ivec3 lo = clamp(i, ivec3(0), hi);
+    ivec4 t = brick_texel(lo, hi, int(VOLUME_BRICK));
+    at[0] = t.xyz;
+    at[1] = (clamp(i + 1, ivec3(0), hi) - lo) * t.w;
+}
+#endif
+
+ivec3 cell_corner(int b) {
+    return ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1);
+}
+
 // The eight voxels of the cell whose low corner is voxel i (clamped to the
 // volume), in stored units, x fastest: [0] c000, [1] c100, ... [7] c111.
 void cell_voxels(ivec3 i, ivec3 hi, out float c[8]) {
+#ifdef BRICK_TABLE_BINDING
+    if (VOLUME_BRICK != 0u) {
+        ivec3 at[2];
+        cell_pool_texels(i, hi, at);
+        for (int b = 0; b < 8; ++b) {
+            float t = texelFetch(volume_tex, at[0] + at[1] * cell_corner(b), 0).r;
+            c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+        }
+        return;
+    }
+#endif
 #ifdef CELLS_BINDING
     if (VOLUME_CELLS != 0u) {
         ivec3 n = hi + 2;
@@ -130,7 +170,7 @@ void cell_voxels(ivec3 i, ivec3 hi, out float c[8]) {
     }
 #endif
     for (int b = 0; b < 8; ++b) {
-        c[b] = volume_texel(i + ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1), hi);
+        c[b] = volume_texel(i + cell_corner(b), hi);
     }
 }
 
@@ -167,12 +207,6 @@ float sample_raw(VolumeRay r, vec3 p) {
     return raw;
 }
 
-// Every channel's voxel i (clamped) in stored units (VOLUME_CHANNELS > 1).
-vec4 volume_texels(ivec3 i, ivec3 hi) {
-    vec4 t = texelFetch(volume_tex, clamp(i, ivec3(0), hi), 0);
-    return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
-}
-
 // Every channel's texel value at p, trilinearly interpolated by hand with
 // sample_manual's weights: eight fetches read every channel.
 vec4 sample_manual_channels(vec3 p, ivec3 hi) {
@@ -181,8 +215,18 @@ vec4 sample_manual_channels(vec3 p, ivec3 hi) {
     precise vec3 f = q - fl;
     ivec3 i = ivec3(fl);
     vec4 c[8];
+#ifdef BRICK_TABLE_BINDING
+    if (VOLUME_BRICK != 0u) {
+        ivec3 at[2];
+        cell_pool_texels(i, hi, at);
+        for (int b = 0; b < 8; ++b) {
+            vec4 t = texelFetch(volume_tex, at[0] + at[1] * cell_corner(b), 0);
+            c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+        }
+    } else
+#endif
     for (int b = 0; b < 8; ++b) {
-        c[b] = volume_texels(i + ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1), hi);
+        c[b] = volume_texels(i + cell_corner(b), hi);
     }
     precise vec4 c00 = mix(c[0], c[1], f.x);
     precise vec4 c10 = mix(c[2], c[3], f.x);

@@ -11,6 +11,8 @@ layout(local_size_x = 64) in;
 #include "nan.glsl"
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
+#define BRICK_TABLE_BINDING 2
+#include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
     uvec4 counts; // xyz: bricks per axis; w: total bricks
@@ -19,7 +21,7 @@ layout(push_constant) uniform Push {
     uint apron;
     uint groups_x;
     uint channels;
-    uint pad;
+    uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
 } pc;
 
 void main() {
@@ -30,12 +32,13 @@ void main() {
     uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     ivec3 lo = max(ivec3(bc * pc.dims.w) - int(pc.apron), ivec3(0));
     ivec3 hi = min(ivec3(bc * pc.dims.w + pc.dims.w - 1u) + int(pc.apron), ivec3(pc.dims.xyz) - 1);
+    ivec3 hi_voxel = ivec3(pc.dims.xyz) - 1;
     vec4 mn = vec4(3.4e38);
     vec4 mx = vec4(-3.4e38);
     for (int z = lo.z; z <= hi.z; ++z) {
         for (int y = lo.y; y <= hi.y; ++y) {
             for (int x = lo.x; x <= hi.x; ++x) {
-                vec4 t = texelFetch(volume_tex, ivec3(x, y, z), 0);
+                vec4 t = texelFetch(volume_tex, stored_texel(ivec3(x, y, z), hi_voxel, int(pc.pool_brick)), 0);
                 for (int c = 0; c < 4; ++c) {
                     if (!is_nan(t[c])) {
                         mn[c] = min(mn[c], t[c]);

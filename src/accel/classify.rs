@@ -122,6 +122,7 @@ impl Classifier {
                     channels: volume.channels,
                     tf_step: tf.channel_step(),
                     max_stride: tf.max_stride,
+                    pool_brick: volume.brick_edge(),
                     ..Default::default()
                 };
                 self.voxel.dispatch(
@@ -131,6 +132,7 @@ impl Classifier {
                         transfer_lut: Binding::Storage(&tf.lut),
                         transfer_max: Binding::Storage(&tf.max_table),
                         flags: Binding::Storage(flags),
+                        brick_table: Binding::TexelBuffer(volume.brick_table().view()),
                     }
                     .list(),
                     bytemuck::bytes_of(&push),

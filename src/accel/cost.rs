@@ -319,6 +319,7 @@ impl Probe {
             gradient_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
             volume_cells: Binding::TexelBuffer(self.no_cells.view()),
             gradient_cells: Binding::TexelBuffer(self.no_cells.view()),
+            brick_table: Binding::TexelBuffer(self.volume.brick_table().view()),
         }
         .list();
         bindings.extend(

@@ -205,6 +205,7 @@ impl<'a> FrameProbe<'a> {
             gradient_tex: Binding::Sampled(gradient, sampler),
             volume_cells: Binding::TexelBuffer(self.volume.cells().unwrap_or(&self.no_cells).view()),
             gradient_cells: Binding::TexelBuffer(self.volume.gradient_cells().unwrap_or(&self.no_cells).view()),
+            brick_table: Binding::TexelBuffer(self.volume.brick_table().view()),
         }
         .list();
         bindings.extend(structure.built.bindings());

@@ -7,7 +7,7 @@ use crate::accel::table::params_for;
 use crate::accel::{Accel, Params};
 use crate::desc::{FrameDesc, LookSpec, Shading};
 use crate::error::{Error, Result};
-use crate::volume::Filter;
+use crate::volume::{Filter, Storage};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -134,9 +134,17 @@ pub struct DatasetConfig {
     /// and each later step is timed to its first exact frame (upload,
     /// ranges, build, frame) per structure; FIRST warms up.
     pub time: Option<[u32; 2]>,
+    /// Voxel storage on the device: dense, bricks, bricks:EDGE or auto
+    /// (default auto, as `render --storage`).
+    pub storage: Option<String>,
 }
 
 impl DatasetConfig {
+    /// Its voxel storage (`storage`, default auto).
+    pub fn storage(&self) -> Result<Storage> {
+        self.storage.as_deref().map_or(Ok(Storage::Auto), Storage::parse)
+    }
+
     /// Frames its `time` range renders per structure (0 without one).
     pub fn new_steps(&self) -> u64 {
         self.time
@@ -165,6 +173,10 @@ impl DatasetConfig {
         let mut look = look;
         if let Some(e) = self.ert {
             look.push(format!("ert {e}"));
+        }
+        let storage = self.storage()?;
+        if storage != Storage::Auto {
+            look.push(format!("storage {storage}"));
         }
         Ok(match look.is_empty() {
             true => self.volume.clone(),

@@ -308,7 +308,12 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             };
         let (series, loaded) = loaded;
         let (v, tf) = (&loaded.volume, &loaded.tf);
-        let mut gv = GpuVolume::upload(ctx, v)?;
+        let mut gv = GpuVolume::upload_as(ctx, v, ds.storage()?)?;
+        if let Some(pool) = gv.pool {
+            let note = format!("{}: {pool}", ds.volume);
+            progress.note(&note);
+            out.notes.push(note);
+        }
         let lut = tf.upload(ctx)?;
         let base = ds.look(config).apply(FrameDesc::builder(1, 1))?;
         gv.prepare(v, base.build()?.lighting().is_some(), timed_filter)?;
@@ -507,6 +512,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 lut: &lut,
                 desc: &first,
                 filter: timed_filter,
+                storage: ds.storage()?,
             };
             let step_frame = |scene: Scene, desc: &FrameDesc, read: bool| frames.frame(scene, desc, read);
             out.steps

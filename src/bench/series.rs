@@ -15,7 +15,7 @@ use crate::gpu::timings::median;
 use crate::gpu::Context;
 use crate::render::{FrameDesc, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
-use crate::volume::{Filter, GpuVolume, Series};
+use crate::volume::{Filter, GpuVolume, Series, Storage};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -56,6 +56,8 @@ pub struct StepBench<'a> {
     /// The filter the run asked for (None: the device's default), for
     /// what the upload adds.
     pub filter: Option<Filter>,
+    /// The data set's voxel storage.
+    pub storage: Storage,
 }
 
 impl StepBench<'_> {
@@ -87,7 +89,7 @@ impl StepBench<'_> {
             let load_ms = ms_since(t);
             // One upload a step: every structure reads the same one.
             let t = Instant::now();
-            let mut gv = GpuVolume::upload(self.ctx, &volume)?;
+            let mut gv = GpuVolume::upload_as(self.ctx, &volume, self.storage)?;
             gv.prepare(&volume, self.desc.lighting().is_some(), self.filter)?;
             let upload = ms_since(t);
             let mut naive: Option<Frame> = None;

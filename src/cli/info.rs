@@ -1,8 +1,8 @@
 //! `lacuna info`: a volume's dims, type, values, and occupancy under a TF.
 
-use super::{tf_for, VolumeArgs};
+use super::{context, tf_for, VolumeArgs};
 use clap::Args;
-use lacuna::volume::{BrickGrid, BRICK};
+use lacuna::volume::{BrickGrid, PoolLayout, Storage, BRICK, POOL_BRICK};
 use lacuna::{Result, TransferFunction};
 use std::process::ExitCode;
 
@@ -43,6 +43,20 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
             d.pos_inf,
             d.neg_inf
         );
+    }
+    // The pool's slot grid follows the device's 3D image limit.
+    match context(false) {
+        Ok(ctx) => {
+            let max = ctx.info().max_image_dimension_3d;
+            let edge = match args.volume.storage {
+                Storage::Bricks { edge } => edge,
+                _ => POOL_BRICK,
+            };
+            let pool = PoolLayout::of_volume(&v, edge, max)?.stats();
+            let storage = Storage::Bricks { edge };
+            println!("storage  {pool} (--storage {storage}, on {})", ctx.info().name);
+        }
+        Err(e) => println!("storage  bricked storage not planned: {e}"),
     }
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {

@@ -16,7 +16,7 @@ pub mod view;
 use clap::Args;
 pub use lacuna::frame::check_parent;
 use lacuna::gpu::{Context, ContextOptions};
-use lacuna::volume::{LoadOptions, RawLayout, Series, VoxelType};
+use lacuna::volume::{LoadOptions, RawLayout, Series, Storage, VoxelType};
 use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
 
@@ -34,6 +34,9 @@ pub struct VolumeArgs {
     /// Time step of a series (a file pattern, a NIfTI time axis, or a generator's animation), from 0.
     #[arg(long, default_value_t = 0)]
     pub time: u32,
+    /// Voxel storage on the device: dense (one 3D image), bricks (a pool of the bricks that vary and a page table; constant bricks are not stored) or auto (dense while it fits the device's limits).
+    #[arg(long, default_value_t = Storage::Auto)]
+    pub storage: Storage,
 }
 
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {

@@ -104,14 +104,18 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     // from the spec or header, before any voxel is read or made.
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
+    let clock = std::time::Instant::now();
     let volume = series.load(args.volume.time, Some(ctx.info()))?;
+    let load_ms = clock.elapsed().as_secs_f64() * 1e3;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
 
     let builder = args.model.builder(&ctx)?;
     let renderer = Renderer::sharing(&builder)?;
-    let mut gpu_volume = GpuVolume::upload(&ctx, &volume)?;
+    let clock = std::time::Instant::now();
+    let mut gpu_volume = GpuVolume::upload_as(&ctx, &volume, args.volume.storage)?;
     gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
+    let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
     gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
     let lut = tf.upload(&ctx)?;
     let input = BuildInput {
@@ -156,6 +160,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     if let Some(step) = args.volume.step_line(&series) {
         println!("time    {step}");
     }
+    println!("storage {}", gpu_volume.describe_storage());
+    println!("loaded  in {load_ms:.0} ms, uploaded in {upload_ms:.0} ms (wall time; the upload with the pool's sorting, or the cells copy)");
     println!("tf      {}", tf.spec);
     println!(
         "frame   {width}x{height}, {}, step {}, filter {}{}, accel {}",

@@ -1,24 +1,26 @@
 //! What a frame fixes in the march kernel that marches it: the
 //! specialization constants of its sample filter, mode and shading, and of
-//! the volume it samples (NaN voxels, texel kind, cells copy, channels). One kernel is
+//! the volume it samples (NaN voxels, texel kind, cells copy, channels,
+//! bricked storage). One kernel is
 //! compiled per distinct set (`render::Renderer`, `accel::probe`), so no
 //! sample branches on any of them.
 
 use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 use crate::volume::{
-    Filter, GpuVolume, CELLS_CONSTANT_ID, CHANNELS_CONSTANT_ID, FILTER_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID,
-    KIND_CONSTANT_ID, NAN_CONSTANT_ID,
+    Filter, GpuVolume, BRICK_CONSTANT_ID, CELLS_CONSTANT_ID, CHANNELS_CONSTANT_ID, FILTER_CONSTANT_ID,
+    GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID,
 };
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 8];
+pub type KernelConstants = [(u32, u32); 9];
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
     /// filter (`filter_for`), the mode, whether composite samples are lit
     /// (iso surfaces are always lit, by their own path), whether the volume
-    /// has NaN voxels, how its texels are stored, and whether the manual
-    /// filter reads its cells copy and (lit frames) the gradient's.
+    /// has NaN voxels, how its texels are stored, whether the manual
+    /// filter reads its cells copy and (lit frames) the gradient's, how
+    /// many channels it has, and its pool's brick edge (0: dense).
     pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
         let filter = self.filter_for(volume);
         let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
@@ -34,6 +36,7 @@ impl FrameDesc {
             (CELLS_CONSTANT_ID, cells as u32),
             (GRADIENT_CELLS_CONSTANT_ID, gradient_cells as u32),
             (CHANNELS_CONSTANT_ID, volume.channels),
+            (BRICK_CONSTANT_ID, volume.brick_edge()),
         ]
     }
 }

@@ -336,7 +336,12 @@ pub struct Image3d {
 /// `maxImageDimension3D`, `maxMemoryAllocationSize` and the device-local
 /// heap; returns its bytes. Loaders call it from a header, before reading voxels.
 pub fn check_image3d(info: &DeviceInfo, extent: [u32; 3], texel_bytes: u64) -> Result<u64> {
-    let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
+    check_image3d_of(info, "volume", extent, texel_bytes)
+}
+
+/// As `check_image3d`, for an image the errors call `what` (e.g. `brick pool of ch2.nii`).
+pub fn check_image3d_of(info: &DeviceInfo, what: &str, extent: [u32; 3], texel_bytes: u64) -> Result<u64> {
+    let dims = format!("{what} {}x{}x{}", extent[0], extent[1], extent[2]);
     let largest = extent.iter().copied().max().unwrap_or(0) as u64;
     info.check(
         dims.clone(),

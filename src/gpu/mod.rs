@@ -45,7 +45,7 @@ macro_rules! check_layout {
     };
 }
 pub(crate) use check_layout;
-pub use memory::{check_image3d, Buffer, Image3d, Staging, TexelBuffer};
+pub use memory::{check_image3d, check_image3d_of, Buffer, Image3d, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};
 pub use timings::Timings;
 pub use validation::ValidationMessage;

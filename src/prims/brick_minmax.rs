@@ -51,13 +51,14 @@ impl BrickMinMax {
             apron,
             groups_x: groups[0],
             channels: volume.channels,
-            pad: 0,
+            pool_brick: volume.brick_edge(),
         };
         self.kernel.dispatch(
             cmd,
             &k::Bindings {
                 volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
                 ranges: Binding::Storage(out),
+                brick_table: Binding::TexelBuffer(volume.brick_table().view()),
             }
             .list(),
             bytemuck::bytes_of(&push),

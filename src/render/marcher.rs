@@ -242,6 +242,7 @@ impl Renderer {
             gradient_tex: Binding::Sampled(gradient, sampler),
             volume_cells: Binding::TexelBuffer(volume.cells().unwrap_or(&self.no_cells).view()),
             gradient_cells: Binding::TexelBuffer(volume.gradient_cells().unwrap_or(&self.no_cells).view()),
+            brick_table: Binding::TexelBuffer(volume.brick_table().view()),
         }
         .list();
         bindings.extend(structure.built.bindings());

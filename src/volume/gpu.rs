@@ -3,14 +3,17 @@
 //! classification) and, where the format filters linearly, a linear one
 //! for `Filter::Hardware`; for shaded and iso frames, the volume's
 //! gradient (`gradient.rs`); and optionally the cells copy the manual
-//! filter reads one texel per sample from (`cells.rs`).
+//! filter reads one texel per sample from (`cells.rs`). With bricked
+//! storage (`pool.rs`) the image is the brick pool and the brick table
+//! finds each voxel in it.
 
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
+use super::pool::{PoolLayout, PoolStats, Storage};
 use super::{channels, Volume, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{check_image3d, vk, Context, Image3d, Staging, TexelBuffer};
+use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Staging, TexelBuffer};
 use std::borrow::Cow;
 
 /// The gradient's texel format (x, y, z, unused).
@@ -18,6 +21,7 @@ const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 pub struct GpuVolume {
     ctx: Context,
+    /// The volume's texels: the dense image, or the brick pool.
     pub image: Image3d,
     /// Nearest filtering: every `texelFetch` user binds this one.
     pub sampler: vk::Sampler,
@@ -44,6 +48,10 @@ pub struct GpuVolume {
     /// The gradient's cells copy the manual filter reads in lit frames
     /// (`add_gradient`, when the volume has its cells copy).
     gradient_cells: Option<TexelBuffer>,
+    /// The brick table (RG32UI); a 16-byte stand-in with dense storage.
+    brick_table: TexelBuffer,
+    /// Bricked storage's layout in numbers; None: dense.
+    pub pool: Option<PoolStats>,
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -60,6 +68,17 @@ fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
     unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")
 }
 
+/// The pool of `volume`'s texels (`bytes`, `texel` bytes each), after its
+/// image, allocation, heap and host memory checks.
+fn pool_texels(ctx: &Context, volume: &Volume, texel: u64, bytes: &[u8], edge: u32) -> Result<(PoolLayout, Vec<u8>)> {
+    let layout = PoolLayout::plan(bytes, volume.dims, texel, edge, ctx.info().max_image_dimension_3d)?;
+    let what = format!("brick pool of {}", volume.name);
+    check_image3d_of(ctx.info(), &what, layout.extent(), texel)?;
+    let mut pool = crate::limits::zeroed::<u8>(what, layout.pool_bytes())?;
+    layout.fill(bytes, &mut pool);
+    Ok((layout, pool))
+}
+
 /// The image format, texel size and bytes of a volume (R8/R16 kept
 /// native; several channels interleaved, `channels.rs`).
 fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
@@ -71,26 +90,86 @@ fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
     )
 }
 
+/// The storage `storage` means for `volume` on this device: auto is dense
+/// while the dense image fits the device's limits.
+pub fn resolve_storage(ctx: &Context, volume: &Volume, storage: Storage) -> Storage {
+    match storage {
+        Storage::Auto => {
+            let (kind, n) = (channels::common_kind(volume), volume.channel_count());
+            match check_image3d(ctx.info(), volume.dims, channels::texel_bytes(kind, n)) {
+                Ok(_) => Storage::Dense,
+                Err(_) => Storage::BRICKS,
+            }
+        }
+        s => s,
+    }
+}
+
 impl GpuVolume {
-    /// Uploads `volume` and waits; checks `maxImageDimension3D` and memory
-    /// limits first.
+    /// Uploads `volume` (auto storage: `upload_as`) and waits.
     pub fn upload(ctx: &Context, volume: &Volume) -> Result<Self> {
+        Self::upload_as(ctx, volume, Storage::Auto)
+    }
+
+    /// Uploads `volume` in `storage` and waits; checks the device's image,
+    /// allocation and heap limits first (bricks: the pool's, after the
+    /// bricks are sorted).
+    pub fn upload_as(ctx: &Context, volume: &Volume, storage: Storage) -> Result<Self> {
+        if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
+            return Self::upload_bricks(ctx, volume, edge);
+        }
         let (format, texel, bytes) = texels(volume);
         let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, texel, &bytes)?;
-        Self::with_image(ctx, volume, image)
+        Self::with_image(ctx, volume, image, None)
+    }
+
+    /// Uploads `volume` in bricks of `edge`^3 voxels and waits.
+    pub fn upload_bricks(ctx: &Context, volume: &Volume, edge: u32) -> Result<Self> {
+        let (format, texel, bytes) = texels(volume);
+        let (layout, pool) = pool_texels(ctx, volume, texel, &bytes, edge)?;
+        let image = Image3d::with_data(ctx, "brick pool", format, layout.extent(), texel, &pool)?;
+        Self::with_image(ctx, volume, image, Some(&layout))
     }
 
     /// As `upload`, recorded into `cmd`: leaves the image in
     /// SHADER_READ_ONLY_OPTIMAL behind a barrier to compute-shader reads.
     /// Keep the returned `Staging` until the submission completed.
     pub fn record_upload(ctx: &Context, cmd: vk::CommandBuffer, volume: &Volume) -> Result<(Self, Staging)> {
-        let (format, texel, bytes) = texels(volume);
-        let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
-        Ok((Self::with_image(ctx, volume, image)?, staging))
+        Self::record_upload_as(ctx, cmd, volume, Storage::Auto)
     }
 
-    fn with_image(ctx: &Context, volume: &Volume, image: Image3d) -> Result<Self> {
+    /// As `upload_as`, recorded into `cmd` (see `record_upload`).
+    pub fn record_upload_as(
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        volume: &Volume,
+        storage: Storage,
+    ) -> Result<(Self, Staging)> {
+        let (format, texel, bytes) = texels(volume);
+        if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
+            let (layout, pool) = pool_texels(ctx, volume, texel, &bytes, edge)?;
+            let (image, staging) =
+                Image3d::record_with_data(ctx, cmd, "brick pool", format, layout.extent(), texel, &pool)?;
+            return Ok((Self::with_image(ctx, volume, image, Some(&layout))?, staging));
+        }
+        let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
+        Ok((Self::with_image(ctx, volume, image, None)?, staging))
+    }
+
+    fn with_image(ctx: &Context, volume: &Volume, image: Image3d, pool: Option<&PoolLayout>) -> Result<Self> {
         let format = image.format;
+        let brick_table = match pool {
+            Some(layout) => {
+                let buffer = Buffer::with_data(
+                    ctx,
+                    "brick table",
+                    bytemuck::cast_slice(&layout.table),
+                    vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
+                )?;
+                TexelBuffer::new(ctx, buffer, vk::Format::R32G32_UINT)?
+            }
+            None => super::cells::no_cells(ctx)?,
+        };
         let mut gv = GpuVolume {
             ctx: ctx.clone(),
             image,
@@ -106,8 +185,13 @@ impl GpuVolume {
             gradient: None,
             cells: None,
             gradient_cells: None,
+            brick_table,
+            pool: pool.map(PoolLayout::stats),
         };
-        if ctx.filters_linearly(format) {
+        // Bricked storage samples with the manual filter only: the
+        // sampler's weights at pool coordinates need not equal the dense
+        // image's.
+        if pool.is_none() && ctx.filters_linearly(format) {
             gv.linear = Some(sampler(ctx, vk::Filter::LINEAR)?);
         }
         Ok(gv)
@@ -118,6 +202,11 @@ impl GpuVolume {
     pub fn sampler_for(&self, filter: Filter) -> Result<vk::Sampler> {
         match (filter, self.linear) {
             (Filter::Manual, _) => Ok(self.sampler),
+            (Filter::Hardware, _) if self.pool.is_some() => Err(Error::invalid(
+                "filter",
+                "hardware",
+                "bricked storage is sampled by the manual filter only (the sampler's weights at pool coordinates need not equal the dense image's); use --filter manual or --storage dense",
+            )),
             // IEEE arithmetic carries a NaN voxel into every sample that
             // reads it; a filter unit's fixed-point weights need not.
             (Filter::Hardware, _) if self.has_nan => Err(Error::invalid(
@@ -217,6 +306,7 @@ impl GpuVolume {
     /// `TexelKind::bytes_per_voxel` bytes per voxel (checked against the
     /// device's limits first); once is enough.
     pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
+        self.check_dense("the cells copy")?;
         if self.cells.is_none() {
             self.check_same(volume, "cells copy")?;
             self.check_one_channel("the cells copy")?;
@@ -231,6 +321,7 @@ impl GpuVolume {
         if self.cells.is_some() {
             return Ok(None);
         }
+        self.check_dense("the cells copy")?;
         self.check_same(volume, "cells copy")?;
         self.check_one_channel("the cells copy")?;
         let (texels, staging) = cells::record_upload_cells(&self.ctx, cmd, volume)?;
@@ -251,6 +342,41 @@ impl GpuVolume {
                 "volume",
                 format!("of {} channels", self.channels),
                 format!("{what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// How the voxels are stored, in a line: "dense (N MiB)" or the pool's
+    /// numbers (`PoolStats`).
+    pub fn describe_storage(&self) -> String {
+        match self.pool {
+            Some(pool) => pool.to_string(),
+            None => {
+                let texel = channels::texel_bytes(self.kind, self.channels as usize);
+                let bytes = self.dims.iter().fold(texel, |a, &e| a * e as u64);
+                format!("dense ({:.1} MiB)", bytes as f64 / (1u64 << 20) as f64)
+            }
+        }
+    }
+
+    /// The brick table march and build kernels bind (a stand-in with dense
+    /// storage, which nothing reads).
+    pub fn brick_table(&self) -> &TexelBuffer {
+        &self.brick_table
+    }
+
+    /// The pool's brick edge: `VOLUME_BRICK` of the kernels, 0 when dense.
+    pub fn brick_edge(&self) -> u32 {
+        self.pool.map_or(0, |p| p.edge)
+    }
+
+    fn check_dense(&self, what: &str) -> Result<()> {
+        if self.pool.is_some() {
+            return Err(Error::invalid(
+                "volume",
+                "in bricked storage",
+                format!("{what} is a dense copy of the volume; upload it with dense storage for that"),
             ));
         }
         Ok(())
@@ -284,7 +410,11 @@ impl GpuVolume {
             None => cpu,
         };
         // The cells copy holds one channel (`cells.rs`).
-        if manual && self.channels == 1 && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok() {
+        if manual
+            && self.channels == 1
+            && self.pool.is_none()
+            && cells::check_cells(self.ctx.info(), self.dims, self.kind).is_ok()
+        {
             self.add_cells(volume)?;
         }
         // After the cells copy: the gradient's goes with it.

@@ -12,6 +12,7 @@ mod gradient;
 #[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
+mod pool;
 pub mod procedural;
 mod raw;
 mod series;
@@ -28,8 +29,9 @@ pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
 };
 pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
-pub use gpu::GpuVolume;
+pub use gpu::{resolve_storage, GpuVolume};
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
+pub use pool::{PoolLayout, PoolStats, Storage, BRICK_CONSTANT_ID, POOL_BRICK};
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use series::{Series, StepNorm};
 pub use spec::{LoadOptions, VolumeSpec};

@@ -50,6 +50,8 @@ pub struct Fixture {
     pub ctx: Context,
     pub renderer: Renderer,
     pub builder: Builder,
+    /// Volumes go up in bricks of this edge (bricked storage); None: dense.
+    pub bricks: Option<u32>,
 }
 
 /// A volume and TF uploaded, with the volume's ranges.
@@ -70,13 +72,25 @@ impl Fixture {
             renderer: Renderer::new(&ctx).unwrap(),
             builder: super::builder(&ctx),
             ctx,
+            bricks: None,
+        }
+    }
+
+    /// As `new`, uploading volumes in bricks of `edge` voxels.
+    pub fn with_bricks(edge: u32) -> Self {
+        Fixture {
+            bricks: Some(edge),
+            ..Self::new()
         }
     }
 
     /// Uploads the volume and TF and computes the ranges every structure
     /// reads with the `given` values.
     pub fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, given: Given) -> Prepared<'a> {
-        let mut gv = GpuVolume::upload(&self.ctx, volume).unwrap();
+        let mut gv = match self.bricks {
+            Some(edge) => GpuVolume::upload_bricks(&self.ctx, volume, edge).unwrap(),
+            None => GpuVolume::upload(&self.ctx, volume).unwrap(),
+        };
         // Shaded and iso views read the gradient; the manual filter reads
         // the cells copy (tests/cells.rs: the same samples as without).
         gv.prepare(volume, volume.channel_count() == 1, Some(Filter::Manual))
@@ -147,8 +161,10 @@ impl Fixture {
                 .filter(|&f| p.gv.sampler_for(f).is_ok())
                 .collect();
             assert!(
-                // Unless the texels are wider, or hold NaN (manual only).
+                // Unless the texels are wider, hold NaN or sit in bricks
+                // (manual only).
                 filters.contains(&Filter::Hardware)
+                    || p.gv.pool.is_some()
                     || lacuna::volume::common_kind(v) != lacuna::volume::TexelKind::Unorm8
                     || v.no_data_total() > 0,
                 "R8 UNORM must filter linearly (Vulkan requires it)"
@@ -233,6 +249,18 @@ pub fn check_kernel(what: &str, s: &Structure, mode: &Mode, kernels: Kernels) ->
             false
         }
     }
+}
+
+/// Every look: composite unshaded and shaded, MIP, MinIP, average, iso.
+pub fn every_look() -> Vec<(Mode, Option<lacuna::render::Shading>)> {
+    vec![
+        (Mode::Composite, None),
+        (Mode::Composite, Some(lacuna::render::Shading::default())),
+        (Mode::Mip, None),
+        (Mode::MinIp, None),
+        (Mode::Average, None),
+        (Mode::Iso(lacuna::render::Iso::new(&[0.4]).unwrap()), None),
+    ]
 }
 
 pub fn cam(size: u32, az: f64, el: f64, projection: Projection, step: f32) -> FrameDesc {

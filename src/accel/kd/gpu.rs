@@ -278,6 +278,8 @@ impl KdGpuBuilder {
                 lut_size: LUT_SIZE as u32,
                 channels: gv.channels,
                 tf_stride: tf.channel_step() * tf.max_stride,
+                pool_brick: gv.brick_edge(),
+                ..Default::default()
             };
             self.tight.dispatch(
                 cmd,
@@ -285,6 +287,7 @@ impl KdGpuBuilder {
                     volume_tex: Binding::Sampled(gv.image.view, gv.sampler),
                     transfer_max: Binding::Storage(&tf.max_table),
                     boxes: Binding::Storage(&boxes),
+                    brick_table: Binding::TexelBuffer(gv.brick_table().view()),
                 }
                 .list(),
                 bytemuck::bytes_of(&push),

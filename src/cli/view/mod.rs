@@ -203,7 +203,7 @@ impl App<'_> {
             tf.clone(),
             self.args.accel,
             *desc.mode(),
-            desc.filter(),
+            (desc.filter(), self.args.volume.storage),
         )?;
         let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
         let json = self.args.json.as_ref().map(|p| p.display().to_string());

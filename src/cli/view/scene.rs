@@ -12,7 +12,7 @@ use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
 use lacuna::render::{Filter, FrameDesc, Mode, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
-use lacuna::volume::GpuVolume;
+use lacuna::volume::{GpuVolume, Storage};
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 
 pub struct Scene {
@@ -39,22 +39,25 @@ pub struct Scene {
     march: Timings,
     /// The sample filter asked for (None: the default), for new steps.
     filter: Option<Filter>,
+    /// The voxel storage asked for, for new steps.
+    storage: Storage,
     /// The last new time step's upload (with what its frames read), ms.
     upload_ms: f64,
 }
 
 impl Scene {
-    /// `filter`: the sample filter asked for (None: the default).
+    /// `filter`: the sample filter asked for (None: the default);
+    /// `storage`: the voxel storage.
     pub fn new(
         builder: Builder,
         volume: Volume,
         tf: TransferFunction,
         accel: Accel,
         mode: Mode,
-        filter: Option<Filter>,
+        (filter, storage): (Option<Filter>, Storage),
     ) -> Result<Scene> {
         let ctx = &builder.context().clone();
-        let mut gpu_volume = GpuVolume::upload(ctx, &volume)?;
+        let mut gpu_volume = GpuVolume::upload_as(ctx, &volume, storage)?;
         gpu_volume.prepare(&volume, false, filter)?;
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
@@ -76,6 +79,7 @@ impl Scene {
             build: Timings::default(),
             march: Timings::default(),
             filter,
+            storage,
             upload_ms: 0.0,
         };
         scene.set_accel(accel);
@@ -104,7 +108,7 @@ impl Scene {
     /// computed before the next frame.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
-        let mut gpu_volume = GpuVolume::upload(&self.ctx, &volume)?;
+        let mut gpu_volume = GpuVolume::upload_as(&self.ctx, &volume, self.storage)?;
         gpu_volume.prepare(&volume, lit, self.filter)?;
         self.upload_ms = t.elapsed().as_secs_f64() * 1000.0;
         self.gpu_volume = gpu_volume;

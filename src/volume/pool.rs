@@ -1,0 +1,395 @@
+//! Bricked storage: the volume as a pool of bricks and a page table, with
+//! the bricks whose texels are all one value left out (`glsl/common/bricks.glsl`).
+//!
+//! A brick is `edge`^3 voxels; its slot in the pool holds (edge + 1)^3
+//! texels: its own and, on its high sides, the first layer of the next
+//! brick (clamped at the volume's end), so the eight voxels of every
+//! trilinear cell lie in one slot and a sample reads the table once. A
+//! brick all of whose slot texels are bit-identical (NaN included) is not
+//! stored: its entry points at one texel holding its value, with step 0.
+//! Distinct values are stored once each, in slots after the stored bricks.
+//! The pool's texels are the dense image's texels, read by the same
+//! `texelFetch`, so every sample equals the dense volume's bit for bit.
+
+use crate::error::{Error, Result};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Brick edge of the pool in voxels: 16. Measured on nbody:512 against 8
+/// and 32 (docs/results/scale.md): frames cost the same within noise, the
+/// pool is 0.35x, 0.43x and 0.54x dense for 8, 16 and 32, and the border
+/// layer costs 42 %, 20 % and 10 % on data without constant bricks; 16
+/// keeps the table 1/512 of the voxel count (8: 1/64).
+pub const POOL_BRICK: u32 = 16;
+
+/// `constant_id` of `VOLUME_BRICK` in `glsl/common/volume.glsl`.
+pub const BRICK_CONSTANT_ID: u32 = 27;
+
+/// Bit 31 of an entry's second word: the brick is one value.
+const CONSTANT: u32 = 1 << 31;
+
+/// Where a volume's voxels live on the device.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Storage {
+    /// One 3D image of the volume's dims.
+    Dense,
+    /// A pool of the bricks of `edge`^3 voxels that vary, and a page table
+    /// (`PoolLayout`).
+    Bricks { edge: u32 },
+    /// Dense while the volume fits the device's image limits, else bricks
+    /// of `POOL_BRICK`.
+    #[default]
+    Auto,
+}
+
+impl Storage {
+    /// Bricks of the default edge.
+    pub const BRICKS: Storage = Storage::Bricks { edge: POOL_BRICK };
+
+    /// `dense`, `bricks`, `bricks:EDGE` or `auto`.
+    pub fn parse(s: &str) -> Result<Self> {
+        let bad = || {
+            Error::invalid(
+                "storage",
+                s,
+                "expected dense, bricks, bricks:EDGE (voxels, 1 to 4095) or auto",
+            )
+        };
+        match s.split_once(':') {
+            None if s == "dense" => Ok(Storage::Dense),
+            None if s == "bricks" => Ok(Storage::BRICKS),
+            None if s == "auto" => Ok(Storage::Auto),
+            Some(("bricks", edge)) => match edge.parse::<u32>() {
+                Ok(edge @ 1..=4095) => Ok(Storage::Bricks { edge }),
+                _ => Err(bad()),
+            },
+            _ => Err(bad()),
+        }
+    }
+}
+
+impl std::fmt::Display for Storage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Storage::Dense => f.write_str("dense"),
+            Storage::Bricks { edge } if *edge == POOL_BRICK => f.write_str("bricks"),
+            Storage::Bricks { edge } => write!(f, "bricks:{edge}"),
+            Storage::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+impl std::str::FromStr for Storage {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Self::parse(s)
+    }
+}
+
+/// What bricked storage keeps of a volume (`PoolLayout`), for reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoolStats {
+    /// Brick edge in voxels.
+    pub edge: u32,
+    /// Bricks stored in the pool, and left out as one value.
+    pub stored: u64,
+    pub constant: u64,
+    /// Bytes of the pool image, the brick table, and the dense image.
+    pub pool_bytes: u64,
+    pub table_bytes: u64,
+    pub dense_bytes: u64,
+}
+
+impl PoolStats {
+    /// Pool and table bytes over the dense image's.
+    pub fn ratio(&self) -> f64 {
+        (self.pool_bytes + self.table_bytes) as f64 / self.dense_bytes.max(1) as f64
+    }
+}
+
+impl std::fmt::Display for PoolStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+        write!(
+            f,
+            "bricks of {}^3: {} stored, {} constant; pool {:.1} MiB + table {:.2} MiB = {:.3}x dense ({:.1} MiB)",
+            self.edge,
+            self.stored,
+            self.constant,
+            mib(self.pool_bytes),
+            mib(self.table_bytes),
+            self.ratio(),
+            mib(self.dense_bytes)
+        )
+    }
+}
+
+/// The pool of one volume: which bricks are stored where, and the table.
+#[derive(Clone, Debug)]
+pub struct PoolLayout {
+    /// Brick edge in voxels.
+    pub edge: u32,
+    /// The volume's dims.
+    pub dims: [u32; 3],
+    /// Bricks per axis.
+    pub counts: [u32; 3],
+    /// Per brick, x fastest: `[x | y << 16, z | constant << 31]`, the pool
+    /// texel its slot (or its one value) starts at.
+    pub table: Vec<[u32; 2]>,
+    /// The brick each stored slot holds, in slot order.
+    pub stored: Vec<u32>,
+    /// The distinct values of the constant bricks, one texel each.
+    pub values: Vec<Vec<u8>>,
+    /// Bricks left out because they are one value.
+    pub constant_bricks: u64,
+    /// Slots per axis of the pool image.
+    pub slots: [u32; 3],
+    /// Bytes per texel.
+    pub texel_bytes: u64,
+}
+
+impl PoolLayout {
+    /// Plans the pool of a volume of `dims` whose texels (`texel_bytes`
+    /// each, x fastest) are `data`: finds the constant bricks (in parallel)
+    /// and places the rest. The pool's extent is checked against
+    /// `maxImageDimension3D`; its bytes are checked by the caller.
+    pub fn plan(data: &[u8], dims: [u32; 3], texel_bytes: u64, edge: u32, max_image_dim: u32) -> Result<Self> {
+        // Table entries hold 16-bit x and y.
+        let most = max_image_dim.clamp(2, 1 << 16) - 1;
+        if edge == 0 || edge > most {
+            return Err(Error::invalid(
+                "brick edge",
+                edge.to_string(),
+                format!("expected 1 to {most} voxels (a slot of edge + 1 texels fits maxImageDimension3D)"),
+            ));
+        }
+        if data.len() as u64 != dims.iter().fold(texel_bytes, |a, &d| a * d as u64) {
+            return Err(Error::invalid(
+                "brick pool",
+                format!("{} bytes", data.len()),
+                format!(
+                    "is not {}x{}x{} texels of {texel_bytes} bytes",
+                    dims[0], dims[1], dims[2]
+                ),
+            ));
+        }
+        let counts = dims.map(|d| d.div_ceil(edge));
+        let total = counts.iter().map(|&c| c as u64).product::<u64>();
+        crate::limits::check_host("brick table", total, 16)?;
+        let tb = texel_bytes as usize;
+        let one_value: Vec<Option<&[u8]>> = (0..total)
+            .into_par_iter()
+            .map(|b| {
+                let lo = brick_origin(b, counts, edge);
+                let first = texel_index(lo, dims) * tb;
+                let value = &data[first..first + tb];
+                let mut same = true;
+                for_each_slot_row(lo, dims, edge, |start, len| {
+                    same = same
+                        && data[start * tb..(start + len) * tb]
+                            .chunks_exact(tb)
+                            .all(|t| t == value);
+                });
+                same.then_some(value)
+            })
+            .collect();
+        let mut values: Vec<Vec<u8>> = Vec::new();
+        let mut value_index: HashMap<&[u8], u32> = HashMap::new();
+        let mut stored = Vec::new();
+        // Which slot or value each brick takes, before the slot grid is known.
+        let mut place: Vec<(bool, u32)> = Vec::with_capacity(total as usize);
+        for (b, v) in one_value.iter().enumerate() {
+            match v {
+                Some(v) => {
+                    let next = values.len() as u32;
+                    let k = *value_index.entry(v).or_insert_with(|| {
+                        values.push(v.to_vec());
+                        next
+                    });
+                    place.push((true, k));
+                }
+                None => {
+                    place.push((false, stored.len() as u32));
+                    stored.push(b as u32);
+                }
+            }
+        }
+        let slot = (edge + 1) as u64;
+        let value_slots = (values.len() as u64).div_ceil(slot.pow(3));
+        let slot_count = (stored.len() as u64 + value_slots).max(1);
+        let slots = slot_grid(slot_count, edge, max_image_dim)?;
+        let mut layout = PoolLayout {
+            edge,
+            dims,
+            counts,
+            table: Vec::new(),
+            stored,
+            constant_bricks: one_value.iter().filter(|v| v.is_some()).count() as u64,
+            values,
+            slots,
+            texel_bytes,
+        };
+        layout.table = place
+            .iter()
+            .map(|&(constant, k)| {
+                let at = if constant {
+                    layout.value_texel(k)
+                } else {
+                    layout.slot_origin(k)
+                };
+                [at[0] | at[1] << 16, at[2] | if constant { CONSTANT } else { 0 }]
+            })
+            .collect();
+        Ok(layout)
+    }
+
+    /// The pool image's extent in texels.
+    pub fn extent(&self) -> [u32; 3] {
+        self.slots.map(|s| s * (self.edge + 1))
+    }
+
+    pub fn pool_bytes(&self) -> u64 {
+        self.extent().iter().fold(self.texel_bytes, |acc, &e| acc * e as u64)
+    }
+
+    pub fn table_bytes(&self) -> u64 {
+        self.table.len() as u64 * 8
+    }
+
+    /// The dense image's bytes, for the ratio.
+    pub fn dense_bytes(&self) -> u64 {
+        self.dims.iter().fold(self.texel_bytes, |acc, &e| acc * e as u64)
+    }
+
+    /// The pool in numbers.
+    pub fn stats(&self) -> PoolStats {
+        PoolStats {
+            edge: self.edge,
+            stored: self.stored.len() as u64,
+            constant: self.constant_bricks,
+            pool_bytes: self.pool_bytes(),
+            table_bytes: self.table_bytes(),
+            dense_bytes: self.dense_bytes(),
+        }
+    }
+
+    /// The pool `volume` would take in bricks of `edge` on a device whose
+    /// 3D images reach `max_image_dim` texels a side.
+    pub fn of_volume(volume: &super::Volume, edge: u32, max_image_dim: u32) -> Result<Self> {
+        let (kind, n) = (super::channels::common_kind(volume), volume.channel_count());
+        let texel = super::channels::texel_bytes(kind, n);
+        Self::plan(
+            &super::channels::texel_data(volume),
+            volume.dims,
+            texel,
+            edge,
+            max_image_dim,
+        )
+    }
+
+    /// The first texel of slot `s`.
+    fn slot_origin(&self, s: u32) -> [u32; 3] {
+        let [gx, gy, _] = self.slots;
+        let e = self.edge + 1;
+        [s % gx * e, s / gx % gy * e, s / (gx * gy) * e]
+    }
+
+    /// The texel holding distinct value `k`: value slots follow the stored
+    /// bricks' slots, (edge + 1)^3 values each, x fastest.
+    fn value_texel(&self, k: u32) -> [u32; 3] {
+        let e = self.edge + 1;
+        let per = e * e * e;
+        let o = self.slot_origin(self.stored.len() as u32 + k / per);
+        let r = k % per;
+        [o[0] + r % e, o[1] + r / e % e, o[2] + r / (e * e)]
+    }
+
+    /// Writes the pool image's texels (x fastest, `pool_bytes` long) from
+    /// the volume's `data`, one pool plane per task.
+    pub fn fill(&self, data: &[u8], out: &mut [u8]) {
+        let [ex, ey, _] = self.extent();
+        let tb = self.texel_bytes as usize;
+        let e = self.edge + 1;
+        let plane = ex as usize * ey as usize * tb;
+        let per_slot = (e * e * e) as usize;
+        out.par_chunks_mut(plane).enumerate().for_each(|(pz, out)| {
+            let (sz, lz) = (pz as u32 / e, pz as u32 % e);
+            for sy in 0..self.slots[1] {
+                for sx in 0..self.slots[0] {
+                    let s = sx + self.slots[0] * (sy + self.slots[1] * sz);
+                    for ly in 0..e {
+                        let row = ((sy * e + ly) as usize * ex as usize + (sx * e) as usize) * tb;
+                        let dst = &mut out[row..row + e as usize * tb];
+                        if let Some(&b) = self.stored.get(s as usize) {
+                            let lo = brick_origin(b as u64, self.counts, self.edge);
+                            let v = [lo[0], lo[1] + ly, lo[2] + lz].map(|c| c as u64);
+                            copy_row(data, self.dims, tb, v, dst);
+                        } else {
+                            let first = (s as usize - self.stored.len()) * per_slot + (lz * e * e + ly * e) as usize;
+                            for (lx, t) in dst.chunks_exact_mut(tb).enumerate() {
+                                if let Some(v) = self.values.get(first + lx) {
+                                    t.copy_from_slice(v);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        });
+    }
+}
+
+/// The first voxel of brick `b` (x fastest).
+fn brick_origin(b: u64, counts: [u32; 3], edge: u32) -> [u32; 3] {
+    let [cx, cy, _] = counts.map(|c| c as u64);
+    [(b % cx) as u32, (b / cx % cy) as u32, (b / (cx * cy)) as u32].map(|c| c * edge)
+}
+
+fn texel_index(v: [u32; 3], dims: [u32; 3]) -> usize {
+    (v[0] as usize) + dims[0] as usize * (v[1] as usize + dims[1] as usize * v[2] as usize)
+}
+
+/// Calls `row(first texel, texels)` for each x-row of the slot of the brick
+/// at `lo` that lies in the volume (the slot's texels past the volume's end
+/// repeat its last voxels, so they add no value of their own).
+fn for_each_slot_row(lo: [u32; 3], dims: [u32; 3], edge: u32, mut row: impl FnMut(usize, usize)) {
+    let hi = [0, 1, 2].map(|a| (lo[a] + edge).min(dims[a] - 1));
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            row(texel_index([lo[0], y, z], dims), (hi[0] - lo[0] + 1) as usize);
+        }
+    }
+}
+
+/// One slot row: the volume's texels from voxel `v` along x, each index
+/// clamped to the volume as the dense image's clamp-to-edge reads them.
+fn copy_row(data: &[u8], dims: [u32; 3], tb: usize, v: [u64; 3], dst: &mut [u8]) {
+    let [w, h, d] = dims.map(|c| c as u64);
+    let (y, z) = (v[1].min(h - 1), v[2].min(d - 1));
+    let base = ((y + h * z) * w) as usize;
+    for (lx, t) in dst.chunks_exact_mut(tb).enumerate() {
+        let x = (v[0] + lx as u64).min(w - 1) as usize;
+        t.copy_from_slice(&data[(base + x) * tb..(base + x + 1) * tb]);
+    }
+}
+
+/// The slot grid of `count` slots of (edge + 1)^3 texels: near a cube, so
+/// the last, partly filled layer wastes little, and no side longer than the
+/// device's 3D images allow (`max_dim` texels).
+fn slot_grid(count: u64, edge: u32, max_dim: u32) -> Result<[u32; 3]> {
+    let per_axis = (max_dim / (edge + 1)).max(1) as u64;
+    let gx = ((count as f64).cbrt().ceil() as u64).clamp(1, per_axis);
+    let gy = ((count.div_ceil(gx) as f64).sqrt().ceil() as u64).clamp(1, per_axis);
+    let gz = count.div_ceil(gx * gy);
+    if gz > per_axis {
+        return Err(Error::invalid(
+            "brick pool",
+            format!("of {count} slots of {}^3 texels", edge + 1),
+            format!(
+                "needs a 3D image {} texels deep, over maxImageDimension3D = {max_dim}; the volume varies in too many bricks for one pool",
+                gz * (edge + 1) as u64
+            ),
+        ));
+    }
+    Ok([gx as u32, gy as u32, gz as u32])
+}
