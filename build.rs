@@ -76,7 +76,7 @@ const SHARED_STRUCTS: [&str; 5] = ["RenderParams", "BvhNode", "OctNode", "Prim",
 
 /// The bindings every march kernel has (`glsl/common/march.glsl`); the
 /// renderer binds them, the structure the rest.
-const MARCH_COMMON: [&str; 9] = [
+const MARCH_COMMON: [&str; 12] = [
     "params",
     "volume_tex",
     "tf_lut",
@@ -86,6 +86,9 @@ const MARCH_COMMON: [&str; 9] = [
     "volume_cells",
     "gradient_cells",
     "brick_table",
+    "pool_1",
+    "pool_2",
+    "pool_3",
 ];
 
 /// Rust keywords a GLSL name may collide with.

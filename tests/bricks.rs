@@ -10,7 +10,15 @@ use common::{assert_clean, fails, gpu, lacuna, masked};
 use lacuna::accel::Structure;
 use lacuna::frame::{diff, Frame};
 use lacuna::render::{Filter, FrameDesc, Mode};
-use lacuna::volume::{GpuVolume, LoadOptions, PoolLayout, Storage, VoxelData, VoxelType, POOL_BRICK};
+use lacuna::volume::{GpuVolume, LoadOptions, PoolLayout, PoolLimits, Storage, VoxelData, VoxelType, POOL_BRICK};
+
+/// Limits of `max_image_dim` texels a side and `max_image_bytes` an image.
+fn limits(max_image_dim: u32, max_image_bytes: u64) -> PoolLimits {
+    PoolLimits {
+        max_image_dim,
+        max_image_bytes,
+    }
+}
 use lacuna::{TransferFunction, Volume};
 
 fn load(spec: &str) -> Volume {
@@ -53,25 +61,47 @@ fn wide(v: &Volume) -> Volume {
 }
 
 /// The pool texel of voxel v as `brick_texel` in glsl/common/bricks.glsl
-/// finds it: (texel, step).
-fn brick_texel(p: &PoolLayout, v: [i64; 3]) -> ([i64; 3], i64) {
+/// finds it: (texel, step, image).
+fn brick_texel(p: &PoolLayout, v: [i64; 3]) -> ([i64; 3], i64, usize) {
     let e = p.edge as i64;
     let b = v.map(|c| c / e);
     let n = p.counts.map(|c| c as i64);
     let [w0, w1] = p.table[(b[0] + n[0] * (b[1] + n[1] * b[2])) as usize];
     let step = 1 - (w1 >> 31) as i64;
     let origin = [(w0 & 0xffff) as i64, (w0 >> 16) as i64, (w1 & 0xffff) as i64];
-    ([0, 1, 2].map(|a| origin[a] + (v[a] - b[a] * e) * step), step)
+    let image = ((w1 >> 16) & 0x7fff) as usize;
+    ([0, 1, 2].map(|a| origin[a] + (v[a] - b[a] * e) * step), step, image)
 }
 
 #[test]
 fn every_cell_read_through_the_table_is_the_dense_cell() {
     let (texels, dims) = slabs();
-    for edge in [1, 4, 5, 8, 30] {
-        let p = PoolLayout::plan(&texels, dims, 2, edge, 4096).unwrap();
-        let mut pool = vec![0u8; p.pool_bytes() as usize];
-        p.fill(&texels, &mut pool);
-        let ext = p.extent().map(|e| e as i64);
+    // Edges from 1 to past the dims; 4 also split over images of at most
+    // 50 slots of 5^3 u16 texels.
+    let cases = [
+        (1, u64::MAX),
+        (4, u64::MAX),
+        (4, 50 * 250),
+        (5, u64::MAX),
+        (8, u64::MAX),
+        (30, u64::MAX),
+    ];
+    for (edge, max_bytes) in cases {
+        let p = PoolLayout::plan(&texels, dims, 2, edge, limits(4096, max_bytes)).unwrap();
+        assert_eq!(
+            p.images.len() > 1,
+            max_bytes < u64::MAX,
+            "edge {edge}: {} images",
+            p.images.len()
+        );
+        let pools: Vec<Vec<u8>> = (0..p.images.len())
+            .map(|k| {
+                assert!(p.image_bytes(k) <= max_bytes);
+                let mut pool = vec![0u8; p.image_bytes(k) as usize];
+                p.fill(k, &texels, &mut pool);
+                pool
+            })
+            .collect();
         let texel_at = |bytes: &[u8], i: i64| u16::from_le_bytes([bytes[2 * i as usize], bytes[2 * i as usize + 1]]);
         let hi = dims.map(|d| d as i64 - 1);
         // Every cell whose low corner is -1 .. hi (the clamped apron the
@@ -82,7 +112,8 @@ fn every_cell_read_through_the_table_is_the_dense_cell() {
                     let i = [x, y, z];
                     let lo = [0, 1, 2].map(|a| i[a].clamp(0, hi[a]));
                     let up = [0, 1, 2].map(|a| (i[a] + 1).clamp(0, hi[a]));
-                    let (at, step) = brick_texel(&p, lo);
+                    let (at, step, image) = brick_texel(&p, lo);
+                    let ext = p.extent(image).map(|e| e as i64);
                     for b in 0..8 {
                         let corner = [b & 1, (b >> 1) & 1, (b >> 2) & 1];
                         let t = [0, 1, 2].map(|a| at[a] + (up[a] - lo[a]) * step * corner[a]);
@@ -90,7 +121,7 @@ fn every_cell_read_through_the_table_is_the_dense_cell() {
                             (0..3).all(|a| t[a] < ext[a]),
                             "edge {edge}: texel {t:?} outside the pool"
                         );
-                        let pooled = texel_at(&pool, t[0] + ext[0] * (t[1] + ext[1] * t[2]));
+                        let pooled = texel_at(&pools[image], t[0] + ext[0] * (t[1] + ext[1] * t[2]));
                         let v = [0, 1, 2].map(|a| if corner[a] == 1 { up[a] } else { lo[a] });
                         let dense = texel_at(&texels, v[0] + dims[0] as i64 * (v[1] + dims[1] as i64 * v[2]));
                         assert_eq!(pooled, dense, "edge {edge}, cell {i:?}, corner {b}");
@@ -121,15 +152,24 @@ fn every_cell_read_through_the_table_is_the_dense_cell() {
 #[test]
 fn a_pool_past_the_device_limits_is_an_error_naming_the_limit() {
     let (texels, dims) = slabs();
-    // 3-texel slots: a 12-texel limit holds 4^3 slots, fewer than needed.
-    let e = PoolLayout::plan(&texels, dims, 2, 2, 12).unwrap_err().to_string();
+    // 3-texel slots: 12-texel sides hold 4^3 slots an image, and four
+    // images hold fewer than the ~1500 needed.
+    let e = PoolLayout::plan(&texels, dims, 2, 2, limits(12, u64::MAX))
+        .unwrap_err()
+        .to_string();
     assert!(
-        e.contains("maxImageDimension3D = 12") && e.contains("brick pool"),
+        e.contains("12 texels a side (maxImageDimension3D)") && e.contains("brick pool"),
         "{e}"
     );
-    let e = PoolLayout::plan(&texels, dims, 2, 0, 4096).unwrap_err().to_string();
+    let e = PoolLayout::plan(&texels, dims, 2, 2, limits(4096, 5400))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("of at most 5400 bytes (maxMemoryAllocationSize"), "{e}");
+    let e = PoolLayout::plan(&texels, dims, 2, 0, limits(4096, u64::MAX))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("invalid brick edge '0'"), "{e}");
-    let e = PoolLayout::plan(&texels[1..], dims, 2, 4, 4096)
+    let e = PoolLayout::plan(&texels[1..], dims, 2, 4, limits(4096, u64::MAX))
         .unwrap_err()
         .to_string();
     assert!(e.contains("brick pool"), "{e}");
@@ -186,6 +226,29 @@ fn check_every_look(what: &str, v: &Volume, edges: &[u32]) {
 fn every_structure_on_bricks_equals_dense_naive_in_every_look() {
     // Odd dims; 5 divides none of them, 32 leaves partial bricks.
     check_every_look("vessels", &load("vessels:45x37x51"), &[5, POOL_BRICK]);
+}
+
+#[test]
+fn a_pool_split_over_four_images_equals_dense() {
+    // Slots of 6^3 u8 texels, at most 64 an image: vessels varies in about
+    // 200 bricks of 5^3, so every one of the four images holds some.
+    let v = load("vessels:30x27x33");
+    let t = tf_of(&v);
+    let fx = Fixture::new();
+    let gv = GpuVolume::upload_bricks_within(&fx.ctx, &v, 5, limits(4096, 64 * 216)).unwrap();
+    assert_eq!(gv.pool_image_count(), 4, "{:?}", gv.pool);
+    let views = &standard_views()[..3];
+    let bricked = Fixture::with_bricks_within(5, limits(4096, 64 * 216));
+    for (mode, shading) in every_look() {
+        let views: Vec<FrameDesc> = views
+            .iter()
+            .map(|d| d.to_builder().mode(mode).shading(shading).build().unwrap())
+            .collect();
+        let what = format!("four images {}", mode.name());
+        let frames = bricked.check_with(&what, &v, &t, &views, &[DEFAULTS], Kernels::Reported);
+        assert_same(&what, &dense_naive(&v, &t, &views), &frames);
+    }
+    assert_clean(&fx.ctx);
 }
 
 #[test]

@@ -14,6 +14,7 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 2) writeonly buffer Boxes { ivec4 boxes[]; }; // lo, hi (exclusive) per brick
 #define BRICK_TABLE_BINDING 3
+#define POOL_BINDING 4
 #include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge (8)
@@ -92,8 +93,8 @@ void main() {
         barrier();
         for (uint i = lid; i < uint(S * S * S); i += 64u) {
             ivec3 l = ivec3(int(i) % S, (int(i) / S) % S, int(i) / (S * S));
-            ivec3 v = stored_texel(origin + l - 1, hi, int(pc.pool_brick));
-            precise float n = (texelFetch(volume_tex, v, 0)[ch] - pc.lo[ch]) * pc.scale[ch];
+            vec4 t = stored_voxel(origin + l - 1, hi, int(pc.pool_brick));
+            precise float n = (t[ch] - pc.lo[ch]) * pc.scale[ch];
             staged[i] = is_nan(n) ? n : clamp(n, 0.0, 1.0);
         }
         barrier();

@@ -15,6 +15,7 @@ layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) readonly buffer TransferLut { vec4 tf_lut[]; };
 layout(std430, set = 0, binding = 3) writeonly buffer Flags { uint flags[]; };
 #define BRICK_TABLE_BINDING 4
+#define POOL_BINDING 5
 #include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
@@ -36,8 +37,8 @@ layout(push_constant) uniform Push {
 #include "tf_range.glsl"
 
 float value_at(ivec3 i, uint ch) {
-    ivec3 c = stored_texel(i, ivec3(pc.dims.xyz) - 1, int(pc.pool_brick));
-    precise float v = (texelFetch(volume_tex, c, 0)[ch] - pc.lo[ch]) * pc.scale[ch];
+    vec4 t = stored_voxel(i, ivec3(pc.dims.xyz) - 1, int(pc.pool_brick));
+    precise float v = (t[ch] - pc.lo[ch]) * pc.scale[ch];
     return is_nan(v) ? v : clamp(v, 0.0, 1.0);
 }
 

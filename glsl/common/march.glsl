@@ -23,7 +23,8 @@
 #define CELLS_BINDING 6
 #define GRADIENT_CELLS_BINDING 7
 #define BRICK_TABLE_BINDING 8
-#define OWN_BINDING 9
+#define POOL_BINDING 9
+#define OWN_BINDING 12
 
 // 8x8: march_pixel_id's Morton order assumes it.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;

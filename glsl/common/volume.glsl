@@ -114,12 +114,14 @@ vec4 volume_texels(ivec3 i, ivec3 hi) {
 #ifdef BRICK_TABLE_BINDING
 // The eight pool texels of the cell whose low corner is voxel i (clamped):
 // each voxel's clamped index lies in the slot of the brick of the first,
-// one table read per cell. Texel b is at[0].xyz + at[1].xyz * corner(b).
-void cell_pool_texels(ivec3 i, ivec3 hi, out ivec3 at[2]) {
+// one table read per cell. Texel b is at[0] + at[1] * corner(b), in pool
+// image `image`.
+void cell_pool_texels(ivec3 i, ivec3 hi, out ivec3 at[2], out int image) {
     ivec3 lo = clamp(i, ivec3(0), hi);
     ivec4 t = brick_texel(lo, hi, int(VOLUME_BRICK));
     at[0] = t.xyz;
-    at[1] = (clamp(i + 1, ivec3(0), hi) - lo) * t.w;
+    at[1] = (clamp(i + 1, ivec3(0), hi) - lo) * (t.w & 1);
+    image = t.w >> 1;
 }
 #endif
 
@@ -133,9 +135,10 @@ void cell_voxels(ivec3 i, ivec3 hi, out float c[8]) {
 #ifdef BRICK_TABLE_BINDING
     if (VOLUME_BRICK != 0u) {
         ivec3 at[2];
-        cell_pool_texels(i, hi, at);
+        int image;
+        cell_pool_texels(i, hi, at, image);
         for (int b = 0; b < 8; ++b) {
-            float t = texelFetch(volume_tex, at[0] + at[1] * cell_corner(b), 0).r;
+            float t = pool_fetch(image, at[0] + at[1] * cell_corner(b)).r;
             c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
         }
         return;
@@ -218,9 +221,10 @@ vec4 sample_manual_channels(vec3 p, ivec3 hi) {
 #ifdef BRICK_TABLE_BINDING
     if (VOLUME_BRICK != 0u) {
         ivec3 at[2];
-        cell_pool_texels(i, hi, at);
+        int image;
+        cell_pool_texels(i, hi, at, image);
         for (int b = 0; b < 8; ++b) {
-            vec4 t = texelFetch(volume_tex, at[0] + at[1] * cell_corner(b), 0);
+            vec4 t = pool_fetch(image, at[0] + at[1] * cell_corner(b));
             c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
         }
     } else

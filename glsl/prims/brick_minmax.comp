@@ -12,6 +12,7 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = 0) uniform sampler3D volume_tex;
 layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
 #define BRICK_TABLE_BINDING 2
+#define POOL_BINDING 3
 #include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
@@ -38,7 +39,7 @@ void main() {
     for (int z = lo.z; z <= hi.z; ++z) {
         for (int y = lo.y; y <= hi.y; ++y) {
             for (int x = lo.x; x <= hi.x; ++x) {
-                vec4 t = texelFetch(volume_tex, stored_texel(ivec3(x, y, z), hi_voxel, int(pc.pool_brick)), 0);
+                vec4 t = stored_voxel(ivec3(x, y, z), hi_voxel, int(pc.pool_brick));
                 for (int c = 0; c < 4; ++c) {
                     if (!is_nan(t[c])) {
                         mn[c] = min(mn[c], t[c]);

@@ -320,6 +320,9 @@ impl Probe {
             volume_cells: Binding::TexelBuffer(self.no_cells.view()),
             gradient_cells: Binding::TexelBuffer(self.no_cells.view()),
             brick_table: Binding::TexelBuffer(self.volume.brick_table().view()),
+            pool_1: Binding::Sampled(self.volume.pool_views()[0], self.volume.sampler),
+            pool_2: Binding::Sampled(self.volume.pool_views()[1], self.volume.sampler),
+            pool_3: Binding::Sampled(self.volume.pool_views()[2], self.volume.sampler),
         }
         .list();
         bindings.extend(

@@ -206,6 +206,9 @@ impl<'a> FrameProbe<'a> {
             volume_cells: Binding::TexelBuffer(self.volume.cells().unwrap_or(&self.no_cells).view()),
             gradient_cells: Binding::TexelBuffer(self.volume.gradient_cells().unwrap_or(&self.no_cells).view()),
             brick_table: Binding::TexelBuffer(self.volume.brick_table().view()),
+            pool_1: Binding::Sampled(self.volume.pool_views()[0], self.volume.sampler),
+            pool_2: Binding::Sampled(self.volume.pool_views()[1], self.volume.sampler),
+            pool_3: Binding::Sampled(self.volume.pool_views()[2], self.volume.sampler),
         }
         .list();
         bindings.extend(structure.built.bindings());

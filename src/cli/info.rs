@@ -47,12 +47,12 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     // The pool's slot grid follows the device's 3D image limit.
     match context(false) {
         Ok(ctx) => {
-            let max = ctx.info().max_image_dimension_3d;
+            let limits = lacuna::volume::PoolLimits::of(ctx.info());
             let edge = match args.volume.storage {
                 Storage::Bricks { edge } => edge,
                 _ => POOL_BRICK,
             };
-            let pool = PoolLayout::of_volume(&v, edge, max)?.stats();
+            let pool = PoolLayout::of_volume(&v, edge, limits)?.stats();
             let storage = Storage::Bricks { edge };
             println!("storage  {pool} (--storage {storage}, on {})", ctx.info().name);
         }

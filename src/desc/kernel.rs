@@ -8,11 +8,11 @@
 use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
 use crate::volume::{
     Filter, GpuVolume, BRICK_CONSTANT_ID, CELLS_CONSTANT_ID, CHANNELS_CONSTANT_ID, FILTER_CONSTANT_ID,
-    GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID,
+    GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID, POOL_IMAGES_CONSTANT_ID,
 };
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 9];
+pub type KernelConstants = [(u32, u32); 10];
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
@@ -20,7 +20,7 @@ impl FrameDesc {
     /// (iso surfaces are always lit, by their own path), whether the volume
     /// has NaN voxels, how its texels are stored, whether the manual
     /// filter reads its cells copy and (lit frames) the gradient's, how
-    /// many channels it has, and its pool's brick edge (0: dense).
+    /// many channels it has, and its pool's brick edge (0: dense) and images.
     pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
         let filter = self.filter_for(volume);
         let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
@@ -37,6 +37,7 @@ impl FrameDesc {
             (GRADIENT_CELLS_CONSTANT_ID, gradient_cells as u32),
             (CHANNELS_CONSTANT_ID, volume.channels),
             (BRICK_CONSTANT_ID, volume.brick_edge()),
+            (POOL_IMAGES_CONSTANT_ID, volume.pool_image_count()),
         ]
     }
 }

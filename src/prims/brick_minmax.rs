@@ -59,6 +59,9 @@ impl BrickMinMax {
                 volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
                 ranges: Binding::Storage(out),
                 brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+                pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
+                pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
+                pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
             }
             .list(),
             bytemuck::bytes_of(&push),

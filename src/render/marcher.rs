@@ -243,6 +243,9 @@ impl Renderer {
             volume_cells: Binding::TexelBuffer(volume.cells().unwrap_or(&self.no_cells).view()),
             gradient_cells: Binding::TexelBuffer(volume.gradient_cells().unwrap_or(&self.no_cells).view()),
             brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+            pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
+            pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
+            pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
         }
         .list();
         bindings.extend(structure.built.bindings());

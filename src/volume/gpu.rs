@@ -10,7 +10,7 @@
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
-use super::pool::{PoolLayout, PoolStats, Storage};
+use super::pool::{PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, Volume, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Staging, TexelBuffer};
@@ -50,6 +50,8 @@ pub struct GpuVolume {
     gradient_cells: Option<TexelBuffer>,
     /// The brick table (RG32UI); a 16-byte stand-in with dense storage.
     brick_table: TexelBuffer,
+    /// The pool's images past the first (`image`), where it spans several.
+    pool_images: Vec<Image3d>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
 }
@@ -70,13 +72,31 @@ fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
 
 /// The pool of `volume`'s texels (`bytes`, `texel` bytes each), after its
 /// image, allocation, heap and host memory checks.
-fn pool_texels(ctx: &Context, volume: &Volume, texel: u64, bytes: &[u8], edge: u32) -> Result<(PoolLayout, Vec<u8>)> {
-    let layout = PoolLayout::plan(bytes, volume.dims, texel, edge, ctx.info().max_image_dimension_3d)?;
-    let what = format!("brick pool of {}", volume.name);
-    check_image3d_of(ctx.info(), &what, layout.extent(), texel)?;
-    let mut pool = crate::limits::zeroed::<u8>(what, layout.pool_bytes())?;
-    layout.fill(bytes, &mut pool);
-    Ok((layout, pool))
+fn plan_pool(
+    ctx: &Context,
+    volume: &Volume,
+    (texel, bytes): (u64, &[u8]),
+    edge: u32,
+    limits: PoolLimits,
+) -> Result<PoolLayout> {
+    let device = PoolLimits::of(ctx.info());
+    let limits = PoolLimits {
+        max_image_dim: limits.max_image_dim.min(device.max_image_dim),
+        max_image_bytes: limits.max_image_bytes.min(device.max_image_bytes),
+    };
+    let layout = PoolLayout::plan(bytes, volume.dims, texel, edge, limits)?;
+    for k in 0..layout.images.len() {
+        let what = format!("brick pool image {k} of {}", volume.name);
+        check_image3d_of(ctx.info(), &what, layout.extent(k), texel)?;
+    }
+    Ok(layout)
+}
+
+/// Pool image `k`'s texels, after the host memory check.
+fn pool_image_texels(layout: &PoolLayout, k: usize, bytes: &[u8]) -> Result<Vec<u8>> {
+    let mut pool = crate::limits::zeroed::<u8>(format_args!("brick pool image {k}"), layout.image_bytes(k))?;
+    layout.fill(k, bytes, &mut pool);
+    Ok(pool)
 }
 
 /// The image format, texel size and bytes of a volume (R8/R16 kept
@@ -120,15 +140,33 @@ impl GpuVolume {
         }
         let (format, texel, bytes) = texels(volume);
         let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, texel, &bytes)?;
-        Self::with_image(ctx, volume, image, None)
+        Self::with_images(ctx, volume, vec![image], None)
     }
 
     /// Uploads `volume` in bricks of `edge`^3 voxels and waits.
     pub fn upload_bricks(ctx: &Context, volume: &Volume, edge: u32) -> Result<Self> {
+        Self::upload_bricks_within(ctx, volume, edge, PoolLimits::of(ctx.info()))
+    }
+
+    /// As `upload_bricks`, each pool image also within `limits` (to leave
+    /// a device room, or to split a pool on purpose).
+    pub fn upload_bricks_within(ctx: &Context, volume: &Volume, edge: u32, limits: PoolLimits) -> Result<Self> {
         let (format, texel, bytes) = texels(volume);
-        let (layout, pool) = pool_texels(ctx, volume, texel, &bytes, edge)?;
-        let image = Image3d::with_data(ctx, "brick pool", format, layout.extent(), texel, &pool)?;
-        Self::with_image(ctx, volume, image, Some(&layout))
+        let layout = plan_pool(ctx, volume, (texel, &bytes), edge, limits)?;
+        // One image's texels on the host at a time.
+        let mut images = Vec::with_capacity(layout.images.len());
+        for k in 0..layout.images.len() {
+            let pool = pool_image_texels(&layout, k, &bytes)?;
+            images.push(Image3d::with_data(
+                ctx,
+                "brick pool",
+                format,
+                layout.extent(k),
+                texel,
+                &pool,
+            )?);
+        }
+        Self::with_images(ctx, volume, images, Some(&layout))
     }
 
     /// As `upload`, recorded into `cmd`: leaves the image in
@@ -147,16 +185,32 @@ impl GpuVolume {
     ) -> Result<(Self, Staging)> {
         let (format, texel, bytes) = texels(volume);
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
-            let (layout, pool) = pool_texels(ctx, volume, texel, &bytes, edge)?;
-            let (image, staging) =
-                Image3d::record_with_data(ctx, cmd, "brick pool", format, layout.extent(), texel, &pool)?;
-            return Ok((Self::with_image(ctx, volume, image, Some(&layout))?, staging));
+            let layout = plan_pool(ctx, volume, (texel, &bytes), edge, PoolLimits::of(ctx.info()))?;
+            let mut images = Vec::with_capacity(layout.images.len());
+            let mut staged: Vec<Staging> = Vec::new();
+            for k in 0..layout.images.len() {
+                let pool = pool_image_texels(&layout, k, &bytes)?;
+                let (image, staging) =
+                    Image3d::record_with_data(ctx, cmd, "brick pool", format, layout.extent(k), texel, &pool)?;
+                images.push(image);
+                staged.push(staging);
+            }
+            let gv = Self::with_images(ctx, volume, images, Some(&layout))?;
+            let first = staged.remove(0);
+            return Ok((gv, staged.into_iter().fold(first, Staging::join)));
         }
         let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
-        Ok((Self::with_image(ctx, volume, image, None)?, staging))
+        Ok((Self::with_images(ctx, volume, vec![image], None)?, staging))
     }
 
-    fn with_image(ctx: &Context, volume: &Volume, image: Image3d, pool: Option<&PoolLayout>) -> Result<Self> {
+    /// `images`: the dense image, or the pool's images (one or more).
+    fn with_images(
+        ctx: &Context,
+        volume: &Volume,
+        mut images: Vec<Image3d>,
+        pool: Option<&PoolLayout>,
+    ) -> Result<Self> {
+        let image = images.remove(0);
         let format = image.format;
         let brick_table = match pool {
             Some(layout) => {
@@ -186,6 +240,7 @@ impl GpuVolume {
             cells: None,
             gradient_cells: None,
             brick_table,
+            pool_images: images,
             pool: pool.map(PoolLayout::stats),
         };
         // Bricked storage samples with the manual filter only: the
@@ -364,6 +419,17 @@ impl GpuVolume {
     /// storage, which nothing reads).
     pub fn brick_table(&self) -> &TexelBuffer {
         &self.brick_table
+    }
+
+    /// The views kernels bind as `pool_1` to `pool_3`: the pool's further
+    /// images, the first one's view where it has fewer (nothing reads them).
+    pub fn pool_views(&self) -> [vk::ImageView; 3] {
+        std::array::from_fn(|i| self.pool_images.get(i).map_or(self.image.view, |p| p.view))
+    }
+
+    /// The images the pool spans: `POOL_IMAGES` of the kernels (1 when dense).
+    pub fn pool_image_count(&self) -> u32 {
+        1 + self.pool_images.len() as u32
     }
 
     /// The pool's brick edge: `VOLUME_BRICK` of the kernels, 0 when dense.

@@ -28,6 +28,36 @@ pub const BRICK_CONSTANT_ID: u32 = 27;
 /// Bit 31 of an entry's second word: the brick is one value.
 const CONSTANT: u32 = 1 << 31;
 
+/// Most images one pool spans (`volume_tex` and `pool_1` to `pool_3` in
+/// glsl/common/bricks.glsl): a pool past one allocation is split.
+pub const MAX_POOL_IMAGES: usize = 4;
+
+/// `constant_id` of `POOL_IMAGES` in `glsl/common/volume.glsl`.
+pub const POOL_IMAGES_CONSTANT_ID: u32 = 28;
+
+/// What bounds one pool image: its side in texels, and its bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoolLimits {
+    /// `maxImageDimension3D`.
+    pub max_image_dim: u32,
+    /// `maxMemoryAllocationSize`, and the device-local heap where smaller.
+    pub max_image_bytes: u64,
+}
+
+impl PoolLimits {
+    pub fn of(info: &crate::gpu::DeviceInfo) -> Self {
+        let heap = if info.device_local_bytes > 0 {
+            info.device_local_bytes
+        } else {
+            u64::MAX
+        };
+        PoolLimits {
+            max_image_dim: info.max_image_dimension_3d,
+            max_image_bytes: info.max_memory_allocation_size.min(heap),
+        }
+    }
+}
+
 /// Where a volume's voxels live on the device.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Storage {
@@ -98,6 +128,8 @@ pub struct PoolStats {
     pub pool_bytes: u64,
     pub table_bytes: u64,
     pub dense_bytes: u64,
+    /// Images the pool spans.
+    pub images: u32,
 }
 
 impl PoolStats {
@@ -110,9 +142,13 @@ impl PoolStats {
 impl std::fmt::Display for PoolStats {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+        let images = match self.images {
+            1 => String::new(),
+            n => format!(" in {n} images"),
+        };
         write!(
             f,
-            "bricks of {}^3: {} stored, {} constant; pool {:.1} MiB + table {:.2} MiB = {:.3}x dense ({:.1} MiB)",
+            "bricks of {}^3: {} stored, {} constant; pool {:.1} MiB{images} + table {:.2} MiB = {:.3}x dense ({:.1} MiB)",
             self.edge,
             self.stored,
             self.constant,
@@ -133,8 +169,8 @@ pub struct PoolLayout {
     pub dims: [u32; 3],
     /// Bricks per axis.
     pub counts: [u32; 3],
-    /// Per brick, x fastest: `[x | y << 16, z | constant << 31]`, the pool
-    /// texel its slot (or its one value) starts at.
+    /// Per brick, x fastest: `[x | y << 16, z | image << 16 | constant << 31]`,
+    /// the pool image and texel its slot (or its one value) starts at.
     pub table: Vec<[u32; 2]>,
     /// The brick each stored slot holds, in slot order.
     pub stored: Vec<u32>,
@@ -142,8 +178,10 @@ pub struct PoolLayout {
     pub values: Vec<Vec<u8>>,
     /// Bricks left out because they are one value.
     pub constant_bricks: u64,
-    /// Slots per axis of the pool image.
-    pub slots: [u32; 3],
+    /// Slots per axis of each pool image.
+    pub images: Vec<[u32; 3]>,
+    /// Slots of every image but the last (a full image's).
+    pub per_image: u64,
     /// Bytes per texel.
     pub texel_bytes: u64,
 }
@@ -151,9 +189,10 @@ pub struct PoolLayout {
 impl PoolLayout {
     /// Plans the pool of a volume of `dims` whose texels (`texel_bytes`
     /// each, x fastest) are `data`: finds the constant bricks (in parallel)
-    /// and places the rest. The pool's extent is checked against
-    /// `maxImageDimension3D`; its bytes are checked by the caller.
-    pub fn plan(data: &[u8], dims: [u32; 3], texel_bytes: u64, edge: u32, max_image_dim: u32) -> Result<Self> {
+    /// and places the rest, in as many images as `limits` need (at most
+    /// `MAX_POOL_IMAGES`, else an error naming the limit).
+    pub fn plan(data: &[u8], dims: [u32; 3], texel_bytes: u64, edge: u32, limits: PoolLimits) -> Result<Self> {
+        let max_image_dim = limits.max_image_dim;
         // Table entries hold 16-bit x and y.
         let most = max_image_dim.clamp(2, 1 << 16) - 1;
         if edge == 0 || edge > most {
@@ -217,7 +256,7 @@ impl PoolLayout {
         let slot = (edge + 1) as u64;
         let value_slots = (values.len() as u64).div_ceil(slot.pow(3));
         let slot_count = (stored.len() as u64 + value_slots).max(1);
-        let slots = slot_grid(slot_count, edge, max_image_dim)?;
+        let (images, per_image) = image_grids(slot_count, edge, texel_bytes, limits)?;
         let mut layout = PoolLayout {
             edge,
             dims,
@@ -226,30 +265,39 @@ impl PoolLayout {
             stored,
             constant_bricks: one_value.iter().filter(|v| v.is_some()).count() as u64,
             values,
-            slots,
+            images,
+            per_image,
             texel_bytes,
         };
         layout.table = place
             .iter()
             .map(|&(constant, k)| {
-                let at = if constant {
+                let (image, at) = if constant {
                     layout.value_texel(k)
                 } else {
-                    layout.slot_origin(k)
+                    layout.slot_origin(k as u64)
                 };
-                [at[0] | at[1] << 16, at[2] | if constant { CONSTANT } else { 0 }]
+                [
+                    at[0] | at[1] << 16,
+                    at[2] | image << 16 | if constant { CONSTANT } else { 0 },
+                ]
             })
             .collect();
         Ok(layout)
     }
 
-    /// The pool image's extent in texels.
-    pub fn extent(&self) -> [u32; 3] {
-        self.slots.map(|s| s * (self.edge + 1))
+    /// Pool image `k`'s extent in texels.
+    pub fn extent(&self, k: usize) -> [u32; 3] {
+        self.images[k].map(|s| s * (self.edge + 1))
+    }
+
+    /// Bytes of pool image `k`.
+    pub fn image_bytes(&self, k: usize) -> u64 {
+        self.extent(k).iter().fold(self.texel_bytes, |acc, &e| acc * e as u64)
     }
 
     pub fn pool_bytes(&self) -> u64 {
-        self.extent().iter().fold(self.texel_bytes, |acc, &e| acc * e as u64)
+        (0..self.images.len()).map(|k| self.image_bytes(k)).sum()
     }
 
     pub fn table_bytes(&self) -> u64 {
@@ -270,53 +318,50 @@ impl PoolLayout {
             pool_bytes: self.pool_bytes(),
             table_bytes: self.table_bytes(),
             dense_bytes: self.dense_bytes(),
+            images: self.images.len() as u32,
         }
     }
 
-    /// The pool `volume` would take in bricks of `edge` on a device whose
-    /// 3D images reach `max_image_dim` texels a side.
-    pub fn of_volume(volume: &super::Volume, edge: u32, max_image_dim: u32) -> Result<Self> {
+    /// The pool `volume` would take in bricks of `edge` within `limits`.
+    pub fn of_volume(volume: &super::Volume, edge: u32, limits: PoolLimits) -> Result<Self> {
         let (kind, n) = (super::channels::common_kind(volume), volume.channel_count());
         let texel = super::channels::texel_bytes(kind, n);
-        Self::plan(
-            &super::channels::texel_data(volume),
-            volume.dims,
-            texel,
-            edge,
-            max_image_dim,
-        )
+        Self::plan(&super::channels::texel_data(volume), volume.dims, texel, edge, limits)
     }
 
-    /// The first texel of slot `s`.
-    fn slot_origin(&self, s: u32) -> [u32; 3] {
-        let [gx, gy, _] = self.slots;
+    /// The image and first texel of slot `s`.
+    fn slot_origin(&self, s: u64) -> (u32, [u32; 3]) {
+        let (k, s) = ((s / self.per_image) as usize, s % self.per_image);
+        let [gx, gy, _] = self.images[k].map(|g| g as u64);
         let e = self.edge + 1;
-        [s % gx * e, s / gx % gy * e, s / (gx * gy) * e]
+        (k as u32, [s % gx, s / gx % gy, s / (gx * gy)].map(|c| c as u32 * e))
     }
 
     /// The texel holding distinct value `k`: value slots follow the stored
     /// bricks' slots, (edge + 1)^3 values each, x fastest.
-    fn value_texel(&self, k: u32) -> [u32; 3] {
+    fn value_texel(&self, k: u32) -> (u32, [u32; 3]) {
         let e = self.edge + 1;
         let per = e * e * e;
-        let o = self.slot_origin(self.stored.len() as u32 + k / per);
+        let (image, o) = self.slot_origin(self.stored.len() as u64 + (k / per) as u64);
         let r = k % per;
-        [o[0] + r % e, o[1] + r / e % e, o[2] + r / (e * e)]
+        (image, [o[0] + r % e, o[1] + r / e % e, o[2] + r / (e * e)])
     }
 
-    /// Writes the pool image's texels (x fastest, `pool_bytes` long) from
-    /// the volume's `data`, one pool plane per task.
-    pub fn fill(&self, data: &[u8], out: &mut [u8]) {
-        let [ex, ey, _] = self.extent();
+    /// Writes pool image `k`'s texels (x fastest, `image_bytes(k)` long)
+    /// from the volume's `data`, one pool plane per task.
+    pub fn fill(&self, k: usize, data: &[u8], out: &mut [u8]) {
+        let [ex, ey, _] = self.extent(k);
+        let [gx, gy, _] = self.images[k];
         let tb = self.texel_bytes as usize;
         let e = self.edge + 1;
         let plane = ex as usize * ey as usize * tb;
         let per_slot = (e * e * e) as usize;
+        let first_slot = k as u64 * self.per_image;
         out.par_chunks_mut(plane).enumerate().for_each(|(pz, out)| {
             let (sz, lz) = (pz as u32 / e, pz as u32 % e);
-            for sy in 0..self.slots[1] {
-                for sx in 0..self.slots[0] {
-                    let s = sx + self.slots[0] * (sy + self.slots[1] * sz);
+            for sy in 0..gy {
+                for sx in 0..gx {
+                    let s = first_slot + (sx + gx * (sy + gy * sz)) as u64;
                     for ly in 0..e {
                         let row = ((sy * e + ly) as usize * ex as usize + (sx * e) as usize) * tb;
                         let dst = &mut out[row..row + e as usize * tb];
@@ -373,23 +418,46 @@ fn copy_row(data: &[u8], dims: [u32; 3], tb: usize, v: [u64; 3], dst: &mut [u8])
     }
 }
 
-/// The slot grid of `count` slots of (edge + 1)^3 texels: near a cube, so
-/// the last, partly filled layer wastes little, and no side longer than the
-/// device's 3D images allow (`max_dim` texels).
-fn slot_grid(count: u64, edge: u32, max_dim: u32) -> Result<[u32; 3]> {
-    let per_axis = (max_dim / (edge + 1)).max(1) as u64;
+/// The slot grid of `count` slots: near a cube, so the last, partly filled
+/// layer wastes little; None where a side would pass `per_axis`.
+fn slot_grid(count: u64, per_axis: u64) -> Option<[u64; 3]> {
     let gx = ((count as f64).cbrt().ceil() as u64).clamp(1, per_axis);
     let gy = ((count.div_ceil(gx) as f64).sqrt().ceil() as u64).clamp(1, per_axis);
     let gz = count.div_ceil(gx * gy);
-    if gz > per_axis {
+    (gz <= per_axis).then_some([gx, gy, gz])
+}
+
+/// The slot grids of the pool images holding `count` slots of (edge + 1)^3
+/// texels within `limits`, and the slots of a full image: one image while
+/// it fits, else full images of the most slots one may hold, then the rest.
+fn image_grids(count: u64, edge: u32, texel_bytes: u64, limits: PoolLimits) -> Result<(Vec<[u32; 3]>, u64)> {
+    let slot_bytes = ((edge + 1) as u64).pow(3) * texel_bytes;
+    let per_axis = (limits.max_image_dim / (edge + 1)).max(1) as u64;
+    let fits = |g: [u64; 3]| g.iter().product::<u64>() * slot_bytes <= limits.max_image_bytes;
+    let to_u32 = |g: [u64; 3]| g.map(|c| c as u32);
+    if let Some(g) = slot_grid(count, per_axis).filter(|&g| fits(g)) {
+        return Ok((vec![to_u32(g)], g.iter().product()));
+    }
+    // A full image: the most slots within both limits, rounded down per axis.
+    let most = (limits.max_image_bytes / slot_bytes).min(per_axis.pow(3)).max(1);
+    let gx = ((most as f64).cbrt().floor() as u64).clamp(1, per_axis);
+    let gy = (((most / gx) as f64).sqrt().floor() as u64).clamp(1, per_axis);
+    let gz = (most / (gx * gy)).clamp(1, per_axis);
+    let full = [gx, gy, gz];
+    let per_image = full.iter().product::<u64>();
+    let images = count.div_ceil(per_image);
+    if images > MAX_POOL_IMAGES as u64 || !fits(full) {
         return Err(Error::invalid(
             "brick pool",
-            format!("of {count} slots of {}^3 texels", edge + 1),
+            format!("of {} bytes", count * slot_bytes),
             format!(
-                "needs a 3D image {} texels deep, over maxImageDimension3D = {max_dim}; the volume varies in too many bricks for one pool",
-                gz * (edge + 1) as u64
+                "needs {images} 3D images of at most {} bytes (maxMemoryAllocationSize, device-local heap) and {} texels a side (maxImageDimension3D); one pool spans at most {MAX_POOL_IMAGES}",
+                limits.max_image_bytes, limits.max_image_dim
             ),
         ));
     }
-    Ok([gx as u32, gy as u32, gz as u32])
+    let mut grids = vec![to_u32(full); images as usize - 1];
+    let rest = count - per_image * (images - 1);
+    grids.push(to_u32(slot_grid(rest, per_axis).filter(|&g| fits(g)).unwrap_or(full)));
+    Ok((grids, per_image))
 }

@@ -50,8 +50,9 @@ pub struct Fixture {
     pub ctx: Context,
     pub renderer: Renderer,
     pub builder: Builder,
-    /// Volumes go up in bricks of this edge (bricked storage); None: dense.
-    pub bricks: Option<u32>,
+    /// Volumes go up in bricks of this edge (bricked storage), each pool
+    /// image within these limits; None: dense.
+    pub bricks: Option<(u32, lacuna::volume::PoolLimits)>,
 }
 
 /// A volume and TF uploaded, with the volume's ranges.
@@ -78,8 +79,18 @@ impl Fixture {
 
     /// As `new`, uploading volumes in bricks of `edge` voxels.
     pub fn with_bricks(edge: u32) -> Self {
+        let fx = Self::new();
+        let limits = lacuna::volume::PoolLimits::of(fx.ctx.info());
         Fixture {
-            bricks: Some(edge),
+            bricks: Some((edge, limits)),
+            ..fx
+        }
+    }
+
+    /// As `with_bricks`, each pool image also within `limits`.
+    pub fn with_bricks_within(edge: u32, limits: lacuna::volume::PoolLimits) -> Self {
+        Fixture {
+            bricks: Some((edge, limits)),
             ..Self::new()
         }
     }
@@ -88,7 +99,7 @@ impl Fixture {
     /// reads with the `given` values.
     pub fn prepare<'a>(&self, volume: &'a Volume, tf: &'a TransferFunction, given: Given) -> Prepared<'a> {
         let mut gv = match self.bricks {
-            Some(edge) => GpuVolume::upload_bricks(&self.ctx, volume, edge).unwrap(),
+            Some((edge, limits)) => GpuVolume::upload_bricks_within(&self.ctx, volume, edge, limits).unwrap(),
             None => GpuVolume::upload(&self.ctx, volume).unwrap(),
         };
         // Shaded and iso views read the gradient; the manual filter reads

@@ -288,6 +288,9 @@ impl KdGpuBuilder {
                     transfer_max: Binding::Storage(&tf.max_table),
                     boxes: Binding::Storage(&boxes),
                     brick_table: Binding::TexelBuffer(gv.brick_table().view()),
+                    pool_1: Binding::Sampled(gv.pool_views()[0], gv.sampler),
+                    pool_2: Binding::Sampled(gv.pool_views()[1], gv.sampler),
+                    pool_3: Binding::Sampled(gv.pool_views()[2], gv.sampler),
                 }
                 .list(),
                 bytemuck::bytes_of(&push),
