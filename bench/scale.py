@@ -20,6 +20,9 @@ from pathlib import Path
 
 VOLUMES = ["nbody", "turbulence"]
 SIZES = [256, 512, 1024, 2048]
+# turbulence:2048 varies everywhere: its pool (1.1x of 8 GiB) passes four
+# images of lavapipe's 2 GiB, so it is refused after minutes of generating.
+LARGEST = {"nbody": 2048, "turbulence": 1024}
 STORAGES = ["dense", "bricks"]
 ACCELS = ["naive", "auto"]
 
@@ -95,7 +98,7 @@ def main():
     a = ap.parse_args()
     rows = {}
     for size in a.sizes:
-        for vol in VOLUMES:
+        for vol in [v for v in VOLUMES if size <= LARGEST[v]]:
             for storage in STORAGES:
                 for accel in ACCELS:
                     r = run(a.binary, f"{vol}:{size}", storage, accel, 512)
@@ -106,7 +109,7 @@ def main():
     lines = ["| volume | storage | pool / dense | load s | upload s | naive frame ms | auto build ms | auto frame ms | speed-up | peak host GiB |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for vol in VOLUMES:
-        for size in a.sizes:
+        for size in [s for s in a.sizes if s <= LARGEST[vol]]:
             for storage in STORAGES:
                 n = rows.get((vol, size, storage, "naive"), {})
                 au = rows.get((vol, size, storage, "auto"), {})

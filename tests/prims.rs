@@ -203,9 +203,25 @@ fn radix_sort_rejects_bad_key_bits() {
 fn brick_minmax_matches_the_cpu_brick_grid() {
     let ctx = gpu();
     let mm = BrickMinMax::new(&ctx).unwrap();
-    for spec in ["turbulence:37x29x41", "vessels:40", "nbody:9x20x3"] {
+    // Dense, and bricks of 5 and 16 (runs of a row per brick, constant
+    // bricks read once).
+    let cases = [
+        ("turbulence:37x29x41", 0),
+        ("vessels:40", 0),
+        ("nbody:9x20x3", 0),
+        ("vessels:40", 5),
+        ("nbody:45x38x41", 16),
+        ("turbulence:37x29x41", 5),
+    ];
+    for (spec, edge) in cases {
         let v = Volume::load(spec, &LoadOptions::default()).unwrap();
-        let gv = GpuVolume::upload(&ctx, &v).unwrap();
+        let gv = match edge {
+            0 => GpuVolume::upload(&ctx, &v).unwrap(),
+            e => GpuVolume::upload_bricks(&ctx, &v, e).unwrap(),
+        };
+        if let (Some(pool), "vessels:40") = (gv.pool, spec) {
+            assert!(pool.constant > 0, "the constant-brick path runs: {pool}");
+        }
         for apron in [0, 1] {
             let cpu = BrickGrid::new(&v, 8, apron);
             let out = buffer(&ctx, &vec![0; cpu.len() * 2]);
@@ -214,7 +230,7 @@ fn brick_minmax_matches_the_cpu_brick_grid() {
             for (i, r) in cpu.ranges.iter().enumerate() {
                 assert!(
                     (got[2 * i] - r[0]).abs() < 1e-6 && (got[2 * i + 1] - r[1]).abs() < 1e-6,
-                    "{spec} apron {apron} brick {i}: {:?} vs {r:?}",
+                    "{spec} bricks {edge} apron {apron} brick {i}: {:?} vs {r:?}",
                     &got[2 * i..2 * i + 2]
                 );
             }

@@ -36,16 +36,34 @@ void main() {
     ivec3 hi_voxel = ivec3(pc.dims.xyz) - 1;
     vec4 mn = vec4(3.4e38);
     vec4 mx = vec4(-3.4e38);
+    int edge = int(pc.pool_brick);
     for (int z = lo.z; z <= hi.z; ++z) {
         for (int y = lo.y; y <= hi.y; ++y) {
-            for (int x = lo.x; x <= hi.x; ++x) {
-                vec4 t = stored_voxel(ivec3(x, y, z), hi_voxel, int(pc.pool_brick));
-                for (int c = 0; c < 4; ++c) {
-                    if (!is_nan(t[c])) {
-                        mn[c] = min(mn[c], t[c]);
-                        mx[c] = max(mx[c], t[c]);
+            // Bricked storage: one table read per run of a row inside one
+            // brick, and one fetch for a run of a constant brick.
+            int x = lo.x;
+            while (x <= hi.x) {
+                ivec3 v = ivec3(x, y, z);
+                int last = hi.x;
+                ivec4 at = ivec4(v, 2);
+                if (edge != 0) {
+                    at = brick_texel(v, hi_voxel, edge);
+                    last = min(hi.x, (x / edge) * edge + edge - 1);
+                    if ((at.w & 1) == 0) {
+                        last = x; // one value: its first voxel stands for the run
                     }
                 }
+                for (int i = 0; i <= last - x; ++i) {
+                    vec4 t = edge == 0 ? texelFetch(volume_tex, v + ivec3(i, 0, 0), 0)
+                                       : pool_fetch(at.w >> 1, at.xyz + ivec3(i, 0, 0));
+                    for (int c = 0; c < 4; ++c) {
+                        if (!is_nan(t[c])) {
+                            mn[c] = min(mn[c], t[c]);
+                            mx[c] = max(mx[c], t[c]);
+                        }
+                    }
+                }
+                x = edge != 0 ? min(hi.x, (x / edge) * edge + edge - 1) + 1 : hi.x + 1;
             }
         }
     }

@@ -17,7 +17,7 @@ use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
-use crate::gpu::Context;
+use crate::gpu::{Context, DeviceInfo};
 use crate::render::{Filter, FrameBuilder, FrameDesc, Projection, Renderer, Scene};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
@@ -84,8 +84,14 @@ struct Loaded {
 }
 
 /// The data set: its step `time` when it is a series.
-fn load(ctx: &Context, series: &Series, time: Option<[u32; 2]>, label: String, tf: Option<&str>) -> Result<Loaded> {
-    let volume = series.load(time.map_or(0, |[first, _]| first), Some(ctx.info()))?;
+fn load(
+    device: Option<&DeviceInfo>,
+    series: &Series,
+    time: Option<[u32; 2]>,
+    label: String,
+    tf: Option<&str>,
+) -> Result<Loaded> {
+    let volume = series.load(time.map_or(0, |[first, _]| first), device)?;
     let tf = match tf {
         Some(spec) => TransferFunction::parse_channels(spec)?,
         None => volume.default_transfer_function()?,
@@ -294,18 +300,26 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
         let series = Series::open(&ds.volume, &LoadOptions::default());
-        let loaded =
-            match series.and_then(|s| load(ctx, &s, ds.time, ds.label(config)?, ds.tf.as_deref()).map(|l| (s, l))) {
-                Ok(l) => l,
-                Err(Error::Io { path, .. }) if ds.optional => {
-                    let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
-                    progress.note(&note);
-                    out.notes.push(note);
-                    progress.step(structures.len() as u64 * (per_structure + ds.new_steps()));
-                    continue;
-                }
-                Err(e) => return Err(e),
-            };
+        let loaded = match series.and_then(|s| {
+            load(
+                ds.storage()?.load_limits(ctx.info()),
+                &s,
+                ds.time,
+                ds.label(config)?,
+                ds.tf.as_deref(),
+            )
+            .map(|l| (s, l))
+        }) {
+            Ok(l) => l,
+            Err(Error::Io { path, .. }) if ds.optional => {
+                let note = format!("skipped optional data set {} (missing {})", ds.volume, path.display());
+                progress.note(&note);
+                out.notes.push(note);
+                progress.step(structures.len() as u64 * (per_structure + ds.new_steps()));
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
         let (series, loaded) = loaded;
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let mut gv = GpuVolume::upload_as(ctx, v, ds.storage()?)?;

@@ -105,7 +105,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = std::time::Instant::now();
-    let volume = series.load(args.volume.time, Some(ctx.info()))?;
+    let volume = series.load(args.volume.time, args.volume.storage.load_limits(ctx.info()))?;
     let load_ms = clock.elapsed().as_secs_f64() * 1e3;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;

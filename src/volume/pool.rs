@@ -76,6 +76,12 @@ impl Storage {
     /// Bricks of the default edge.
     pub const BRICKS: Storage = Storage::Bricks { edge: POOL_BRICK };
 
+    /// The device whose image limits a load checks before reading voxels:
+    /// dense storage's only (bricks are checked once the pool is planned).
+    pub fn load_limits(self, info: &crate::gpu::DeviceInfo) -> Option<&crate::gpu::DeviceInfo> {
+        (self == Storage::Dense).then_some(info)
+    }
+
     /// `dense`, `bricks`, `bricks:EDGE` or `auto`.
     pub fn parse(s: &str) -> Result<Self> {
         let bad = || {
