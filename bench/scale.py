@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """The cost curve of volume size: nbody and turbulence at growing sizes,
 dense and bricked storage, naive and auto, each a whole `lacuna render`
-process (load, upload, ranges and build, one frame) under /usr/bin/time for
-its peak host memory. Writes a Markdown table and an SVG plot.
+process (load, upload, ranges and build, one timed build and frame after an
+untimed one) under /usr/bin/time for its peak host memory. Writes a
+Markdown table (OUT.table.md) and an SVG plot (OUT.svg).
 
     cargo build --release
-    python3 bench/scale.py --out docs/results/scale  # scale.md, scale.svg
+    python3 bench/scale.py --out docs/results/scale
 
 A size the machine refuses (host memory, device limits) is a row with the
 error line: that is a result too.
@@ -29,7 +30,10 @@ ACCELS = ["naive", "auto"]
 
 def run(binary, volume, storage, accel, size):
     cmd = ["/usr/bin/time", "-v", binary, "render", volume, "--storage", storage,
-           "--accel", accel, "--size", f"{size}x{size}", "--filter", "manual"]
+           "--accel", accel, "--size", f"{size}x{size}", "--filter", "manual",
+           # One timed frame and build after an untimed one: lavapipe compiles a
+           # kernel over its first frames.
+           "--warmup", "1", "--repeat", "1"]
     t = time.monotonic()
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.monotonic() - t

@@ -85,6 +85,15 @@ fn candidates_are_what_the_device_holds() {
             "{notes:?}"
         );
     }
+    // Where neither cell 4 nor 8 fits (2048^3 in cells of 8 is 256^3
+    // cells, 201 MB of row stacks), the finest coarser map that fits.
+    let (c, notes) = choose::candidates(info, [2048; 3], &Mode::Composite).unwrap();
+    if 256u64.pow(3) * 12 > range && 128u64.pow(3) * 12 <= range {
+        assert_eq!(c[1].label, "distance (cell 16)", "{notes:?}");
+        assert!(notes
+            .iter()
+            .any(|n| n == "a distance map at cell 16: the finest that fits"));
+    }
     // Average frames read every sample: naive only.
     let (c, _) = choose::candidates(info, [64; 3], &Mode::Average).unwrap();
     assert_eq!(c.len(), 1);

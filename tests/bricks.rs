@@ -11,15 +11,16 @@ use lacuna::accel::Structure;
 use lacuna::frame::{diff, Frame};
 use lacuna::render::{Filter, FrameDesc, Mode};
 use lacuna::volume::{GpuVolume, LoadOptions, PoolLayout, PoolLimits, Storage, VoxelData, VoxelType, POOL_BRICK};
+use lacuna::{TransferFunction, Volume};
 
 /// Limits of `max_image_dim` texels a side and `max_image_bytes` an image.
 fn limits(max_image_dim: u32, max_image_bytes: u64) -> PoolLimits {
     PoolLimits {
         max_image_dim,
         max_image_bytes,
+        max_table_entries: i32::MAX as u64,
     }
 }
-use lacuna::{TransferFunction, Volume};
 
 fn load(spec: &str) -> Volume {
     Volume::load(spec, &LoadOptions::default()).unwrap()
@@ -76,7 +77,7 @@ fn brick_texel(p: &PoolLayout, v: [i64; 3]) -> ([i64; 3], i64, usize) {
 #[test]
 fn every_cell_read_through_the_table_is_the_dense_cell() {
     let (texels, dims) = slabs();
-    // Edges from 1 to past the dims; 4 also split over images of at most
+    // Edges from 1 to the longest side; 4 also split over images of at most
     // 50 slots of 5^3 u16 texels.
     let cases = [
         (1, u64::MAX),
@@ -84,7 +85,7 @@ fn every_cell_read_through_the_table_is_the_dense_cell() {
         (4, 50 * 250),
         (5, u64::MAX),
         (8, u64::MAX),
-        (30, u64::MAX),
+        (29, u64::MAX),
     ];
     for (edge, max_bytes) in cases {
         let p = PoolLayout::plan(&texels, dims, 2, edge, limits(4096, max_bytes)).unwrap();
@@ -169,6 +170,22 @@ fn a_pool_past_the_device_limits_is_an_error_naming_the_limit() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("invalid brick edge '0'"), "{e}");
+    let e = PoolLayout::plan(&texels, dims, 2, 30, limits(4096, u64::MAX))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("is longer than the volume's longest side (29 voxels)"),
+        "{e}"
+    );
+    let few = PoolLimits {
+        max_table_entries: 100,
+        ..limits(4096, u64::MAX)
+    };
+    let e = PoolLayout::plan(&texels, dims, 2, 4, few).unwrap_err().to_string();
+    assert!(
+        e.contains("of 240 bricks of 4^3") && e.contains("maxTexelBufferElements"),
+        "{e}"
+    );
     let e = PoolLayout::plan(&texels[1..], dims, 2, 4, limits(4096, u64::MAX))
         .unwrap_err()
         .to_string();

@@ -44,16 +44,17 @@ void main() {
             int x = lo.x;
             while (x <= hi.x) {
                 ivec3 v = ivec3(x, y, z);
-                int last = hi.x;
-                ivec4 at = ivec4(v, 2);
+                // The run: the rest of the row (dense), or of this brick.
+                int run_end = edge == 0 ? hi.x : min(hi.x, (x / edge) * edge + edge - 1);
+                int read_end = run_end;
+                ivec4 at = ivec4(0);
                 if (edge != 0) {
                     at = brick_texel(v, hi_voxel, edge);
-                    last = min(hi.x, (x / edge) * edge + edge - 1);
                     if ((at.w & 1) == 0) {
-                        last = x; // one value: its first voxel stands for the run
+                        read_end = x; // one value: its first voxel stands for the run
                     }
                 }
-                for (int i = 0; i <= last - x; ++i) {
+                for (int i = 0; i <= read_end - x; ++i) {
                     vec4 t = edge == 0 ? texelFetch(volume_tex, v + ivec3(i, 0, 0), 0)
                                        : pool_fetch(at.w >> 1, at.xyz + ivec3(i, 0, 0));
                     for (int c = 0; c < 4; ++c) {
@@ -63,7 +64,7 @@ void main() {
                         }
                     }
                 }
-                x = edge != 0 ? min(hi.x, (x / edge) * edge + edge - 1) + 1 : hi.x + 1;
+                x = run_end + 1;
             }
         }
     }

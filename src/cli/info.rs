@@ -52,9 +52,15 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
                 Storage::Bricks { edge } => edge,
                 _ => POOL_BRICK,
             };
-            let pool = PoolLayout::of_volume(&v, edge, limits)?.stats();
             let storage = Storage::Bricks { edge };
-            println!("storage  {pool} (--storage {storage}, on {})", ctx.info().name);
+            match PoolLayout::of_volume(&v, edge, limits) {
+                Ok(pool) => println!(
+                    "storage  {} (--storage {storage}, on {})",
+                    pool.stats(),
+                    ctx.info().name
+                ),
+                Err(e) => println!("storage  --storage {storage} does not fit {}: {e}", ctx.info().name),
+            }
         }
         Err(e) => println!("storage  bricked storage not planned: {e}"),
     }

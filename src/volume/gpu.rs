@@ -83,8 +83,20 @@ fn plan_pool(
     let limits = PoolLimits {
         max_image_dim: limits.max_image_dim.min(device.max_image_dim),
         max_image_bytes: limits.max_image_bytes.min(device.max_image_bytes),
+        max_table_entries: limits.max_table_entries.min(device.max_table_entries),
     };
     let layout = PoolLayout::plan(bytes, volume.dims, texel, edge, limits)?;
+    // Each image is within the heap; all of them must be too.
+    let info = ctx.info();
+    if info.device_local_bytes > 0 {
+        let total = layout.pool_bytes() + layout.table_bytes();
+        info.check(
+            format!("brick pool of {} ({total} bytes)", volume.name),
+            "device-local heap size",
+            total,
+            info.device_local_bytes,
+        )?;
+    }
     for k in 0..layout.images.len() {
         let what = format!("brick pool image {k} of {}", volume.name);
         check_image3d_of(ctx.info(), &what, layout.extent(k), texel)?;

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Brick edge of the pool in voxels: 16. Measured on nbody:512 against 8
-/// and 32 (docs/results/scale.md): frames cost the same within noise, the
+/// and 32 (README, "Storage"): frames cost the same within noise, the
 /// pool is 0.35x, 0.43x and 0.54x dense for 8, 16 and 32, and the border
 /// layer costs 42 %, 20 % and 10 % on data without constant bricks; 16
 /// keeps the table 1/512 of the voxel count (8: 1/64).
@@ -42,6 +42,9 @@ pub struct PoolLimits {
     pub max_image_dim: u32,
     /// `maxMemoryAllocationSize`, and the device-local heap where smaller.
     pub max_image_bytes: u64,
+    /// Bricks the table may hold: `maxTexelBufferElements`, and the
+    /// shaders' signed 32-bit index.
+    pub max_table_entries: u64,
 }
 
 impl PoolLimits {
@@ -54,6 +57,7 @@ impl PoolLimits {
         PoolLimits {
             max_image_dim: info.max_image_dimension_3d,
             max_image_bytes: info.max_memory_allocation_size.min(heap),
+            max_table_entries: (info.max_texel_buffer_elements as u64).min(i32::MAX as u64),
         }
     }
 }
@@ -218,9 +222,28 @@ impl PoolLayout {
                 ),
             ));
         }
+        let longest = dims.iter().copied().max().unwrap_or(1);
+        if edge > longest {
+            return Err(Error::invalid(
+                "brick edge",
+                edge.to_string(),
+                format!("is longer than the volume's longest side ({longest} voxels)"),
+            ));
+        }
         let counts = dims.map(|d| d.div_ceil(edge));
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
-        crate::limits::check_host("brick table", total, 16)?;
+        if total > limits.max_table_entries {
+            return Err(Error::invalid(
+                "brick table",
+                format!("of {total} bricks of {edge}^3"),
+                format!(
+                    "exceeds the {} entries a table may hold (maxTexelBufferElements); take larger bricks",
+                    limits.max_table_entries
+                ),
+            ));
+        }
+        // The scan's per-brick value, place, entry and slot.
+        crate::limits::check_host("brick table", total, 40)?;
         let tb = texel_bytes as usize;
         let one_value: Vec<Option<&[u8]>> = (0..total)
             .into_par_iter()
@@ -346,11 +369,12 @@ impl PoolLayout {
     /// The texel holding distinct value `k`: value slots follow the stored
     /// bricks' slots, (edge + 1)^3 values each, x fastest.
     fn value_texel(&self, k: u32) -> (u32, [u32; 3]) {
-        let e = self.edge + 1;
-        let per = e * e * e;
-        let (image, o) = self.slot_origin(self.stored.len() as u64 + (k / per) as u64);
+        let e = (self.edge + 1) as u64;
+        let (k, per) = (k as u64, e * e * e);
+        let (image, o) = self.slot_origin(self.stored.len() as u64 + k / per);
         let r = k % per;
-        (image, [o[0] + r % e, o[1] + r / e % e, o[2] + r / (e * e)])
+        let local = [r % e, r / e % e, r / (e * e)].map(|c| c as u32);
+        (image, [o[0] + local[0], o[1] + local[1], o[2] + local[2]])
     }
 
     /// Writes pool image `k`'s texels (x fastest, `image_bytes(k)` long)
@@ -361,13 +385,13 @@ impl PoolLayout {
         let tb = self.texel_bytes as usize;
         let e = self.edge + 1;
         let plane = ex as usize * ey as usize * tb;
-        let per_slot = (e * e * e) as usize;
+        let per_slot = (e as usize).pow(3);
         let first_slot = k as u64 * self.per_image;
         out.par_chunks_mut(plane).enumerate().for_each(|(pz, out)| {
             let (sz, lz) = (pz as u32 / e, pz as u32 % e);
             for sy in 0..gy {
                 for sx in 0..gx {
-                    let s = first_slot + (sx + gx * (sy + gy * sz)) as u64;
+                    let s = first_slot + sx as u64 + gx as u64 * (sy as u64 + gy as u64 * sz as u64);
                     for ly in 0..e {
                         let row = ((sy * e + ly) as usize * ex as usize + (sx * e) as usize) * tb;
                         let dst = &mut out[row..row + e as usize * tb];
@@ -376,7 +400,8 @@ impl PoolLayout {
                             let v = [lo[0], lo[1] + ly, lo[2] + lz].map(|c| c as u64);
                             copy_row(data, self.dims, tb, v, dst);
                         } else {
-                            let first = (s as usize - self.stored.len()) * per_slot + (lz * e * e + ly * e) as usize;
+                            let (lz, ly, e) = (lz as usize, ly as usize, e as usize);
+                            let first = (s as usize - self.stored.len()) * per_slot + lz * e * e + ly * e;
                             for (lx, t) in dst.chunks_exact_mut(tb).enumerate() {
                                 if let Some(v) = self.values.get(first + lx) {
                                     t.copy_from_slice(v);
@@ -438,7 +463,8 @@ fn slot_grid(count: u64, per_axis: u64) -> Option<[u64; 3]> {
 /// it fits, else full images of the most slots one may hold, then the rest.
 fn image_grids(count: u64, edge: u32, texel_bytes: u64, limits: PoolLimits) -> Result<(Vec<[u32; 3]>, u64)> {
     let slot_bytes = ((edge + 1) as u64).pow(3) * texel_bytes;
-    let per_axis = (limits.max_image_dim / (edge + 1)).max(1) as u64;
+    // Table entries hold 16-bit x and y.
+    let per_axis = (limits.max_image_dim.min(1 << 16) / (edge + 1)).max(1) as u64;
     let fits = |g: [u64; 3]| g.iter().product::<u64>() * slot_bytes <= limits.max_image_bytes;
     let to_u32 = |g: [u64; 3]| g.map(|c| c as u32);
     if let Some(g) = slot_grid(count, per_axis).filter(|&g| fits(g)) {

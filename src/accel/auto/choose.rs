@@ -20,6 +20,11 @@ pub const DISTANCE_CELLS: [u32; 2] = [4, 8];
 /// Macro-cell grid cells auto tries.
 pub const GRID_CELLS: [u32; 2] = [8, 16];
 
+/// Coarser distance map cells, finest first: where no map of
+/// [`DISTANCE_CELLS`] fits the device (nbody:2048 on lavapipe's 128 MiB
+/// buffers), auto tries the finest of these that does.
+pub const COARSE_DISTANCE_CELLS: [u32; 3] = [16, 32, 64];
+
 /// Grids of at most this many cells (64^3) get octant maps, which march
 /// faster (their boxes reach further ahead: 30 % at 256^3, cell 4) but
 /// whose transform costs several times the cube map's (91 against 23 ms
@@ -89,15 +94,37 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec
     if matches!(mode, Mode::Average) {
         return Ok((out, notes));
     }
-    for cell in DISTANCE_CELLS {
+    let distance_map = |cell: u32| -> Result<Option<Candidate>> {
         let n = cells_of(dims, cell);
         let octants = n <= OCTANT_CELLS;
         match distance::check_fits(info, n, octants) {
-            Ok(()) => out.push(Candidate::new(if octants { OCTANT } else { DISTANCE }, Some(cell))?),
-            Err(_) => notes.push(format!(
+            Ok(()) => Ok(Some(Candidate::new(
+                if octants { OCTANT } else { DISTANCE },
+                Some(cell),
+            )?)),
+            Err(_) => Ok(None),
+        }
+    };
+    let mut fine_map = false;
+    for cell in DISTANCE_CELLS {
+        match distance_map(cell)? {
+            Some(c) => {
+                out.push(c);
+                fine_map = true;
+            }
+            None => notes.push(format!(
                 "no distance map at cell {cell}: over maxStorageBufferRange ({} cells)",
-                n
+                cells_of(dims, cell)
             )),
+        }
+    }
+    if !fine_map {
+        for cell in COARSE_DISTANCE_CELLS {
+            if let Some(c) = distance_map(cell)? {
+                notes.push(format!("a distance map at cell {cell}: the finest that fits"));
+                out.push(c);
+                break;
+            }
         }
     }
     for cell in GRID_CELLS {
