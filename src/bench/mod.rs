@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod config;
 pub mod contract;
+mod dataset;
 mod frame_timer;
 pub mod hard;
 mod plots;

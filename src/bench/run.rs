@@ -8,6 +8,7 @@
 //! and early-termination thresholds, against a manually filtered reference.
 
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
+use super::dataset::load;
 use super::frame_timer::FrameTimer;
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
@@ -17,11 +18,10 @@ use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
-use crate::gpu::{Context, DeviceInfo};
+use crate::gpu::Context;
 use crate::render::{Filter, FrameBuilder, FrameDesc, Projection, Renderer, Scene};
-use crate::tf::{GpuTransferFunction, TransferFunction};
+use crate::tf::GpuTransferFunction;
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
-use crate::Volume;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -74,34 +74,6 @@ fn params_of(s: &StructureSpec) -> BTreeMap<String, String> {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect()
-}
-
-struct Loaded {
-    /// The data set's label (`DatasetConfig::label`).
-    spec: String,
-    volume: Volume,
-    tf: TransferFunction,
-}
-
-/// The data set: its step `time` when it is a series.
-fn load(
-    device: Option<&DeviceInfo>,
-    series: &Series,
-    time: Option<[u32; 2]>,
-    label: String,
-    tf: Option<&str>,
-) -> Result<Loaded> {
-    let volume = series.load(time.map_or(0, |[first, _]| first), device)?;
-    let tf = match tf {
-        Some(spec) => TransferFunction::parse_channels(spec)?,
-        None => volume.default_transfer_function()?,
-    };
-    tf.check_channels(volume.channel_count())?;
-    Ok(Loaded {
-        spec: label,
-        tf,
-        volume,
-    })
 }
 
 /// The speed-against-error sweep of one data set: what it sweeps.

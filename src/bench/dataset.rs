@@ -1,0 +1,36 @@
+//! A bench data set loaded: its volume (step FIRST of a series) and its
+//! transfer function, one per channel.
+
+use crate::error::Result;
+use crate::gpu::DeviceInfo;
+use crate::tf::TransferFunction;
+use crate::volume::Series;
+use crate::Volume;
+
+pub struct Loaded {
+    /// The data set's label (`DatasetConfig::label`).
+    pub spec: String,
+    pub volume: Volume,
+    pub tf: TransferFunction,
+}
+
+/// The data set: its step `time` when it is a series.
+pub fn load(
+    device: Option<&DeviceInfo>,
+    series: &Series,
+    time: Option<[u32; 2]>,
+    label: String,
+    tf: Option<&str>,
+) -> Result<Loaded> {
+    let volume = series.load(time.map_or(0, |[first, _]| first), device)?;
+    let tf = match tf {
+        Some(spec) => TransferFunction::parse_channels(spec)?,
+        None => volume.default_transfer_function()?,
+    };
+    tf.check_channels(volume.channel_count())?;
+    Ok(Loaded {
+        spec: label,
+        tf,
+        volume,
+    })
+}
