@@ -391,6 +391,9 @@ fn interfaces_are_read_from_the_spirv() {
             ("volume_cells", texels),
             ("gradient_cells", texels),
             ("brick_table", texels),
+            ("pool_1", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("pool_2", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("pool_3", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("cells", d)
         ]
     );

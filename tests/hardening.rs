@@ -92,7 +92,8 @@ fn sizes_are_checked_before_allocation() {
     );
     // The device's limits, from the spec, before the volume is generated:
     // a volume of one image dimension's maximum squared, deep enough to
-    // pass maxMemoryAllocationSize.
+    // pass maxMemoryAllocationSize, stored dense (auto would store it in
+    // bricks and render it).
     let ctx = common::gpu();
     let info = ctx.info().clone();
     drop(ctx);
@@ -100,7 +101,7 @@ fn sizes_are_checked_before_allocation() {
     let depth = (info.max_memory_allocation_size / (side * side) + 1).min(side);
     let spec = format!("menger:{side}x{side}x{depth}");
     if side * side * depth > info.max_memory_allocation_size {
-        let (code, stderr) = run(&["render", &spec, "--validate"]);
+        let (code, stderr) = run(&["render", &spec, "--storage", "dense", "--validate"]);
         assert_eq!(code, Some(2), "{stderr}");
         assert!(
             stderr.contains("exceeds the device limit") || stderr.contains("bytes of host memory"),
