@@ -111,35 +111,35 @@ vec4 volume_texels(ivec3 i, ivec3 hi) {
     return VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
 }
 
-#ifdef BRICK_TABLE_BINDING
-// The eight pool texels of the cell whose low corner is voxel i (clamped):
-// each voxel's clamped index lies in the slot of the brick of the first,
-// one table read per cell. Texel b is at[0] + at[1] * corner(b), in pool
-// image `image`.
-void cell_pool_texels(ivec3 i, ivec3 hi, out ivec3 at[2], out int image) {
-    ivec3 lo = clamp(i, ivec3(0), hi);
-    ivec4 t = brick_texel(lo, hi, int(VOLUME_BRICK));
-    at[0] = t.xyz;
-    at[1] = (clamp(i + 1, ivec3(0), hi) - lo) * (t.w & 1);
-    image = t.w >> 1;
-}
-#endif
-
 ivec3 cell_corner(int b) {
     return ivec3(b & 1, (b >> 1) & 1, (b >> 2) & 1);
 }
+
+#ifdef BRICK_TABLE_BINDING
+// Every channel of the eight voxels of the cell whose low corner is voxel i
+// (clamped), from the pool, in stored units, x fastest: each voxel's
+// clamped index lies in the slot of the brick of the first, so one table
+// read serves the cell.
+void cell_pool_voxels(ivec3 i, ivec3 hi, out vec4 c[8]) {
+    ivec3 lo = clamp(i, ivec3(0), hi);
+    ivec4 t = brick_texel(lo, hi, int(VOLUME_BRICK));
+    ivec3 step = (clamp(i + 1, ivec3(0), hi) - lo) * (t.w & 1);
+    for (int b = 0; b < 8; ++b) {
+        vec4 v = pool_fetch(t.w >> 1, t.xyz + step * cell_corner(b));
+        c[b] = VOLUME_KIND == KIND_FLOAT ? v : round(v * volume_unit());
+    }
+}
+#endif
 
 // The eight voxels of the cell whose low corner is voxel i (clamped to the
 // volume), in stored units, x fastest: [0] c000, [1] c100, ... [7] c111.
 void cell_voxels(ivec3 i, ivec3 hi, out float c[8]) {
 #ifdef BRICK_TABLE_BINDING
     if (VOLUME_BRICK != 0u) {
-        ivec3 at[2];
-        int image;
-        cell_pool_texels(i, hi, at, image);
+        vec4 t[8];
+        cell_pool_voxels(i, hi, t);
         for (int b = 0; b < 8; ++b) {
-            float t = pool_fetch(image, at[0] + at[1] * cell_corner(b)).r;
-            c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
+            c[b] = t[b].r;
         }
         return;
     }
@@ -220,13 +220,7 @@ vec4 sample_manual_channels(vec3 p, ivec3 hi) {
     vec4 c[8];
 #ifdef BRICK_TABLE_BINDING
     if (VOLUME_BRICK != 0u) {
-        ivec3 at[2];
-        int image;
-        cell_pool_texels(i, hi, at, image);
-        for (int b = 0; b < 8; ++b) {
-            vec4 t = pool_fetch(image, at[0] + at[1] * cell_corner(b));
-            c[b] = VOLUME_KIND == KIND_FLOAT ? t : round(t * volume_unit());
-        }
+        cell_pool_voxels(i, hi, c);
     } else
 #endif
     for (int b = 0; b < 8; ++b) {
