@@ -47,6 +47,7 @@ struct March {
     Ray ray;
     float t_enter; // entry into the volume box (0 when the eye is inside)
     float t_exit;  // exit from the volume box
+    float t_last;  // where the whole ray ends: its last sample's weight reaches here
     float dt;
     int k;         // next lattice index to sample
     int k_end;     // the first lattice index at or past t_exit
@@ -105,11 +106,18 @@ int lattice_index(March m, float t) {
     return k;
 }
 
-// Ends the march at t_exit (no later than the box exit).
-void march_set_exit(inout March m, float t_exit) {
+// Stops the march at t_exit, its last sample weighted as before: a
+// segment's end (march_pixel), not the ray's.
+void march_set_stop(inout March m, float t_exit) {
     m.t_exit = t_exit;
     m.done = !(m.t_enter < m.t_exit);
     m.k_end = m.done ? 0 : lattice_index(m, m.t_exit);
+}
+
+// Ends the ray at t_exit (no later than the box exit).
+void march_set_exit(inout March m, float t_exit) {
+    march_set_stop(m, t_exit);
+    m.t_last = t_exit;
 }
 
 // Sets up the march for a ray; false when the ray misses the volume box.
@@ -186,6 +194,18 @@ vec2 clip_interval(Ray r) {
     return keep;
 }
 
+// The part of the ray inside the rank's block (params.segment_lo/hi). A ray
+// lying in a face two blocks share belongs to the block above the face only
+// (intersect_box keeps it in both), so no sample is taken twice.
+vec2 segment_interval(Ray r) {
+    for (int a = 0; a < 3; ++a) {
+        if (r.dir[a] == 0.0 && r.org[a] == params.segment_hi[a] && params.segment_hi[a] < float(params.dims[a])) {
+            return vec2(1.0, -1.0);
+        }
+    }
+    return intersect_box(r, params.segment_lo, params.segment_hi);
+}
+
 // Advances k to the first lattice point at or past t (never backwards).
 void march_skip_to(inout March m, float t) {
     if (m.done) {
@@ -223,6 +243,14 @@ bool march_pixel(uvec2 px, out March m) {
         vec2 keep = clip_interval(m.ray);
         march_set_exit(m, min(m.t_exit, keep.y));
         march_skip_to(m, keep.x);
+    }
+    // A data-parallel rank's part of the ray (src/parallel): the lattice
+    // samples inside its block, each weighted as the whole ray weights it,
+    // so the blocks' parts blended front to back are the whole ray.
+    if (hit && params.segment != 0u) {
+        vec2 part = segment_interval(m.ray);
+        march_set_stop(m, min(m.t_exit, part.y));
+        march_skip_to(m, part.x);
     }
     return !m.done;
 }
@@ -428,12 +456,12 @@ void march_full_sample(inout March m) {
     }
 }
 
-// Takes the ray's last sample (k = k_end - 1), weighted by its length up to
-// the box exit, and ends the march.
+// Takes the march's last sample (k = k_end - 1), weighted by its length up
+// to the ray's end (a full step where only a segment ends), and ends the march.
 void march_last_sample(inout March m) {
     count_iteration(COUNT_SAMPLE);
     float t = lattice_t(m, m.k);
-    precise float w = min(m.dt, m.t_exit - t);
+    precise float w = min(m.dt, m.t_last - t);
     take_sample(m, t, w, false);
     m.k += 1;
     m.done = true;

@@ -65,6 +65,12 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     uint channel_pad1;
     vec4 channel_lo;
     vec4 channel_scale;
+    // A data-parallel rank's block (src/parallel), when segment == 1: only
+    // the lattice samples inside [segment_lo, segment_hi] (voxel space).
+    vec3 segment_lo;
+    uint segment;
+    vec3 segment_hi;
+    uint segment_pad;
     // Per pixel (row-major), when depth_limits == 1: the ray's t where the
     // host's opaque surface is, written by glsl/render/depth_limit.comp.
     float t_max[];

@@ -210,6 +210,7 @@ pub struct FrameDesc {
     shading: Option<Shading>,
     clip: Clip,
     jitter: bool,
+    segment: Option<[[f32; 3]; 2]>,
 }
 
 /// Sets a [`FrameDesc`]'s fields; `build` checks them all.
@@ -235,6 +236,7 @@ impl FrameDesc {
             shading: None,
             clip: Clip::default(),
             jitter: false,
+            segment: None,
         })
     }
 
@@ -388,6 +390,10 @@ impl FrameDesc {
             channel_pad1: 0,
             channel_lo: [norm[0], 0.0, 0.0, 0.0],
             channel_scale: [norm[1], 0.0, 0.0, 0.0],
+            segment_lo: self.segment.unwrap_or_default()[0],
+            segment: self.segment.is_some() as u32,
+            segment_hi: self.segment.unwrap_or_default()[1],
+            segment_pad: 0,
         })
     }
 
@@ -436,6 +442,10 @@ impl FrameDesc {
         }
         if self.jitter {
             out.push(("jitter", "on".into()));
+        }
+        if let Some([lo, hi]) = self.segment {
+            let axes: Vec<String> = (0..3).map(|a| format!("{}:{}", lo[a], hi[a])).collect();
+            out.push(("segment", axes.join(",")));
         }
         out
     }
@@ -518,6 +528,16 @@ impl FrameBuilder {
         self
     }
 
+    /// One part of a data-parallel frame (`crate::parallel`): only the
+    /// lattice samples inside the box `[lo, hi]` (voxel space), each
+    /// weighted as the whole frame weights it, so the parts of boxes that
+    /// tile the volume, blended front to back, are the whole frame. Unlike
+    /// a crop, the box does not end the ray: its last sample keeps its step.
+    pub fn segment(mut self, segment: Option<[[f32; 3]; 2]>) -> Self {
+        self.0.segment = segment;
+        self
+    }
+
     /// The frame, every field checked.
     pub fn build(self) -> Result<FrameDesc> {
         let d = self.0;
@@ -552,6 +572,15 @@ impl FrameBuilder {
             depth.check(d.width, d.height)?;
         }
         mode::validate(&d.mode, &d.shading, d.ert)?;
+        if let Some([lo, hi]) = d.segment {
+            if !lo.iter().chain(&hi).all(|v| v.is_finite()) || (0..3).any(|a| lo[a] > hi[a]) {
+                return Err(Error::invalid(
+                    "segment",
+                    format!("{lo:?} to {hi:?}"),
+                    "must be finite, LO <= HI per axis",
+                ));
+            }
+        }
         Ok(d)
     }
 }

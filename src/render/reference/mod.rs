@@ -275,9 +275,19 @@ impl<'a> Tracer<'a> {
                 k += 1;
             }
         }
+        // A rank's segment stops the samples, not the ray (`march_pixel`).
+        let mut t_stop = t_exit;
+        if p.segment != 0 {
+            let (lo, hi) = segment_interval(p, org, dir);
+            t_stop = t_stop.min(hi);
+            while lattice_t(k) < lo {
+                k += 1;
+            }
+        }
         let samples = LatticeSamples {
             t_enter,
             t_exit,
+            t_stop,
             dt,
             jitter,
             k,
@@ -394,12 +404,24 @@ impl<'a> Tracer<'a> {
     }
 }
 
+/// As `segment_interval` in `glsl/common/lattice.glsl`: the ray's part in
+/// the rank's block, a ray lying in a shared face in the block above it.
+fn segment_interval(p: &RenderParams, org: Vec3, dir: Vec3) -> (f32, f32) {
+    let in_face = (0..3).any(|a| dir[a] == 0.0 && org[a] == p.segment_hi[a] && p.segment_hi[a] < p.dims[a] as f32);
+    if in_face {
+        return (1.0, -1.0);
+    }
+    intersect_box(org, dir, Vec3::from(p.segment_lo), Vec3::from(p.segment_hi))
+}
+
 /// A ray's lattice samples from index `k` on, as the GLSL march takes
 /// them: (t_k, the path length it stands for). Only the ray's last sample
 /// is shortened (`glsl/common/lattice.glsl`).
 struct LatticeSamples {
     t_enter: f32,
     t_exit: f32,
+    /// A segment's end (<= t_exit): no sample at or past it.
+    t_stop: f32,
     dt: f32,
     jitter: f32,
     k: u32,
@@ -418,7 +440,7 @@ impl Iterator for LatticeSamples {
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     fn next(&mut self) -> Option<(f32, f32)> {
         let t = self.t(self.k);
-        if !(t < self.t_exit) {
+        if !(t < self.t_stop) {
             return None;
         }
         let last = !(self.t(self.k + 1) < self.t_exit);
