@@ -10,7 +10,7 @@
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
-use super::pool::{PoolLayout, PoolLimits, PoolStats, Storage};
+use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, Volume, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Staging, TexelBuffer};
@@ -78,6 +78,7 @@ fn plan_pool(
     (texel, bytes): (u64, &[u8]),
     edge: u32,
     limits: PoolLimits,
+    keep: Option<BrickBox>,
 ) -> Result<PoolLayout> {
     let device = PoolLimits::of(ctx.info());
     let limits = PoolLimits {
@@ -85,7 +86,7 @@ fn plan_pool(
         max_image_bytes: limits.max_image_bytes.min(device.max_image_bytes),
         max_table_entries: limits.max_table_entries.min(device.max_table_entries),
     };
-    let layout = PoolLayout::plan(bytes, volume.dims, texel, edge, limits)?;
+    let layout = PoolLayout::plan_kept(bytes, volume.dims, texel, edge, limits, keep)?;
     // Each image is within the heap; all of them must be too.
     let info = ctx.info();
     if info.device_local_bytes > 0 {
@@ -163,8 +164,26 @@ impl GpuVolume {
     /// As `upload_bricks`, each pool image also within `limits` (to leave
     /// a device room, or to split a pool on purpose).
     pub fn upload_bricks_within(ctx: &Context, volume: &Volume, edge: u32, limits: PoolLimits) -> Result<Self> {
+        Self::upload_pool(ctx, volume, edge, limits, None)
+    }
+
+    /// Uploads only the bricks of `volume` inside `keep` (one rank's block
+    /// and its ghost bricks, `crate::parallel`) and waits: samples inside
+    /// `keep` less one brick equal the whole volume's; outside, the pool
+    /// holds stand-in values no frame cropped to the block reads.
+    pub fn upload_bricks_kept(ctx: &Context, volume: &Volume, edge: u32, keep: BrickBox) -> Result<Self> {
+        Self::upload_pool(ctx, volume, edge, PoolLimits::of(ctx.info()), Some(keep))
+    }
+
+    fn upload_pool(
+        ctx: &Context,
+        volume: &Volume,
+        edge: u32,
+        limits: PoolLimits,
+        keep: Option<BrickBox>,
+    ) -> Result<Self> {
         let (format, texel, bytes) = texels(volume);
-        let layout = plan_pool(ctx, volume, (texel, &bytes), edge, limits)?;
+        let layout = plan_pool(ctx, volume, (texel, &bytes), edge, limits, keep)?;
         // One image's texels on the host at a time.
         let mut images = Vec::with_capacity(layout.images.len());
         for k in 0..layout.images.len() {
@@ -197,7 +216,7 @@ impl GpuVolume {
     ) -> Result<(Self, Staging)> {
         let (format, texel, bytes) = texels(volume);
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
-            let layout = plan_pool(ctx, volume, (texel, &bytes), edge, PoolLimits::of(ctx.info()))?;
+            let layout = plan_pool(ctx, volume, (texel, &bytes), edge, PoolLimits::of(ctx.info()), None)?;
             let mut images = Vec::with_capacity(layout.images.len());
             let mut staged: Vec<Staging> = Vec::new();
             for k in 0..layout.images.len() {

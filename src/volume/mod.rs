@@ -32,7 +32,8 @@ pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 pub use gpu::{resolve_storage, GpuVolume};
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 pub use pool::{
-    PoolLayout, PoolLimits, PoolStats, Storage, BRICK_CONSTANT_ID, MAX_POOL_IMAGES, POOL_BRICK, POOL_IMAGES_CONSTANT_ID,
+    BrickBox, PoolLayout, PoolLimits, PoolStats, Storage, BRICK_CONSTANT_ID, MAX_POOL_IMAGES, POOL_BRICK,
+    POOL_IMAGES_CONSTANT_ID,
 };
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use series::{Series, StepNorm};

@@ -170,6 +170,9 @@ impl std::fmt::Display for PoolStats {
     }
 }
 
+/// A box of bricks: `[lo, hi]`, `lo` inclusive and `hi` exclusive per axis.
+pub type BrickBox = [[u32; 3]; 2];
+
 /// The pool of one volume: which bricks are stored where, and the table.
 #[derive(Clone, Debug)]
 pub struct PoolLayout {
@@ -202,6 +205,22 @@ impl PoolLayout {
     /// and places the rest, in as many images as `limits` need (at most
     /// `MAX_POOL_IMAGES`, else an error naming the limit).
     pub fn plan(data: &[u8], dims: [u32; 3], texel_bytes: u64, edge: u32, limits: PoolLimits) -> Result<Self> {
+        Self::plan_kept(data, dims, texel_bytes, edge, limits, None)
+    }
+
+    /// As `plan`, storing only the bricks inside `keep` (bricks `lo`
+    /// inclusive to `hi` exclusive per axis): one rank's block and its
+    /// ghost bricks (`crate::parallel`). A brick outside is left out as if
+    /// it were one value, its first texel's: samples there are never
+    /// taken, and a range over it still holds only values of the volume.
+    pub fn plan_kept(
+        data: &[u8],
+        dims: [u32; 3],
+        texel_bytes: u64,
+        edge: u32,
+        limits: PoolLimits,
+        keep: Option<BrickBox>,
+    ) -> Result<Self> {
         let max_image_dim = limits.max_image_dim;
         // Table entries hold 16-bit x and y.
         let most = max_image_dim.clamp(2, 1 << 16) - 1;
@@ -251,6 +270,14 @@ impl PoolLayout {
                 let lo = brick_origin(b, counts, edge);
                 let first = texel_index(lo, dims) * tb;
                 let value = &data[first..first + tb];
+                if keep.is_some_and(|[klo, khi]| {
+                    (0..3).any(|a| {
+                        let c = lo[a] / edge;
+                        c < klo[a] || c >= khi[a]
+                    })
+                }) {
+                    return Some(value);
+                }
                 let mut same = true;
                 for_each_slot_row(lo, dims, edge, |start, len| {
                     same = same
