@@ -20,6 +20,10 @@ use std::path::{Path, PathBuf};
 #[path = "build/reflect.rs"]
 mod reflect;
 
+#[cfg(feature = "mpi")]
+#[path = "build/mpi.rs"]
+mod mpi;
+
 /// Resolves `#include "x.glsl"` against `glsl/common/` (and the including
 /// file's own folder), recording every file it opens for `rerun-if-changed`.
 struct Includer {
@@ -243,6 +247,8 @@ fn main() {
     let common = glsl.join("common");
     println!("cargo:rerun-if-changed=glsl");
     println!("cargo:rerun-if-changed=build/reflect.rs");
+    #[cfg(feature = "mpi")]
+    mpi::build(&root);
 
     let mut shaders = Vec::new();
     collect(&glsl, "comp", &mut shaders);

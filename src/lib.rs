@@ -6,8 +6,8 @@
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
 // Layers, each using only those below it: cli (the binary) -> bench ->
-// render / octree -> accel -> prims / spatial / scene -> volume / tf / frame
-// -> gpu; limits and error are used by all.
+// render / octree -> accel -> prims / spatial / scene -> desc / parallel ->
+// volume / tf / frame -> gpu; limits and error are used by all.
 pub mod accel;
 #[cfg(feature = "bench")]
 pub mod bench;
@@ -17,6 +17,7 @@ pub mod frame;
 pub mod gpu;
 pub mod limits;
 pub mod octree;
+pub mod parallel;
 pub mod prims;
 pub mod render;
 pub mod scene;

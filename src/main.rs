@@ -53,6 +53,8 @@ fn reset_sigpipe() {
 
 fn main() -> ExitCode {
     reset_sigpipe();
+    // Under mpirun, an error every rank meets alike is said by rank 0 alone.
+    let echo = lacuna::parallel::launched_rank().is_none_or(|r| r == 0);
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -80,11 +82,41 @@ fn main() -> ExitCode {
                     .collect();
                 line = format!("{line} {}", listed.join(", "));
             }
-            eprintln!("{}", line.trim_end());
+            if echo {
+                eprintln!("{}", line.trim_end());
+            }
             return ExitCode::from(2);
         }
     };
-    let result = match &cli.command {
+    let ranks = lacuna::parallel::across_ranks(lacuna::parallel::launched_ranks(), lacuna::parallel::ENABLED);
+    let (result, echo) = match (&cli.command, ranks) {
+        (_, Err(e)) => (Err(e), echo),
+        // The ranks agree which of them says why (`cli/ranks.rs`).
+        #[cfg(feature = "mpi")]
+        (Command::Render(a), Ok(true)) => (cli::ranks::run(a), true),
+        (_, Ok(true)) => (
+            Err(lacuna::Error::invalid(
+                "command",
+                "under mpirun",
+                "only `lacuna render` renders across ranks",
+            )),
+            echo,
+        ),
+        (command, Ok(false)) => (dispatch(command), true),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            if echo {
+                eprintln!("error: {e}");
+            }
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn dispatch(command: &Command) -> lacuna::Result<ExitCode> {
+    match command {
         Command::Render(a) => cli::render::run(a),
         Command::Info(a) => cli::info::run(a),
         Command::Export(a) => cli::export::run(a),
@@ -95,12 +127,5 @@ fn main() -> ExitCode {
         Command::Octree(a) => cli::octree::run(a),
         #[cfg(feature = "view")]
         Command::View(a) => cli::view::run(a),
-    };
-    match result {
-        Ok(code) => code,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
-        }
     }
 }

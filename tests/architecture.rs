@@ -28,6 +28,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "desc", "error", "gpu", "limits", "octree", "prims", "spatial", "tf", "volume",
         ],
     ),
+    ("parallel", &["desc", "error", "volume"]),
     (
         "render",
         &["accel", "desc", "error", "frame", "gpu", "limits", "tf", "volume"],

@@ -8,6 +8,8 @@ pub mod export;
 pub mod info;
 pub mod look;
 pub mod octree;
+#[cfg(feature = "mpi")]
+pub mod ranks;
 pub mod render;
 pub mod scene;
 #[cfg(feature = "view")]

@@ -15,43 +15,43 @@ use std::process::ExitCode;
 #[derive(Args)]
 pub struct RenderArgs {
     #[command(flatten)]
-    volume: VolumeArgs,
+    pub(super) volume: VolumeArgs,
     /// Transfer function: ramp:LO:HI[:A], band:LO:HI[:A], spike:C:W[:A] or a ParaView .json (default: the generator's).
     /// Several channels: one --tf per channel in order, or one for all.
     #[arg(long)]
-    tf: Vec<TransferFunction>,
+    pub(super) tf: Vec<TransferFunction>,
     /// Empty space skipping structure (default auto: chosen per volume and TF).
     #[arg(long, default_value = "auto", value_parser = AccelParser)]
-    accel: Accel,
+    pub(super) accel: Accel,
     #[command(flatten)]
-    structure: StructureArgs,
+    pub(super) structure: StructureArgs,
     #[command(flatten)]
-    model: ModelArgs,
+    pub(super) model: ModelArgs,
     /// Image size WxH.
     #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
-    size: (u32, u32),
+    pub(super) size: (u32, u32),
     #[command(flatten)]
-    frame: FrameArgs,
+    pub(super) frame: FrameArgs,
     /// Time this many builds and frames and report per-phase medians.
     #[arg(long, default_value_t = 1)]
-    repeat: u32,
+    pub(super) repeat: u32,
     /// Untimed builds and frames first (lavapipe compiles shaders on first use).
     #[arg(long, default_value_t = 0)]
-    warmup: u32,
+    pub(super) warmup: u32,
     /// Write the frame: .exr (OpenEXR, RGBA f32, linear, premultiplied) or .png (8-bit sRGB, straight alpha).
     #[arg(long)]
-    out: Option<PathBuf>,
+    pub(super) out: Option<PathBuf>,
     /// PNG only: composite the frame over this sRGB colour (hex RRGGBB) and write it opaque.
     #[arg(long, requires = "out")]
-    background: Option<Background>,
+    pub(super) background: Option<Background>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
-    validate: bool,
+    pub(super) validate: bool,
 }
 
 impl RenderArgs {
     /// Every option checked, before any file is read or GPU work is done.
-    fn options(&self) -> Result<(Params, FrameDesc, Option<FrameFormat>)> {
+    pub(super) fn options(&self) -> Result<(Params, FrameDesc, Option<FrameFormat>)> {
         let params = self.structure.params(self.accel)?;
         let desc = self.frame.desc(self.size)?;
         if self.repeat == 0 {
@@ -74,7 +74,7 @@ impl RenderArgs {
 
 /// Builds the structure `warmup + repeat` times; returns the last and the
 /// per-phase medians of the timed builds (None for naive).
-fn build(
+pub(super) fn build(
     builder: &Builder,
     args: &RenderArgs,
     input: &BuildInput,
@@ -96,6 +96,30 @@ fn build(
     }
     let structure = last.ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
     Ok((structure, Some(Timings::median(&times[args.warmup as usize..]))))
+}
+
+/// Renders `warmup + repeat` frames; the last, and the medians of the timed ones.
+pub(super) fn frames(
+    renderer: &Renderer,
+    scene: Scene,
+    desc: &FrameDesc,
+    args: &RenderArgs,
+) -> Result<(Frame, Timings)> {
+    let mut frames = Vec::new();
+    for _ in 0..args.warmup + args.repeat {
+        frames.push(renderer.render(scene, desc)?);
+    }
+    let timings = Timings::median(
+        &frames[args.warmup as usize..]
+            .iter()
+            .map(|f| f.1.clone())
+            .collect::<Vec<_>>(),
+    );
+    let frame = frames
+        .pop()
+        .map(|f| f.0)
+        .ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
+    Ok((frame, timings))
 }
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
@@ -132,20 +156,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         volume: &gpu_volume,
         tf: &lut,
     };
-    let mut frames = Vec::new();
-    for _ in 0..args.warmup + args.repeat {
-        frames.push(renderer.render(scene, &desc)?);
-    }
-    let timings = Timings::median(
-        &frames[args.warmup as usize..]
-            .iter()
-            .map(|f| f.1.clone())
-            .collect::<Vec<_>>(),
-    );
-    let mut frame = frames
-        .pop()
-        .map(|f| f.0)
-        .ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
+    let (mut frame, timings) = frames(&renderer, scene, &desc, args)?;
 
     let info = ctx.info();
     let (width, height) = desc.size();

@@ -5,7 +5,15 @@
 //! - `cargo xtask test [ARGS]`: those, the validation layer, the ch2 MRI,
 //!   and a virtual X server with the libraries the viewer's window needs,
 //!   then `cargo test ARGS`;
-//! - `cargo xtask setup [test]`: only the packages.
+//! - `cargo xtask setup [test|mpi]`: only the packages (mpi: MPI and IceT
+//!   for the `mpi` feature; `test` includes them, and runs `cargo test
+//!   --features mpi`).
+//!
+//! IceT comes with Debian's `paraview` package, which pulls in Qt and two
+//! hundred other packages; its two small libraries need only libc and MPI.
+//! So `setup mpi` downloads `paraview` and `paraview-dev` with `apt-get
+//! download` (no root needed), unpacks them with `dpkg-deb -x` and keeps
+//! IceT's headers and libraries in `target/icet`, where build.rs finds them.
 //!
 //! Packages (Debian's names) that `dpkg-query` does not list as installed
 //! are installed with `apt-get` when this runs as root (or with `sudo -n`
@@ -34,6 +42,10 @@ const TEST: &[&str] = &[
     "libxkbcommon-x11-0",
 ];
 
+/// What the `mpi` feature needs from packages: `mpirun` and `mpicc` with
+/// `mpi.h` (OpenMPI).
+const MPI: &[&str] = &["openmpi-bin", "libopenmpi-dev"];
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (task, rest) = match args.split_first() {
@@ -42,11 +54,16 @@ fn main() -> ExitCode {
     };
     let result = match task {
         "run" => setup(RUN).and_then(|()| cargo(&["run", "--release", "--"], strip_dashes(rest))),
-        "test" => setup(&[RUN, TEST].concat()).and_then(|()| cargo(&["test"], rest)),
-        "setup" if rest.first().map(String::as_str) == Some("test") => setup(&[RUN, TEST].concat()),
+        "test" => setup(&[RUN, TEST, MPI].concat())
+            .and_then(|()| icet())
+            .and_then(|()| cargo(&["test", "--features", "mpi"], rest)),
+        "setup" if rest.first().map(String::as_str) == Some("test") => {
+            setup(&[RUN, TEST, MPI].concat()).and_then(|()| icet())
+        }
+        "setup" if rest.first().map(String::as_str) == Some("mpi") => setup(MPI).and_then(|()| icet()),
         "setup" => setup(RUN),
         _ => {
-            eprintln!("usage: cargo xtask run [-- LACUNA ARGS] | test [CARGO TEST ARGS] | setup [test]");
+            eprintln!("usage: cargo xtask run [-- LACUNA ARGS] | test [CARGO TEST ARGS] | setup [test|mpi]");
             return ExitCode::from(2);
         }
     };
@@ -156,4 +173,85 @@ fn cargo(fixed: &[&str], args: &[String]) -> Result<(), u8> {
             Err(1)
         }
     }
+}
+
+/// IceT's headers and libraries in `target/icet` (see the module comment),
+/// unless they are there already or `paraview-dev` is installed.
+fn icet() -> Result<(), u8> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = root.join("target").join("icet");
+    if dir.join("include").join("IceT.h").is_file() || system_icet() {
+        return Ok(());
+    }
+    let debs = root.join("target").join("icet-debs");
+    let fail = |what: &str| {
+        eprintln!("error: cannot fetch IceT ({what}); install paraview-dev, or set LACUNA_ICET_DIR");
+        1
+    };
+    let _ = std::fs::remove_dir_all(&debs);
+    std::fs::create_dir_all(&debs).map_err(|_| fail("cannot create target/icet-debs"))?;
+    eprintln!("fetching IceT from Debian's paraview and paraview-dev packages into target/icet");
+    let downloaded = Command::new("apt-get")
+        .args(["download", "-qq", "paraview", "paraview-dev"])
+        .current_dir(&debs)
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !downloaded {
+        return Err(fail("apt-get download paraview paraview-dev failed"));
+    }
+    let unpacked = debs.join("root");
+    for entry in std::fs::read_dir(&debs).map_err(|_| fail("no packages"))?.flatten() {
+        let path = entry.path();
+        if path.extension().is_some_and(|e| e == "deb")
+            && !Command::new("dpkg-deb")
+                .arg("-x")
+                .arg(&path)
+                .arg(&unpacked)
+                .status()
+                .is_ok_and(|s| s.success())
+        {
+            return Err(fail("dpkg-deb -x failed"));
+        }
+    }
+    let mut found = (0, 0);
+    let (include, lib) = (dir.join("include"), dir.join("lib"));
+    std::fs::create_dir_all(&include)
+        .and_then(|()| std::fs::create_dir_all(&lib))
+        .map_err(|_| fail("cannot create target/icet"))?;
+    let mut stack = vec![unpacked.clone()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let path = entry.path();
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if path.is_dir() {
+                stack.push(path);
+            } else if ["IceT.h", "IceTConfig.h", "IceTMPI.h"].contains(&name.as_str()) {
+                std::fs::copy(&path, include.join(&name)).map_err(|_| fail("cannot copy a header"))?;
+                found.0 += 1;
+            } else if (name.starts_with("libvtkIceTCore") || name.starts_with("libvtkIceTMPI")) && name.contains(".so")
+            {
+                std::fs::copy(&path, lib.join(&name)).map_err(|_| fail("cannot copy a library"))?;
+                found.1 += 1;
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&debs);
+    if found.0 < 3 || found.1 < 2 {
+        let _ = std::fs::remove_dir_all(&dir);
+        return Err(fail("the packages hold no IceT headers or libraries"));
+    }
+    Ok(())
+}
+
+/// Whether `paraview-dev` put IceT's headers under /usr/include.
+fn system_icet() -> bool {
+    std::fs::read_dir("/usr/include")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .any(|e| {
+            e.file_name().to_string_lossy().starts_with("paraview-")
+                && e.path().join("vtkicet/src/include/IceT.h").is_file()
+        })
 }

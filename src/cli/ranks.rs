@@ -1,0 +1,201 @@
+//! `mpirun -np N lacuna render ...` (feature `mpi`): each rank renders its
+//! block of the volume, IceT composites the ranks' frames in visibility
+//! order, rank 0 prints and writes the frame (`lacuna::parallel`).
+
+use super::render::{build, describe, frames, look_notes, RenderArgs};
+use super::{context, tf_for, validation_verdict};
+use lacuna::accel::BuildInput;
+use lacuna::frame::Frame;
+use lacuna::gpu::Context;
+use lacuna::parallel::{Decomposition, World};
+use lacuna::render::{FrameDesc, Mode, Renderer, Scene};
+use lacuna::volume::{GpuVolume, Storage, POOL_BRICK};
+use lacuna::{Error, Result, Timings, TransferFunction};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// What one rank made: its frame of its block, and what rank 0 reports.
+struct Part {
+    ctx: Context,
+    frame: Frame,
+    order: Vec<u32>,
+    timings: Timings,
+    /// Per rank, gathered on rank 0: load, upload and build wall ms, march
+    /// GPU ms, bricks stored.
+    stats: [f64; 5],
+    report: Vec<String>,
+    desc: FrameDesc,
+}
+
+/// The frame of this rank's block, on every rank; a failure on any rank
+/// stops every rank before IceT (whose collectives would wait for it).
+pub fn run(args: &RenderArgs) -> Result<ExitCode> {
+    let world = World::init()?;
+    let part = render_block(args, &world);
+    match (world.first_failed(part.is_ok()), part) {
+        (None, Ok(part)) => finish(args, &world, part),
+        (None, Err(e)) => Err(e),
+        // The lowest failing rank says why, before any rank exits (mpirun
+        // ends the others at the first non-zero exit).
+        (Some(first), part) => {
+            if let (true, Err(e)) = (first == world.rank, part) {
+                eprintln!("error: {e} (rank {} of {})", world.rank, world.size);
+            }
+            world.barrier();
+            Ok(ExitCode::from(2))
+        }
+    }
+}
+
+fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
+    let (params, desc, _) = args.options()?;
+    if !matches!(desc.mode(), Mode::Composite) {
+        return Err(Error::invalid(
+            "mode",
+            desc.mode().name(),
+            "does not composite across ranks: IceT blends premultiplied colour front to back, which is the composite mode's sum; render it in one process",
+        ));
+    }
+    let edge = match args.volume.storage {
+        Storage::Bricks { edge } => edge,
+        Storage::Auto => POOL_BRICK,
+        Storage::Dense => {
+            return Err(Error::invalid(
+                "storage",
+                "dense",
+                "ranks store their blocks in bricks: use --storage auto or bricks[:N]",
+            ))
+        }
+    };
+    let ctx = context(args.validate)?;
+    let series = args.volume.series()?;
+    let clock = Instant::now();
+    let volume = series.load(args.volume.time, None)?;
+    let load_ms = clock.elapsed().as_secs_f64() * 1e3;
+    let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
+    desc.check_for(volume.dims, volume.spacing)?;
+    let split = Decomposition::new(volume.dims, edge, world.size)?;
+    let block = split.blocks[world.rank as usize];
+
+    // The frame's samples inside the block.
+    let (lo, hi) = block.bounds();
+    let block_desc = desc.to_builder().segment(Some([lo, hi])).build()?;
+
+    let builder = args.model.builder(&ctx)?;
+    let renderer = Renderer::sharing(&builder)?;
+    let clock = Instant::now();
+    let mut gpu_volume = GpuVolume::upload_bricks_kept(&ctx, &volume, edge, block.with_ghosts(split.counts))?;
+    gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
+    let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
+    gpu_volume.sampler_for(block_desc.filter_for(&gpu_volume))?;
+    let lut = tf.upload(&ctx)?;
+    let input = BuildInput {
+        volume: &volume,
+        gpu_volume: &gpu_volume,
+        tf: &tf,
+        gpu_tf: &lut,
+        mode: *block_desc.mode(),
+        frame: Some(&block_desc),
+    };
+    let clock = Instant::now();
+    let (structure, _) = build(&builder, args, &input, &params)?;
+    let build_ms = clock.elapsed().as_secs_f64() * 1e3 / (args.warmup + args.repeat) as f64;
+    let scene = Scene {
+        structure: &structure,
+        volume: &gpu_volume,
+        tf: &lut,
+    };
+    let (mut frame, timings) = frames(&renderer, scene, &block_desc, args)?;
+    describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
+
+    let (width, height) = desc.size();
+    let rays = desc.camera().rays(volume.dims, volume.spacing, width, height)?;
+    let pool = gpu_volume.pool;
+    let mut report = vec![
+        format!(
+            "volume  {} ({}x{}x{} {})",
+            volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
+        ),
+        format!(
+            "ranks   {} blocks of bricks of {edge}^3 (k-d split), each stored with one layer of ghost bricks",
+            world.size
+        ),
+        format!("tf      {}", tf.spec),
+        format!(
+            "frame   {width}x{height}, {}, step {}, filter {}, accel {}",
+            desc.camera().describe(),
+            desc.step(),
+            block_desc.filter_for(&gpu_volume),
+            args.accel
+        ),
+    ];
+    if let Some(m) = structure.marched_as_reason() {
+        report.push(format!("{} -> {} on rank 0", args.accel, m.label));
+    }
+    report.extend(look_notes(&desc).into_iter().map(|n| format!("note: {n}")));
+    if let Some(ert) = desc.ert() {
+        report.push(format!(
+            "note: each rank ends its own segment at alpha {ert}: the frame differs from one process's by up to {}",
+            1.0 - ert
+        ));
+    }
+    Ok(Part {
+        stats: [
+            load_ms,
+            upload_ms,
+            build_ms,
+            timings.phase("march")?,
+            pool.map_or(0.0, |p| p.stored as f64),
+        ],
+        frame,
+        order: split.order(&rays),
+        timings,
+        report,
+        desc,
+        ctx,
+    })
+}
+
+/// Composites the ranks' frames; rank 0 prints the report and writes.
+fn finish(args: &RenderArgs, world: &World, part: Part) -> Result<ExitCode> {
+    let (pixels, composite_ms) = world.composite(part.desc.size(), &part.frame.pixels, &part.order)?;
+    let stats = world.gather(&part.stats);
+    let Some(pixels) = pixels else {
+        return Ok(validation_verdict(&part.ctx));
+    };
+    let info = part.ctx.info();
+    println!(
+        "device  {} ({}), subTexelPrecisionBits {}",
+        info.name, info.driver, info.sub_texel_precision_bits
+    );
+    for line in &part.report {
+        println!("{line}");
+    }
+    let order: Vec<String> = part.order.iter().map(u32::to_string).collect();
+    println!("per rank (wall ms for load, upload and build; GPU ms for march):");
+    for (rank, s) in stats.chunks_exact(5).enumerate() {
+        println!(
+            "  rank {rank}: load {:.0}, upload {:.0}, build {:.1}, march {:.3}, bricks stored {}",
+            s[0], s[1], s[2], s[3], s[4]
+        );
+    }
+    println!(
+        "composite {composite_ms:.3} ms wall (IceT ordered blend, ranks front to back {})",
+        order.join(" ")
+    );
+    println!("render GPU time per pass on rank 0:\n{}", part.timings);
+    if let Some(out) = &args.out {
+        let mut frame = Frame::new(part.frame.width, part.frame.height, pixels);
+        frame.metadata = part.frame.metadata;
+        frame.metadata.insert("ranks".into(), world.size.to_string());
+        frame
+            .metadata
+            .insert("composite_ms".into(), format!("{composite_ms:.4}"));
+        match &args.background {
+            Some(background) => frame.write_png_over(out, background)?,
+            None => frame.write(out, lacuna::frame::FrameFormat::from_path(out)?)?,
+        }
+        println!("wrote {}", out.display());
+    }
+    Ok(validation_verdict(&part.ctx))
+}

@@ -1,0 +1,83 @@
+/* The few MPI and IceT calls lacuna makes (feature `mpi`), behind a plain C
+ * interface: compiled against the real mpi.h and IceT.h by build.rs, so
+ * MPI_Comm and the IceT enums keep their implementation's ABI and values,
+ * and the Rust side declares only ints, doubles and float pointers
+ * (src/parallel/mpi.rs). */
+#include <IceT.h>
+#include <IceTMPI.h>
+#include <mpi.h>
+#include <string.h>
+
+int lacuna_mpi_init(int *rank, int *size) {
+    int ready = 0;
+    MPI_Initialized(&ready);
+    if (!ready && MPI_Init(NULL, NULL) != MPI_SUCCESS) {
+        return 0;
+    }
+    MPI_Comm_rank(MPI_COMM_WORLD, rank);
+    MPI_Comm_size(MPI_COMM_WORLD, size);
+    return 1;
+}
+
+void lacuna_mpi_finalize(void) {
+    int done = 0;
+    MPI_Finalized(&done);
+    if (!done) {
+        MPI_Finalize();
+    }
+}
+
+/* The smallest of every rank's v (every rank gets it). */
+int lacuna_mpi_min(int v) {
+    int out = v;
+    MPI_Allreduce(&v, &out, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    return out;
+}
+
+void lacuna_mpi_barrier(void) {
+    MPI_Barrier(MPI_COMM_WORLD);
+}
+
+/* Every rank's n values, in rank order, on rank 0 (out: n * size values
+ * there; unused elsewhere). */
+void lacuna_mpi_gather(const double *values, int n, double *out) {
+    MPI_Gather(values, n, MPI_DOUBLE, out, n, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+}
+
+/* Composites every rank's premultiplied RGBA float image (width x height,
+ * the same layout on every rank) by IceT's ordered blend: order lists the
+ * ranks front to back. Rank 0 receives the result in out (width * height *
+ * 4 floats) and ms the compositing's wall time. Returns IceT's error
+ * (ICET_NO_ERROR is 0). Every rank must call it. */
+int lacuna_icet_composite(int width, int height, const float *rgba, const int *order, float *out, double *ms) {
+    IceTCommunicator comm = icetCreateMPICommunicator(MPI_COMM_WORLD);
+    IceTContext context = icetCreateContext(comm);
+    icetDiagnostics(ICET_DIAG_ERRORS | ICET_DIAG_ALL_NODES);
+    icetSetColorFormat(ICET_IMAGE_COLOR_RGBA_FLOAT);
+    icetSetDepthFormat(ICET_IMAGE_DEPTH_NONE);
+    icetCompositeMode(ICET_COMPOSITE_MODE_BLEND);
+    /* One tile: sequential is IceT's recommendation; it orders. */
+    icetStrategy(ICET_STRATEGY_SEQUENTIAL);
+    icetSingleImageStrategy(ICET_SINGLE_IMAGE_STRATEGY_AUTOMATIC);
+    icetEnable(ICET_ORDERED_COMPOSITE);
+    icetCompositeOrder(order);
+    icetResetTiles();
+    icetAddTile(0, 0, width, height, 0);
+    icetPhysicalRenderSize(width, height);
+    const IceTDouble identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const IceTFloat background[4] = {0, 0, 0, 0};
+    MPI_Barrier(MPI_COMM_WORLD);
+    double start = MPI_Wtime();
+    IceTImage image = icetCompositeImage(rgba, NULL, NULL, identity, identity, background);
+    double end = MPI_Wtime();
+    IceTEnum error = icetGetError();
+    int rank = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (error == ICET_NO_ERROR && rank == 0) {
+        memcpy(out, icetImageGetColorcf(image), (size_t)width * (size_t)height * 4 * sizeof(float));
+    }
+    *ms = (end - start) * 1e3;
+    icetDestroyContext(context);
+    icetDestroyMPICommunicator(comm);
+    return (int)error;
+}

@@ -1,0 +1,127 @@
+//! MPI and IceT through `icet_shim.c` (feature `mpi`): the process's rank
+//! in `MPI_COMM_WORLD`, agreement on failure, and IceT's ordered blend of
+//! the ranks' frames.
+
+use crate::error::{Error, Result};
+use std::os::raw::{c_double, c_float, c_int};
+
+extern "C" {
+    fn lacuna_mpi_init(rank: *mut c_int, size: *mut c_int) -> c_int;
+    fn lacuna_mpi_finalize();
+    fn lacuna_mpi_min(v: c_int) -> c_int;
+    fn lacuna_mpi_barrier();
+    fn lacuna_mpi_gather(values: *const c_double, n: c_int, out: *mut c_double);
+    fn lacuna_icet_composite(
+        width: c_int,
+        height: c_int,
+        rgba: *const c_float,
+        order: *const c_int,
+        out: *mut c_float,
+        ms: *mut c_double,
+    ) -> c_int;
+}
+
+/// This process in `MPI_COMM_WORLD`; MPI is finalized when it drops. One
+/// per process: MPI initializes once.
+pub struct World {
+    pub rank: u32,
+    pub size: u32,
+}
+
+impl World {
+    pub fn init() -> Result<World> {
+        let (mut rank, mut size) = (0, 0);
+        // SAFETY: two valid out-pointers; the shim calls MPI_Init only once.
+        if unsafe { lacuna_mpi_init(&mut rank, &mut size) } == 0 {
+            return Err(Error::invalid("MPI", "MPI_Init", "failed"));
+        }
+        Ok(World {
+            rank: rank as u32,
+            size: size as u32,
+        })
+    }
+
+    /// The lowest rank that is not `ok`, on every rank (a collective: every
+    /// rank calls it, so none waits on one that failed).
+    pub fn first_failed(&self, ok: bool) -> Option<u32> {
+        let mine = if ok { self.size as c_int } else { self.rank as c_int };
+        // SAFETY: a collective over plain ints.
+        let first = unsafe { lacuna_mpi_min(mine) };
+        (first < self.size as c_int).then_some(first as u32)
+    }
+
+    /// Waits for every rank.
+    pub fn barrier(&self) {
+        // SAFETY: a collective without arguments.
+        unsafe { lacuna_mpi_barrier() };
+    }
+
+    /// Every rank's `values` (the same count on each), in rank order, on
+    /// rank 0; empty elsewhere.
+    pub fn gather(&self, values: &[f64]) -> Vec<f64> {
+        let mut out = vec![
+            0.0;
+            if self.rank == 0 {
+                values.len() * self.size as usize
+            } else {
+                1
+            }
+        ];
+        // SAFETY: out holds n * size values on rank 0, the only one that writes it.
+        unsafe { lacuna_mpi_gather(values.as_ptr(), values.len() as c_int, out.as_mut_ptr()) };
+        if self.rank == 0 {
+            out
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Composites every rank's premultiplied `pixels` (`width` x `height`,
+    /// one layout on every rank) with IceT's ordered blend, `order` front
+    /// to back. Rank 0 gets the frame's pixels and the compositing's
+    /// milliseconds; the others `None`. Every rank must call it.
+    pub fn composite(
+        &self,
+        (width, height): (u32, u32),
+        pixels: &[[f32; 4]],
+        order: &[u32],
+    ) -> Result<(Option<Vec<[f32; 4]>>, f64)> {
+        if pixels.len() != width as usize * height as usize || order.len() != self.size as usize {
+            return Err(Error::invalid(
+                "composite",
+                format!("{} pixels, {} ranks ordered", pixels.len(), order.len()),
+                format!("expected {width}x{height} pixels and {} ranks", self.size),
+            ));
+        }
+        let order: Vec<c_int> = order.iter().map(|&r| r as c_int).collect();
+        let mut out = vec![[0.0f32; 4]; if self.rank == 0 { pixels.len() } else { 1 }];
+        let mut ms = 0.0;
+        // SAFETY: pixels and out hold width * height RGBA floats (out on rank
+        // 0, the only one the shim writes); order holds one entry per rank.
+        let error = unsafe {
+            lacuna_icet_composite(
+                width as c_int,
+                height as c_int,
+                pixels.as_ptr().cast(),
+                order.as_ptr(),
+                out.as_mut_ptr().cast(),
+                &mut ms,
+            )
+        };
+        if error != 0 {
+            return Err(Error::invalid(
+                "IceT",
+                "icetCompositeImage",
+                format!("failed with error {error:#x}"),
+            ));
+        }
+        Ok(((self.rank == 0).then_some(out), ms))
+    }
+}
+
+impl Drop for World {
+    fn drop(&mut self) {
+        // SAFETY: once per process, after every collective.
+        unsafe { lacuna_mpi_finalize() };
+    }
+}

@@ -1,0 +1,137 @@
+//! `mpirun -np N lacuna render` (feature `mpi`; `cargo xtask test` installs
+//! OpenMPI and IceT and runs these): with 2 and 3 ranks the IceT-composited
+//! frame equals the one-process frame within 1e-5, and bad requests end
+//! every rank with one `error:` line and no file.
+#![cfg(feature = "mpi")]
+
+mod common;
+use lacuna::frame::{diff, Frame};
+use std::path::Path;
+use std::process::Command;
+
+/// `mpirun -np ranks lacuna ARGS` (as root too, more ranks than cores).
+fn mpirun(ranks: u32, args: &[&str]) -> common::Run {
+    let out = Command::new("mpirun")
+        .args(["--oversubscribe", "-np", &ranks.to_string()])
+        .arg(env!("CARGO_BIN_EXE_lacuna"))
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env(
+            "XDG_CACHE_HOME",
+            Path::new(env!("CARGO_TARGET_TMPDIR")).join("xdg-cache"),
+        )
+        .output()
+        .expect("mpirun (Debian: openmpi-bin; `cargo xtask setup mpi`)");
+    common::Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into(),
+        stderr: String::from_utf8_lossy(&out.stderr).into(),
+    }
+}
+
+#[test]
+fn ranks_composite_to_the_one_process_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [&[&str]; 2] = [
+        &["nbody:64", "--accel", "auto"],
+        &[
+            "turbulence:37x29x45",
+            "--tf",
+            "ramp:0.3:0.9",
+            "--perspective",
+            "40",
+            "--camera",
+            "200,-30",
+            "--shade",
+            "on",
+            "--accel",
+            "distance",
+        ],
+    ];
+    for (i, case) in cases.iter().enumerate() {
+        let one = dir.path().join(format!("one{i}.exr"));
+        let mut args = vec!["render"];
+        args.extend_from_slice(case);
+        args.extend(["--size", "96x80", "--validate"]);
+        let r = common::lacuna(
+            &[&args, &["--filter", "manual", "--out", one.to_str().unwrap()][..]].concat(),
+            &[],
+        );
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        let one = Frame::read_exr(&one).unwrap();
+        assert!(
+            one.pixels.iter().filter(|p| p[3] > 0.001).count() > 20,
+            "{case:?} shows the volume"
+        );
+        for ranks in [2, 3] {
+            let out = dir.path().join(format!("ranks{i}_{ranks}.exr"));
+            let mut all = args.clone();
+            all.extend(["--out", out.to_str().unwrap()]);
+            let r = mpirun(ranks, &all);
+            assert_eq!(r.code, 0, "{ranks} ranks {case:?}:\n{}\n{}", r.stdout, r.stderr);
+            assert!(
+                r.stdout.contains("composite") && r.stdout.contains(&format!("rank {}:", ranks - 1)),
+                "{}",
+                r.stdout
+            );
+            // Rank 0 alone reports and writes.
+            assert_eq!(r.stdout.matches("wrote ").count(), 1, "{}", r.stdout);
+            let frame = Frame::read_exr(&out).unwrap();
+            assert_eq!(
+                frame.metadata.get("ranks").map(String::as_str),
+                Some(&*ranks.to_string())
+            );
+            let d = diff(&one, &frame).unwrap();
+            assert!(d.max_abs < 1e-5, "{ranks} ranks {case:?}: {d:?}");
+        }
+    }
+}
+
+/// Every rank ends non-zero, one `error:` line in all, naming `needle`,
+/// and no file is written.
+fn fails_on_ranks(ranks: u32, args: &[&str], needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let mut all = vec!["render"];
+    all.extend_from_slice(args);
+    all.extend(["--size", "32x32", "--validate", "--out", out.to_str().unwrap()]);
+    let r = mpirun(ranks, &all);
+    assert_ne!(r.code, 0, "{all:?} succeeded: {}", r.stdout);
+    let errors: Vec<&str> = r.stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{all:?}: expected one error line, got:\n{}", r.stderr);
+    assert!(errors[0].contains(needle), "'{}' lacks '{needle}'", errors[0]);
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "{all:?} left a file behind"
+    );
+}
+
+#[test]
+fn bad_requests_across_ranks_are_one_error() {
+    // One brick of 16^3, two ranks.
+    fails_on_ranks(2, &["nbody:16"], "invalid rank count '2'");
+    fails_on_ranks(3, &["nbody:32", "--mode", "mip"], "does not composite across ranks");
+    fails_on_ranks(
+        2,
+        &["nbody:32", "--storage", "dense"],
+        "ranks store their blocks in bricks",
+    );
+    fails_on_ranks(
+        2,
+        &["no-such-file.raw", "--dims", "8x8x8", "--type", "uint8"],
+        "no-such-file.raw",
+    );
+    // A file shorter than its dims, found before any rank renders.
+    let data = tempfile::tempdir().unwrap();
+    let short = data.path().join("short.raw");
+    std::fs::write(&short, vec![0u8; 100]).unwrap();
+    let short = short.to_str().unwrap();
+    fails_on_ranks(
+        2,
+        &[short, "--dims", "8x8x8", "--type", "uint8"],
+        "holds 100 bytes of voxel data but 8x8x8 uint8 needs 512",
+    );
+}
