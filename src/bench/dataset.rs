@@ -4,7 +4,7 @@
 use crate::error::Result;
 use crate::gpu::DeviceInfo;
 use crate::tf::TransferFunction;
-use crate::volume::Series;
+use crate::volume::{Series, Storage};
 use crate::Volume;
 
 pub struct Loaded {
@@ -16,13 +16,13 @@ pub struct Loaded {
 
 /// The data set: its step `time` when it is a series.
 pub fn load(
-    device: Option<&DeviceInfo>,
+    (storage, device): (Storage, &DeviceInfo),
     series: &Series,
     time: Option<[u32; 2]>,
     label: String,
     tf: Option<&str>,
 ) -> Result<Loaded> {
-    let volume = series.load(time.map_or(0, |[first, _]| first), device)?;
+    let volume = series.load_stored(time.map_or(0, |[first, _]| first), storage, device)?;
     let tf = match tf {
         Some(spec) => TransferFunction::parse_channels(spec)?,
         None => volume.default_transfer_function()?,

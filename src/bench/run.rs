@@ -274,7 +274,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let series = Series::open(&ds.volume, &LoadOptions::default());
         let loaded = match series.and_then(|s| {
             load(
-                ds.storage()?.load_limits(ctx.info()),
+                (ds.storage()?, ctx.info()),
                 &s,
                 ds.time,
                 ds.label(config)?,

@@ -129,7 +129,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = std::time::Instant::now();
-    let volume = series.load(args.volume.time, args.volume.storage.load_limits(ctx.info()))?;
+    let volume = series.load_stored(args.volume.time, args.volume.storage, ctx.info())?;
     let load_ms = clock.elapsed().as_secs_f64() * 1e3;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
@@ -173,6 +173,12 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     }
     println!("storage {}", gpu_volume.describe_storage());
     println!("loaded  in {load_ms:.0} ms, uploaded in {upload_ms:.0} ms (wall time; the upload with the pool's sorting, or the cells copy)");
+    if let lacuna::volume::VoxelData::Bricks(host) = &volume.data {
+        println!(
+            "        streamed into bricks: the host holds {:.1} MiB of slots and table, not the dense volume",
+            host.host_bytes() as f64 / (1u64 << 20) as f64
+        );
+    }
     println!("tf      {}", tf.spec);
     println!(
         "frame   {width}x{height}, {}, step {}, filter {}{}, accel {}",
@@ -218,6 +224,12 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         println!("structure {stats}");
     }
     println!("render GPU time per pass:\n{timings}");
+    if let Some(peak) = peak_host_bytes() {
+        println!(
+            "host peak {:.1} MiB (VmHWM: the most resident memory so far; on a CPU device it includes device memory)",
+            peak as f64 / (1u64 << 20) as f64
+        );
+    }
     if let (Some(out), Some(format)) = (&args.out, format) {
         describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
         if series.steps() > 1 {
@@ -277,4 +289,12 @@ pub(super) fn describe(
     meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
     meta.insert("gpu_ms".into(), format!("{:.4}", timings.phase("march")?));
     Ok(())
+}
+
+/// The process's peak resident memory (Linux `VmHWM`), where known.
+pub(super) fn peak_host_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }

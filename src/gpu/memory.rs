@@ -383,6 +383,41 @@ impl Image3d {
         Ok(image)
     }
 
+    /// As `with_data`, the texels of slices `z .. z + n` written by
+    /// `fill(z, n, out)` straight into each staging chunk: the host never
+    /// holds the whole image (a brick pool made from its bricks).
+    pub fn with_slices(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: [u32; 3],
+        texel_bytes: u64,
+        fill: impl Fn(u32, u32, &mut [u8]),
+    ) -> Result<Self> {
+        let image = Self::create_empty(ctx, name, format, extent, texel_bytes)?;
+        let [w, h, d] = extent;
+        let slice_bytes = (w as u64 * h as u64 * texel_bytes).max(1);
+        let slices_per_chunk = (STAGING_CHUNK / slice_bytes).max(1) as u32;
+        let mut z = 0u32;
+        while z < d {
+            let n = slices_per_chunk.min(d - z);
+            let mut staging = Buffer::new(
+                ctx,
+                "staging volume",
+                n as u64 * slice_bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
+            fill(z, n, &mut staging.host_mut()?[..(n as u64 * slice_bytes) as usize]);
+            ctx.submit_and_wait(|cmd| {
+                image.record_copy(cmd, &staging, z, n, z == 0, z + n == d);
+                Ok(())
+            })?;
+            z += n;
+        }
+        Ok(image)
+    }
+
     /// As `with_data`, recorded into `cmd` instead of submitted: one copy from
     /// a staging buffer, leaving the image in `SHADER_READ_ONLY_OPTIMAL` with
     /// a barrier to compute-shader reads. Keep the returned `Staging` until
@@ -411,16 +446,25 @@ impl Image3d {
         texel_bytes: u64,
         data: &[u8],
     ) -> Result<Self> {
-        let info = ctx.info();
-        let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
-        let bytes = check_image3d(info, extent, texel_bytes)?;
+        let bytes = check_image3d(ctx.info(), extent, texel_bytes)?;
         if bytes != data.len() as u64 {
             return Err(Error::invalid(
                 "image data",
                 format!("{} bytes", data.len()),
-                format!("{dims} of {texel_bytes}-byte texels needs {bytes}"),
+                format!(
+                    "volume {}x{}x{} of {texel_bytes}-byte texels needs {bytes}",
+                    extent[0], extent[1], extent[2]
+                ),
             ));
         }
+        Self::create_empty(ctx, name, format, extent, texel_bytes)
+    }
+
+    /// The image and its view, after the limit checks; no contents yet.
+    fn create_empty(ctx: &Context, name: &str, format: vk::Format, extent: [u32; 3], texel_bytes: u64) -> Result<Self> {
+        let info = ctx.info();
+        let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
+        let bytes = check_image3d(info, extent, texel_bytes)?;
         let device = ctx.device();
         let create = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_3D)

@@ -36,10 +36,10 @@ pub const GRADIENT_CELLS_CONSTANT_ID: u32 = 25;
 
 impl TexelKind {
     pub fn of(data: &VoxelData) -> TexelKind {
-        match data {
-            VoxelData::U8(_) => TexelKind::Unorm8,
-            VoxelData::U16(_) => TexelKind::Unorm16,
-            VoxelData::F32(_) => TexelKind::Float32,
+        match data.texel_bytes() {
+            1 => TexelKind::Unorm8,
+            2 => TexelKind::Unorm16,
+            _ => TexelKind::Float32,
         }
     }
 
@@ -177,6 +177,18 @@ fn pack_layers(volume: &Volume, layers: std::ops::Range<u64>) -> Vec<u32> {
         VoxelData::F32(v) => {
             for (b, word) in cell.iter_mut().enumerate() {
                 *word = v[corner(b)].to_bits();
+            }
+        }
+        // The same words from the texels' bytes (little-endian, as above).
+        VoxelData::Bricks(p) => {
+            let tb = p.layout.texel_bytes as usize;
+            let per_word = 4 / tb;
+            for (w, word) in cell.iter_mut().enumerate() {
+                *word = (0..per_word).fold(0u32, |acc, k| {
+                    let t = p.texel_bytes_at(corner(w * per_word + k));
+                    let v = t.iter().rev().fold(0u32, |a, &b| a << 8 | b as u32);
+                    acc | v << (8 * tb * k)
+                });
             }
         }
     })

@@ -73,6 +73,12 @@ pub fn texel_data(volume: &Volume) -> Cow<'_, [u8]> {
             VoxelData::U8(v) => Cow::Borrowed(v.as_slice()),
             VoxelData::U16(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
             VoxelData::F32(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
+            // The dense image's bytes (a streamed volume uploaded dense).
+            VoxelData::Bricks(p) => Cow::Owned(
+                (0..volume.data.len())
+                    .flat_map(|i| p.texel_bytes_at(i).to_vec())
+                    .collect(),
+            ),
         };
     }
     let kind = common_kind(volume);
@@ -83,10 +89,9 @@ pub fn texel_data(volume: &Volume) -> Cow<'_, [u8]> {
         TexelKind::Unorm8 => {
             let mut out = vec![0u8; n * per];
             for (c, ch) in channels.iter().enumerate() {
-                if let VoxelData::U8(v) = &ch.data {
-                    for (i, &x) in v.iter().enumerate() {
-                        out[i * per + c] = x;
-                    }
+                // Every channel is u8 here (a wider one widens the kind).
+                for (i, x) in out.iter_mut().skip(c).step_by(per).enumerate() {
+                    *x = ch.data.stored_at(i) as u8;
                 }
             }
             Cow::Owned(out)
@@ -100,6 +105,12 @@ pub fn texel_data(volume: &Volume) -> Cow<'_, [u8]> {
                         .enumerate()
                         .for_each(|(i, &x)| out[i * per + c] = x as u16 * 257),
                     VoxelData::U16(v) => v.iter().enumerate().for_each(|(i, &x)| out[i * per + c] = x),
+                    VoxelData::Bricks(p) => {
+                        let widen = if p.layout.texel_bytes == 1 { 257 } else { 1 };
+                        for (i, x) in out.iter_mut().skip(c).step_by(per).enumerate() {
+                            *x = ch.data.stored_at(i) as u16 * widen;
+                        }
+                    }
                     VoxelData::F32(_) => unreachable!("a float channel makes the common kind float"),
                 }
             }

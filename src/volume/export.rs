@@ -50,8 +50,8 @@ impl<'a> SourceValues<'a> {
         let scale = if smax > smin { (hi - lo) / (smax - smin) } else { 0.0 };
         // Float data hold the source values to f32 precision: half an ulp of
         // [0, 1] is at most 2^-25 of the range; allow twice that.
-        let tolerance = match volume.data {
-            VoxelData::F32(_) => (hi - lo).abs() * (-24f64).exp2(),
+        let tolerance = match volume.data.texel_bytes() {
+            4 => (hi - lo).abs() * (-24f64).exp2(),
             _ => 0.0,
         };
         SourceValues {
@@ -77,11 +77,7 @@ impl<'a> SourceValues<'a> {
     /// The source value of voxel `i` (x fastest); panics if `i >= len()`.
     #[inline]
     pub fn get(&self, i: usize) -> f64 {
-        let stored = match self.data {
-            VoxelData::U8(v) => v[i] as f64,
-            VoxelData::U16(v) => v[i] as f64,
-            VoxelData::F32(v) => v[i] as f64,
-        };
+        let stored = self.data.stored_at(i);
         let value = self.lo + (stored - self.stored_min) * self.scale;
         if self.integer {
             value.round()

@@ -11,7 +11,7 @@ use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
-use super::{channels, Volume, MAX_CHANNELS};
+use super::{channels, HostPool, Volume, VoxelData, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
 use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Staging, TexelBuffer};
 use std::borrow::Cow;
@@ -87,7 +87,14 @@ fn plan_pool(
         max_table_entries: limits.max_table_entries.min(device.max_table_entries),
     };
     let layout = PoolLayout::plan_kept(bytes, volume.dims, texel, edge, limits, keep)?;
-    // Each image is within the heap; all of them must be too.
+    check_pool(ctx, volume, &layout)?;
+    Ok(layout)
+}
+
+/// The pool's images against the device's image limits, and all of them
+/// with the table against the device-local heap.
+fn check_pool(ctx: &Context, volume: &Volume, layout: &PoolLayout) -> Result<()> {
+    let texel = layout.texel_bytes;
     let info = ctx.info();
     if info.device_local_bytes > 0 {
         let total = layout.pool_bytes() + layout.table_bytes();
@@ -102,7 +109,7 @@ fn plan_pool(
         let what = format!("brick pool image {k} of {}", volume.name);
         check_image3d_of(ctx.info(), &what, layout.extent(k), texel)?;
     }
-    Ok(layout)
+    Ok(())
 }
 
 /// Pool image `k`'s texels, after the host memory check.
@@ -126,6 +133,10 @@ fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
 /// The storage `storage` means for `volume` on this device: auto is dense
 /// while the dense image fits the device's limits.
 pub fn resolve_storage(ctx: &Context, volume: &Volume, storage: Storage) -> Storage {
+    // Streamed into bricks: uploaded as it is.
+    if let (Storage::Auto, VoxelData::Bricks(host)) = (storage, &volume.data) {
+        return Storage::Bricks { edge: host.layout.edge };
+    }
     match storage {
         Storage::Auto => {
             let (kind, n) = (channels::common_kind(volume), volume.channel_count());
@@ -182,6 +193,9 @@ impl GpuVolume {
         limits: PoolLimits,
         keep: Option<BrickBox>,
     ) -> Result<Self> {
+        if let VoxelData::Bricks(host) = &volume.data {
+            return Self::upload_host_pool(ctx, volume, host, edge);
+        }
         let (format, texel, bytes) = texels(volume);
         let layout = plan_pool(ctx, volume, (texel, &bytes), edge, limits, keep)?;
         // One image's texels on the host at a time.
@@ -198,6 +212,34 @@ impl GpuVolume {
             )?);
         }
         Self::with_images(ctx, volume, images, Some(&layout))
+    }
+
+    /// A volume streamed into bricks (`HostPool`): its slots copied into
+    /// the pool images a staging chunk at a time, never a whole image on
+    /// the host. Its bricks (and those it keeps) were chosen as it loaded.
+    fn upload_host_pool(ctx: &Context, volume: &Volume, host: &HostPool, edge: u32) -> Result<Self> {
+        let layout = &host.layout;
+        if layout.edge != edge {
+            return Err(Error::invalid(
+                "brick edge",
+                edge.to_string(),
+                format!("{} was streamed into bricks of {}", volume.name, layout.edge),
+            ));
+        }
+        check_pool(ctx, volume, layout)?;
+        let format = channels::format(TexelKind::of(&volume.data), 1);
+        let mut images = Vec::with_capacity(layout.images.len());
+        for k in 0..layout.images.len() {
+            images.push(Image3d::with_slices(
+                ctx,
+                "brick pool",
+                format,
+                layout.extent(k),
+                layout.texel_bytes,
+                |z, _, out| host.fill(k, z, out),
+            )?);
+        }
+        Self::with_images(ctx, volume, images, Some(layout))
     }
 
     /// As `upload`, recorded into `cmd`: leaves the image in

@@ -17,6 +17,7 @@ pub mod procedural;
 mod raw;
 mod series;
 mod spec;
+mod stream;
 
 pub use bricks::{BrickGrid, BRICK};
 pub use cells::{
@@ -38,6 +39,7 @@ pub use pool::{
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use series::{Series, StepNorm};
 pub use spec::{LoadOptions, VolumeSpec};
+pub use stream::{HostPool, PoolStream};
 
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
@@ -49,6 +51,10 @@ pub enum VoxelData {
     U8(Vec<u8>),
     U16(Vec<u16>),
     F32(Vec<f32>),
+    /// Streamed into bricks (`stream.rs`): one channel's texels of 1, 2 or
+    /// 4 bytes (u8, u16, f32) as the brick pool's slots; constant bricks
+    /// are one value each.
+    Bricks(std::sync::Arc<HostPool>),
 }
 
 impl VoxelData {
@@ -57,6 +63,7 @@ impl VoxelData {
             VoxelData::U8(v) => v.len(),
             VoxelData::U16(v) => v.len(),
             VoxelData::F32(v) => v.len(),
+            VoxelData::Bricks(p) => p.layout.dims.iter().map(|&d| d as usize).product(),
         }
     }
 
@@ -70,6 +77,28 @@ impl VoxelData {
             VoxelData::U8(v) => minmax(v.iter().map(|&x| x as f64)),
             VoxelData::U16(v) => minmax(v.iter().map(|&x| x as f64)),
             VoxelData::F32(v) => minmax(v.iter().map(|&x| x as f64)),
+            VoxelData::Bricks(p) => p.stored_range(),
+        }
+    }
+
+    /// Bytes per texel: 1 (u8), 2 (u16), 4 (f32).
+    pub fn texel_bytes(&self) -> u64 {
+        match self {
+            VoxelData::U8(_) => 1,
+            VoxelData::U16(_) => 2,
+            VoxelData::F32(_) => 4,
+            VoxelData::Bricks(p) => p.layout.texel_bytes,
+        }
+    }
+
+    /// The stored value at index `i`: 0..255, 0..65535, or the float.
+    #[inline]
+    pub fn stored_at(&self, i: usize) -> f64 {
+        match self {
+            VoxelData::U8(v) => v[i] as f64,
+            VoxelData::U16(v) => v[i] as f64,
+            VoxelData::F32(v) => v[i] as f64,
+            VoxelData::Bricks(p) => p.stored(p.texel_bytes_at(i)),
         }
     }
 
@@ -80,6 +109,7 @@ impl VoxelData {
             VoxelData::U8(v) => v[i] as f32 / 255.0,
             VoxelData::U16(v) => v[i] as f32 / 65535.0,
             VoxelData::F32(v) => v[i],
+            VoxelData::Bricks(p) => p.decode(p.texel_bytes_at(i)),
         }
     }
 }
@@ -230,10 +260,10 @@ impl Volume {
             (lo, hi) if lo > hi => (0.0, 0.0),
             r => r,
         };
-        let full = match &data {
-            VoxelData::U8(_) => 255.0,
-            VoxelData::U16(_) => 65535.0,
-            VoxelData::F32(_) => 1.0,
+        let full = match data.texel_bytes() {
+            1 => 255.0,
+            2 => 65535.0,
+            _ => 1.0,
         };
         let norm = if hi > lo {
             [(lo / full) as f32, (full / (hi - lo)) as f32]
@@ -384,11 +414,7 @@ impl Volume {
 
     /// Bytes per stored voxel.
     pub fn texel_bytes(&self) -> u64 {
-        match self.data {
-            VoxelData::U8(_) => 1,
-            VoxelData::U16(_) => 2,
-            VoxelData::F32(_) => 4,
-        }
+        self.data.texel_bytes()
     }
 
     /// Loads a volume spec: a file path or a procedural `NAME:SIZE[:PARAM]`.

@@ -80,12 +80,6 @@ impl Storage {
     /// Bricks of the default edge.
     pub const BRICKS: Storage = Storage::Bricks { edge: POOL_BRICK };
 
-    /// The device whose image limits a load checks before reading voxels:
-    /// dense storage's only (bricks are checked once the pool is planned).
-    pub fn load_limits(self, info: &crate::gpu::DeviceInfo) -> Option<&crate::gpu::DeviceInfo> {
-        (self == Storage::Dense).then_some(info)
-    }
-
     /// `dense`, `bricks`, `bricks:EDGE` or `auto`.
     pub fn parse(s: &str) -> Result<Self> {
         let bad = || {
@@ -221,16 +215,6 @@ impl PoolLayout {
         limits: PoolLimits,
         keep: Option<BrickBox>,
     ) -> Result<Self> {
-        let max_image_dim = limits.max_image_dim;
-        // Table entries hold 16-bit x and y.
-        let most = max_image_dim.clamp(2, 1 << 16) - 1;
-        if edge == 0 || edge > most {
-            return Err(Error::invalid(
-                "brick edge",
-                edge.to_string(),
-                format!("expected 1 to {most} voxels (a slot of edge + 1 texels fits maxImageDimension3D)"),
-            ));
-        }
         if data.len() as u64 != dims.iter().fold(texel_bytes, |a, &d| a * d as u64) {
             return Err(Error::invalid(
                 "brick pool",
@@ -239,6 +223,45 @@ impl PoolLayout {
                     "is not {}x{}x{} texels of {texel_bytes} bytes",
                     dims[0], dims[1], dims[2]
                 ),
+            ));
+        }
+        let (counts, total) = Self::check(dims, edge, limits)?;
+        // The scan's per-brick value, place, entry and slot.
+        crate::limits::check_host("brick table", total, 40)?;
+        let tb = texel_bytes as usize;
+        let one_value: Vec<Option<&[u8]>> = (0..total)
+            .into_par_iter()
+            .map(|b| {
+                let lo = brick_origin(b, counts, edge);
+                let first = texel_index(lo, dims) * tb;
+                let value = &data[first..first + tb];
+                if outside(keep, lo, edge) {
+                    return Some(value);
+                }
+                let mut same = true;
+                for_each_slot_row(lo, dims, edge, |start, len| {
+                    same = same
+                        && data[start * tb..(start + len) * tb]
+                            .chunks_exact(tb)
+                            .all(|t| t == value);
+                });
+                same.then_some(value)
+            })
+            .collect();
+        Self::assemble(edge, dims, texel_bytes, limits, &one_value)
+    }
+
+    /// The brick grid of a volume of `dims` in bricks of `edge`, and its
+    /// brick count, after the edge and table limits' checks.
+    pub(super) fn check(dims: [u32; 3], edge: u32, limits: PoolLimits) -> Result<([u32; 3], u64)> {
+        let max_image_dim = limits.max_image_dim;
+        // Table entries hold 16-bit x and y.
+        let most = max_image_dim.clamp(2, 1 << 16) - 1;
+        if edge == 0 || edge > most {
+            return Err(Error::invalid(
+                "brick edge",
+                edge.to_string(),
+                format!("expected 1 to {most} voxels (a slot of edge + 1 texels fits maxImageDimension3D)"),
             ));
         }
         let longest = dims.iter().copied().max().unwrap_or(1);
@@ -261,38 +284,24 @@ impl PoolLayout {
                 ),
             ));
         }
-        // The scan's per-brick value, place, entry and slot.
-        crate::limits::check_host("brick table", total, 40)?;
-        let tb = texel_bytes as usize;
-        let one_value: Vec<Option<&[u8]>> = (0..total)
-            .into_par_iter()
-            .map(|b| {
-                let lo = brick_origin(b, counts, edge);
-                let first = texel_index(lo, dims) * tb;
-                let value = &data[first..first + tb];
-                if keep.is_some_and(|[klo, khi]| {
-                    (0..3).any(|a| {
-                        let c = lo[a] / edge;
-                        c < klo[a] || c >= khi[a]
-                    })
-                }) {
-                    return Some(value);
-                }
-                let mut same = true;
-                for_each_slot_row(lo, dims, edge, |start, len| {
-                    same = same
-                        && data[start * tb..(start + len) * tb]
-                            .chunks_exact(tb)
-                            .all(|t| t == value);
-                });
-                same.then_some(value)
-            })
-            .collect();
+        Ok((counts, total))
+    }
+
+    /// Places the bricks: per brick, `one_value` is its one value (left
+    /// out) or None (stored in the next slot, in brick order).
+    pub(super) fn assemble(
+        edge: u32,
+        dims: [u32; 3],
+        texel_bytes: u64,
+        limits: PoolLimits,
+        one_value: &[Option<&[u8]>],
+    ) -> Result<Self> {
+        let counts = dims.map(|d| d.div_ceil(edge));
         let mut values: Vec<Vec<u8>> = Vec::new();
         let mut value_index: HashMap<&[u8], u32> = HashMap::new();
         let mut stored = Vec::new();
         // Which slot or value each brick takes, before the slot grid is known.
-        let mut place: Vec<(bool, u32)> = Vec::with_capacity(total as usize);
+        let mut place: Vec<(bool, u32)> = Vec::with_capacity(one_value.len());
         for (b, v) in one_value.iter().enumerate() {
             match v {
                 Some(v) => {
@@ -407,6 +416,24 @@ impl PoolLayout {
     /// Writes pool image `k`'s texels (x fastest, `image_bytes(k)` long)
     /// from the volume's `data`, one pool plane per task.
     pub fn fill(&self, k: usize, data: &[u8], out: &mut [u8]) {
+        let tb = self.texel_bytes as usize;
+        self.fill_with(k, 0, out, |_, b, ly, lz, dst| {
+            let lo = brick_origin(b as u64, self.counts, self.edge);
+            let v = [lo[0], lo[1] + ly, lo[2] + lz].map(|c| c as u64);
+            copy_row(data, self.dims, tb, v, dst);
+        });
+    }
+
+    /// As `fill`, from texel plane `first_plane` of the image on (`out`
+    /// whole planes), the stored slots' rows from `stored_row(slot, brick,
+    /// ly, lz, dst)`: the slot's texel row (ly, lz), edge + 1 texels.
+    pub fn fill_with(
+        &self,
+        k: usize,
+        first_plane: u32,
+        out: &mut [u8],
+        stored_row: impl Fn(u64, u32, u32, u32, &mut [u8]) + Sync,
+    ) {
         let [ex, ey, _] = self.extent(k);
         let [gx, gy, _] = self.images[k];
         let tb = self.texel_bytes as usize;
@@ -415,7 +442,8 @@ impl PoolLayout {
         let per_slot = (e as usize).pow(3);
         let first_slot = k as u64 * self.per_image;
         out.par_chunks_mut(plane).enumerate().for_each(|(pz, out)| {
-            let (sz, lz) = (pz as u32 / e, pz as u32 % e);
+            let pz = pz as u32 + first_plane;
+            let (sz, lz) = (pz / e, pz % e);
             for sy in 0..gy {
                 for sx in 0..gx {
                     let s = first_slot + sx as u64 + gx as u64 * (sy as u64 + gy as u64 * sz as u64);
@@ -423,9 +451,7 @@ impl PoolLayout {
                         let row = ((sy * e + ly) as usize * ex as usize + (sx * e) as usize) * tb;
                         let dst = &mut out[row..row + e as usize * tb];
                         if let Some(&b) = self.stored.get(s as usize) {
-                            let lo = brick_origin(b as u64, self.counts, self.edge);
-                            let v = [lo[0], lo[1] + ly, lo[2] + lz].map(|c| c as u64);
-                            copy_row(data, self.dims, tb, v, dst);
+                            stored_row(s, b, ly, lz, dst);
                         } else {
                             let (lz, ly, e) = (lz as usize, ly as usize, e as usize);
                             let first = (s as usize - self.stored.len()) * per_slot + lz * e * e + ly * e;
@@ -443,7 +469,17 @@ impl PoolLayout {
 }
 
 /// The first voxel of brick `b` (x fastest).
-fn brick_origin(b: u64, counts: [u32; 3], edge: u32) -> [u32; 3] {
+/// Whether the brick at voxel `lo` lies outside `keep` (None keeps all).
+pub(super) fn outside(keep: Option<BrickBox>, lo: [u32; 3], edge: u32) -> bool {
+    keep.is_some_and(|[klo, khi]| {
+        (0..3).any(|a| {
+            let c = lo[a] / edge;
+            c < klo[a] || c >= khi[a]
+        })
+    })
+}
+
+pub(super) fn brick_origin(b: u64, counts: [u32; 3], edge: u32) -> [u32; 3] {
     let [cx, cy, _] = counts.map(|c| c as u64);
     [(b % cx) as u32, (b / cx % cy) as u32, (b / (cx * cy)) as u32].map(|c| c * edge)
 }

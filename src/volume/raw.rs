@@ -2,7 +2,7 @@
 //! layout from `--dims`/`--type`. Little-endian.
 
 use super::decode::{decode, VoxelType};
-use super::Volume;
+use super::{BrickBox, PoolLimits, PoolStream, Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::Path;
@@ -86,6 +86,48 @@ pub fn load(
     super::check_size(layout.dims, layout.ty, &path.display().to_string(), device)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     decode(path, &bytes, layout.ty, true, layout.dims, spacing.unwrap_or([1.0; 3]))
+}
+
+/// As `load`, streamed into bricks (`Series::load_bricks`): uint8 and
+/// uint16 files are read a slab at a time into a `PoolStream` (their
+/// texels are their bytes), so the host never holds the dense volume;
+/// other types load whole.
+pub fn load_bricks(
+    path: &Path,
+    layout: Option<RawLayout>,
+    (edge, limits, keep): (u32, PoolLimits, Option<BrickBox>),
+) -> Result<Volume> {
+    let layout = match layout {
+        Some(l) => l,
+        None => layout_from_name(path)?,
+    };
+    let tb = match layout.ty {
+        VoxelType::U8 => 1,
+        VoxelType::U16 => 2,
+        _ => return load(path, Some(layout), None, None),
+    };
+    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    check_length(path, len, layout)?;
+    let [w, h, d] = layout.dims;
+    let mut stream = PoolStream::new(layout.dims, tb, edge, limits, keep)?;
+    let layer = w as usize * h as usize * tb as usize;
+    // Slabs of about 64 MiB.
+    let per_slab = ((64usize << 20) / layer).clamp(1, d as usize);
+    let mut slab = crate::limits::zeroed::<u8>(
+        format_args!("raw slab of {}", path.display()),
+        (per_slab * layer) as u64,
+    )?;
+    let mut file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
+    let mut z = 0usize;
+    while z < d as usize {
+        let n = per_slab.min(d as usize - z);
+        std::io::Read::read_exact(&mut file, &mut slab[..n * layer]).map_err(|e| Error::io(path, e))?;
+        stream.push(&slab[..n * layer])?;
+        z += n;
+    }
+    let pool = stream.finish(limits)?;
+    let data = VoxelData::Bricks(std::sync::Arc::new(pool));
+    Volume::new(path.display().to_string(), layout.dims, [1.0; 3], layout.ty, data)
 }
 
 /// A raw volume from memory: `name` gives the layout as a file name does

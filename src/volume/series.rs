@@ -14,7 +14,7 @@
 
 use super::procedural::{self, Generator};
 use super::spec::{LoadOptions, VolumeSpec};
-use super::{Volume, VoxelType};
+use super::{BrickBox, PoolLimits, Storage, Volume, VoxelType, POOL_BRICK};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
@@ -153,9 +153,76 @@ impl Series {
         Ok(())
     }
 
+    /// The grid and voxel type of a source that comes in slabs (a
+    /// generator, raw files), known before any voxel is read; None for
+    /// the others.
+    pub fn streamed_layout(&self) -> Option<([u32; 3], VoxelType)> {
+        let raw = |path: &Path| -> Option<([u32; 3], VoxelType)> {
+            let name = path.file_name()?.to_str()?.to_lowercase();
+            let layout = match self.options.raw {
+                Some(l) => l,
+                None if name.ends_with(".raw") => super::raw::layout_from_name(path).ok()?,
+                None => return None,
+            };
+            Some((layout.dims, layout.ty))
+        };
+        match &self.source {
+            Source::Generator { dims, .. } | Source::Still(VolumeSpec::Procedural { dims, .. }) => {
+                Some((*dims, VoxelType::U8))
+            }
+            Source::Still(VolumeSpec::File(path)) => raw(path),
+            Source::Files(files) => raw(&files[0]),
+            _ => None,
+        }
+    }
+
+    /// Step `k` for `storage` on the device `info` describes: dense, checked
+    /// against the device before it is read or made; streamed into bricks
+    /// (`load_bricks`) for bricks, and for auto where the source comes in
+    /// slabs and its dense image would not fit; else whole.
+    pub fn load_stored(&self, k: u32, storage: Storage, info: &DeviceInfo) -> Result<Volume> {
+        let limits = PoolLimits::of(info);
+        match storage {
+            Storage::Dense => self.load(k, Some(info)),
+            Storage::Bricks { edge } => self.load_bricks(k, (edge, limits, None)),
+            Storage::Auto => {
+                let too_big = self.streamed_layout().is_some_and(|(dims, ty)| {
+                    let texel = match ty {
+                        VoxelType::U8 => 1,
+                        VoxelType::U16 => 2,
+                        _ => 4,
+                    };
+                    crate::gpu::check_image3d(info, dims, texel).is_err()
+                });
+                match too_big {
+                    true => self.load_bricks(k, (POOL_BRICK, limits, None)),
+                    false => self.load(k, None),
+                }
+            }
+        }
+    }
+
     /// Step `k`, its size checked against `device` before it is read or
     /// made, normalised as step 0.
     pub fn load(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+        self.load_as(k, device, None)
+    }
+
+    /// As `load`, streamed into bricks (`PoolStream`) where the source
+    /// comes in slabs (the nbody generator, raw uint8 and uint16 files):
+    /// `bricks` is the brick edge, the pool's limits and the bricks to keep.
+    /// Other sources load whole, unchecked against the device (their
+    /// upload plans the pool).
+    pub fn load_bricks(&self, k: u32, bricks: (u32, PoolLimits, Option<BrickBox>)) -> Result<Volume> {
+        self.load_as(k, None, Some(bricks))
+    }
+
+    fn load_as(
+        &self,
+        k: u32,
+        device: Option<&DeviceInfo>,
+        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
+    ) -> Result<Volume> {
         self.check_step(k)?;
         if let Source::Channels(channels) = &self.source {
             let loaded = channels
@@ -164,12 +231,12 @@ impl Series {
                 .collect::<Result<Vec<_>>>()?;
             return Volume::join(loaded);
         }
-        let mut volume = self.load_raw(k, device)?;
+        let mut volume = self.load_raw(k, device, bricks)?;
         let first = match self.first.get() {
             Some(first) => *first,
             None if k == 0 => *self.first.get_or_init(|| StepNorm::of(&volume)),
             None => {
-                let step0 = self.load_raw(0, device)?;
+                let step0 = self.load_raw(0, device, bricks)?;
                 *self.first.get_or_init(|| StepNorm::of(&step0))
             }
         };
@@ -177,7 +244,23 @@ impl Series {
         Ok(volume)
     }
 
-    fn load_raw(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
+    fn load_raw(
+        &self,
+        k: u32,
+        device: Option<&DeviceInfo>,
+        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
+    ) -> Result<Volume> {
+        match (&self.source, bricks) {
+            (Source::Still(spec), Some(b)) => spec.load_bricks(&self.options, b),
+            (Source::Files(files), Some(b)) => {
+                VolumeSpec::File(files[k as usize].clone()).load_bricks(&self.options, b)
+            }
+            (Source::Generator { generator, dims, param }, Some(b)) => generator.generate_bricks(*dims, *param, k, b),
+            _ => self.load_dense(k, device),
+        }
+    }
+
+    fn load_dense(&self, k: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
         match &self.source {
             Source::Still(spec) => spec.load_within(&self.options, device),
             Source::Generator { generator, dims, param } => {
@@ -236,7 +319,7 @@ impl StepNorm {
     /// texels are absolute; float texels are `(v - lo) / (hi - lo)` of
     /// their own step's range, so `v` is recovered and mapped onto step 0's.
     fn norm_for(&self, step: &Volume) -> [f32; 2] {
-        if !matches!(step.data, super::VoxelData::F32(_)) {
+        if step.data.texel_bytes() != 4 {
             return self.norm;
         }
         let [lo0, hi0] = self.range;

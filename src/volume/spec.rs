@@ -3,8 +3,8 @@
 
 use super::procedural::Generator;
 use super::raw::RawLayout;
-use super::Volume;
 use super::VoxelType;
+use super::{BrickBox, PoolLimits, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
@@ -102,6 +102,21 @@ impl VolumeSpec {
     }
 
     /// As `load`, checking sizes against `device` before allocating (see `Volume::load_within`).
+    /// As `load_within`, streamed into bricks where the source comes in
+    /// slabs (`Series::load_bricks`); other sources load whole.
+    pub fn load_bricks(&self, options: &LoadOptions, bricks: (u32, PoolLimits, Option<BrickBox>)) -> Result<Volume> {
+        match self {
+            VolumeSpec::Procedural { generator, dims, param } => generator.generate_bricks(*dims, *param, 0, bricks),
+            VolumeSpec::File(path) if is_raw(path, options) => {
+                if !path.exists() {
+                    return Err(not_found(path));
+                }
+                super::raw::load_bricks(path, options.raw, bricks)
+            }
+            _ => self.load_within(options, None),
+        }
+    }
+
     pub fn load_within(&self, options: &LoadOptions, device: Option<&DeviceInfo>) -> Result<Volume> {
         match self {
             VolumeSpec::Procedural { generator, dims, param } => {
@@ -126,14 +141,23 @@ impl VolumeSpec {
     }
 }
 
+fn is_raw(path: &Path, options: &LoadOptions) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
+    options.raw.is_some() || name.ends_with(".raw")
+}
+
+fn not_found(path: &Path) -> Error {
+    Error::io(
+        path,
+        std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
+    )
+}
+
 fn load_file(path: &Path, options: &LoadOptions, device: Option<&DeviceInfo>) -> Result<Volume> {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
-    if options.raw.is_some() || name.ends_with(".raw") {
+    if is_raw(path, options) {
         if !path.exists() {
-            return Err(Error::io(
-                path,
-                std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
-            ));
+            return Err(not_found(path));
         }
         return super::raw::load(path, options.raw, None, device);
     }
@@ -150,10 +174,7 @@ fn load_file(path: &Path, options: &LoadOptions, device: Option<&DeviceInfo>) ->
         ));
     }
     if !path.exists() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::NotFound, "No such file or directory"),
-        ));
+        return Err(not_found(path));
     }
     Err(Error::format(
         path,

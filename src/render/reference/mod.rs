@@ -29,6 +29,14 @@ pub fn sample_raw(volume: &Volume, p: Vec3) -> f32 {
         VoxelData::U8(v) => trilinear(volume, p, |i| v[i] as f32) * (1.0 / 255.0),
         VoxelData::U16(v) => trilinear(volume, p, |i| v[i] as f32) * (1.0 / 65535.0),
         VoxelData::F32(v) => trilinear(volume, p, |i| v[i]),
+        VoxelData::Bricks(b) => {
+            let scale = match b.layout.texel_bytes {
+                1 => 1.0 / 255.0,
+                2 => 1.0 / 65535.0,
+                _ => 1.0,
+            };
+            trilinear(volume, p, |i| b.stored(b.texel_bytes_at(i)) as f32) * scale
+        }
     }
 }
 

@@ -11,7 +11,7 @@ mod shells;
 mod turbulence;
 mod vessels;
 
-use super::{Volume, VoxelData, VoxelType};
+use super::{BrickBox, PoolLimits, PoolStream, Volume, VoxelData, VoxelType};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 
@@ -77,6 +77,31 @@ impl Generator {
 
     /// Step `time` (below `STEPS`) of its animation.
     pub fn generate_at(self, dims: [u32; 3], param: Option<f64>, time: u32) -> Result<Volume> {
+        self.generate_as(dims, param, time, None)
+    }
+
+    /// As `generate_at`, streamed into bricks of `edge` (those inside
+    /// `keep`; `volume::PoolStream`) where the generator makes its volume
+    /// in slabs (nbody): the host then holds the stored bricks, not the
+    /// dense volume. The others are made whole (their upload plans the pool).
+    pub fn generate_bricks(
+        self,
+        dims: [u32; 3],
+        param: Option<f64>,
+        time: u32,
+        (edge, limits, keep): (u32, PoolLimits, Option<BrickBox>),
+    ) -> Result<Volume> {
+        self.generate_as(dims, param, time, Some((edge, limits, keep)))
+    }
+
+    fn generate_as(
+        self,
+        dims: [u32; 3],
+        param: Option<f64>,
+        time: u32,
+        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
+    ) -> Result<Volume> {
+        let streamed = bricks.filter(|_| self == Generator::Nbody);
         if time >= STEPS {
             return Err(Error::invalid(
                 "time",
@@ -86,10 +111,10 @@ impl Generator {
         }
         let n = super::check_dims(dims, self.name())?;
         // The u8 voxels, and the n-body's slabs of f32 density beside them.
-        let peak = if self == Generator::Nbody {
-            nbody::peak_bytes(n)
-        } else {
-            n
+        let peak = match (self, streamed) {
+            (Generator::Nbody, Some(_)) => nbody::peak_bytes(n) - n,
+            (Generator::Nbody, None) => nbody::peak_bytes(n),
+            _ => n,
         };
         let [w, h, d] = dims;
         crate::limits::check_host(format_args!("volume {}:{w}x{h}x{d}", self.name()), peak, 1)?;
@@ -115,7 +140,15 @@ impl Generator {
                 }
                 menger::generate(dims, level as u32, time)
             }
-            Generator::Nbody => nbody::generate(dims, seed(param)?, time),
+            Generator::Nbody => match streamed {
+                Some((edge, limits, keep)) => {
+                    let mut stream = PoolStream::new(dims, 1, edge, limits, keep)?;
+                    nbody::stream(dims, seed(param)?, time, |slab| stream.push(slab))?;
+                    let pool = stream.finish(limits)?;
+                    return self.named(dims, param, VoxelData::Bricks(std::sync::Arc::new(pool)));
+                }
+                None => nbody::generate(dims, seed(param)?, time),
+            },
             Generator::Vessels => vessels::generate(dims, seed(param)?, time),
             Generator::Turbulence => turbulence::generate(dims, seed(param)?, time),
             Generator::Shells => {
@@ -126,11 +159,16 @@ impl Generator {
                 shells::generate(dims, count as u32, time)
             }
         };
+        self.named(dims, param, VoxelData::U8(data))
+    }
+
+    /// The volume of `data`, named by its spec, with the default TF.
+    fn named(self, dims: [u32; 3], param: Option<f64>, data: VoxelData) -> Result<Volume> {
         let name = match param {
             Some(p) => format!("{}:{}x{}x{}:{}", self.name(), dims[0], dims[1], dims[2], p),
             None => format!("{}:{}x{}x{}", self.name(), dims[0], dims[1], dims[2]),
         };
-        let mut volume = Volume::new(name, dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data))?;
+        let mut volume = Volume::new(name, dims, [1.0; 3], VoxelType::U8, data)?;
         volume.default_tf = Some(self.default_tf().to_string());
         Ok(volume)
     }

@@ -92,6 +92,29 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
 
 /// As `generate`, with slabs of at most `slab_bytes` of density.
 fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> Vec<u8> {
+    let mut out = Vec::with_capacity(dims.iter().map(|&d| d as usize).product());
+    let collect: crate::Result<()> = for_each_slab(dims, seed, time, slab_bytes, |slab| {
+        out.extend_from_slice(slab);
+        Ok(())
+    });
+    debug_assert!(collect.is_ok());
+    out
+}
+
+/// The volume's z-layers, whole slabs in z order, to `sink` (which may
+/// stop it with an error): the host holds two slabs of voxels and their
+/// density, not the volume (`volume::PoolStream`).
+pub fn stream(dims: [u32; 3], seed: u64, time: u32, sink: impl FnMut(&[u8]) -> crate::Result<()>) -> crate::Result<()> {
+    for_each_slab(dims, seed, time, SLAB_BYTES, sink)
+}
+
+fn for_each_slab(
+    dims: [u32; 3],
+    seed: u64,
+    time: u32,
+    slab_bytes: u64,
+    mut sink: impl FnMut(&[u8]) -> crate::Result<()>,
+) -> crate::Result<()> {
     let n = dims.map(|d| d as f64);
     let clusters = clusters(dims, seed, time);
     let layer = dims[0] as usize * dims[1] as usize;
@@ -125,9 +148,11 @@ fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> V
     // Pass 2, per slab: deposit its particles in cluster and particle
     // order, then store the log density. Two slabs at a time, whatever
     // the thread count, as `peak_bytes` counts.
-    let mut out = vec![0u8; layer * dims[2] as usize];
     let slab = layer * depth as usize;
-    for (pair, out) in out.chunks_mut(2 * slab).enumerate() {
+    let total = layer * dims[2] as usize;
+    let mut pair_buf = vec![0u8; (2 * slab).min(total)];
+    for pair in 0..slabs.div_ceil(2) {
+        let out = &mut pair_buf[..(2 * slab).min(total - 2 * pair * slab)];
         out.par_chunks_mut(slab).enumerate().for_each(|(half, out)| {
             let s = 2 * pair + half;
             let z0 = s * depth as usize;
@@ -158,8 +183,9 @@ fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> V
                 *o = ((1.0 + d).log2() * 48.0).round().min(255.0) as u8;
             }
         });
+        sink(out)?;
     }
-    out
+    Ok(())
 }
 
 #[cfg(test)]

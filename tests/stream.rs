@@ -1,0 +1,244 @@
+//! Streamed loading into bricks (`volume::PoolStream`): the pool a
+//! generator's slabs or a raw file's layers stream into is the pool planned
+//! from the dense volume, byte for byte (table, slots, images); every voxel
+//! reads back through it; a kept region stores only its bricks and still
+//! normalises by the whole volume; every structure renders a streamed
+//! volume as naive does, and as the dense volume renders; bad streams are
+//! errors.
+
+mod common;
+use common::identity::{standard_views, Fixture};
+use common::{fails, lacuna};
+use lacuna::frame::diff;
+use lacuna::volume::{LoadOptions, PoolLayout, PoolLimits, PoolStream, RawLayout, Series, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+fn limits(max_image_bytes: u64) -> PoolLimits {
+    PoolLimits {
+        max_image_dim: 4096,
+        max_image_bytes,
+        max_table_entries: i32::MAX as u64,
+    }
+}
+
+fn dense(spec: &str) -> Volume {
+    Volume::load(spec, &LoadOptions::default()).unwrap()
+}
+
+/// `spec` streamed into bricks of `edge`, keeping `keep`.
+fn streamed(spec: &str, edge: u32, l: PoolLimits, keep: Option<[[u32; 3]; 2]>) -> Volume {
+    let series = Series::open(spec, &LoadOptions::default()).unwrap();
+    series.load_bricks(0, (edge, l, keep)).unwrap()
+}
+
+fn host(v: &Volume) -> &lacuna::volume::HostPool {
+    match &v.data {
+        VoxelData::Bricks(p) => p,
+        _ => panic!("{} was not streamed", v.name),
+    }
+}
+
+#[test]
+fn a_streamed_pool_is_the_planned_pool_byte_for_byte() {
+    // Odd dims; an edge that divides nothing, the default, and a pool split
+    // over several images.
+    for (spec, edge, max_bytes) in [
+        ("nbody:37x29x45", 4, u64::MAX),
+        ("nbody:37x29x45", 16, u64::MAX),
+        ("nbody:48", 8, 100_000),
+    ] {
+        let d = dense(spec);
+        let s = streamed(spec, edge, limits(max_bytes), None);
+        let planned = PoolLayout::of_volume(&d, edge, limits(max_bytes)).unwrap();
+        let p = host(&s);
+        assert_eq!(p.layout.table, planned.table, "{spec}/{edge}");
+        assert_eq!(p.layout.stored, planned.stored);
+        assert_eq!(p.layout.values, planned.values);
+        assert_eq!(p.layout.images, planned.images);
+        assert!(planned.images.len() > 1 || max_bytes == u64::MAX);
+        let VoxelData::U8(bytes) = &d.data else {
+            panic!("nbody is u8")
+        };
+        for k in 0..planned.images.len() {
+            let mut want = vec![0u8; planned.image_bytes(k) as usize];
+            planned.fill(k, bytes, &mut want);
+            let mut got = vec![0u8; want.len()];
+            p.fill(k, 0, &mut got);
+            assert!(got == want, "{spec}/{edge}: image {k} differs");
+        }
+        // Every voxel through the table, and the volume's own fields.
+        assert!((0..d.data.len()).all(|i| s.data.texel(i) == d.data.texel(i)));
+        assert_eq!((s.dims, s.value_range, s.norm), (d.dims, d.value_range, d.norm));
+        assert_eq!(
+            (s.name.as_str(), s.default_tf.as_deref()),
+            (d.name.as_str(), d.default_tf.as_deref())
+        );
+    }
+}
+
+#[test]
+fn a_raw_file_streams_as_it_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    // uint16, odd dims, a constant slab and a varying rest.
+    let dims = [23u32, 17, 29];
+    let mut bytes = Vec::new();
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let v: u16 = if x < 9 { 7 } else { (x * 31 + y * 7 + z * 1013) as u16 };
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let path = dir.path().join("slabs_23x17x29_uint16.raw");
+    std::fs::write(&path, &bytes).unwrap();
+    let spec = path.to_str().unwrap();
+    let d = dense(spec);
+    let s = streamed(spec, 4, limits(u64::MAX), None);
+    let planned = PoolLayout::of_volume(&d, 4, limits(u64::MAX)).unwrap();
+    assert_eq!(host(&s).layout.table, planned.table);
+    assert!(planned.constant_bricks > 0);
+    assert!((0..d.data.len()).all(|i| s.data.texel(i) == d.data.texel(i)));
+    assert_eq!(
+        (s.value_range, s.norm, s.source_type),
+        (d.value_range, d.norm, VoxelType::U16)
+    );
+    // A file shorter than its dims is refused before any layer is read.
+    let short = dir.path().join("short_23x17x29_uint16.raw");
+    std::fs::write(&short, &bytes[..bytes.len() - 2]).unwrap();
+    let series = Series::open(short.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let e = series
+        .load_bricks(0, (16, limits(u64::MAX), None))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("needs 22678"), "{e}");
+    // --dims and --type name a file's layout as its name does.
+    let options = LoadOptions {
+        raw: Some(RawLayout {
+            dims,
+            ty: VoxelType::U16,
+        }),
+    };
+    let plain = dir.path().join("plain.bin");
+    std::fs::write(&plain, &bytes).unwrap();
+    let series = Series::open(plain.to_str().unwrap(), &options).unwrap();
+    assert_eq!(series.streamed_layout(), Some((dims, VoxelType::U16)));
+    let v = series.load_bricks(0, (4, limits(u64::MAX), None)).unwrap();
+    assert_eq!(host(&v).layout.table, planned.table);
+}
+
+#[test]
+fn a_kept_region_stores_only_its_bricks_and_normalises_by_the_whole() {
+    let d = dense("nbody:64");
+    let keep = [[1, 0, 0], [3, 4, 2]];
+    let s = streamed("nbody:64", 16, limits(u64::MAX), Some(keep));
+    let p = host(&s);
+    let counts = p.layout.counts;
+    for &b in &p.layout.stored {
+        let c = [b % counts[0], b / counts[0] % counts[1], b / (counts[0] * counts[1])];
+        assert!(
+            (0..3).all(|a| c[a] >= keep[0][a] && c[a] < keep[1][a]),
+            "brick {c:?} stored"
+        );
+    }
+    let whole = PoolLayout::of_volume(&d, 16, limits(u64::MAX)).unwrap();
+    assert!(p.layout.stored.len() < whole.stored.len());
+    // Inside the kept bricks every voxel is the volume's.
+    for z in 0..32 {
+        for y in 0..64 {
+            for x in 16..48 {
+                let i = d.index(x, y, z);
+                assert_eq!(s.data.texel(i), d.data.texel(i));
+            }
+        }
+    }
+    assert_eq!((s.value_range, s.norm), (d.value_range, d.norm));
+}
+
+#[test]
+fn every_structure_renders_a_streamed_volume_as_the_dense_one() {
+    let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+    // Three of the standard views: oblique, axis-aligned, perspective inside.
+    let views: Vec<_> = standard_views()
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| [0, 2, 6].contains(i))
+        .map(|(_, v)| v)
+        .collect();
+    let d = dense("nbody:37x29x45");
+    let from_dense = Fixture::new().check("nbody dense", &d, &tf, &views);
+    let s = streamed("nbody:37x29x45", 16, PoolLimits::of(common::gpu().info()), None);
+    let from_stream = Fixture::with_bricks(16).check("nbody streamed", &s, &tf, &views);
+    for (i, (a, b)) in from_dense.iter().zip(&from_stream).enumerate() {
+        let st = diff(a, b).unwrap();
+        assert_eq!(st.differing, 0, "view {i}: {st:?}");
+    }
+}
+
+#[test]
+fn render_streams_what_does_not_fit_and_says_so() {
+    // Auto streams where the dense image passes the device's 3D limit.
+    let ctx = common::gpu();
+    let too_long = format!("nbody:{}x3x2", ctx.info().max_image_dimension_3d + 1);
+    drop(ctx);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.exr");
+    let r = lacuna(
+        &[
+            "render",
+            &too_long,
+            "--size",
+            "32x32",
+            "--validate",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("storage bricks of 16^3"), "{}", r.stdout);
+    assert!(r.stdout.contains("streamed into bricks"), "{}", r.stdout);
+    assert!(r.stdout.contains("host peak"), "{}", r.stdout);
+    // An explicit dense store of it is refused by that limit.
+    fails(
+        &["render", &too_long, "--size", "32x32", "--storage", "dense"],
+        &[],
+        "maxImageDimension3D",
+    );
+    // Bricks asked for a small volume stream too, and say so.
+    let r = lacuna(
+        &[
+            "render",
+            "nbody:40",
+            "--size",
+            "32x32",
+            "--storage",
+            "bricks",
+            "--validate",
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("streamed into bricks"), "{}", r.stdout);
+    let r = lacuna(&["render", "nbody:40", "--size", "32x32", "--validate"], &[]);
+    assert!(
+        r.stdout.contains("storage dense") && !r.stdout.contains("streamed"),
+        "{}",
+        r.stdout
+    );
+}
+
+#[test]
+fn a_broken_stream_is_an_error() {
+    let l = limits(u64::MAX);
+    let mut s = PoolStream::new([8, 8, 8], 1, 4, l, None).unwrap();
+    let e = s.push(&[0u8; 65]).unwrap_err().to_string();
+    assert!(e.contains("whole layers of 64 bytes"), "{e}");
+    s.push(&[0u8; 64 * 3]).unwrap();
+    let e = s.finish(l).unwrap_err().to_string();
+    assert!(e.contains("3 of 8 layers"), "{e}");
+    let mut s = PoolStream::new([8, 8, 8], 1, 4, l, None).unwrap();
+    let e = s.push(&[0u8; 64 * 9]).unwrap_err().to_string();
+    assert!(e.contains("at most 8"), "{e}");
+    assert!(PoolStream::new([8, 8, 8], 1, 0, l, None).is_err());
+}
