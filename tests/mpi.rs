@@ -121,7 +121,7 @@ fn bad_requests_across_ranks_are_one_error() {
     );
     fails_on_ranks(
         2,
-        &["no-such-file.raw", "--dims", "8x8x8", "--type", "uint8"],
+        &["no-such-file.raw", "--dims", "64x64x64", "--type", "uint8"],
         "no-such-file.raw",
     );
     // A file shorter than its dims, found before any rank renders.
@@ -131,7 +131,7 @@ fn bad_requests_across_ranks_are_one_error() {
     let short = short.to_str().unwrap();
     fails_on_ranks(
         2,
-        &[short, "--dims", "8x8x8", "--type", "uint8"],
-        "holds 100 bytes of voxel data but 8x8x8 uint8 needs 512",
+        &[short, "--dims", "64x64x64", "--type", "uint8"],
+        "holds 100 bytes of voxel data but 64x64x64 uint8 needs 262144",
     );
 }

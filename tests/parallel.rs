@@ -19,7 +19,13 @@ use lacuna::{TransferFunction, Volume};
 
 #[test]
 fn blocks_tile_the_bricks_and_each_rank_has_one() {
-    for (dims, edge) in [([64, 64, 64], 16), ([37, 29, 45], 16), ([100, 7, 9], 8), ([5, 5, 5], 1)] {
+    for (dims, edge) in [
+        ([64, 64, 64], 16),
+        ([37, 29, 45], 16),
+        ([100, 7, 9], 8),
+        ([5, 5, 5], 1),
+        ([48, 48, 16], 16),
+    ] {
         let counts = dims.map(|d: u32| d.div_ceil(edge));
         let total = counts.iter().product::<u32>();
         for ranks in 1..=total.min(11) {
@@ -244,4 +250,61 @@ fn mpirun_without_the_feature_is_one_error() {
     assert!(!across_ranks(None, false).unwrap());
     assert!(across_ranks(Some(2), true).unwrap());
     assert!(!across_ranks(None, true).unwrap());
+}
+
+#[test]
+fn segments_under_a_crop_clip_planes_and_jitter_blend_to_the_frame_and_match_the_cpu() {
+    use lacuna::render::{reference, Clip};
+    let ctx = gpu();
+    let volume = load("turbulence:37x29x45");
+    let tf = TransferFunction::parse("ramp:0.3:0.9").unwrap();
+    // The crop box misses part of every block; the plane cuts across the
+    // volume, and some rays pass beside the crop entirely.
+    let clip = Clip::default()
+        .crop([4.0, 3.0, 6.0], [30.0, 25.0, 40.0])
+        .unwrap()
+        .plane([1.0, 0.4, -0.2, -9.0])
+        .unwrap();
+    let desc = cam(64, 200.0, -30.0, Projection::Orthographic, 0.7)
+        .to_builder()
+        .clip(clip)
+        .jitter(true)
+        .filter(Filter::Manual)
+        .build()
+        .unwrap();
+    let whole = common::render(&ctx, &volume, &tf, &desc, accel("naive"));
+    assert!(whole.pixels.iter().filter(|p| p[3] > 0.001).count() > 20);
+    for ranks in [2, 3] {
+        let blended = rendered_in_parts(&volume, &tf, &desc, ranks, &[accel("auto"), accel("grid")]);
+        let d = diff(&whole, &blended).unwrap();
+        assert!(d.max_abs < 1e-5, "{ranks} parts: {d:?}");
+    }
+    // Each part against the CPU reference of the same part.
+    let split = Decomposition::new(volume.dims, 16, 3).unwrap();
+    for block in &split.blocks {
+        let (lo, hi) = block.bounds();
+        let part = desc.to_builder().segment(Some([lo, hi])).build().unwrap();
+        let gpu_part = common::render(&ctx, &volume, &tf, &part, accel("naive"));
+        let cpu_part = reference::render_frame(&volume, &tf, &part).unwrap();
+        let d = diff(&gpu_part, &cpu_part).unwrap();
+        assert!(d.max_abs <= 1e-4, "block {block:?}: {d:?}");
+    }
+}
+
+#[test]
+fn a_segment_is_a_composite_frame_s_part_only() {
+    let e = cam(16, 30.0, 20.0, Projection::Orthographic, 0.5)
+        .to_builder()
+        .mode(lacuna::render::Mode::Mip)
+        .segment(Some([[0.0; 3], [8.0; 3]]))
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("composite mode only"), "{e}");
+    let e = FrameDesc::builder(8, 8)
+        .segment(Some([[4.0, 0.0, 0.0], [2.0, 8.0, 8.0]]))
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("invalid segment"), "{e}");
 }

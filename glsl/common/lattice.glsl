@@ -247,7 +247,7 @@ bool march_pixel(uvec2 px, out March m) {
     // A data-parallel rank's part of the ray (src/parallel): the lattice
     // samples inside its block, each weighted as the whole ray weights it,
     // so the blocks' parts blended front to back are the whole ray.
-    if (hit && params.segment != 0u) {
+    if (hit && !m.done && params.segment != 0u) {
         vec2 part = segment_interval(m.ray);
         march_set_stop(m, min(m.t_exit, part.y));
         march_skip_to(m, part.x);

@@ -2,14 +2,14 @@
 //! block of the volume, IceT composites the ranks' frames in visibility
 //! order, rank 0 prints and writes the frame (`lacuna::parallel`).
 
-use super::render::{build, describe, frames, look_notes, RenderArgs};
+use super::render::{build, describe, frames, look_notes, peak_host_bytes, RenderArgs};
 use super::{context, tf_for, validation_verdict};
 use lacuna::accel::BuildInput;
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
 use lacuna::parallel::{Decomposition, World};
 use lacuna::render::{FrameDesc, Mode, Renderer, Scene};
-use lacuna::volume::{GpuVolume, Storage, POOL_BRICK};
+use lacuna::volume::{GpuVolume, PoolLimits, Storage, POOL_BRICK};
 use lacuna::{Error, Result, Timings, TransferFunction};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -21,8 +21,8 @@ struct Part {
     order: Vec<u32>,
     timings: Timings,
     /// Per rank, gathered on rank 0: load, upload and build wall ms, march
-    /// GPU ms, bricks stored.
-    stats: [f64; 5],
+    /// GPU ms, bricks stored, host peak bytes.
+    stats: [f64; 6],
     report: Vec<String>,
     desc: FrameDesc,
 }
@@ -33,18 +33,28 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let world = World::init()?;
     let part = render_block(args, &world);
     match (world.first_failed(part.is_ok()), part) {
-        (None, Ok(part)) => finish(args, &world, part),
-        (None, Err(e)) => Err(e),
-        // The lowest failing rank says why, before any rank exits (mpirun
-        // ends the others at the first non-zero exit).
-        (Some(first), part) => {
-            if let (true, Err(e)) = (first == world.rank, part) {
-                eprintln!("error: {e} (rank {} of {})", world.rank, world.size);
+        (None, Ok(part)) => {
+            let composited = world.composite(part.desc.size(), &part.frame.pixels, &part.order);
+            match (world.first_failed(composited.is_ok()), composited) {
+                (None, Ok(c)) => finish(args, &world, part, c),
+                (first, c) => fail(&world, first, c.map(|_| ())),
             }
-            world.barrier();
-            Ok(ExitCode::from(2))
+        }
+        (first, part) => fail(&world, first, part.map(|_| ())),
+    }
+}
+
+/// Ends this rank after the ranks agreed that `first` failed: that rank
+/// says why, before any rank exits (mpirun ends the others at the first
+/// non-zero exit).
+fn fail(world: &World, first: Option<u32>, outcome: Result<()>) -> Result<ExitCode> {
+    if let (Some(r), Err(e)) = (first, outcome) {
+        if r == world.rank {
+            eprintln!("error: {e} (rank {} of {})", world.rank, world.size);
         }
     }
+    world.barrier();
+    Ok(ExitCode::from(2))
 }
 
 fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
@@ -70,7 +80,16 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = Instant::now();
-    let volume = series.load(args.volume.time, None)?;
+    // A source that comes in slabs is streamed, keeping only this rank's
+    // bricks and ghosts; others load whole (the upload keeps the bricks).
+    let volume = match series.streamed_layout() {
+        Some((dims, _)) => {
+            let split = Decomposition::new(dims, edge, world.size)?;
+            let keep = split.blocks[world.rank as usize].with_ghosts(split.counts);
+            series.load_bricks(args.volume.time, (edge, PoolLimits::of(ctx.info()), Some(keep)))?
+        }
+        None => series.load(args.volume.time, None)?,
+    };
     let load_ms = clock.elapsed().as_secs_f64() * 1e3;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
@@ -146,6 +165,7 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
             build_ms,
             timings.phase("march")?,
             pool.map_or(0.0, |p| p.stored as f64),
+            peak_host_bytes().unwrap_or(0) as f64,
         ],
         frame,
         order: split.order(&rays),
@@ -156,9 +176,13 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     })
 }
 
-/// Composites the ranks' frames; rank 0 prints the report and writes.
-fn finish(args: &RenderArgs, world: &World, part: Part) -> Result<ExitCode> {
-    let (pixels, composite_ms) = world.composite(part.desc.size(), &part.frame.pixels, &part.order)?;
+/// Rank 0 prints the report and writes the composited frame.
+fn finish(
+    args: &RenderArgs,
+    world: &World,
+    part: Part,
+    (pixels, composite_ms): (Option<Vec<[f32; 4]>>, f64),
+) -> Result<ExitCode> {
     let stats = world.gather(&part.stats);
     let Some(pixels) = pixels else {
         return Ok(validation_verdict(&part.ctx));
@@ -173,10 +197,15 @@ fn finish(args: &RenderArgs, world: &World, part: Part) -> Result<ExitCode> {
     }
     let order: Vec<String> = part.order.iter().map(u32::to_string).collect();
     println!("per rank (wall ms for load, upload and build; GPU ms for march):");
-    for (rank, s) in stats.chunks_exact(5).enumerate() {
+    for (rank, s) in stats.chunks_exact(6).enumerate() {
         println!(
-            "  rank {rank}: load {:.0}, upload {:.0}, build {:.1}, march {:.3}, bricks stored {}",
-            s[0], s[1], s[2], s[3], s[4]
+            "  rank {rank}: load {:.0}, upload {:.0}, build {:.1}, march {:.3}, bricks stored {}, host peak {:.1} MiB",
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            s[4],
+            s[5] / (1u64 << 20) as f64
         );
     }
     println!(

@@ -17,6 +17,7 @@ mod matrices;
 mod mode;
 mod orbit;
 mod parse;
+pub use parse::parse_size;
 mod shading;
 
 pub use crate::volume::Filter;
@@ -580,19 +581,15 @@ impl FrameBuilder {
                     "must be finite, LO <= HI per axis",
                 ));
             }
+            // Parts blend front to back: the composite sum only.
+            if d.mode != Mode::Composite {
+                return Err(Error::invalid(
+                    "segment",
+                    d.mode.name(),
+                    "parts of a frame blend in composite mode only",
+                ));
+            }
         }
         Ok(d)
     }
-}
-
-/// Parses `WxH` (both > 0).
-pub fn parse_size(s: &str) -> Result<(u32, u32)> {
-    let bad = |why: &str| Error::invalid("size", s, why.to_string());
-    let (w, h) = s.split_once('x').ok_or_else(|| bad("expected WxH"))?;
-    let w: u32 = w.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
-    let h: u32 = h.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
-    if w == 0 || h == 0 {
-        return Err(bad("width and height must be > 0"));
-    }
-    Ok((w, h))
 }

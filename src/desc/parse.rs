@@ -19,3 +19,15 @@ pub(crate) fn numbers(what: &'static str, s: &str, n: usize, seps: &[char], usag
     }
     Ok(values)
 }
+
+/// Parses `WxH` (both > 0).
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let bad = |why: &str| Error::invalid("size", s, why.to_string());
+    let (w, h) = s.split_once('x').ok_or_else(|| bad("expected WxH"))?;
+    let w: u32 = w.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    let h: u32 = h.trim().parse().map_err(|_| bad("expected WxH with integers"))?;
+    if w == 0 || h == 0 {
+        return Err(bad("width and height must be > 0"));
+    }
+    Ok((w, h))
+}

@@ -105,6 +105,38 @@ impl Decomposition {
         (bricks[1][axis] * self.edge).min(self.dims[axis]) - bricks[0][axis] * self.edge
     }
 
+    /// Where to cut `bricks` along `axis` for `ranks` ranks, and the ranks
+    /// of the low side: half the ranks at the brick nearest their share of
+    /// the voxels; where a side would have fewer bricks than ranks, the cut
+    /// nearest the middle whose sides can hold their shares. None where the
+    /// side cannot be cut so.
+    fn cut(&self, bricks: BrickBox, axis: usize, ranks: u32) -> Option<(u32, u32)> {
+        let [lo, hi] = bricks;
+        let len = hi[axis] - lo[axis];
+        let across: u64 = (0..3).filter(|&a| a != axis).map(|a| (hi[a] - lo[a]) as u64).product();
+        let ranks = ranks as u64;
+        // The low side's ranks for a cut: its share of the voxels, within
+        // what each side's bricks can hold.
+        let lo_ranks_at = |cut: u32, want: u64| -> Option<u64> {
+            let (lo_bricks, hi_bricks) = (cut as u64 * across, (len - cut) as u64 * across);
+            let least = ranks.saturating_sub(hi_bricks).max(1);
+            let most = lo_bricks.min(ranks - 1);
+            (least <= most).then(|| want.clamp(least, most))
+        };
+        let half = ranks / 2;
+        let share = self.voxels(bricks, axis) as f64 * half as f64 / ranks as f64;
+        let cut = ((share / self.edge as f64).round() as u32).clamp(1, len.max(2) - 1);
+        if len >= 2 && lo_ranks_at(cut, half) == Some(half) {
+            return Some((cut, half as u32));
+        }
+        let mut cuts: Vec<u32> = (1..len).collect();
+        cuts.sort_by_key(|&c| (2 * c as i64 - len as i64).abs());
+        cuts.into_iter().find_map(|cut| {
+            let want = (ranks as f64 * cut as f64 / len as f64).round() as u64;
+            lo_ranks_at(cut, want).map(|r| (cut, r as u32))
+        })
+    }
+
     fn split(&mut self, bricks: BrickBox, ranks: u32) -> Result<Node> {
         if ranks == 1 {
             let rank = self.blocks.len() as u32;
@@ -115,37 +147,25 @@ impl Decomposition {
             });
             return Ok(Node::Leaf(rank));
         }
-        let lo_ranks = ranks / 2;
-        let hi_ranks = ranks - lo_ranks;
         // Longest side first; a side of one brick cannot be cut.
         let mut axes = [0, 1, 2];
         axes.sort_by_key(|&a| std::cmp::Reverse(self.voxels(bricks, a)));
         for axis in axes {
-            let [lo, hi] = bricks;
-            let len = hi[axis] - lo[axis];
-            if len < 2 {
-                continue;
+            if let Some((cut, lo_ranks)) = self.cut(bricks, axis, ranks) {
+                let [lo, _] = bricks;
+                let mut lo_box = bricks;
+                lo_box[1][axis] = lo[axis] + cut;
+                let mut hi_box = bricks;
+                hi_box[0][axis] = lo[axis] + cut;
+                let lo_node = self.split(lo_box, lo_ranks)?;
+                let hi_node = self.split(hi_box, ranks - lo_ranks)?;
+                return Ok(Node::Split {
+                    axis,
+                    at: (lo[axis] + cut) * self.edge,
+                    lo: Box::new(lo_node),
+                    hi: Box::new(hi_node),
+                });
             }
-            let across: u64 = (0..3).filter(|&a| a != axis).map(|a| (hi[a] - lo[a]) as u64).product();
-            // The cut nearest the low side's share of voxels.
-            let share = self.voxels(bricks, axis) as f64 * lo_ranks as f64 / ranks as f64;
-            let cut = ((share / self.edge as f64).round() as u32).clamp(1, len - 1);
-            let (lo_bricks, hi_bricks) = (cut as u64 * across, (len - cut) as u64 * across);
-            if lo_bricks < lo_ranks as u64 || hi_bricks < hi_ranks as u64 {
-                continue;
-            }
-            let mut lo_box = bricks;
-            lo_box[1][axis] = lo[axis] + cut;
-            let mut hi_box = bricks;
-            hi_box[0][axis] = lo[axis] + cut;
-            let lo_node = self.split(lo_box, lo_ranks)?;
-            let hi_node = self.split(hi_box, hi_ranks)?;
-            return Ok(Node::Split {
-                axis,
-                at: (lo[axis] + cut) * self.edge,
-                lo: Box::new(lo_node),
-                hi: Box::new(hi_node),
-            });
         }
         Err(Error::invalid(
             "rank count",

@@ -34,6 +34,11 @@ int lacuna_mpi_min(int v) {
     return out;
 }
 
+/* Ends every rank (a rank that panicked: the others would wait for it). */
+void lacuna_mpi_abort(int code) {
+    MPI_Abort(MPI_COMM_WORLD, code);
+}
+
 void lacuna_mpi_barrier(void) {
     MPI_Barrier(MPI_COMM_WORLD);
 }

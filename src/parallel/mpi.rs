@@ -10,6 +10,7 @@ extern "C" {
     fn lacuna_mpi_finalize();
     fn lacuna_mpi_min(v: c_int) -> c_int;
     fn lacuna_mpi_barrier();
+    fn lacuna_mpi_abort(code: c_int);
     fn lacuna_mpi_gather(values: *const c_double, n: c_int, out: *mut c_double);
     fn lacuna_icet_composite(
         width: c_int,
@@ -121,6 +122,13 @@ impl World {
 
 impl Drop for World {
     fn drop(&mut self) {
+        // A panic unwinding past the ranks' agreement would leave the others
+        // waiting in a collective, and MPI_Finalize waiting for them: abort
+        // the job instead.
+        if std::thread::panicking() {
+            // SAFETY: ends the process and every rank.
+            unsafe { lacuna_mpi_abort(70) };
+        }
         // SAFETY: once per process, after every collective.
         unsafe { lacuna_mpi_finalize() };
     }

@@ -54,6 +54,11 @@ fn main() -> ExitCode {
     };
     let result = match task {
         "run" => setup(RUN).and_then(|()| cargo(&["run", "--release", "--"], strip_dashes(rest))),
+        // Without dpkg there is no IceT to unpack: the tests without MPI.
+        "test" if !quiet_ok("dpkg-query", &["--version"]) => {
+            eprintln!("note: no dpkg, so no IceT to unpack: the tests run without the `mpi` feature");
+            setup(&[RUN, TEST].concat()).and_then(|()| cargo(&["test"], rest))
+        }
         "test" => setup(&[RUN, TEST, MPI].concat())
             .and_then(|()| icet())
             .and_then(|()| cargo(&["test", "--features", "mpi"], rest)),
@@ -214,7 +219,7 @@ fn icet() -> Result<(), u8> {
             return Err(fail("dpkg-deb -x failed"));
         }
     }
-    let mut found = (0, 0);
+    let mut found = (0, [false; 2]);
     let (include, lib) = (dir.join("include"), dir.join("lib"));
     std::fs::create_dir_all(&include)
         .and_then(|()| std::fs::create_dir_all(&lib))
@@ -232,12 +237,12 @@ fn icet() -> Result<(), u8> {
             } else if (name.starts_with("libvtkIceTCore") || name.starts_with("libvtkIceTMPI")) && name.contains(".so")
             {
                 std::fs::copy(&path, lib.join(&name)).map_err(|_| fail("cannot copy a library"))?;
-                found.1 += 1;
+                found.1[name.starts_with("libvtkIceTMPI") as usize] = true;
             }
         }
     }
     let _ = std::fs::remove_dir_all(&debs);
-    if found.0 < 3 || found.1 < 2 {
+    if found.0 < 3 || found.1 != [true; 2] {
         let _ = std::fs::remove_dir_all(&dir);
         return Err(fail("the packages hold no IceT headers or libraries"));
     }
