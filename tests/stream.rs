@@ -10,7 +10,9 @@ mod common;
 use common::identity::{standard_views, Fixture};
 use common::{fails, lacuna};
 use lacuna::frame::diff;
-use lacuna::volume::{LoadOptions, PoolLayout, PoolLimits, PoolStream, RawLayout, Series, VoxelData, VoxelType};
+use lacuna::volume::{
+    LoadOptions, PoolLayout, PoolLimits, PoolStream, RawLayout, Series, StreamTo, VoxelData, VoxelType,
+};
 use lacuna::{TransferFunction, Volume};
 
 fn limits(max_image_bytes: u64) -> PoolLimits {
@@ -28,7 +30,7 @@ fn dense(spec: &str) -> Volume {
 /// `spec` streamed into bricks of `edge`, keeping `keep`.
 fn streamed(spec: &str, edge: u32, l: PoolLimits, keep: Option<[[u32; 3]; 2]>) -> Volume {
     let series = Series::open(spec, &LoadOptions::default()).unwrap();
-    series.load_bricks(0, (edge, l, keep)).unwrap()
+    series.load_bricks(0, &StreamTo::new(edge, l).keep(keep)).unwrap()
 }
 
 fn host(v: &Volume) -> &lacuna::volume::HostPool {
@@ -108,7 +110,7 @@ fn a_raw_file_streams_as_it_loads() {
     std::fs::write(&short, &bytes[..bytes.len() - 2]).unwrap();
     let series = Series::open(short.to_str().unwrap(), &LoadOptions::default()).unwrap();
     let e = series
-        .load_bricks(0, (16, limits(u64::MAX), None))
+        .load_bricks(0, &StreamTo::new(16, limits(u64::MAX)))
         .unwrap_err()
         .to_string();
     assert!(e.contains("needs 22678"), "{e}");
@@ -123,7 +125,7 @@ fn a_raw_file_streams_as_it_loads() {
     std::fs::write(&plain, &bytes).unwrap();
     let series = Series::open(plain.to_str().unwrap(), &options).unwrap();
     assert_eq!(series.streamed_layout(), Some((dims, VoxelType::U16)));
-    let v = series.load_bricks(0, (4, limits(u64::MAX), None)).unwrap();
+    let v = series.load_bricks(0, &StreamTo::new(4, limits(u64::MAX))).unwrap();
     assert_eq!(host(&v).layout.table, planned.table);
 }
 
@@ -241,4 +243,18 @@ fn a_broken_stream_is_an_error() {
     let e = s.push(&[0u8; 64 * 9]).unwrap_err().to_string();
     assert!(e.contains("at most 8"), "{e}");
     assert!(PoolStream::new([8, 8, 8], 1, 0, l, None).is_err());
+}
+
+#[test]
+fn progress_hears_every_brick_row_in_order() {
+    let heard = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let log = heard.clone();
+    let to = StreamTo::new(16, limits(u64::MAX)).progress(std::sync::Arc::new(move |done, total| {
+        log.lock().unwrap().push((done, total));
+    }));
+    let series = Series::open("nbody:40x30x50", &LoadOptions::default()).unwrap();
+    series.load_bricks(0, &to).unwrap();
+    let heard = heard.lock().unwrap();
+    // Rows of 16 layers, each heard once its next row's first layer is in.
+    assert_eq!(*heard, vec![(17, 50), (33, 50), (49, 50), (50, 50)]);
 }

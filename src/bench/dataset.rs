@@ -22,7 +22,7 @@ pub fn load(
     label: String,
     tf: Option<&str>,
 ) -> Result<Loaded> {
-    let volume = series.load_stored(time.map_or(0, |[first, _]| first), storage, device)?;
+    let volume = series.load_stored(time.map_or(0, |[first, _]| first), storage, device, None)?;
     let tf = match tf {
         Some(spec) => TransferFunction::parse_channels(spec)?,
         None => volume.default_transfer_function()?,

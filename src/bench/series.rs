@@ -85,7 +85,7 @@ impl StepBench<'_> {
         for k in first..=last {
             progress.at(&format!("{label} - new step {k}"));
             let t = Instant::now();
-            let volume = series.load_stored(k, self.storage, self.ctx.info())?;
+            let volume = series.load_stored(k, self.storage, self.ctx.info(), None)?;
             let load_ms = ms_since(t);
             // One upload a step: every structure reads the same one.
             let t = Instant::now();

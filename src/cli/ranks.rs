@@ -9,7 +9,7 @@ use lacuna::frame::Frame;
 use lacuna::gpu::Context;
 use lacuna::parallel::{Decomposition, World};
 use lacuna::render::{FrameDesc, Mode, Renderer, Scene};
-use lacuna::volume::{GpuVolume, PoolLimits, Storage, POOL_BRICK};
+use lacuna::volume::{GpuVolume, PoolLimits, Storage, StreamTo, POOL_BRICK};
 use lacuna::{Error, Result, Timings, TransferFunction};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -86,7 +86,8 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
         Some((dims, _)) => {
             let split = Decomposition::new(dims, edge, world.size)?;
             let keep = split.blocks[world.rank as usize].with_ghosts(split.counts);
-            series.load_bricks(args.volume.time, (edge, PoolLimits::of(ctx.info()), Some(keep)))?
+            let to = StreamTo::new(edge, PoolLimits::of(ctx.info())).keep(Some(keep));
+            series.load_bricks(args.volume.time, &to)?
         }
         None => series.load(args.volume.time, None)?,
     };

@@ -129,7 +129,12 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = std::time::Instant::now();
-    let volume = series.load_stored(args.volume.time, args.volume.storage, ctx.info())?;
+    let volume = series.load_stored(
+        args.volume.time,
+        args.volume.storage,
+        ctx.info(),
+        Some(stream_bar(&args.volume.volume)),
+    )?;
     let load_ms = clock.elapsed().as_secs_f64() * 1e3;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
@@ -297,4 +302,27 @@ pub(super) fn peak_host_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// A progress bar for a stream into bricks (on a terminal, once it has
+/// taken a second).
+pub(super) fn stream_bar(what: &str) -> lacuna::volume::StreamProgress {
+    let bar = indicatif::ProgressBar::new(1);
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} layers, ETA {eta}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(format!("streaming {what} into bricks"));
+    let start = std::time::Instant::now();
+    std::sync::Arc::new(move |done: u32, total: u32| {
+        if start.elapsed().as_secs_f64() > 1.0 {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        }
+        if done == total {
+            bar.finish_and_clear();
+        }
+    })
 }

@@ -2,7 +2,7 @@
 //! layout from `--dims`/`--type`. Little-endian.
 
 use super::decode::{decode, VoxelType};
-use super::{BrickBox, PoolLimits, PoolStream, Volume, VoxelData};
+use super::{StreamTo, Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::Path;
@@ -92,11 +92,7 @@ pub fn load(
 /// uint16 files are read a slab at a time into a `PoolStream` (their
 /// texels are their bytes), so the host never holds the dense volume;
 /// other types load whole.
-pub fn load_bricks(
-    path: &Path,
-    layout: Option<RawLayout>,
-    (edge, limits, keep): (u32, PoolLimits, Option<BrickBox>),
-) -> Result<Volume> {
+pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Result<Volume> {
     let layout = match layout {
         Some(l) => l,
         None => layout_from_name(path)?,
@@ -109,7 +105,7 @@ pub fn load_bricks(
     let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
     check_length(path, len, layout)?;
     let [w, h, d] = layout.dims;
-    let mut stream = PoolStream::new(layout.dims, tb, edge, limits, keep)?;
+    let mut stream = to.stream(layout.dims, tb)?;
     let layer = w as usize * h as usize * tb as usize;
     // Slabs of about 64 MiB.
     let per_slab = ((64usize << 20) / layer).clamp(1, d as usize);
@@ -125,7 +121,7 @@ pub fn load_bricks(
         stream.push(&slab[..n * layer])?;
         z += n;
     }
-    let pool = stream.finish(limits)?;
+    let pool = stream.finish(to.limits)?;
     let data = VoxelData::Bricks(std::sync::Arc::new(pool));
     Volume::new(path.display().to_string(), layout.dims, [1.0; 3], layout.ty, data)
 }

@@ -14,7 +14,7 @@
 
 use super::procedural::{self, Generator};
 use super::spec::{LoadOptions, VolumeSpec};
-use super::{BrickBox, PoolLimits, Storage, Volume, VoxelType, POOL_BRICK};
+use super::{PoolLimits, Storage, StreamProgress, StreamTo, Volume, VoxelType, POOL_BRICK};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
@@ -179,12 +179,25 @@ impl Series {
     /// Step `k` for `storage` on the device `info` describes: dense, checked
     /// against the device before it is read or made; streamed into bricks
     /// (`load_bricks`) for bricks, and for auto where the source comes in
-    /// slabs and its dense image would not fit; else whole.
-    pub fn load_stored(&self, k: u32, storage: Storage, info: &DeviceInfo) -> Result<Volume> {
-        let limits = PoolLimits::of(info);
+    /// slabs and its dense image would not fit; else whole. `progress`
+    /// hears of a stream's brick rows.
+    pub fn load_stored(
+        &self,
+        k: u32,
+        storage: Storage,
+        info: &DeviceInfo,
+        progress: Option<StreamProgress>,
+    ) -> Result<Volume> {
+        let to = |edge| {
+            let to = StreamTo::new(edge, PoolLimits::of(info));
+            match &progress {
+                Some(f) => to.progress(f.clone()),
+                None => to,
+            }
+        };
         match storage {
             Storage::Dense => self.load(k, Some(info)),
-            Storage::Bricks { edge } => self.load_bricks(k, (edge, limits, None)),
+            Storage::Bricks { edge } => self.load_bricks(k, &to(edge)),
             Storage::Auto => {
                 let too_big = self.streamed_layout().is_some_and(|(dims, ty)| {
                     let texel = match ty {
@@ -195,7 +208,7 @@ impl Series {
                     crate::gpu::check_image3d(info, dims, texel).is_err()
                 });
                 match too_big {
-                    true => self.load_bricks(k, (POOL_BRICK, limits, None)),
+                    true => self.load_bricks(k, &to(POOL_BRICK)),
                     false => self.load(k, None),
                 }
             }
@@ -213,16 +226,11 @@ impl Series {
     /// `bricks` is the brick edge, the pool's limits and the bricks to keep.
     /// Other sources load whole, unchecked against the device (their
     /// upload plans the pool).
-    pub fn load_bricks(&self, k: u32, bricks: (u32, PoolLimits, Option<BrickBox>)) -> Result<Volume> {
+    pub fn load_bricks(&self, k: u32, bricks: &StreamTo) -> Result<Volume> {
         self.load_as(k, None, Some(bricks))
     }
 
-    fn load_as(
-        &self,
-        k: u32,
-        device: Option<&DeviceInfo>,
-        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
-    ) -> Result<Volume> {
+    fn load_as(&self, k: u32, device: Option<&DeviceInfo>, bricks: Option<&StreamTo>) -> Result<Volume> {
         self.check_step(k)?;
         if let Source::Channels(channels) = &self.source {
             let loaded = channels
@@ -244,12 +252,7 @@ impl Series {
         Ok(volume)
     }
 
-    fn load_raw(
-        &self,
-        k: u32,
-        device: Option<&DeviceInfo>,
-        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
-    ) -> Result<Volume> {
+    fn load_raw(&self, k: u32, device: Option<&DeviceInfo>, bricks: Option<&StreamTo>) -> Result<Volume> {
         match (&self.source, bricks) {
             (Source::Still(spec), Some(b)) => spec.load_bricks(&self.options, b),
             (Source::Files(files), Some(b)) => {

@@ -4,7 +4,7 @@
 use super::procedural::Generator;
 use super::raw::RawLayout;
 use super::VoxelType;
-use super::{BrickBox, PoolLimits, Volume};
+use super::{StreamTo, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
@@ -104,7 +104,7 @@ impl VolumeSpec {
     /// As `load`, checking sizes against `device` before allocating (see `Volume::load_within`).
     /// As `load_within`, streamed into bricks where the source comes in
     /// slabs (`Series::load_bricks`); other sources load whole.
-    pub fn load_bricks(&self, options: &LoadOptions, bricks: (u32, PoolLimits, Option<BrickBox>)) -> Result<Volume> {
+    pub fn load_bricks(&self, options: &LoadOptions, bricks: &StreamTo) -> Result<Volume> {
         match self {
             VolumeSpec::Procedural { generator, dims, param } => generator.generate_bricks(*dims, *param, 0, bricks),
             VolumeSpec::File(path) if is_raw(path, options) => {

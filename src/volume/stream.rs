@@ -99,6 +99,50 @@ impl HostPool {
     }
 }
 
+/// Called with (layers streamed, layers in all) after each brick row.
+pub type StreamProgress = std::sync::Arc<dyn Fn(u32, u32) + Send + Sync>;
+
+/// How a load streams into bricks (`Series::load_bricks`): the brick edge,
+/// the pool's limits, the bricks to keep (None: all), and who hears of its
+/// progress.
+#[derive(Clone)]
+pub struct StreamTo {
+    pub edge: u32,
+    pub limits: PoolLimits,
+    pub keep: Option<BrickBox>,
+    pub progress: Option<StreamProgress>,
+}
+
+impl StreamTo {
+    pub fn new(edge: u32, limits: PoolLimits) -> Self {
+        StreamTo {
+            edge,
+            limits,
+            keep: None,
+            progress: None,
+        }
+    }
+
+    /// Keeps only the bricks of `keep` (one rank's block and ghosts).
+    pub fn keep(mut self, keep: Option<BrickBox>) -> Self {
+        self.keep = keep;
+        self
+    }
+
+    /// Reports each brick row cut.
+    pub fn progress(mut self, f: StreamProgress) -> Self {
+        self.progress = Some(f);
+        self
+    }
+
+    /// The stream for a volume of `dims` with texels of `texel_bytes`.
+    pub fn stream(&self, dims: [u32; 3], texel_bytes: u64) -> Result<PoolStream> {
+        let mut s = PoolStream::new(dims, texel_bytes, self.edge, self.limits, self.keep)?;
+        s.progress = self.progress.clone();
+        Ok(s)
+    }
+}
+
 /// Builds a `HostPool` from a volume's z-layers pushed in order.
 pub struct PoolStream {
     dims: [u32; 3],
@@ -115,6 +159,7 @@ pub struct PoolStream {
     one_value: Vec<Option<Vec<u8>>>,
     slots: Vec<u8>,
     range: (f64, f64),
+    progress: Option<StreamProgress>,
 }
 
 impl PoolStream {
@@ -145,6 +190,7 @@ impl PoolStream {
             one_value: Vec::with_capacity(total as usize),
             slots: Vec::new(),
             range: (f64::INFINITY, f64::NEG_INFINITY),
+            progress: None,
         })
     }
 
@@ -203,6 +249,9 @@ impl PoolStream {
                 self.base += keep_from;
                 self.filled = kept;
                 self.row += 1;
+                if let Some(f) = &self.progress {
+                    f(self.base + self.filled, self.dims[2]);
+                }
             }
             if layers.is_empty() {
                 break;

@@ -11,7 +11,7 @@ mod shells;
 mod turbulence;
 mod vessels;
 
-use super::{BrickBox, PoolLimits, PoolStream, Volume, VoxelData, VoxelType};
+use super::{StreamTo, Volume, VoxelData, VoxelType};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 
@@ -80,27 +80,15 @@ impl Generator {
         self.generate_as(dims, param, time, None)
     }
 
-    /// As `generate_at`, streamed into bricks of `edge` (those inside
-    /// `keep`; `volume::PoolStream`) where the generator makes its volume
+    /// As `generate_at`, streamed into bricks as `to` says
+    /// (`volume::PoolStream`) where the generator makes its volume
     /// in slabs (nbody): the host then holds the stored bricks, not the
     /// dense volume. The others are made whole (their upload plans the pool).
-    pub fn generate_bricks(
-        self,
-        dims: [u32; 3],
-        param: Option<f64>,
-        time: u32,
-        (edge, limits, keep): (u32, PoolLimits, Option<BrickBox>),
-    ) -> Result<Volume> {
-        self.generate_as(dims, param, time, Some((edge, limits, keep)))
+    pub fn generate_bricks(self, dims: [u32; 3], param: Option<f64>, time: u32, to: &StreamTo) -> Result<Volume> {
+        self.generate_as(dims, param, time, Some(to))
     }
 
-    fn generate_as(
-        self,
-        dims: [u32; 3],
-        param: Option<f64>,
-        time: u32,
-        bricks: Option<(u32, PoolLimits, Option<BrickBox>)>,
-    ) -> Result<Volume> {
+    fn generate_as(self, dims: [u32; 3], param: Option<f64>, time: u32, bricks: Option<&StreamTo>) -> Result<Volume> {
         let streamed = bricks.filter(|_| self == Generator::Nbody);
         if time >= STEPS {
             return Err(Error::invalid(
@@ -141,10 +129,10 @@ impl Generator {
                 menger::generate(dims, level as u32, time)
             }
             Generator::Nbody => match streamed {
-                Some((edge, limits, keep)) => {
-                    let mut stream = PoolStream::new(dims, 1, edge, limits, keep)?;
+                Some(to) => {
+                    let mut stream = to.stream(dims, 1)?;
                     nbody::stream(dims, seed(param)?, time, |slab| stream.push(slab))?;
-                    let pool = stream.finish(limits)?;
+                    let pool = stream.finish(to.limits)?;
                     return self.named(dims, param, VoxelData::Bricks(std::sync::Arc::new(pool)));
                 }
                 None => nbody::generate(dims, seed(param)?, time),
