@@ -2,9 +2,8 @@
 //! block of the volume, IceT composites the ranks' frames in visibility
 //! order, rank 0 prints and writes the frame (`lacuna::parallel`).
 
-use super::render::{build, describe, frames, look_notes, peak_host_bytes, RenderArgs};
+use super::render::{build_and_render, describe, look_notes, peak_host_bytes, RenderArgs, Rendered};
 use super::{context, tf_for, validation_verdict};
-use lacuna::accel::BuildInput;
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
 use lacuna::parallel::{Decomposition, World};
@@ -20,7 +19,7 @@ struct Part {
     frame: Frame,
     order: Vec<u32>,
     timings: Timings,
-    /// Per rank, gathered on rank 0: load, upload and build wall ms, march
+    /// Per rank, gathered on rank 0: load and upload wall ms, build ms, march
     /// GPU ms, bricks stored, host peak bytes.
     stats: [f64; 6],
     report: Vec<String>,
@@ -107,25 +106,28 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let mut gpu_volume = GpuVolume::upload_bricks_kept(&ctx, &volume, edge, block.with_ghosts(split.counts))?;
     gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
     let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
-    gpu_volume.sampler_for(block_desc.filter_for(&gpu_volume))?;
-    let lut = tf.upload(&ctx)?;
-    let input = BuildInput {
-        volume: &volume,
-        gpu_volume: &gpu_volume,
-        tf: &tf,
-        gpu_tf: &lut,
-        mode: *block_desc.mode(),
-        frame: Some(&block_desc),
-    };
-    let clock = Instant::now();
-    let (structure, _) = build(&builder, args, &input, &params)?;
-    let build_ms = clock.elapsed().as_secs_f64() * 1e3 / (args.warmup + args.repeat) as f64;
+    let Rendered {
+        lut,
+        structure,
+        build,
+        mut frame,
+        timings,
+    } = build_and_render(
+        &ctx,
+        (&builder, &renderer),
+        args,
+        &params,
+        (&volume, &tf),
+        &mut gpu_volume,
+        &block_desc,
+    )?;
+    // Per build: ranges and the structure (GPU timestamps; CPU phases in wall time).
+    let build_ms = build.as_ref().map_or(0.0, Timings::total);
     let scene = Scene {
         structure: &structure,
         volume: &gpu_volume,
         tf: &lut,
     };
-    let (mut frame, timings) = frames(&renderer, scene, &block_desc, args)?;
     describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
 
     let (width, height) = desc.size();
@@ -197,7 +199,7 @@ fn finish(
         println!("{line}");
     }
     let order: Vec<String> = part.order.iter().map(u32::to_string).collect();
-    println!("per rank (wall ms for load, upload and build; GPU ms for march):");
+    println!("per rank (wall ms for load and upload; build ms of its phases, GPU timestamps and CPU wall; GPU ms for march):");
     for (rank, s) in stats.chunks_exact(6).enumerate() {
         println!(
             "  rank {rank}: load {:.0}, upload {:.0}, build {:.1}, march {:.3}, bricks stored {}, host peak {:.1} MiB",

@@ -7,6 +7,7 @@ use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::render::{self, FrameDesc, Mode, Renderer, Scene};
+use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 use std::path::PathBuf;
@@ -98,6 +99,55 @@ pub(super) fn build(
     Ok((structure, Some(Timings::median(&times[args.warmup as usize..]))))
 }
 
+/// A structure built for a prepared volume, and the frames it rendered.
+pub(super) struct Rendered {
+    pub lut: GpuTransferFunction,
+    pub structure: Structure,
+    /// Per-phase medians of the timed builds (None for naive).
+    pub build: Option<Timings>,
+    /// The last frame, and the medians of the timed ones.
+    pub frame: Frame,
+    pub timings: Timings,
+}
+
+/// What `render` and each rank do once the volume is uploaded: its sampler
+/// for `desc`, the TF, the structure (`warmup + repeat` builds) and the
+/// frames.
+pub(super) fn build_and_render(
+    ctx: &Context,
+    (builder, renderer): (&Builder, &Renderer),
+    args: &RenderArgs,
+    params: &Params,
+    (volume, tf): (&Volume, &TransferFunction),
+    gpu_volume: &mut GpuVolume,
+    desc: &FrameDesc,
+) -> Result<Rendered> {
+    gpu_volume.sampler_for(desc.filter_for(gpu_volume))?;
+    let lut = tf.upload(ctx)?;
+    let input = BuildInput {
+        volume,
+        gpu_volume,
+        tf,
+        gpu_tf: &lut,
+        mode: *desc.mode(),
+        frame: Some(desc),
+    };
+    let (structure, build) = build(builder, args, &input, params)?;
+    let scene = Scene {
+        structure: &structure,
+        volume: gpu_volume,
+        tf: &lut,
+    };
+    let (frame, timings) = frames(renderer, scene, desc, args)?;
+    Ok(Rendered {
+        lut,
+        structure,
+        build,
+        frame,
+        timings,
+    })
+}
+
 /// Renders `warmup + repeat` frames; the last, and the medians of the timed ones.
 pub(super) fn frames(
     renderer: &Renderer,
@@ -145,23 +195,26 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let mut gpu_volume = GpuVolume::upload_as(&ctx, &volume, args.volume.storage)?;
     gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
     let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
-    gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
-    let lut = tf.upload(&ctx)?;
-    let input = BuildInput {
-        volume: &volume,
-        gpu_volume: &gpu_volume,
-        tf: &tf,
-        gpu_tf: &lut,
-        mode: *desc.mode(),
-        frame: Some(&desc),
-    };
-    let (structure, build) = build(&builder, args, &input, &params)?;
+    let Rendered {
+        lut,
+        structure,
+        build,
+        mut frame,
+        timings,
+    } = build_and_render(
+        &ctx,
+        (&builder, &renderer),
+        args,
+        &params,
+        (&volume, &tf),
+        &mut gpu_volume,
+        &desc,
+    )?;
     let scene = Scene {
         structure: &structure,
         volume: &gpu_volume,
         tf: &lut,
     };
-    let (mut frame, timings) = frames(&renderer, scene, &desc, args)?;
 
     let info = ctx.info();
     let (width, height) = desc.size();

@@ -74,11 +74,13 @@ pub fn texel_data(volume: &Volume) -> Cow<'_, [u8]> {
             VoxelData::U16(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
             VoxelData::F32(v) => Cow::Borrowed(bytemuck::cast_slice(v)),
             // The dense image's bytes (a streamed volume uploaded dense).
-            VoxelData::Bricks(p) => Cow::Owned(
-                (0..volume.data.len())
-                    .flat_map(|i| p.texel_bytes_at(i).to_vec())
-                    .collect(),
-            ),
+            VoxelData::Bricks(p) => {
+                let mut out = Vec::with_capacity(volume.data.len() * p.layout.texel_bytes as usize);
+                for i in 0..volume.data.len() {
+                    out.extend_from_slice(p.texel_bytes_at(i));
+                }
+                Cow::Owned(out)
+            }
         };
     }
     let kind = common_kind(volume);
