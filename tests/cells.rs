@@ -13,7 +13,9 @@ use lacuna::desc::Iso;
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
 use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
-use lacuna::volume::{check_cells, check_gradient_cells, GpuVolume, TexelKind, VoxelData, VoxelType};
+use lacuna::volume::{
+    cells_words, check_cells, check_gradient_cells, record_pack_cells, GpuVolume, TexelKind, VoxelData, VoxelType,
+};
 use lacuna::{TransferFunction, Volume};
 
 /// A lumpy field on odd dims in each texel kind, values over the whole range.
@@ -153,4 +155,38 @@ fn a_cells_copy_past_the_devices_limits_is_refused_by_name() {
         "{err}"
     );
     assert_eq!(TexelKind::Float32.bytes_per_voxel(), 32);
+}
+
+/// The copy the device makes from the volume image (`record_pack_cells`,
+/// the path of devices whose memory is not the host's) and the one the
+/// host packs in shared memory (`add_cells` on this CPU device) are the
+/// host's words, bit for bit, for every kind (NaN included), also when the
+/// copy is made in several dispatches of a few rows each.
+#[test]
+fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
+    let ctx = gpu();
+    for v in volumes() {
+        let want: Vec<u8> = bytemuck::cast_slice(&cells_words(&v)).to_vec();
+        let kind = TexelKind::of(&v.data);
+        let mut gv = GpuVolume::upload(&ctx, &v).unwrap();
+        // One binding for the whole copy, and one of about three rows.
+        let row = (v.dims[0] as u64 + 1) * kind.bytes_per_voxel();
+        for range in [u64::MAX, 3 * row + 1] {
+            let image = (gv.image.view, gv.sampler);
+            let got = ctx
+                .submit_and_wait(|cmd| record_pack_cells(&ctx, cmd, image, v.dims, kind, range))
+                .unwrap()
+                .0;
+            let got = got.buffer().download(0, want.len() as u64).unwrap();
+            assert!(
+                got == want,
+                "{}: the device's copy differs (binding of {range} bytes)",
+                v.name
+            );
+        }
+        gv.add_cells(&v).unwrap();
+        let shared = gv.cells().unwrap().buffer().download(0, want.len() as u64).unwrap();
+        assert!(shared == want, "{}: add_cells's copy differs", v.name);
+    }
+    assert_clean(&ctx);
 }

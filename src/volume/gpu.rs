@@ -13,7 +13,7 @@ use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, HostPool, Volume, VoxelData, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Staging, TexelBuffer};
+use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Kernel, Staging, TexelBuffer};
 use std::borrow::Cow;
 
 /// The gradient's texel format (x, y, z, unused).
@@ -45,6 +45,9 @@ pub struct GpuVolume {
     gradient: Option<Image3d>,
     /// The cells copy the manual filter reads (`add_cells`).
     cells: Option<TexelBuffer>,
+    /// The kernel `record_add_cells` recorded: kept while a recorded
+    /// packing may be pending.
+    cells_kernel: Option<Kernel>,
     /// The gradient's cells copy the manual filter reads in lit frames
     /// (`add_gradient`, when the volume has its cells copy).
     gradient_cells: Option<TexelBuffer>,
@@ -311,6 +314,7 @@ impl GpuVolume {
             kind: channels::common_kind(volume),
             gradient: None,
             cells: None,
+            cells_kernel: None,
             gradient_cells: None,
             brick_table,
             pool_images: images,
@@ -428,33 +432,62 @@ impl GpuVolume {
         self.gradient.as_ref().map(|g| g.view)
     }
 
-    /// Uploads the cells copy (`volume`'s, the volume this was uploaded
-    /// from) and waits: the manual filter then fetches one texel per sample
-    /// instead of eight, with the same result bit for bit. Costs
-    /// `TexelKind::bytes_per_voxel` bytes per voxel (checked against the
-    /// device's limits first); once is enough.
+    /// Makes the cells copy (`volume`'s, the volume this was uploaded
+    /// from) on the device from the volume image and waits: the manual
+    /// filter then fetches one texel per sample instead of eight, with the
+    /// same result bit for bit. Costs `TexelKind::bytes_per_voxel` bytes
+    /// per voxel (checked against the device's limits first); once is
+    /// enough.
     pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
-        self.check_dense("the cells copy")?;
         if self.cells.is_none() {
-            self.check_same(volume, "cells copy")?;
-            self.check_one_channel("the cells copy")?;
-            self.cells = Some(cells::upload_cells(&self.ctx, volume)?);
+            self.check_cells_of(volume)?;
+            let cells = if self.host_shared() {
+                cells::shared_cells(&self.ctx, volume)?
+            } else {
+                let ctx = self.ctx.clone();
+                ctx.submit_and_wait(|cmd| self.record_pack_cells(cmd))?.0
+            };
+            self.cells = Some(cells);
         }
         Ok(())
     }
 
-    /// As `add_cells`, recorded into `cmd` (see `record_upload`); None when
-    /// it is already there.
-    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
+    /// As `add_cells`, recorded into `cmd` after the volume's upload (see
+    /// `record_upload`), ending with a barrier to compute-shader reads;
+    /// nothing to keep but this volume (it holds the kernel). On a CPU
+    /// device the host packs the copy at once and nothing is recorded.
+    /// Does nothing when the copy is already there.
+    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<()> {
         if self.cells.is_some() {
-            return Ok(None);
+            return Ok(());
         }
+        self.check_cells_of(volume)?;
+        if self.host_shared() {
+            self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
+            return Ok(());
+        }
+        let (cells, kernel) = self.record_pack_cells(cmd)?;
+        self.cells = Some(cells);
+        self.cells_kernel = Some(kernel);
+        Ok(())
+    }
+
+    fn host_shared(&self) -> bool {
+        cells::host_shared(&self.ctx)
+    }
+
+    /// Whether `volume` can have a cells copy here: dense, the volume this
+    /// was uploaded from, one channel.
+    fn check_cells_of(&self, volume: &Volume) -> Result<()> {
         self.check_dense("the cells copy")?;
         self.check_same(volume, "cells copy")?;
-        self.check_one_channel("the cells copy")?;
-        let (texels, staging) = cells::record_upload_cells(&self.ctx, cmd, volume)?;
-        self.cells = Some(texels);
-        Ok(Some(staging))
+        self.check_one_channel("the cells copy")
+    }
+
+    fn record_pack_cells(&self, cmd: vk::CommandBuffer) -> Result<(TexelBuffer, Kernel)> {
+        let image = (self.image.view, self.sampler);
+        let range = self.ctx.info().max_storage_buffer_range;
+        cells::record_pack_cells(&self.ctx, cmd, image, self.dims, self.kind, range)
     }
 
     /// The cells copy, where `add_cells` uploaded it.

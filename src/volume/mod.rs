@@ -21,8 +21,8 @@ mod stream;
 
 pub use bricks::{BrickGrid, BRICK};
 pub use cells::{
-    cells_bytes, check_cells, check_gradient_cells, no_cells, TexelKind, CELLS_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID,
-    GRADIENT_CELL_BYTES, KIND_CONSTANT_ID,
+    cells_bytes, cells_words, check_cells, check_gradient_cells, no_cells, record_pack_cells, TexelKind,
+    CELLS_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID, GRADIENT_CELL_BYTES, KIND_CONSTANT_ID,
 };
 pub use channels::{common_kind, stored_texel, CHANNELS_CONSTANT_ID};
 pub use decode::VoxelType;
