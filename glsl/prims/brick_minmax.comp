@@ -25,6 +25,25 @@ layout(push_constant) uniform Push {
     uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
 } pc;
 
+// Widens the ranges by texel t's channels, NaN ignored (one channel: a
+// scalar test, which lavapipe runs several times faster than the loop over
+// four).
+void take(vec4 t, inout vec4 mn, inout vec4 mx) {
+    if (pc.channels == 1u) {
+        if (!is_nan(t.x)) {
+            mn.x = min(mn.x, t.x);
+            mx.x = max(mx.x, t.x);
+        }
+        return;
+    }
+    for (int c = 0; c < 4; ++c) {
+        if (!is_nan(t[c])) {
+            mn[c] = min(mn[c], t[c]);
+            mx[c] = max(mx[c], t[c]);
+        }
+    }
+}
+
 void main() {
     uint b = linear_index(pc.groups_x);
     if (b >= pc.counts.w) {
@@ -37,34 +56,50 @@ void main() {
     vec4 mn = vec4(3.4e38);
     vec4 mx = vec4(-3.4e38);
     int edge = int(pc.pool_brick);
-    for (int z = lo.z; z <= hi.z; ++z) {
-        for (int y = lo.y; y <= hi.y; ++y) {
-            // Bricked storage: one table read per run of a row inside one
-            // brick, and one fetch for a run of a constant brick.
-            int x = lo.x;
-            while (x <= hi.x) {
-                ivec3 v = ivec3(x, y, z);
-                // The run: the rest of the row (dense), or of this brick.
-                int run_end = edge == 0 ? hi.x : min(hi.x, (x / edge) * edge + edge - 1);
-                int read_end = run_end;
-                ivec4 at = ivec4(0);
-                if (edge != 0) {
-                    at = brick_texel(v, hi_voxel, edge);
-                    if ((at.w & 1) == 0) {
-                        read_end = x; // one value: its first voxel stands for the run
+    if (edge == 0 && pc.channels == 1u) {
+        // The common case, as plain as it gets: scalar extremes (lavapipe
+        // ran the loop through take 1.4x slower, and a loop over four
+        // channels 7x).
+        float lo1 = mn.x;
+        float hi1 = mx.x;
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    float t = texelFetch(volume_tex, ivec3(x, y, z), 0).r;
+                    if (!is_nan(t)) {
+                        lo1 = min(lo1, t);
+                        hi1 = max(hi1, t);
                     }
                 }
-                for (int i = 0; i <= read_end - x; ++i) {
-                    vec4 t = edge == 0 ? texelFetch(volume_tex, v + ivec3(i, 0, 0), 0)
-                                       : pool_fetch(at.w >> 1, at.xyz + ivec3(i, 0, 0));
-                    for (int c = 0; c < 4; ++c) {
-                        if (!is_nan(t[c])) {
-                            mn[c] = min(mn[c], t[c]);
-                            mx[c] = max(mx[c], t[c]);
-                        }
-                    }
+            }
+        }
+        mn.x = lo1;
+        mx.x = hi1;
+    } else if (edge == 0) {
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                for (int x = lo.x; x <= hi.x; ++x) {
+                    take(texelFetch(volume_tex, ivec3(x, y, z), 0), mn, mx);
                 }
-                x = run_end + 1;
+            }
+        }
+    } else {
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                // One table read per run of a row inside one brick, and one
+                // fetch for a run of a constant brick.
+                int x = lo.x;
+                while (x <= hi.x) {
+                    ivec3 v = ivec3(x, y, z);
+                    int run_end = min(hi.x, (x / edge) * edge + edge - 1);
+                    ivec4 at = brick_texel(v, hi_voxel, edge);
+                    // One value: its first voxel stands for the run.
+                    int read_end = (at.w & 1) == 0 ? x : run_end;
+                    for (int i = 0; i <= read_end - x; ++i) {
+                        take(pool_fetch(at.w >> 1, at.xyz + ivec3(i, 0, 0)), mn, mx);
+                    }
+                    x = run_end + 1;
+                }
             }
         }
     }
