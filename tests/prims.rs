@@ -1,12 +1,15 @@
 //! GPU primitives against CPU references: scan, compaction, radix sort (keys
-//! and payloads, stability) and brick min/max, at the sizes and key patterns
-//! that break naive implementations.
+//! and payloads, stability) and brick min/max (from the volume, and coarser
+//! from finer), at the sizes and key patterns that break naive
+//! implementations.
 
 mod common;
 use common::{assert_clean, gpu};
+use lacuna::accel::builder::RangeKind;
+use lacuna::accel::Builder;
 use lacuna::gpu::{vk, Buffer, Context};
 use lacuna::prims::{BlockLayout, BrickMinMax, Compact, RadixSort, Scan};
-use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions};
+use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::Volume;
 
 const SIZES: [usize; 9] = [0, 1, 2, 255, 256, 257, 4097, 100_000, 1 << 20];
@@ -234,6 +237,60 @@ fn brick_minmax_matches_the_cpu_brick_grid() {
                     &got[2 * i..2 * i + 2]
                 );
             }
+        }
+    }
+    assert_clean(&ctx);
+}
+
+/// Coarser ranges made from finer ones (`Builder::ranges` makes cells of 8,
+/// 16 and 32 from those of 4) are the ranges computed from the volume, bit
+/// for bit: odd dims, floats with NaN-only bricks, two channels, bricked
+/// storage.
+#[test]
+fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
+    let ctx = gpu();
+    let builder = Builder::new(&ctx).unwrap();
+    let dims = [37u32, 29, 41];
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let floats: Vec<f32> = (0..n)
+        .map(|i| {
+            let (x, y, z) = (i % 37, i / 37 % 29, i / (37 * 29));
+            // A block of no data over whole 4^3 and 8^3 cells, and holes.
+            if (x < 17 && y < 9 && z < 9) || i % 97 == 0 {
+                f32::NAN
+            } else {
+                ((x * 3 + y * 7 + z * 5) % 23) as f32 * 0.7 - 4.0
+            }
+        })
+        .collect();
+    let float = Volume::new("floats", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(floats)).unwrap();
+    let load = |s: &str| Volume::load(s, &LoadOptions::default()).unwrap();
+    let two = Volume::join(vec![load("vessels:37x29x41"), load("nbody:37x29x41")]).unwrap();
+    let cases = [
+        (load("turbulence:37x29x41"), 0),
+        (float.clone(), 0),
+        (two, 0),
+        (load("nbody:45x38x41"), 16),
+        (float, 5),
+    ];
+    for (v, edge) in cases {
+        let gv = match edge {
+            0 => GpuVolume::upload(&ctx, &v).unwrap(),
+            e => GpuVolume::upload_bricks(&ctx, &v, e).unwrap(),
+        };
+        let all = [4, 8, 16, 32].map(RangeKind::Cells);
+        let (coarsened, _) = builder.ranges(&all, &gv).unwrap();
+        for cell in [8, 16, 32] {
+            let (direct, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
+            let bytes = |r: &lacuna::accel::builder::Ranges| {
+                let b = &r.cells(cell).unwrap().ranges;
+                b.download(0, b.size()).unwrap()
+            };
+            assert!(
+                bytes(&coarsened) == bytes(&direct),
+                "{} (bricks {edge}): cell {cell} ranges differ",
+                v.name
+            );
         }
     }
     assert_clean(&ctx);

@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Timer};
-use crate::prims::brick_minmax::{brick_counts, BrickMinMax};
+use crate::prims::brick_minmax::{brick_counts, coarsens_exactly, BrickMinMax};
 use crate::volume::GpuVolume;
 
 /// Brick edge in voxels for the LBVH and classification.
@@ -22,21 +22,32 @@ pub struct GpuBricks {
 }
 
 impl GpuBricks {
-    /// Computes the ranges of `volume`'s `brick`^3 bricks and waits; returns
-    /// them and the GPU milliseconds it took.
-    pub fn compute(ctx: &Context, minmax: &BrickMinMax, volume: &GpuVolume, brick: u32) -> Result<(Self, f64)> {
+    /// Computes the ranges of `volume`'s `brick`^3 bricks and waits (from
+    /// `finer` where given: see `record`); returns them and the GPU
+    /// milliseconds it took.
+    pub fn compute(
+        ctx: &Context,
+        minmax: &BrickMinMax,
+        volume: &GpuVolume,
+        brick: u32,
+        finer: Option<&GpuBricks>,
+    ) -> Result<(Self, f64)> {
         let bricks = Self::allocate(ctx, volume, brick)?;
         let mut timer = Timer::new(ctx, 1)?;
         ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            bricks.record(cmd, Some(&mut timer), "ranges", minmax, volume)
+            bricks.record(cmd, Some(&mut timer), "ranges", minmax, volume, finer)
         })?;
         let ms = timer.results()?.phase("ranges")?;
         Ok((bricks, ms))
     }
 
-    /// Records the computation of the ranges (timed as `pass`) into `cmd`;
-    /// ends with compute writes of `ranges` (the `prims` convention).
+    /// Records the computation of the ranges (timed as `pass`) into `cmd`:
+    /// from `finer` (ranges of smaller bricks whose edge divides this one's,
+    /// recorded before) where the volume's normalisation allows it
+    /// (`coarsens_exactly`), the same ranges from fewer reads; else from
+    /// the volume. Ends with compute writes of `ranges` (the `prims`
+    /// convention).
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -44,9 +55,15 @@ impl GpuBricks {
         pass: &str,
         minmax: &BrickMinMax,
         volume: &GpuVolume,
+        finer: Option<&GpuBricks>,
     ) -> Result<()> {
         let p = timer.begin(cmd, pass)?;
-        minmax.record(cmd, volume, self.brick, 1, &self.ranges)?;
+        match finer.filter(|f| self.brick.is_multiple_of(f.brick) && coarsens_exactly(volume)) {
+            Some(f) => {
+                minmax.record_coarsen(cmd, volume, (&f.ranges, self.brick / f.brick), self.brick, &self.ranges)?
+            }
+            None => minmax.record(cmd, volume, self.brick, 1, &self.ranges)?,
+        }
         timer.end(cmd, p);
         Ok(())
     }

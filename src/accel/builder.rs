@@ -141,7 +141,7 @@ impl Builder {
         for kind in kinds {
             let minmax = self.shared::<BrickMinMax>()?;
             let (size, pass) = size_and_pass(kind, several);
-            let (b, ms) = GpuBricks::compute(&self.ctx, &minmax, volume, size)?;
+            let (b, ms) = GpuBricks::compute(&self.ctx, &minmax, volume, size, ranges.finer(size))?;
             t.push(pass, ms);
             ranges.insert(kind, b, ms);
         }
@@ -168,7 +168,7 @@ impl Builder {
             let minmax = self.shared::<BrickMinMax>()?;
             let (size, pass) = size_and_pass(kind, several);
             let b = GpuBricks::allocate(&self.ctx, volume, size)?;
-            b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume)?;
+            b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, ranges.finer(size))?;
             ranges.insert(kind, b, f64::NAN);
         }
         Ok(ranges)
@@ -176,6 +176,17 @@ impl Builder {
 }
 
 impl Ranges {
+    /// The coarsest ranges here whose brick edge divides `edge` (and is
+    /// smaller): the cheapest to make `edge`'s from.
+    fn finer(&self, edge: u32) -> Option<&GpuBricks> {
+        let bricks = self.bricks.iter().map(|b| &b.0);
+        let cells = self.cells.iter().map(|c| &c.0);
+        bricks
+            .chain(cells)
+            .filter(|b| b.brick < edge && edge.is_multiple_of(b.brick))
+            .max_by_key(|b| b.brick)
+    }
+
     fn insert(&mut self, kind: RangeKind, bricks: GpuBricks, ms: f64) {
         match kind {
             RangeKind::Bricks => self.bricks = Some((bricks, ms)),
@@ -184,7 +195,8 @@ impl Ranges {
     }
 }
 
-/// The kinds that need computing, each once, in order; cell edges checked.
+/// The kinds that need computing, each once, finest first (coarser ranges
+/// are made from finer ones); cell edges checked.
 fn distinct(kinds: &[RangeKind]) -> Result<Vec<RangeKind>> {
     let mut out: Vec<RangeKind> = Vec::new();
     for &k in kinds {
@@ -195,6 +207,7 @@ fn distinct(kinds: &[RangeKind]) -> Result<Vec<RangeKind>> {
             out.push(k);
         }
     }
+    out.sort_by_key(|&k| size_and_pass(k, false).0);
     Ok(out)
 }
 

@@ -1,16 +1,19 @@
 //! Per-brick min/max of normalised voxel values over an apron, one invocation
-//! per brick, straight from the volume image.
+//! per brick, straight from the volume image, or from the ranges of finer
+//! bricks over the same apron (`record_coarsen`: exactly the same ranges,
+//! `glsl/prims/ranges_coarsen.comp` says why, for a fraction of the reads).
 
 use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record;
-use crate::gpu::shaders::{self, prims_brick_minmax as k};
+use crate::gpu::shaders::{self, prims_brick_minmax as k, prims_ranges_coarsen as coarsen};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
 use crate::volume::GpuVolume;
 
 pub struct BrickMinMax {
     ctx: Context,
     kernel: Kernel,
+    coarsen: Kernel,
 }
 
 /// Bricks per axis for a volume.
@@ -23,6 +26,7 @@ impl BrickMinMax {
         Ok(BrickMinMax {
             ctx: ctx.clone(),
             kernel: Kernel::new::<k::Push>(ctx, &shaders::PRIMS_BRICK_MINMAX)?,
+            coarsen: Kernel::new::<coarsen::Push>(ctx, &shaders::PRIMS_RANGES_COARSEN)?,
         })
     }
 
@@ -68,4 +72,52 @@ impl BrickMinMax {
             groups,
         )
     }
+
+    /// Records the ranges of `volume`'s `brick`^3 bricks into `out` from
+    /// `fine`, the ranges of its (`brick` / `ratio`)^3 bricks over the same
+    /// apron (as `record` wrote them). Exact only where every channel's
+    /// normalisation scale is finite (`coarsens_exactly`). Ends with compute
+    /// writes.
+    pub fn record_coarsen(
+        &self,
+        cmd: vk::CommandBuffer,
+        volume: &GpuVolume,
+        (fine, ratio): (&Buffer, u32),
+        brick: u32,
+        out: &Buffer,
+    ) -> Result<()> {
+        let counts = brick_counts(volume.dims, brick);
+        let fine_counts = brick_counts(volume.dims, brick / ratio);
+        let total = counts.iter().map(|&c| c as u64).product::<u64>();
+        check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
+        let fine_total = fine_counts.iter().map(|&c| c as u64).product::<u64>();
+        check_range(
+            self.ctx.info(),
+            "finer brick ranges",
+            fine_total * 8 * volume.channels as u64,
+        )?;
+        entry_barrier(self.ctx.device(), cmd);
+        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.coarsen.local_size()[0])?;
+        let push = coarsen::Push {
+            fine_counts: [fine_counts[0], fine_counts[1], fine_counts[2], volume.channels],
+            counts: [counts[0], counts[1], counts[2], total as u32],
+            ratio,
+            groups_x: groups[0],
+        };
+        let bindings = coarsen::Bindings {
+            fine: Binding::Storage(fine),
+            coarse: Binding::Storage(out),
+        };
+        self.coarsen
+            .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)
+    }
+}
+
+/// Whether coarser ranges of `volume` may be made from finer ones: every
+/// channel's normalisation is finite with a scale >= 0, so it keeps the
+/// order of values (`glsl/prims/ranges_coarsen.comp`).
+pub fn coarsens_exactly(volume: &GpuVolume) -> bool {
+    volume.norms[..volume.channels as usize]
+        .iter()
+        .all(|[lo, scale]| lo.is_finite() && scale.is_finite() && *scale >= 0.0)
 }
