@@ -3,7 +3,8 @@
 
 Writes docs/gallery.md and docs/gallery/*.png: each of lacuna's looks
 (composite, composite shaded, MIP, MinIP, average, iso) on the ch2 brain MRI
-and on generated volumes, 256x256 over black, beside VTK's image of the same
+and on generated volumes, and two channels (the MRI and a channel derived
+from it, its gradient magnitude, each with its own transfer function), 256x256 over black, beside VTK's image of the same
 raw file, camera, transfer function and look (bench/peers/vtk.py: the fixed-
 point CPU mapper where it has the mode, else the GPU mapper, labelled), or a
 note where VTK has no such mode. Under each pair: both sides' visible pixels,
@@ -31,11 +32,15 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 CH2 = "/usr/share/mricron/templates/ch2.nii.gz"
 CAMERA = (0.0, 20.0)  # azimuth, elevation: view 0 of the bench orbit, as docs/results/peers.md
 CPU, GPU = "cpu", "gpu"
+# Two channels: the MRI joined with a channel derived from it (`derive_edges`).
+TWO = "ch2+edges"
+TWO_TFS = ["bench/peers/tf/ch2-tissue.json", "bench/peers/tf/ch2-edges.json"]
 MAPPER_LABEL = {CPU: "VTK CPU (fixed point)", GPU: "VTK GPU (llvmpipe)"}
 
 # Volumes: (key, title, spec).
 VOLUMES = [
     ("ch2", "ch2 brain MRI (`/usr/share/mricron/templates/ch2.nii.gz`)", CH2),
+    (TWO, "two channels: the ch2 MRI and its gradient magnitude (`ch2.raw+ch2-edges.raw`)", None),
     ("vessels", "generated vessels (`vessels:128`)", "vessels:128"),
     ("turbulence", "generated turbulence (`turbulence:128`)", "turbulence:128"),
 ]
@@ -56,6 +61,7 @@ ROWS = [
      ["--mode", "minip", "--crop", "40:141,50:170,60:120"], CPU),
     ("ch2", "average", "average", "ramp:0.05:0.4", ["--mode", "average"], NO_AVERAGE),
     ("ch2", "iso", "iso 0.45", "ramp:0.3:0.6", ["--mode", "iso", "--iso", "0.45"], GPU),
+    (TWO, "composite", "composite, cropped to z 0:90", TWO_TFS, ["--crop", "0:181,0:217,0:90"], CPU),
     ("vessels", "composite", "composite", "ramp:0.3:1", [], CPU),
     ("vessels", "shaded", "composite, shaded", "ramp:0.3:1", ["--shade", "on"], CPU),
     ("vessels", "mip", "MIP", "ramp:0.3:1", ["--mode", "mip"], CPU),
@@ -83,6 +89,8 @@ NOTES = {
     ("vessels", "shaded"): "Alike in shading; the same wider, softer vessels on VTK CPU as unshaded.",
     ("vessels", "mip"): "Alike; VTK CPU's vessels again slightly wider with a faint halo.",
     ("vessels", "average"): "",
+    (TWO, "composite"): "Alike: warm tissue with cyan boundaries, the same ventricles and sulci; VTK's "
+    "independent components give the scalp's rim a brighter, crisper edge.",
     ("vessels", "iso"): "Same tubes; VTK GPU's highlights are narrower and glossier (Phong against "
     "Blinn), lacuna's surfaces a touch smoother.",
     ("turbulence", "minip"): "Alike, blob for blob inside the slab.",
@@ -136,6 +144,21 @@ def coverage(png):
     return float((a.max(axis=-1) > 1.0).mean())
 
 
+def derive_edges(ch2_raw, work):
+    """The second channel of the two-channel rows: the MRI's gradient
+    magnitude (central differences), scaled so its 99.5th percentile is
+    255, as an 8-bit raw file on the same grid; returns its path."""
+    import numpy as np
+
+    dims = (181, 217, 181)
+    a = np.fromfile(ch2_raw, dtype=np.uint8).reshape(dims[::-1]).astype(np.float32)
+    g = np.sqrt(sum(d * d for d in np.gradient(a)))
+    edges = np.clip(g / np.percentile(g, 99.5) * 255.0, 0, 255).astype(np.uint8)
+    path = os.path.join(work, "ch2-edges_181x217x181_uint8.raw")
+    edges.tofile(path)
+    return path
+
+
 def main(argv):
     args = parse_args(argv)
     try:
@@ -159,14 +182,18 @@ def main(argv):
     try:
         raws = {}
         for key, _, spec in VOLUMES:
+            if spec is None:
+                continue
             lines = run([args.lacuna, "export", spec, os.path.join(args.work, key)]).strip().splitlines()
             if not lines or not os.path.exists(lines[-1]):
                 raise Failure(f"lacuna export {spec} did not say what it wrote")
             raws[key] = lines[-1]
+        raws[TWO] = raws["ch2"] + "+" + derive_edges(raws["ch2"], args.work)
         for vol, row, _, tf, look, mapper in ROWS:
             raw = raws[vol]
+            tfs = [a for t in (tf if isinstance(tf, list) else [tf]) for a in ("--tf", t)]
             lpng = os.path.join(images, f"{vol}-{row}-lacuna.png")
-            run([args.lacuna, "render", raw, "--tf", tf, "--size", args.size,
+            run([args.lacuna, "render", raw, *tfs, "--size", args.size,
                  "--camera", f"{CAMERA[0]:g},{CAMERA[1]:g}", "--background", "000000", "--out", lpng] + look)
             lcov = coverage(lpng)
             if lcov < 0.001:
@@ -175,7 +202,7 @@ def main(argv):
                 results[(vol, row)] = {"lacuna": lpng, "lacuna_coverage": lcov}
                 continue
             vpng = os.path.join(images, f"{vol}-{row}-vtk-{mapper}.png")
-            out = run([sys.executable, os.path.join(HERE, "vtk.py"), raw, "--tf", tf, "--size", args.size,
+            out = run([sys.executable, os.path.join(HERE, "vtk.py"), raw, *tfs, "--size", args.size,
                        "--azimuth", f"{CAMERA[0]:g}", "--elevation", f"{CAMERA[1]:g}", "--frames", "1",
                        "--warmup", "0", "--mapper", mapper, "--ert", "on", "--png", vpng, "--srgb",
                        "--expect-coverage", f"{lcov:.6f}"] + look)
@@ -203,7 +230,8 @@ def main(argv):
         "OSMesa, llvmpipe); the column says which. Both over black, sRGB-encoded as lacuna's PNGs are",
         "(VTK's linear frame encoded the same way). Under each pair: visible pixels on each side and the",
         "mean difference of the 8-bit sRGB channels over the pixels either side shows, then what differs",
-        "to the eye.",
+        "to the eye. The two-channel row gives each channel its own ParaView JSON transfer function",
+        "(bench/peers/tf/) and VTK the two as independent components.",
         "",
         "Where VTK's shading departs from lacuna's: the CPU mapper lights quantised per-voxel normals and",
         "interpolates the lit colours; the GPU mapper's highlight is Phong's (R.V)^n, narrower than",
@@ -218,7 +246,8 @@ def main(argv):
             r = results[(vol, row)]
             rel = lambda p: os.path.relpath(p, os.path.dirname(args.out))  # noqa: E731
             shown = " ".join(look) if look else "(default)"
-            head = f"**{rtitle}**<br>`--tf {tf}`<br>`{shown}`"
+            tf_args = " ".join(f"--tf {t}" for t in (tf if isinstance(tf, list) else [tf]))
+            head = f"**{rtitle}**<br>`{tf_args}`<br>`{shown}`"
             if "vtk" in r:
                 vtk_cell = f"![VTK]({rel(r['vtk'])})<br>{MAPPER_LABEL[mapper]}"
             else:

@@ -300,6 +300,15 @@ def parse_ramp(text):
     return lo, hi, alpha
 
 
+def parse_tf(text):
+    """A lacuna TF spec: ramp:LO:HI[:ALPHA] or a ParaView JSON export, as
+    (spec, LUT) with lacuna's LUT of (v, r, g, b, a) over v in [0, 1]."""
+    if text.lower().endswith(".json"):
+        return text, json_lut(text)
+    lo, hi, alpha = parse_ramp(text)
+    return f"ramp:{lo:g}:{hi:g}:{alpha:g}", ramp_lut(lo, hi, alpha)
+
+
 def parse_phong(text):
     """KA,KD,KS,N -> four floats (weights >= 0, shininess > 0)."""
     try:
@@ -348,9 +357,11 @@ def parse_args(argv):
         description="Time VTK's volume mappers (offscreen, OSMesa) on lacuna's benchmark work.",
         epilog="See the module docstring for what is reproduced and how.",
     )
-    p.add_argument("volume", help="raw file named name_WxHxD_TYPE.raw (little-endian, x fastest)")
-    p.add_argument("--tf", default="ramp:0.3:0.6", type=parse_ramp, metavar="ramp:LO:HI[:ALPHA]",
-                   help="lacuna transfer function over the normalised value (default ramp:0.3:0.6)")
+    p.add_argument("volume", help="raw file named name_WxHxD_TYPE.raw (little-endian, x fastest); "
+                   "A.raw+B.raw: channels, as lacuna joins them (VTK's independent components)")
+    p.add_argument("--tf", action="append", type=parse_tf, metavar="ramp:LO:HI[:ALPHA]|TF.json",
+                   help="lacuna transfer function over the normalised value (default ramp:0.3:0.6); "
+                   "once per channel, or once for all")
     p.add_argument("--mode", default="composite", choices=MODES,
                    help="what each ray shows (default composite); iso needs --iso and the GPU mapper")
     p.add_argument("--iso", type=parse_iso, metavar="V[,V2..]",
@@ -384,6 +395,14 @@ def parse_args(argv):
     p.add_argument("--min-coverage", type=float, default=0.001,
                    help="coverage of frame 0 below which the peer counts as empty (default 0.001)")
     args = p.parse_args(argv)
+    args.tf = args.tf or [parse_tf("ramp:0.3:0.6")]
+    args.channels = args.volume.split("+")
+    if len(args.channels) > 4:
+        p.error("at most 4 channels (VTK's independent components)")
+    if len(args.tf) not in (1, len(args.channels)):
+        p.error(f"{len(args.tf)} --tf for {len(args.channels)} channels: give one, or one per channel")
+    if len(args.channels) > 1 and (args.mode != "composite" or args.shade == "on"):
+        p.error("several channels: unshaded composite only (lacuna shades one channel)")
     if args.frames < 1:
         p.error("--frames must be >= 1")
     if args.warmup < 0:
@@ -451,6 +470,24 @@ def read_volume(vtk, np, path):
     return reader, dims, ty, value_range
 
 
+def read_channels(vtk, np, paths):
+    """Each channel's raw file (read_volume), several joined as components
+    of one image (same dims, as lacuna requires); (source, dims, type,
+    [range per channel])."""
+    reads = [read_volume(vtk, np, p) for p in paths]
+    dims, ty = reads[0][1], reads[0][2]
+    for p, r in zip(paths[1:], reads[1:]):
+        if r[1] != dims:
+            fail(f"channel '{p}' is {r[1]}, the first channel {dims}")
+    if len(reads) == 1:
+        return reads[0][0], dims, ty, [reads[0][3]]
+    join = vtk.imaging.vtkImageAppendComponents()
+    for r in reads:
+        join.AddInputConnection(r[0].GetOutputPort())
+    join.Update()
+    return join, dims, "+".join(r[2] for r in reads), [r[3] for r in reads]
+
+
 # ----------------------------------------------------------- transfer function
 
 
@@ -474,21 +511,56 @@ def ramp_lut(lo, hi, alpha):
     return lut
 
 
+def json_lut(path):
+    """lacuna's LUT of a ParaView colormap export (src/tf.rs
+    from_paraview_json): the RGBPoints' x range onto [0, 1], linear
+    segments, opacity from Points or a linear ramp."""
+    try:
+        with open(path) as f:
+            data = json.load(f)
+    except (OSError, ValueError) as e:
+        raise argparse.ArgumentTypeError(f"'{path}': {e}")
+    data = data[0] if isinstance(data, list) else data
+    rgb = data.get("RGBPoints")
+    if not rgb or len(rgb) % 4:
+        raise argparse.ArgumentTypeError(f"'{path}': no RGBPoints (x, r, g, b)*")
+    op = data.get("Points")
+    groups = lambda pts: [pts[i:i + 4] for i in range(0, len(pts), 4)]
+
+    def interp(pts, x, ch):
+        g = groups(pts)
+        if x <= g[0][0]:
+            return g[0][ch]
+        for a, b in zip(g, g[1:]):
+            if x <= b[0]:
+                f = (x - a[0]) / (b[0] - a[0]) if b[0] > a[0] else 1.0
+                return a[ch] + (b[ch] - a[ch]) * f
+        return g[-1][ch]
+
+    x0, x1 = rgb[0], rgb[-4]
+    lut = []
+    for i in range(LUT_SIZE):
+        v = i / (LUT_SIZE - 1)
+        x = x0 + (x1 - x0) * v
+        a = interp(op, x, 1) if op else v
+        lut.append((v, interp(rgb, x, 1), interp(rgb, x, 2), interp(rgb, x, 3), a))
+    return lut
+
+
 def raw_value(v, value_range):
     """A normalised value (TF and iso specs) in the volume's raw units."""
     vmin, vmax = value_range
     return vmin + v * (vmax - vmin)
 
 
-def volume_property(vtk, tf, value_range, args):
-    """The lacuna TF and look as a vtkVolumeProperty over raw values."""
+def tf_functions(vtk, lut, value_range, iso):
+    """A LUT over normalised values as VTK's colour and opacity functions
+    over raw values."""
     vmin, vmax = value_range
     color = vtk.rendering.vtkColorTransferFunction()
     opacity = vtk.data.vtkPiecewiseFunction()
-    lut = ramp_lut(*tf)
     # Iso surfaces are opaque in lacuna; VTK's iso blend takes a surface's
     # opacity from the scalar opacity function at the value: constant 1.
-    iso = args.mode == "iso"
     if vmax > vmin:
         for v, r, g, b, a in lut:
             x = raw_value(v, value_range)
@@ -499,10 +571,21 @@ def volume_property(vtk, tf, value_range, args):
         _, r, g, b, a = lut[0]
         color.AddRGBPoint(vmin, r, g, b)
         opacity.AddPoint(vmin, 1.0 if iso else a)
+    return color, opacity
+
+
+def volume_property(vtk, tfs, value_ranges, args):
+    """The lacuna TFs (one per channel, or one for all) and look as a
+    vtkVolumeProperty over raw values; several channels as independent
+    components."""
+    iso = args.mode == "iso"
     prop = vtk.rendering.vtkVolumeProperty()
-    prop.SetColor(color)
-    prop.SetScalarOpacity(opacity)
-    prop.SetScalarOpacityUnitDistance(1.0)  # alpha per voxel of path length
+    prop.SetIndependentComponents(True)  # VTK's default; several channels are independent
+    for c, value_range in enumerate(value_ranges):
+        color, opacity = tf_functions(vtk, tfs[min(c, len(tfs) - 1)][1], value_range, iso)
+        prop.SetColor(c, color)
+        prop.SetScalarOpacity(c, opacity)
+        prop.SetScalarOpacityUnitDistance(c, 1.0)  # alpha per voxel of path length
     prop.SetInterpolationTypeToLinear()  # trilinear, then classify
     if args.lit:
         ka, kd, ks, n = args.phong
@@ -515,7 +598,7 @@ def volume_property(vtk, tf, value_range, args):
         prop.ShadeOff()
     if iso:
         for i, v in enumerate(args.iso):
-            prop.GetIsoSurfaceValues().SetValue(i, raw_value(v, value_range))
+            prop.GetIsoSurfaceValues().SetValue(i, raw_value(v, value_ranges[0]))
     # No gradient-magnitude opacity, as lacuna. Explicitly: the fixed-point
     # mapper calls GetGradientOpacity(), which attaches a default (constant 1)
     # function, and a GPU mapper seeing one computes a gradient at every
@@ -674,7 +757,7 @@ def run_mapper(vtk, np, kind, reader, dims, args, value_range, png_path):
     width, height = args.size
     volume = vtk.rendering.vtkVolume()
     # A property of its own: mappers add state to the one they render.
-    tf_prop = volume_property(vtk, args.tf, value_range, args)
+    tf_prop = volume_property(vtk, args.tf, value_range, args)  # value_range: one per channel
     volume.SetProperty(tf_prop)
     mapper, ert_info = make_mapper(vtk, kind, reader, args.step, args.ert, volume, args.mode)
     if args.crop:
@@ -792,7 +875,7 @@ def main(argv):
     try:
         np, vtk = import_dependencies()
         # VTK's warnings go to stderr; errors end in a Failure below.
-        reader, dims, ty, value_range = read_volume(vtk, np, args.volume)
+        reader, dims, ty, value_range = read_channels(vtk, np, args.channels)
         kinds = ("cpu", "gpu") if args.mapper == "both" else (args.mapper,)
         skipped = {k: NO_SUCH_MODE[(k, args.mode)] for k in kinds if (k, args.mode) in NO_SUCH_MODE}
         if len(skipped) == len(kinds):
@@ -810,15 +893,14 @@ def main(argv):
     except Failure as e:
         print(f"error: {e}", file=sys.stderr)
         return e.code
-    lo, hi, alpha = args.tf
     result = {
         "peer": "vtk",
         "vtk_version": vtk.version,
         "volume": args.volume,
         "dims": list(dims),
         "type": ty,
-        "value_range": list(value_range),
-        "tf": f"ramp:{lo:g}:{hi:g}:{alpha:g}",
+        "value_range": list(value_range[0]) if len(value_range) == 1 else [list(r) for r in value_range],
+        "tf": " | ".join(spec for spec, _ in args.tf),
         "mode": args.mode,
         "shade": args.mode == "composite" and args.shade == "on",
         "lit": args.lit,
