@@ -8,6 +8,7 @@ use common::{assert_clean, gpu};
 use lacuna::accel::builder::RangeKind;
 use lacuna::accel::Builder;
 use lacuna::gpu::{vk, Buffer, Context};
+use lacuna::prims::brick_minmax::coarsens_exactly;
 use lacuna::prims::{BlockLayout, BrickMinMax, Compact, RadixSort, Scan};
 use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions, VoxelData, VoxelType};
 use lacuna::Volume;
@@ -250,6 +251,7 @@ fn brick_minmax_matches_the_cpu_brick_grid() {
 fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
     let ctx = gpu();
     let builder = Builder::new(&ctx).unwrap();
+    let mm = BrickMinMax::new(&ctx).unwrap();
     let dims = [37u32, 29, 41];
     let n = (dims[0] * dims[1] * dims[2]) as usize;
     let floats: Vec<f32> = (0..n)
@@ -278,8 +280,23 @@ fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
             0 => GpuVolume::upload(&ctx, &v).unwrap(),
             e => GpuVolume::upload_bricks(&ctx, &v, e).unwrap(),
         };
+        assert!(coarsens_exactly(&gv), "{}: its normalisation keeps order", v.name);
         let all = [4, 8, 16, 32].map(RangeKind::Cells);
         let (coarsened, _) = builder.ranges(&all, &gv).unwrap();
+        // The kernel itself, cells of 16 from cells of 4, against the
+        // builder's direct ranges (so the comparison below is not of two
+        // direct computations).
+        let (direct16, _) = builder.ranges(&[RangeKind::Cells(16)], &gv).unwrap();
+        let want = &direct16.cells(16).unwrap().ranges;
+        let out = buffer(&ctx, &vec![0; want.size() as usize / 4]);
+        let fine = &coarsened.cells(4).unwrap().ranges;
+        ctx.submit_and_wait(|cmd| mm.record_coarsen(cmd, &gv, (fine, 4), 16, &out))
+            .unwrap();
+        assert!(
+            read(&out, want.size() as usize / 4) == read(want, want.size() as usize / 4),
+            "{} (bricks {edge}): cells of 16 coarsened from 4 differ",
+            v.name
+        );
         for cell in [8, 16, 32] {
             let (direct, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
             let bytes = |r: &lacuna::accel::builder::Ranges| {

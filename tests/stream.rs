@@ -11,7 +11,8 @@ use common::identity::{standard_views, Fixture};
 use common::{fails, lacuna};
 use lacuna::frame::diff;
 use lacuna::volume::{
-    LoadOptions, PoolLayout, PoolLimits, PoolStream, RawLayout, Series, StreamTo, VoxelData, VoxelType,
+    cells_words, GpuVolume, LoadOptions, PoolLayout, PoolLimits, PoolStream, RawLayout, Series, Storage, StreamTo,
+    VoxelData, VoxelType,
 };
 use lacuna::{TransferFunction, Volume};
 
@@ -257,4 +258,22 @@ fn progress_hears_every_brick_row_in_order() {
     let heard = heard.lock().unwrap();
     // Rows of 16 layers, each heard once its next row's first layer is in.
     assert_eq!(*heard, vec![(17, 50), (33, 50), (49, 50), (50, 50)]);
+}
+
+/// A streamed volume uploaded dense (a library caller may) gets the dense
+/// volume's cells copy, word for word, packed from the pool block by block.
+#[test]
+fn a_streamed_volume_uploaded_dense_has_the_dense_cells_copy() {
+    let ctx = common::gpu();
+    let d = dense("nbody:37x29x45");
+    let s = streamed("nbody:37x29x45", 16, PoolLimits::of(ctx.info()), None);
+    let want: Vec<u8> = bytemuck::cast_slice(&cells_words(&d)).to_vec();
+    let mut gv = GpuVolume::upload_as(&ctx, &s, Storage::Dense).unwrap();
+    gv.add_cells(&s).unwrap();
+    let got = gv.cells().unwrap().buffer().download(0, want.len() as u64).unwrap();
+    assert!(
+        got == want,
+        "the streamed volume's cells copy differs from the dense one's"
+    );
+    common::assert_clean(&ctx);
 }

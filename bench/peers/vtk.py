@@ -396,7 +396,8 @@ def parse_args(argv):
                    help="coverage of frame 0 below which the peer counts as empty (default 0.001)")
     args = p.parse_args(argv)
     args.tf = args.tf or [parse_tf("ramp:0.3:0.6")]
-    args.channels = args.volume.split("+")
+    # A path that exists is one channel, '+' in its name or not.
+    args.channels = [args.volume] if os.path.exists(args.volume) else args.volume.split("+")
     if len(args.channels) > 4:
         p.error("at most 4 channels (VTK's independent components)")
     if len(args.tf) not in (1, len(args.channels)):
@@ -479,6 +480,9 @@ def read_channels(vtk, np, paths):
     for p, r in zip(paths[1:], reads[1:]):
         if r[1] != dims:
             fail(f"channel '{p}' is {r[1]}, the first channel {dims}")
+        # vtkImageAppendComponents joins one scalar type only (lacuna widens).
+        if r[2] != ty:
+            fail(f"channel '{p}' is {r[2]}, the first channel {ty}: VTK joins one voxel type only")
     if len(reads) == 1:
         return reads[0][0], dims, ty, [reads[0][3]]
     join = vtk.imaging.vtkImageAppendComponents()

@@ -339,7 +339,19 @@ fn pack_into(volume: &Volume, out: &mut [u8]) {
         VoxelData::U8(v) => pack_rows(v, volume.dims, out),
         VoxelData::U16(v) => pack_rows(v, volume.dims, bytemuck::cast_slice_mut(out)),
         VoxelData::F32(v) => pack_rows(v, volume.dims, bytemuck::cast_slice_mut(out)),
-        VoxelData::Bricks(_) => out.copy_from_slice(bytemuck::cast_slice(&cells_words(volume))),
+        // Not reached by dense uploads of streamed volumes through the CLI;
+        // a library caller's: packed in blocks of layers, as the host's
+        // memory for it is bounded.
+        VoxelData::Bricks(_) => {
+            let [cw, ch, cd] = cell_dims(volume.dims);
+            let layer = (cw * ch * TexelKind::of(&volume.data).bytes_per_voxel()) as usize;
+            let per_block = (LAYER_BYTES as usize / layer).max(1);
+            for (b, block) in out.chunks_mut(per_block * layer).enumerate() {
+                let first = (b * per_block) as u64;
+                let end = (first + per_block as u64).min(cd);
+                block.copy_from_slice(bytemuck::cast_slice(&pack_layers(volume, first..end)));
+            }
+        }
     }
 }
 

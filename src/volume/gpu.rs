@@ -20,7 +20,7 @@ use std::borrow::Cow;
 const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 pub struct GpuVolume {
-    ctx: Context,
+    pub(super) ctx: Context,
     /// The volume's texels: the dense image, or the brick pool.
     pub image: Image3d,
     /// Nearest filtering: every `texelFetch` user binds this one.
@@ -44,10 +44,10 @@ pub struct GpuVolume {
     /// The gradient shaded and iso frames read (`add_gradient`).
     gradient: Option<Image3d>,
     /// The cells copy the manual filter reads (`add_cells`).
-    cells: Option<TexelBuffer>,
+    pub(super) cells: Option<TexelBuffer>,
     /// The kernel `record_add_cells` recorded: kept while a recorded
     /// packing may be pending.
-    cells_kernel: Option<Kernel>,
+    pub(super) cells_kernel: Option<Kernel>,
     /// The gradient's cells copy the manual filter reads in lit frames
     /// (`add_gradient`, when the volume has its cells copy).
     gradient_cells: Option<TexelBuffer>,
@@ -432,69 +432,6 @@ impl GpuVolume {
         self.gradient.as_ref().map(|g| g.view)
     }
 
-    /// Makes the cells copy (`volume`'s, the volume this was uploaded
-    /// from) on the device from the volume image and waits: the manual
-    /// filter then fetches one texel per sample instead of eight, with the
-    /// same result bit for bit. Costs `TexelKind::bytes_per_voxel` bytes
-    /// per voxel (checked against the device's limits first); once is
-    /// enough.
-    pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
-        if self.cells.is_none() {
-            self.check_cells_of(volume)?;
-            let cells = if self.host_shared() {
-                cells::shared_cells(&self.ctx, volume)?
-            } else {
-                let ctx = self.ctx.clone();
-                ctx.submit_and_wait(|cmd| self.record_pack_cells(cmd))?.0
-            };
-            self.cells = Some(cells);
-        }
-        Ok(())
-    }
-
-    /// As `add_cells`, recorded into `cmd` after the volume's upload (see
-    /// `record_upload`), ending with a barrier to compute-shader reads;
-    /// nothing to keep but this volume (it holds the kernel). On a CPU
-    /// device the host packs the copy at once and nothing is recorded.
-    /// Does nothing when the copy is already there.
-    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<()> {
-        if self.cells.is_some() {
-            return Ok(());
-        }
-        self.check_cells_of(volume)?;
-        if self.host_shared() {
-            self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
-            return Ok(());
-        }
-        let (cells, kernel) = self.record_pack_cells(cmd)?;
-        self.cells = Some(cells);
-        self.cells_kernel = Some(kernel);
-        Ok(())
-    }
-
-    fn host_shared(&self) -> bool {
-        cells::host_shared(&self.ctx)
-    }
-
-    /// Whether `volume` can have a cells copy here: dense, the volume this
-    /// was uploaded from, one channel.
-    fn check_cells_of(&self, volume: &Volume) -> Result<()> {
-        self.check_dense("the cells copy")?;
-        self.check_same(volume, "cells copy")?;
-        self.check_one_channel("the cells copy")
-    }
-
-    fn record_pack_cells(&self, cmd: vk::CommandBuffer) -> Result<(TexelBuffer, Kernel)> {
-        let image = (self.image.view, self.sampler);
-        let range = self.ctx.info().max_storage_buffer_range;
-        cells::record_pack_cells(&self.ctx, cmd, image, self.dims, self.kind, range)
-    }
-
-    /// The cells copy, where `add_cells` uploaded it.
-    pub fn cells(&self) -> Option<&TexelBuffer> {
-        self.cells.as_ref()
-    }
-
     /// An error naming `what` unless the volume has one channel: shading
     /// and isosurfaces read one field's gradient.
     pub fn check_one_channel(&self, what: &str) -> Result<()> {
@@ -543,7 +480,7 @@ impl GpuVolume {
         self.pool.map_or(0, |p| p.edge)
     }
 
-    fn check_dense(&self, what: &str) -> Result<()> {
+    pub(super) fn check_dense(&self, what: &str) -> Result<()> {
         if self.pool.is_some() {
             return Err(Error::invalid(
                 "volume",
@@ -554,7 +491,7 @@ impl GpuVolume {
         Ok(())
     }
 
-    fn check_same(&self, volume: &Volume, what: &'static str) -> Result<()> {
+    pub(super) fn check_same(&self, volume: &Volume, what: &'static str) -> Result<()> {
         if volume.dims != self.dims
             || volume.norm != self.norm
             || volume.channel_count() as u32 != self.channels

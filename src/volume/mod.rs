@@ -8,6 +8,7 @@ mod decode;
 mod export;
 mod filter;
 mod gpu;
+mod gpu_cells;
 mod gradient;
 #[cfg(feature = "loaders")]
 mod nifti;

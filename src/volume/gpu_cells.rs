@@ -1,0 +1,74 @@
+//! The volume's cells copy on a `GpuVolume` (`cells.rs`): made once, by
+//! the host in memory the device reads on a CPU device, else by a kernel
+//! from the volume image, recorded or waited for.
+
+use super::cells;
+use super::{GpuVolume, Volume};
+use crate::error::Result;
+use crate::gpu::{vk, Kernel, TexelBuffer};
+
+impl GpuVolume {
+    /// Makes the cells copy (`volume`'s, the volume this was uploaded
+    /// from) and waits: packed by the host in place on a CPU device, else
+    /// made on the device from the volume image. The manual filter then
+    /// fetches one texel per sample instead of eight, with the same result
+    /// bit for bit. Costs `TexelKind::bytes_per_voxel` bytes
+    /// per voxel (checked against the device's limits first); once is
+    /// enough.
+    pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
+        if self.cells.is_none() {
+            self.check_cells_of(volume)?;
+            let cells = if self.host_shared() {
+                cells::shared_cells(&self.ctx, volume)?
+            } else {
+                let ctx = self.ctx.clone();
+                ctx.submit_and_wait(|cmd| self.record_pack_cells(cmd))?.0
+            };
+            self.cells = Some(cells);
+        }
+        Ok(())
+    }
+
+    /// As `add_cells`, recorded into `cmd` after the volume's upload (see
+    /// `record_upload`), ending with a barrier to compute-shader reads;
+    /// nothing to keep but this volume (it holds the kernel). On a CPU
+    /// device the host packs the copy at once and nothing is recorded.
+    /// Does nothing when the copy is already there.
+    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<()> {
+        if self.cells.is_some() {
+            return Ok(());
+        }
+        self.check_cells_of(volume)?;
+        if self.host_shared() {
+            self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
+            return Ok(());
+        }
+        let (cells, kernel) = self.record_pack_cells(cmd)?;
+        self.cells = Some(cells);
+        self.cells_kernel = Some(kernel);
+        Ok(())
+    }
+
+    fn host_shared(&self) -> bool {
+        cells::host_shared(&self.ctx)
+    }
+
+    /// Whether `volume` can have a cells copy here: dense, the volume this
+    /// was uploaded from, one channel.
+    fn check_cells_of(&self, volume: &Volume) -> Result<()> {
+        self.check_dense("the cells copy")?;
+        self.check_same(volume, "cells copy")?;
+        self.check_one_channel("the cells copy")
+    }
+
+    fn record_pack_cells(&self, cmd: vk::CommandBuffer) -> Result<(TexelBuffer, Kernel)> {
+        let image = (self.image.view, self.sampler);
+        let range = self.ctx.info().max_storage_buffer_range;
+        cells::record_pack_cells(&self.ctx, cmd, image, self.dims, self.kind, range)
+    }
+
+    /// The cells copy, where `add_cells` (or `record_add_cells`) made it.
+    pub fn cells(&self) -> Option<&TexelBuffer> {
+        self.cells.as_ref()
+    }
+}
