@@ -7,7 +7,7 @@ use super::{context, tf_for, validation_verdict};
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
 use lacuna::parallel::{Decomposition, World};
-use lacuna::render::{FrameDesc, Mode, Renderer, Scene};
+use lacuna::render::{FrameDesc, Mode, Scene};
 use lacuna::volume::{GpuVolume, PoolLimits, Storage, StreamTo, POOL_BRICK};
 use lacuna::{Error, Result, Timings, TransferFunction};
 use std::process::ExitCode;
@@ -100,27 +100,18 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let (lo, hi) = block.bounds();
     let block_desc = desc.to_builder().segment(Some([lo, hi])).build()?;
 
-    let builder = args.model.builder(&ctx)?;
-    let renderer = Renderer::sharing(&builder)?;
-    let clock = Instant::now();
-    let mut gpu_volume = GpuVolume::upload_bricks_kept(&ctx, &volume, edge, block.with_ghosts(split.counts))?;
-    gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
-    let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
+    let keep = block.with_ghosts(split.counts);
     let Rendered {
+        gpu_volume,
+        upload_ms,
         lut,
         structure,
         build,
         mut frame,
         timings,
-    } = build_and_render(
-        &ctx,
-        (&builder, &renderer),
-        args,
-        &params,
-        (&volume, &tf),
-        &mut gpu_volume,
-        &block_desc,
-    )?;
+    } = build_and_render(&ctx, args, &params, (&volume, &tf), &block_desc, || {
+        GpuVolume::upload_bricks_kept(&ctx, &volume, edge, keep)
+    })?;
     // Per build: ranges and the structure (GPU timestamps; CPU phases in wall time).
     let build_ms = build.as_ref().map_or(0.0, Timings::total);
     let scene = Scene {

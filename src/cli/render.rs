@@ -101,6 +101,10 @@ pub(super) fn build(
 
 /// A structure built for a prepared volume, and the frames it rendered.
 pub(super) struct Rendered {
+    /// The volume as `upload` made it, with what the frames read.
+    pub gpu_volume: GpuVolume,
+    /// Wall ms of the upload and what `GpuVolume::prepare` added.
+    pub upload_ms: f64,
     pub lut: GpuTransferFunction,
     pub structure: Structure,
     /// Per-phase medians of the timed builds (None for naive).
@@ -110,36 +114,43 @@ pub(super) struct Rendered {
     pub timings: Timings,
 }
 
-/// What `render` and each rank do once the volume is uploaded: its sampler
-/// for `desc`, the TF, the structure (`warmup + repeat` builds) and the
-/// frames.
+/// What `render` and each rank do with a loaded volume: `upload` it and
+/// add what `desc`'s frames read (timed), its sampler for `desc`, the TF,
+/// the structure (`warmup + repeat` builds) and the frames.
 pub(super) fn build_and_render(
     ctx: &Context,
-    (builder, renderer): (&Builder, &Renderer),
     args: &RenderArgs,
     params: &Params,
     (volume, tf): (&Volume, &TransferFunction),
-    gpu_volume: &mut GpuVolume,
     desc: &FrameDesc,
+    upload: impl FnOnce() -> Result<GpuVolume>,
 ) -> Result<Rendered> {
-    gpu_volume.sampler_for(desc.filter_for(gpu_volume))?;
+    let builder = args.model.builder(ctx)?;
+    let renderer = Renderer::sharing(&builder)?;
+    let clock = std::time::Instant::now();
+    let mut gpu_volume = upload()?;
+    gpu_volume.prepare(volume, desc.lighting().is_some(), desc.filter())?;
+    let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
+    gpu_volume.sampler_for(desc.filter_for(&gpu_volume))?;
     let lut = tf.upload(ctx)?;
     let input = BuildInput {
         volume,
-        gpu_volume,
+        gpu_volume: &gpu_volume,
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
         frame: Some(desc),
     };
-    let (structure, build) = build(builder, args, &input, params)?;
+    let (structure, build) = build(&builder, args, &input, params)?;
     let scene = Scene {
         structure: &structure,
-        volume: gpu_volume,
+        volume: &gpu_volume,
         tf: &lut,
     };
-    let (frame, timings) = frames(renderer, scene, desc, args)?;
+    let (frame, timings) = frames(&renderer, scene, desc, args)?;
     Ok(Rendered {
+        gpu_volume,
+        upload_ms,
         lut,
         structure,
         build,
@@ -189,27 +200,17 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
 
-    let builder = args.model.builder(&ctx)?;
-    let renderer = Renderer::sharing(&builder)?;
-    let clock = std::time::Instant::now();
-    let mut gpu_volume = GpuVolume::upload_as(&ctx, &volume, args.volume.storage)?;
-    gpu_volume.prepare(&volume, desc.lighting().is_some(), desc.filter())?;
-    let upload_ms = clock.elapsed().as_secs_f64() * 1e3;
     let Rendered {
+        gpu_volume,
+        upload_ms,
         lut,
         structure,
         build,
         mut frame,
         timings,
-    } = build_and_render(
-        &ctx,
-        (&builder, &renderer),
-        args,
-        &params,
-        (&volume, &tf),
-        &mut gpu_volume,
-        &desc,
-    )?;
+    } = build_and_render(&ctx, args, &params, (&volume, &tf), &desc, || {
+        GpuVolume::upload_as(&ctx, &volume, args.volume.storage)
+    })?;
     let scene = Scene {
         structure: &structure,
         volume: &gpu_volume,

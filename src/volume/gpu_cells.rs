@@ -18,7 +18,7 @@ impl GpuVolume {
     pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
         if self.cells.is_none() {
             self.check_cells_of(volume)?;
-            let cells = if self.host_shared() {
+            let cells = if cells::host_shared(&self.ctx) {
                 cells::shared_cells(&self.ctx, volume)?
             } else {
                 let ctx = self.ctx.clone();
@@ -39,7 +39,7 @@ impl GpuVolume {
             return Ok(());
         }
         self.check_cells_of(volume)?;
-        if self.host_shared() {
+        if cells::host_shared(&self.ctx) {
             self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
             return Ok(());
         }
@@ -47,10 +47,6 @@ impl GpuVolume {
         self.cells = Some(cells);
         self.cells_kernel = Some(kernel);
         Ok(())
-    }
-
-    fn host_shared(&self) -> bool {
-        cells::host_shared(&self.ctx)
     }
 
     /// Whether `volume` can have a cells copy here: dense, the volume this
