@@ -59,6 +59,10 @@ pub enum Error {
     /// The GPU was lost (driver reset, watchdog) or ran out of memory.
     #[error("{0}")]
     Device(String),
+    /// A step several processes take together (MPI ranks) failed in
+    /// another process, which reports why.
+    #[error("{0} failed in another process")]
+    Elsewhere(String),
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },

@@ -33,8 +33,20 @@ fn mpirun(ranks: u32, args: &[&str]) -> common::Run {
 #[test]
 fn ranks_composite_to_the_one_process_frame() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [&[&str]; 2] = [
+    // A uint16 file each rank reads only its layers of (odd dims, values
+    // that vary along z so that no rank's layers hold the whole range).
+    let raw = dir.path().join("ramp_37x29x45_uint16.raw");
+    let bytes: Vec<u8> = (0..37 * 29 * 45u32)
+        .flat_map(|i| {
+            let (x, y, z) = (i % 37, i / 37 % 29, i / (37 * 29));
+            let v = if (x + y) % 5 == 0 { 900 * z + 40 * x } else { 0 };
+            (v as u16).to_le_bytes()
+        })
+        .collect();
+    std::fs::write(&raw, bytes).unwrap();
+    let cases: [&[&str]; 3] = [
         &["nbody:64", "--accel", "auto"],
+        &[raw.to_str().unwrap(), "--tf", "ramp:0.2:1", "--accel", "grid"],
         &[
             "turbulence:37x29x45",
             "--tf",

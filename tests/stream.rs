@@ -82,19 +82,8 @@ fn a_streamed_pool_is_the_planned_pool_byte_for_byte() {
 #[test]
 fn a_raw_file_streams_as_it_loads() {
     let dir = tempfile::tempdir().unwrap();
-    // uint16, odd dims, a constant slab and a varying rest.
+    let (path, bytes) = raw_u16(dir.path());
     let dims = [23u32, 17, 29];
-    let mut bytes = Vec::new();
-    for z in 0..dims[2] {
-        for y in 0..dims[1] {
-            for x in 0..dims[0] {
-                let v: u16 = if x < 9 { 7 } else { (x * 31 + y * 7 + z * 1013) as u16 };
-                bytes.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-    }
-    let path = dir.path().join("slabs_23x17x29_uint16.raw");
-    std::fs::write(&path, &bytes).unwrap();
     let spec = path.to_str().unwrap();
     let d = dense(spec);
     let s = streamed(spec, 4, limits(u64::MAX), None);
@@ -130,20 +119,25 @@ fn a_raw_file_streams_as_it_loads() {
     assert_eq!(host(&v).layout.table, planned.table);
 }
 
+/// Every brick `p` stores lies in `keep`.
+fn assert_stores_only(p: &lacuna::volume::HostPool, keep: [[u32; 3]; 2], spec: &str) {
+    let counts = p.layout.counts;
+    for &b in &p.layout.stored {
+        let c = [b % counts[0], b / counts[0] % counts[1], b / (counts[0] * counts[1])];
+        assert!(
+            (0..3).all(|a| c[a] >= keep[0][a] && c[a] < keep[1][a]),
+            "{spec}: brick {c:?} stored"
+        );
+    }
+}
+
 #[test]
 fn a_kept_region_stores_only_its_bricks_and_normalises_by_the_whole() {
     let d = dense("nbody:64");
     let keep = [[1, 0, 0], [3, 4, 2]];
     let s = streamed("nbody:64", 16, limits(u64::MAX), Some(keep));
     let p = host(&s);
-    let counts = p.layout.counts;
-    for &b in &p.layout.stored {
-        let c = [b % counts[0], b / counts[0] % counts[1], b / (counts[0] * counts[1])];
-        assert!(
-            (0..3).all(|a| c[a] >= keep[0][a] && c[a] < keep[1][a]),
-            "brick {c:?} stored"
-        );
-    }
+    assert_stores_only(p, keep, "nbody:64");
     let whole = PoolLayout::of_volume(&d, 16, limits(u64::MAX)).unwrap();
     assert!(p.layout.stored.len() < whole.stored.len());
     // Inside the kept bricks every voxel is the volume's.
@@ -156,6 +150,142 @@ fn a_kept_region_stores_only_its_bricks_and_normalises_by_the_whole() {
         }
     }
     assert_eq!((s.value_range, s.norm), (d.value_range, d.norm));
+}
+
+/// A uint16 raw file of odd dims with a constant slab (x < 9) and a
+/// varying rest, named for its layout; its bytes.
+fn raw_u16(dir: &std::path::Path) -> (std::path::PathBuf, Vec<u8>) {
+    let dims = [23u32, 17, 29];
+    let mut bytes = Vec::new();
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let v: u16 = if x < 9 { 7 } else { (x * 31 + y * 7 + z * 1013) as u16 };
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let path = dir.join("slabs_23x17x29_uint16.raw");
+    std::fs::write(&path, &bytes).unwrap();
+    (path, bytes)
+}
+
+/// The least and greatest stored value of layers `z` of a dense volume.
+fn layers_range(v: &Volume, z: std::ops::Range<u32>) -> (f64, f64) {
+    let [w, h, _] = v.dims;
+    let stored = |i: usize| -> f64 {
+        match &v.data {
+            VoxelData::U8(b) => b[i] as f64,
+            VoxelData::U16(b) => b[i] as f64,
+            _ => panic!("{} is not an integer volume", v.name),
+        }
+    };
+    let n = (w * h) as usize;
+    (z.start as usize * n..z.end as usize * n)
+        .map(stored)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)))
+}
+
+#[test]
+fn a_rank_streams_only_its_layers_and_normalises_by_the_agreed_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let (raw, _) = raw_u16(dir.path());
+    // Blocks in the middle, at either end, and one brick row thick.
+    for (spec, edge, keep) in [
+        ("nbody:37x29x45", 8, [[0, 1, 2], [3, 4, 4]]),
+        ("nbody:37x29x45", 8, [[2, 0, 0], [5, 4, 1]]),
+        ("nbody:37x29x45", 16, [[0, 0, 1], [3, 2, 3]]),
+        (raw.to_str().unwrap(), 4, [[1, 1, 3], [6, 5, 5]]),
+        (raw.to_str().unwrap(), 4, [[0, 0, 7], [6, 5, 8]]),
+    ] {
+        let d = dense(spec);
+        let whole = layers_range(&d, 0..d.dims[2]);
+        // The layers the kept bricks' slots hold: their rows and one more.
+        let layers = keep[0][2] * edge..(keep[1][2] * edge + 1).min(d.dims[2]);
+        assert!(layers.len() < d.dims[2] as usize);
+        let (heard, progress) = (
+            std::sync::Arc::new(std::sync::Mutex::new(Vec::new())),
+            std::sync::Arc::new(std::sync::Mutex::new(0)),
+        );
+        let (log, seen) = (heard.clone(), progress.clone());
+        let to = StreamTo::new(edge, limits(u64::MAX))
+            .keep(Some(keep))
+            .across(std::sync::Arc::new(move |mine| {
+                log.lock().unwrap().push(mine);
+                Ok(whole)
+            }))
+            .progress(std::sync::Arc::new(move |_, total| *seen.lock().unwrap() = total));
+        let series = Series::open(spec, &LoadOptions::default()).unwrap();
+        let s = series.load_bricks(0, &to).unwrap();
+        // Asked once, with the range of its own layers; told the whole's.
+        assert_eq!(
+            *heard.lock().unwrap(),
+            vec![Some(layers_range(&d, layers.clone()))],
+            "{spec}"
+        );
+        assert_eq!(
+            *progress.lock().unwrap(),
+            layers.len() as u32,
+            "{spec}: layers streamed"
+        );
+        assert_eq!((s.value_range, s.norm), (d.value_range, d.norm), "{spec}");
+        // Only kept bricks stored, and every voxel of their slots is the
+        // volume's.
+        let p = host(&s);
+        assert_stores_only(p, keep, spec);
+        let [lo, hi] = keep.map(|k| [0, 1, 2].map(|a| (k[a] * edge).min(d.dims[a])));
+        for z in lo[2]..hi[2] {
+            for y in lo[1]..hi[1] {
+                for x in lo[0]..hi[0] {
+                    let i = d.index(x, y, z);
+                    assert_eq!(s.data.texel(i), d.data.texel(i), "{spec}: voxel {x},{y},{z}");
+                }
+            }
+        }
+        // The slots, border layers included, are those of the whole stream.
+        let all_layers = streamed(spec, edge, limits(u64::MAX), Some(keep));
+        let q = host(&all_layers);
+        assert_eq!(
+            (&p.layout.stored, &p.layout.images),
+            (&q.layout.stored, &q.layout.images)
+        );
+        assert!((0..p.layout.stored.len()).all(|k| p.slot(k) == q.slot(k)), "{spec}");
+        // A brick row not streamed holds one value of the volume.
+        let values: std::collections::HashSet<_> = (0..d.data.len()).map(|i| d.data.texel(i).to_bits()).collect();
+        assert!(
+            (0..s.data.len()).all(|i| values.contains(&s.data.texel(i).to_bits())),
+            "{spec}"
+        );
+    }
+}
+
+#[test]
+fn a_failed_stream_still_agrees_and_reports_its_own_error() {
+    let heard = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let log = heard.clone();
+    let to = StreamTo::new(4, limits(u64::MAX))
+        .keep(Some([[0, 0, 1], [2, 2, 2]]))
+        .across(std::sync::Arc::new(move |mine| {
+            log.lock().unwrap().push(mine);
+            Err(lacuna::Error::Elsewhere("streaming the volume".into()))
+        }));
+    // This process's feed fails: it still takes part, with no range, and
+    // its own error is what it reports.
+    let e = to
+        .run([8, 8, 8], 1, |_, layers| {
+            assert_eq!(layers, 4..8);
+            Err(lacuna::Error::invalid("layer", "4", "unreadable"))
+        })
+        .unwrap_err();
+    assert!(e.to_string().starts_with("invalid layer '4'"), "{e}");
+    // Its feed succeeds but another's failed: the agreement's error.
+    let e = to
+        .run([8, 8, 8], 1, |stream, layers| {
+            stream.push(&vec![3u8; 64 * layers.len()])
+        })
+        .unwrap_err();
+    assert!(matches!(e, lacuna::Error::Elsewhere(_)), "{e}");
+    assert_eq!(*heard.lock().unwrap(), vec![None, Some((3.0, 3.0))]);
 }
 
 #[test]
@@ -242,7 +372,7 @@ fn a_broken_stream_is_an_error() {
     assert!(e.contains("3 of 8 layers"), "{e}");
     let mut s = PoolStream::new([8, 8, 8], 1, 4, l, None).unwrap();
     let e = s.push(&[0u8; 64 * 9]).unwrap_err().to_string();
-    assert!(e.contains("at most 8"), "{e}");
+    assert!(e.contains("up to layer 8"), "{e}");
     assert!(PoolStream::new([8, 8, 8], 1, 0, l, None).is_err());
 }
 

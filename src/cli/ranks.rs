@@ -31,7 +31,9 @@ struct Part {
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let world = World::init()?;
     let part = render_block(args, &world);
-    match (world.first_failed(part.is_ok()), part) {
+    // A rank that failed only because another did leaves the report to it.
+    let own_failure = matches!(part, Err(ref e) if !matches!(e, Error::Elsewhere(_)));
+    match (world.first_failed(!own_failure), part) {
         (None, Ok(part)) => {
             let composited = world.composite(part.desc.size(), &part.frame.pixels, &part.order);
             match (world.first_failed(composited.is_ok()), composited) {
@@ -79,13 +81,16 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = Instant::now();
-    // A source that comes in slabs is streamed, keeping only this rank's
-    // bricks and ghosts; others load whole (the upload keeps the bricks).
+    // A source that comes in slabs is streamed, reading or generating only
+    // the layers of this rank's bricks and ghosts (the ranks agree on the
+    // value range); others load whole (the upload keeps the bricks).
     let volume = match series.streamed_layout() {
         Some((dims, _)) => {
             let split = Decomposition::new(dims, edge, world.size)?;
             let keep = split.blocks[world.rank as usize].with_ghosts(split.counts);
-            let to = StreamTo::new(edge, PoolLimits::of(ctx.info())).keep(Some(keep));
+            let to = StreamTo::new(edge, PoolLimits::of(ctx.info()))
+                .keep(Some(keep))
+                .across(world.range_across());
             series.load_bricks(args.volume.time, &to)?
         }
         None => series.load(args.volume.time, None)?,

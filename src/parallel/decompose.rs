@@ -68,7 +68,7 @@ pub struct Decomposition {
 impl Decomposition {
     /// Splits the bricks of a volume of `dims` (bricks of `edge`^3) into
     /// `ranks` blocks: each split halves the ranks and cuts the box's
-    /// longest side (in voxels) at the brick nearest the ranks' share, so
+    /// longest side (in voxels, z first among equals) at the brick nearest the ranks' share, so
     /// blocks hold about equal voxels.
     pub fn new(dims: [u32; 3], edge: u32, ranks: u32) -> Result<Self> {
         if edge == 0 || dims.contains(&0) {
@@ -147,8 +147,10 @@ impl Decomposition {
             });
             return Ok(Node::Leaf(rank));
         }
-        // Longest side first; a side of one brick cannot be cut.
-        let mut axes = [0, 1, 2];
+        // Longest side first, z first among equals (a cube's first cut is
+        // across z, so each side reads or generates only its own layers,
+        // `StreamTo::across`); a side of one brick cannot be cut.
+        let mut axes = [2, 1, 0];
         axes.sort_by_key(|&a| std::cmp::Reverse(self.voxels(bricks, a)));
         for axis in axes {
             if let Some((cut, lo_ranks)) = self.cut(bricks, axis, ranks) {

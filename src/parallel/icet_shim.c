@@ -34,6 +34,19 @@ int lacuna_mpi_min(int v) {
     return out;
 }
 
+/* The least lo and greatest hi over every rank where every rank is ok
+ * (returns 1), else 0 (every rank gets the same answer). */
+int lacuna_mpi_range(double lo, double hi, int ok, double *out) {
+    /* Negated where the wanted reduction is a maximum, so one MPI_MIN
+     * reduces all three. */
+    double mine[3] = {lo, -hi, ok ? 0.0 : -1.0};
+    double all[3] = {0, 0, 0};
+    MPI_Allreduce(mine, all, 3, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    out[0] = all[0];
+    out[1] = -all[1];
+    return all[2] == 0.0;
+}
+
 /* Ends every rank (a rank that panicked: the others would wait for it). */
 void lacuna_mpi_abort(int code) {
     MPI_Abort(MPI_COMM_WORLD, code);

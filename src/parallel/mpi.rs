@@ -3,6 +3,7 @@
 //! the ranks' frames.
 
 use crate::error::{Error, Result};
+use crate::volume::RangeAcross;
 use std::os::raw::{c_double, c_float, c_int};
 
 extern "C" {
@@ -11,6 +12,7 @@ extern "C" {
     fn lacuna_mpi_min(v: c_int) -> c_int;
     fn lacuna_mpi_barrier();
     fn lacuna_mpi_abort(code: c_int);
+    fn lacuna_mpi_range(lo: c_double, hi: c_double, ok: c_int, out: *mut c_double) -> c_int;
     fn lacuna_mpi_gather(values: *const c_double, n: c_int, out: *mut c_double);
     fn lacuna_icet_composite(
         width: c_int,
@@ -49,6 +51,24 @@ impl World {
         // SAFETY: a collective over plain ints.
         let first = unsafe { lacuna_mpi_min(mine) };
         (first < self.size as c_int).then_some(first as u32)
+    }
+
+    /// How the ranks streaming their own layers agree on the volume's range
+    /// (`StreamTo::across`): the least and greatest of every rank's, where
+    /// every rank has one; `Error::Elsewhere` where another rank's stream
+    /// failed (this rank's own failure is its own to report).
+    pub fn range_across(&self) -> RangeAcross {
+        std::sync::Arc::new(|mine: Option<(f64, f64)>| {
+            let (lo, hi) = mine.unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
+            let mut out = [0.0; 2];
+            // SAFETY: a collective over plain doubles (MPI is initialized
+            // while a World lives); out holds two.
+            let all_ok = unsafe { lacuna_mpi_range(lo, hi, mine.is_some() as c_int, out.as_mut_ptr()) } != 0;
+            match all_ok {
+                true => Ok((out[0], out[1])),
+                false => Err(Error::Elsewhere("streaming the volume".into())),
+            }
+        })
     }
 
     /// Waits for every rank.

@@ -40,7 +40,7 @@ pub use pool::{
 pub use raw::{parse_dims, parse_type, RawLayout};
 pub use series::{Series, StepNorm};
 pub use spec::{LoadOptions, VolumeSpec};
-pub use stream::{HostPool, PoolStream, StreamProgress, StreamTo};
+pub use stream::{HostPool, PoolStream, RangeAcross, StreamProgress, StreamTo};
 
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;

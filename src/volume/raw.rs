@@ -90,8 +90,9 @@ pub fn load(
 
 /// As `load`, streamed into bricks (`Series::load_bricks`): uint8 and
 /// uint16 files are read a slab at a time into a `PoolStream` (their
-/// texels are their bytes), so the host never holds the dense volume;
-/// other types load whole.
+/// texels are their bytes), so the host never holds the dense volume (and
+/// a rank reads only its block's layers, `StreamTo::across`); other types
+/// load whole.
 pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Result<Volume> {
     let layout = match layout {
         Some(l) => l,
@@ -104,24 +105,27 @@ pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Res
     };
     let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
     check_length(path, len, layout)?;
-    let [w, h, d] = layout.dims;
-    let mut stream = to.stream(layout.dims, tb)?;
+    let [w, h, _] = layout.dims;
     let layer = w as usize * h as usize * tb as usize;
-    // Slabs of about 64 MiB.
-    let per_slab = ((64usize << 20) / layer).clamp(1, d as usize);
-    let mut slab = crate::limits::zeroed::<u8>(
-        format_args!("raw slab of {}", path.display()),
-        (per_slab * layer) as u64,
-    )?;
-    let mut file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
-    let mut z = 0usize;
-    while z < d as usize {
-        let n = per_slab.min(d as usize - z);
-        std::io::Read::read_exact(&mut file, &mut slab[..n * layer]).map_err(|e| Error::io(path, e))?;
-        stream.push(&slab[..n * layer])?;
-        z += n;
-    }
-    let pool = stream.finish(to.limits)?;
+    let pool = to.run(layout.dims, tb, |stream, layers| {
+        // Slabs of about 64 MiB.
+        let per_slab = ((64usize << 20) / layer).clamp(1, layers.len().max(1));
+        let mut slab = crate::limits::zeroed::<u8>(
+            format_args!("raw slab of {}", path.display()),
+            (per_slab * layer) as u64,
+        )?;
+        let mut file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(layers.start as u64 * layer as u64))
+            .map_err(|e| Error::io(path, e))?;
+        let mut z = layers.start as usize;
+        while z < layers.end as usize {
+            let n = per_slab.min(layers.end as usize - z);
+            std::io::Read::read_exact(&mut file, &mut slab[..n * layer]).map_err(|e| Error::io(path, e))?;
+            stream.push(&slab[..n * layer])?;
+            z += n;
+        }
+        Ok(())
+    })?;
     let data = VoxelData::Bricks(std::sync::Arc::new(pool));
     Volume::new(path.display().to_string(), layout.dims, [1.0; 3], layout.ty, data)
 }

@@ -9,6 +9,7 @@
 use super::pool::{brick_origin, outside, BrickBox, PoolLayout, PoolLimits};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Per brick in `slot_of`: a constant brick's value index has this bit.
 const VALUE: u32 = 1 << 31;
@@ -60,6 +61,11 @@ impl HostPool {
         self.texel_at((i % w) as u32, (i / w % h) as u32, (i / (w * h)) as u32)
     }
 
+    /// Stored slot `s`'s texels, (edge + 1)^3 of them, x fastest.
+    pub fn slot(&self, s: usize) -> &[u8] {
+        &self.slots[s * self.slot_bytes()..(s + 1) * self.slot_bytes()]
+    }
+
     /// Pool image `k`'s texel planes from `first_plane` on (`out`, whole
     /// planes), as `PoolLayout::fill` makes them from the dense volume.
     pub fn fill(&self, k: usize, first_plane: u32, out: &mut [u8]) {
@@ -102,14 +108,22 @@ impl HostPool {
 /// Called with (layers streamed, layers in all) after each brick row.
 pub type StreamProgress = std::sync::Arc<dyn Fn(u32, u32) + Send + Sync>;
 
+/// How processes that each stream only their own layers of one volume
+/// (MPI ranks) learn its stored range: given this process's layers' range,
+/// or None where its stream failed, the least and greatest over every
+/// process, or an error where any failed. A collective: each process calls
+/// it once per stream, failed or not, so none waits on one that failed.
+pub type RangeAcross = std::sync::Arc<dyn Fn(Option<(f64, f64)>) -> Result<(f64, f64)> + Send + Sync>;
+
 /// How a load streams into bricks (`Series::load_bricks`): the brick edge,
-/// the pool's limits, the bricks to keep (None: all), and who hears of its
-/// progress.
+/// the pool's limits, the bricks to keep (None: all), whether the source
+/// streams only the kept layers (`across`), and who hears of its progress.
 #[derive(Clone)]
 pub struct StreamTo {
     pub edge: u32,
     pub limits: PoolLimits,
     pub keep: Option<BrickBox>,
+    pub across: Option<RangeAcross>,
     pub progress: Option<StreamProgress>,
 }
 
@@ -119,6 +133,7 @@ impl StreamTo {
             edge,
             limits,
             keep: None,
+            across: None,
             progress: None,
         }
     }
@@ -127,6 +142,54 @@ impl StreamTo {
     pub fn keep(mut self, keep: Option<BrickBox>) -> Self {
         self.keep = keep;
         self
+    }
+
+    /// Streams only the layers the kept bricks' slots hold (every layer
+    /// where nothing is kept), and learns the whole volume's range from
+    /// `agree`: each rank of a split volume reads or generates its own
+    /// layers, and all of them normalise alike.
+    pub fn across(mut self, agree: RangeAcross) -> Self {
+        self.across = Some(agree);
+        self
+    }
+
+    /// The brick rows (z) a stream cuts, and the layers it takes: the kept
+    /// rows and the layer after them (their slots' border) with `across`,
+    /// else all of them.
+    pub fn rows_and_layers(&self, dims: [u32; 3]) -> (Range<u32>, Range<u32>) {
+        match (self.keep, &self.across) {
+            (Some([lo, hi]), Some(_)) => (
+                lo[2]..hi[2],
+                (lo[2] * self.edge).min(dims[2])..(hi[2] * self.edge + 1).min(dims[2]),
+            ),
+            _ => (0..dims[2].div_ceil(self.edge.max(1)), 0..dims[2]),
+        }
+    }
+
+    /// The pool of a volume of `dims` with texels of `texel_bytes` whose
+    /// layers `feed` pushes into the stream it is given (the layers it must
+    /// push, in order, are the range it is given).
+    pub fn run(
+        &self,
+        dims: [u32; 3],
+        texel_bytes: u64,
+        feed: impl FnOnce(&mut PoolStream, Range<u32>) -> Result<()>,
+    ) -> Result<HostPool> {
+        let fed = self.stream(dims, texel_bytes).and_then(|mut s| {
+            let layers = s.layers.clone();
+            feed(&mut s, layers)?;
+            Ok(s)
+        });
+        let stream = match &self.across {
+            None => fed?,
+            Some(agree) => {
+                let whole = agree(fed.as_ref().ok().map(|s| s.range));
+                let mut s = fed?;
+                s.range = whole?;
+                s
+            }
+        };
+        stream.finish(self.limits)
     }
 
     /// Reports each brick row cut.
@@ -138,6 +201,9 @@ impl StreamTo {
     /// The stream for a volume of `dims` with texels of `texel_bytes`.
     pub fn stream(&self, dims: [u32; 3], texel_bytes: u64) -> Result<PoolStream> {
         let mut s = PoolStream::new(dims, texel_bytes, self.edge, self.limits, self.keep)?;
+        let (rows, layers) = self.rows_and_layers(dims);
+        (s.base, s.row) = (layers.start, rows.start);
+        (s.rows, s.layers) = (rows, layers);
         s.progress = self.progress.clone();
         Ok(s)
     }
@@ -150,13 +216,20 @@ pub struct PoolStream {
     tb: usize,
     counts: [u32; 3],
     keep: Option<BrickBox>,
+    /// The brick rows (z) cut, and the layers pushed: all of them, or a
+    /// kept block's (`StreamTo::across`). Rows outside hold one value.
+    rows: Range<u32>,
+    layers: Range<u32>,
     /// Layers `base ..` of the volume, at most edge + 1 of them.
     window: Vec<u8>,
     base: u32,
     filled: u32,
     /// The next brick row (z) to cut.
     row: u32,
+    /// Per brick of the rows cut: its one value, or None where it is stored.
     one_value: Vec<Option<Vec<u8>>>,
+    /// The first texel pushed: the value of the rows not cut.
+    first: Option<Vec<u8>>,
     slots: Vec<u8>,
     range: (f64, f64),
     progress: Option<StreamProgress>,
@@ -183,11 +256,14 @@ impl PoolStream {
             tb: texel_bytes as usize,
             counts,
             keep,
+            rows: 0..counts[2],
+            layers: 0..dims[2],
             window,
             base: 0,
             filled: 0,
             row: 0,
             one_value: Vec::with_capacity(total as usize),
+            first: None,
             slots: Vec::new(),
             range: (f64::INFINITY, f64::NEG_INFINITY),
             progress: None,
@@ -201,16 +277,20 @@ impl PoolStream {
     /// Takes whole z-layers, the next in order.
     pub fn push(&mut self, mut layers: &[u8]) -> Result<()> {
         let layer = self.layer_bytes();
-        if !layers.len().is_multiple_of(layer) || self.base + self.filled + (layers.len() / layer) as u32 > self.dims[2]
+        if !layers.len().is_multiple_of(layer)
+            || self.base + self.filled + (layers.len() / layer) as u32 > self.layers.end
         {
             return Err(Error::invalid(
                 "volume stream",
                 format!("{} bytes after layer {}", layers.len(), self.base + self.filled),
                 format!(
-                    "expected whole layers of {layer} bytes, at most {} in all",
-                    self.dims[2]
+                    "expected whole layers of {layer} bytes, up to layer {}",
+                    self.layers.end
                 ),
             ));
+        }
+        if self.first.is_none() && !layers.is_empty() {
+            self.first = Some(layers[..self.tb].to_vec());
         }
         let tb = self.tb;
         let (lo, hi) = layers
@@ -236,7 +316,7 @@ impl PoolStream {
             layers = &layers[take * layer..];
             // A row needs its bricks' layers and the next row's first (or
             // the volume's last); a short last row may be whole at once.
-            while self.row < self.counts[2]
+            while self.row < self.rows.end
                 && self.base + self.filled > (self.row * self.edge + self.edge).min(self.dims[2] - 1)
             {
                 self.cut_row();
@@ -250,7 +330,7 @@ impl PoolStream {
                 self.filled = kept;
                 self.row += 1;
                 if let Some(f) = &self.progress {
-                    f(self.base + self.filled, self.dims[2]);
+                    f(self.base + self.filled - self.layers.start, self.layers.len() as u32);
                 }
             }
             if layers.is_empty() {
@@ -311,14 +391,22 @@ impl PoolStream {
 
     /// The pool, once every layer was pushed.
     pub fn finish(self, limits: PoolLimits) -> Result<HostPool> {
-        if self.base + self.filled != self.dims[2] || self.row != self.counts[2] {
+        if self.base + self.filled != self.layers.end || self.row != self.rows.end {
             return Err(Error::invalid(
                 "volume stream",
-                format!("{} of {} layers", self.base + self.filled, self.dims[2]),
+                format!("{} of {} layers", self.base + self.filled, self.layers.end),
                 "ended before the volume's last layer",
             ));
         }
-        let one_value: Vec<Option<&[u8]>> = self.one_value.iter().map(|v| v.as_deref()).collect();
+        // The rows not cut (outside a kept block's layers) hold one value
+        // of the volume, as a brick outside the block does.
+        let per_row = self.counts[0] as usize * self.counts[1] as usize;
+        let fill = self.first.as_deref();
+        let (before, after) = (self.rows.start as usize, (self.counts[2] - self.rows.end) as usize);
+        let one_value: Vec<Option<&[u8]>> = std::iter::repeat_n(fill, before * per_row)
+            .chain(self.one_value.iter().map(|v| v.as_deref()))
+            .chain(std::iter::repeat_n(fill, after * per_row))
+            .collect();
         let layout = PoolLayout::assemble(self.edge, self.dims, self.tb as u64, limits, &one_value)?;
         let mut value_index = std::collections::HashMap::new();
         for (k, v) in layout.values.iter().enumerate() {

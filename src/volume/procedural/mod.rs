@@ -130,9 +130,10 @@ impl Generator {
             }
             Generator::Nbody => match streamed {
                 Some(to) => {
-                    let mut stream = to.stream(dims, 1)?;
-                    nbody::stream(dims, seed(param)?, time, |slab| stream.push(slab))?;
-                    let pool = stream.finish(to.limits)?;
+                    let seed = seed(param)?;
+                    let pool = to.run(dims, 1, |stream, layers| {
+                        nbody::stream(dims, seed, time, layers, |slab| stream.push(slab))
+                    })?;
                     return self.named(dims, param, VoxelData::Bricks(std::sync::Arc::new(pool)));
                 }
                 None => nbody::generate(dims, seed(param)?, time),

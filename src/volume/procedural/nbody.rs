@@ -14,6 +14,7 @@
 
 use super::Rng;
 use rayon::prelude::*;
+use std::ops::Range;
 
 const CLUSTERS: usize = 48;
 /// Particles per voxel of the volume (spread over all clusters).
@@ -93,7 +94,7 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
 /// As `generate`, with slabs of at most `slab_bytes` of density.
 fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> Vec<u8> {
     let mut out = Vec::with_capacity(dims.iter().map(|&d| d as usize).product());
-    let collect: crate::Result<()> = for_each_slab(dims, seed, time, slab_bytes, |slab| {
+    let collect: crate::Result<()> = for_each_slab(dims, seed, time, 0..dims[2], slab_bytes, |slab| {
         out.extend_from_slice(slab);
         Ok(())
     });
@@ -101,17 +102,25 @@ fn generate_in_slabs(dims: [u32; 3], seed: u64, time: u32, slab_bytes: u64) -> V
     out
 }
 
-/// The volume's z-layers, whole slabs in z order, to `sink` (which may
-/// stop it with an error): the host holds two slabs of voxels and their
-/// density, not the volume (`volume::PoolStream`).
-pub fn stream(dims: [u32; 3], seed: u64, time: u32, sink: impl FnMut(&[u8]) -> crate::Result<()>) -> crate::Result<()> {
-    for_each_slab(dims, seed, time, SLAB_BYTES, sink)
+/// The volume's z-layers `layers` (the whole volume's values, bit for bit),
+/// in order and in whole layers, to `sink` (which may stop it with an
+/// error): the host holds two slabs of voxels and their density, not the
+/// volume (`volume::PoolStream`), and a rank makes only its block's layers.
+pub fn stream(
+    dims: [u32; 3],
+    seed: u64,
+    time: u32,
+    layers: Range<u32>,
+    sink: impl FnMut(&[u8]) -> crate::Result<()>,
+) -> crate::Result<()> {
+    for_each_slab(dims, seed, time, layers, SLAB_BYTES, sink)
 }
 
 fn for_each_slab(
     dims: [u32; 3],
     seed: u64,
     time: u32,
+    layers: Range<u32>,
     slab_bytes: u64,
     mut sink: impl FnMut(&[u8]) -> crate::Result<()>,
 ) -> crate::Result<()> {
@@ -120,24 +129,29 @@ fn for_each_slab(
     let layer = dims[0] as usize * dims[1] as usize;
     let depth = (slab_bytes / (4 * layer as u64)).clamp(1, dims[2] as u64) as u32;
     let slabs = dims[2].div_ceil(depth) as usize;
-    // Pass 1, per cluster: the particles depositing into each slab (a
-    // particle at z deposits into layers floor(z) and floor(z) + 1).
+    let layers = layers.start.min(dims[2])..layers.end.min(dims[2]);
+    // The slabs that hold `layers`.
+    let wanted = (layers.start / depth) as usize..layers.end.div_ceil(depth) as usize;
+    // Pass 1, per cluster: the particles depositing into each wanted slab
+    // (a particle at z deposits into layers floor(z) and floor(z) + 1).
     let lists: Vec<Vec<Vec<u32>>> = clusters
         .par_iter()
         .map(|c| {
             let mut per_slab = vec![Vec::new(); slabs];
-            // A cluster far from every layer lists nothing; skipping it
-            // here only saves the draws.
+            // A cluster far from every wanted layer lists nothing; skipping
+            // it here only saves the draws.
             let reach = c.scale * MAX_RADIUS + 2.0;
-            if c.centre[2] + reach < 0.0 || c.centre[2] - reach > n[2] {
+            if c.centre[2] + reach < layers.start as f64 || c.centre[2] - reach > layers.end as f64 {
                 return per_slab;
             }
             for j in 0..c.count {
                 if let Some(p) = particle(c, j, n) {
                     let z = p[2].floor() as u32;
                     let (a, b) = ((z / depth) as usize, ((z + 1).min(dims[2] - 1) / depth) as usize);
-                    per_slab[a].push(j as u32);
-                    if b != a {
+                    if wanted.contains(&a) {
+                        per_slab[a].push(j as u32);
+                    }
+                    if b != a && wanted.contains(&b) {
                         per_slab[b].push(j as u32);
                     }
                 }
@@ -151,14 +165,17 @@ fn for_each_slab(
     let slab = layer * depth as usize;
     let total = layer * dims[2] as usize;
     let mut pair_buf = vec![0u8; (2 * slab).min(total)];
-    for pair in 0..slabs.div_ceil(2) {
-        let out = &mut pair_buf[..(2 * slab).min(total - 2 * pair * slab)];
+    for pair in wanted.clone().step_by(2) {
+        let z_pair = pair * depth as usize;
+        let pair_layers = z_pair..(z_pair + 2 * depth as usize).min(dims[2] as usize);
+        let pair_layers = pair_layers.start..pair_layers.end.min(wanted.end * depth as usize);
+        let out = &mut pair_buf[..pair_layers.len() * layer];
         out.par_chunks_mut(slab).enumerate().for_each(|(half, out)| {
-            let s = 2 * pair + half;
+            let s = pair + half;
             let z0 = s * depth as usize;
             let mut density = vec![0f32; out.len()];
             let idx = |x: usize, y: usize, z: usize| x + dims[0] as usize * (y + dims[1] as usize * (z - z0));
-            let layers = z0..z0 + out.len() / layer;
+            let in_slab = z0..z0 + out.len() / layer;
             for (c, per_slab) in clusters.iter().zip(&lists) {
                 // Listed particles are inside: pass 1 found them so.
                 for p in per_slab[s].iter().filter_map(|&j| particle(c, j as usize, n)) {
@@ -168,7 +185,7 @@ fn for_each_slab(
                         for dy in 0..2 {
                             for dx in 0..2 {
                                 let (x, y, z) = (i[0] + dx, i[1] + dy, i[2] + dz);
-                                if x < dims[0] as usize && y < dims[1] as usize && layers.contains(&z) {
+                                if x < dims[0] as usize && y < dims[1] as usize && in_slab.contains(&z) {
                                     let wgt = (if dx == 1 { f[0] } else { 1.0 - f[0] })
                                         * (if dy == 1 { f[1] } else { 1.0 - f[1] })
                                         * (if dz == 1 { f[2] } else { 1.0 - f[2] });
@@ -183,7 +200,10 @@ fn for_each_slab(
                 *o = ((1.0 + d).log2() * 48.0).round().min(255.0) as u8;
             }
         });
-        sink(out)?;
+        // The pair's layers within `layers`.
+        let from = (layers.start as usize).max(pair_layers.start) - pair_layers.start;
+        let to = (layers.end as usize).min(pair_layers.end) - pair_layers.start;
+        sink(&out[from * layer..to * layer])?;
     }
     Ok(())
 }
@@ -216,6 +236,20 @@ mod tests {
         for layers in [1, 3, 40] {
             let slabs = generate_in_slabs(dims, 3, 4, layers * 4 * 37 * 30);
             assert!(slabs == whole, "slabs of {layers} layers");
+        }
+        // Any run of layers is the whole volume's, in slabs of any depth
+        // (runs that start and end inside a slab, or across several).
+        let layer = 37 * 30;
+        for (run, depth) in [(0..41, 3), (5..6, 3), (7..29, 4), (16..41, 16), (2..40, 40)] {
+            let mut got = Vec::new();
+            for_each_slab(dims, 3, 4, run.clone(), depth * 4 * layer as u64, |s| {
+                assert!(s.len().is_multiple_of(layer) && !s.is_empty());
+                got.extend_from_slice(s);
+                Ok(())
+            })
+            .unwrap();
+            let want = &whole[run.start as usize * layer..run.end as usize * layer];
+            assert!(got == want, "layers {run:?} in slabs of {depth}");
         }
     }
 }
