@@ -44,8 +44,21 @@ fn ranks_composite_to_the_one_process_frame() {
         })
         .collect();
     std::fs::write(&raw, bytes).unwrap();
-    let cases: [&[&str]; 3] = [
+    let cases: [&[&str]; 5] = [
         &["nbody:64", "--accel", "auto"],
+        // MIP and MinIP keep each pixel's extreme ray value: bit for bit.
+        &["nbody:64", "--mode", "mip", "--tf", "ramp:0.1:1", "--accel", "auto"],
+        &[
+            "turbulence:37x29x45",
+            "--mode",
+            "minip",
+            "--tf",
+            "band:0.05:0.45",
+            "--camera",
+            "90,10",
+            "--accel",
+            "distance",
+        ],
         &[raw.to_str().unwrap(), "--tf", "ramp:0.2:1", "--accel", "grid"],
         &[
             "turbulence:37x29x45",
@@ -95,7 +108,10 @@ fn ranks_composite_to_the_one_process_frame() {
                 Some(&*ranks.to_string())
             );
             let d = diff(&one, &frame).unwrap();
-            assert!(d.max_abs < 1e-5, "{ranks} ranks {case:?}: {d:?}");
+            match case.contains(&"--mode") {
+                true => assert_eq!(d.differing, 0, "{ranks} ranks {case:?}: {d:?}"),
+                false => assert!(d.max_abs < 1e-5, "{ranks} ranks {case:?}: {d:?}"),
+            }
         }
     }
 }
@@ -125,7 +141,12 @@ fn fails_on_ranks(ranks: u32, args: &[&str], needle: &str) {
 fn bad_requests_across_ranks_are_one_error() {
     // One brick of 16^3, two ranks.
     fails_on_ranks(2, &["nbody:16"], "invalid rank count '2'");
-    fails_on_ranks(3, &["nbody:32", "--mode", "mip"], "does not composite across ranks");
+    fails_on_ranks(3, &["nbody:32", "--mode", "average"], "does not composite across ranks");
+    fails_on_ranks(
+        2,
+        &["nbody:32", "--mode", "iso", "--iso", "0.5"],
+        "does not composite across ranks",
+    );
     fails_on_ranks(
         2,
         &["nbody:32", "--storage", "dense"],

@@ -1,10 +1,11 @@
 //! Data-parallel rendering without MPI (`lacuna::parallel`): the k-d blocks
 //! tile the bricks and come in visibility order; each rank's part (its
 //! bricks and ghosts, its segment of every ray) is rendered by every
-//! structure exactly as naive marching renders it; and the parts blended
+//! structure exactly as naive marching renders it; the parts blended
 //! front to back are the one-process frame within 1e-5 (the blend
-//! reassociates the float sums). tests/mpi.rs does the same through
-//! `mpirun` and IceT.
+//! reassociates the float sums), and MIP/MinIP parts picked by their ray
+//! values are it bit for bit. tests/mpi.rs does the same through `mpirun`,
+//! IceT and MPI reductions.
 
 mod common;
 use common::identity::cam;
@@ -12,8 +13,8 @@ use common::{accel, assert_clean, builder, gpu};
 use lacuna::accel::{Accel, BuildInput, Params};
 use lacuna::desc::Rays;
 use lacuna::frame::{diff, Frame};
-use lacuna::parallel::{blend, Decomposition};
-use lacuna::render::{Camera, Filter, FrameDesc, Projection, Renderer, Scene, Shading};
+use lacuna::parallel::{blend, pick, Decomposition};
+use lacuna::render::{Camera, Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -171,7 +172,73 @@ fn rendered_in_parts(
     let (w, h) = desc.size();
     let rays = desc.camera().rays(volume.dims, volume.spacing, w, h).unwrap();
     let pixels: Vec<&[[f32; 4]]> = parts.iter().map(|f| f.pixels.as_slice()).collect();
-    Frame::new(w, h, blend(&pixels, &split.order(&rays)))
+    let joined = match desc.mode() {
+        Mode::Mip | Mode::MinIp => {
+            let values: Vec<&[f32]> = parts
+                .iter()
+                .map(|f| f.depth.as_deref().expect("a MIP part carries its ray values"))
+                .collect();
+            pick(&pixels, &values, *desc.mode() == Mode::Mip)
+        }
+        _ => blend(&pixels, &split.order(&rays)),
+    };
+    Frame::new(w, h, joined)
+}
+
+#[test]
+fn mip_and_minip_parts_picked_by_ray_value_are_the_one_process_frame_bit_for_bit() {
+    let ctx = gpu();
+    let cases = [
+        (
+            "nbody:48",
+            "ramp:0.1:1",
+            Mode::Mip,
+            30.0,
+            20.0,
+            Projection::Orthographic,
+        ),
+        (
+            "turbulence:37x29x45",
+            "ramp:0.3:0.9",
+            Mode::Mip,
+            200.0,
+            -30.0,
+            Projection::Perspective {
+                fov_deg: 40.0,
+                distance: None,
+            },
+        ),
+        (
+            "turbulence:37x29x45",
+            "band:0.05:0.45",
+            Mode::MinIp,
+            90.0,
+            10.0,
+            Projection::Orthographic,
+        ),
+    ];
+    for (spec, tf, mode, az, el, projection) in cases {
+        let volume = load(spec);
+        let tf = TransferFunction::parse(tf).unwrap();
+        let desc = cam(64, az, el, projection, 0.5)
+            .to_builder()
+            .mode(mode)
+            .filter(Filter::Manual)
+            .build()
+            .unwrap();
+        let whole = common::render(&ctx, &volume, &tf, &desc, accel("naive"));
+        let shown = whole.pixels.iter().filter(|p| p[3] > 0.01).count();
+        assert!(
+            shown > 100 && shown < 64 * 64,
+            "{spec} {mode:?} shows the volume ({shown})"
+        );
+        for ranks in [2, 3] {
+            let structures = [accel("auto"), accel("grid"), accel("distance"), accel("octree-rev")];
+            let picked = rendered_in_parts(&volume, &tf, &desc, ranks, &structures);
+            let d = diff(&whole, &picked).unwrap();
+            assert_eq!(d.differing, 0, "{spec} {mode:?} in {ranks} parts: {d:?}");
+        }
+    }
 }
 
 #[test]
@@ -292,15 +359,27 @@ fn segments_under_a_crop_clip_planes_and_jitter_blend_to_the_frame_and_match_the
 }
 
 #[test]
-fn a_segment_is_a_composite_frame_s_part_only() {
-    let e = cam(16, 30.0, 20.0, Projection::Orthographic, 0.5)
-        .to_builder()
-        .mode(lacuna::render::Mode::Mip)
-        .segment(Some([[0.0; 3], [8.0; 3]]))
-        .build()
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("composite mode only"), "{e}");
+fn a_segment_is_a_composite_mip_or_minip_frame_s_part_only() {
+    use lacuna::render::Mode;
+    let part = |mode: Mode| {
+        cam(16, 30.0, 20.0, Projection::Orthographic, 0.5)
+            .to_builder()
+            .mode(mode)
+            .segment(Some([[0.0; 3], [8.0; 3]]))
+            .build()
+    };
+    for mode in [Mode::Average, Mode::Iso(lacuna::render::Iso::parse("0.5").unwrap())] {
+        let e = part(mode).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!("invalid segment '{}'", mode.name()))
+                && e.contains("composite, mip and minip modes only"),
+            "{e}"
+        );
+    }
+    for mode in [Mode::Composite, Mode::Mip, Mode::MinIp] {
+        let desc = part(mode).unwrap();
+        assert_eq!(desc.writes_ray_values(), mode != Mode::Composite);
+    }
     let e = FrameDesc::builder(8, 8)
         .segment(Some([[4.0, 0.0, 0.0], [2.0, 8.0, 8.0]]))
         .build()

@@ -515,6 +515,9 @@ vec4 march_result(March m) {
 
 // An iso frame's depth at the surface hit (render_params.glsl, depth_out).
 float march_depth(March m) {
+    if (params.depth_out == 3u) {
+        return m.best;
+    }
     if (!m.hit) {
         return params.no_hit_depth;
     }

@@ -54,6 +54,8 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     // Iso frames' surface depth (frame_out.glsl): 0 not written; 1 NDC
     // depth through voxel_to_ndc (host camera matrices); 2 distance from the
     // ray's origin in physical units. no_hit_depth where a ray hits nothing.
+    // 3: a rank's MIP (MinIP) segment writes its ray's largest (smallest)
+    // sample instead, -1 (2) where it took none, for the ranks' compositing.
     uint depth_out;
     mat4 voxel_to_ndc;
     float no_hit_depth;

@@ -1,6 +1,7 @@
 //! `mpirun -np N lacuna render ...` (feature `mpi`): each rank renders its
 //! block of the volume, IceT composites the ranks' frames in visibility
-//! order, rank 0 prints and writes the frame (`lacuna::parallel`).
+//! order (MIP and MinIP frames: each pixel's extreme ray value picks the
+//! colour), rank 0 prints and writes the frame (`lacuna::parallel`).
 
 use super::render::{build_and_render, describe, look_notes, peak_host_bytes, RenderArgs, Rendered};
 use super::{context, tf_for, validation_verdict};
@@ -35,13 +36,41 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let own_failure = matches!(part, Err(ref e) if !matches!(e, Error::Elsewhere(_)));
     match (world.first_failed(!own_failure), part) {
         (None, Ok(part)) => {
-            let composited = world.composite(part.desc.size(), &part.frame.pixels, &part.order);
+            let composited = composite(&world, &part);
             match (world.first_failed(composited.is_ok()), composited) {
                 (None, Ok(c)) => finish(args, &world, part, c),
                 (first, c) => fail(&world, first, c.map(|_| ())),
             }
         }
         (first, part) => fail(&world, first, part.map(|_| ())),
+    }
+}
+
+/// The ranks' frames as one: composite frames blended front to back by
+/// IceT, MIP (MinIP) frames by the colour of each pixel's largest
+/// (smallest) ray value.
+fn composite(world: &World, part: &Part) -> Result<(Option<Vec<[f32; 4]>>, f64)> {
+    let size = part.desc.size();
+    match (part.desc.mode(), &part.frame.depth) {
+        (Mode::Composite, _) => world.composite(size, &part.frame.pixels, &part.order),
+        (mode, Some(values)) => world.pick(size, &part.frame.pixels, values, *mode == Mode::Mip),
+        (mode, None) => Err(Error::invalid(
+            "mode",
+            mode.name(),
+            "the rank's frame came back without its ray values",
+        )),
+    }
+}
+
+/// How `composite` joined the frames, for the report.
+fn composited_how(mode: &Mode, order: &[u32]) -> String {
+    match mode {
+        Mode::Composite => {
+            let order: Vec<String> = order.iter().map(u32::to_string).collect();
+            format!("IceT ordered blend, ranks front to back {}", order.join(" "))
+        }
+        Mode::Mip => "each pixel's largest ray value and its colour, by an MPI MAXLOC reduction".into(),
+        _ => "each pixel's smallest ray value and its colour, by an MPI MINLOC reduction".into(),
     }
 }
 
@@ -60,12 +89,22 @@ fn fail(world: &World, first: Option<u32>, outcome: Result<()>) -> Result<ExitCo
 
 fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let (params, desc, _) = args.options()?;
-    if !matches!(desc.mode(), Mode::Composite) {
-        return Err(Error::invalid(
-            "mode",
-            desc.mode().name(),
-            "does not composite across ranks: IceT blends premultiplied colour front to back, which is the composite mode's sum; render it in one process",
-        ));
+    match desc.mode() {
+        Mode::Composite | Mode::Mip | Mode::MinIp => {}
+        Mode::Average => {
+            return Err(Error::invalid(
+                "mode",
+                "average",
+                "does not composite across ranks: the mean of the ray's samples goes through the transfer function after every rank's sum and count would be joined; render it in one process",
+            ))
+        }
+        Mode::Iso(_) => {
+            return Err(Error::invalid(
+                "mode",
+                "iso",
+                "does not composite across ranks: a surface crossing between two ranks' samples is seen by neither; render it in one process",
+            ))
+        }
     }
     let edge = match args.volume.storage {
         Storage::Bricks { edge } => edge,
@@ -194,7 +233,6 @@ fn finish(
     for line in &part.report {
         println!("{line}");
     }
-    let order: Vec<String> = part.order.iter().map(u32::to_string).collect();
     println!("per rank (wall ms for load and upload; build ms of its phases, GPU timestamps and CPU wall; GPU ms for march):");
     for (rank, s) in stats.chunks_exact(6).enumerate() {
         println!(
@@ -208,8 +246,8 @@ fn finish(
         );
     }
     println!(
-        "composite {composite_ms:.3} ms wall (IceT ordered blend, ranks front to back {})",
-        order.join(" ")
+        "composite {composite_ms:.3} ms wall ({})",
+        composited_how(part.desc.mode(), &part.order)
     );
     println!("render GPU time per pass on rank 0:\n{}", part.timings);
     if let Some(out) = &args.out {

@@ -404,6 +404,20 @@ impl FrameDesc {
         matches!(self.camera, Camera::Matrices(_))
     }
 
+    /// Whether the frame's depth output holds each ray's value instead of
+    /// a depth: a segment's (a rank's part) MIP or MinIP frame, whose
+    /// ranks keep the colour of the largest (smallest) value
+    /// (`crate::parallel::pick`). -1 (2) where the segment took no sample.
+    pub fn writes_ray_values(&self) -> bool {
+        self.segment.is_some() && matches!(self.mode, Mode::Mip | Mode::MinIp)
+    }
+
+    /// Whether the frame writes its depth output: iso frames (the surface's
+    /// depth) and `writes_ray_values`.
+    pub fn writes_depth(&self) -> bool {
+        matches!(self.mode, Mode::Iso(_)) || self.writes_ray_values()
+    }
+
     /// (name, value) pairs for printouts and frame metadata.
     pub fn describe(&self, volume: &GpuVolume) -> Vec<(&'static str, String)> {
         let mut out = vec![
@@ -581,12 +595,14 @@ impl FrameBuilder {
                     "must be finite, LO <= HI per axis",
                 ));
             }
-            // Parts blend front to back: the composite sum only.
-            if d.mode != Mode::Composite {
+            // Parts blend front to back (composite) or keep the extreme
+            // ray value (MIP, MinIP); an average's mean and an iso
+            // crossing between two parts' samples are not parts' sums.
+            if matches!(d.mode, Mode::Average | Mode::Iso(_)) {
                 return Err(Error::invalid(
                     "segment",
                     d.mode.name(),
-                    "parts of a frame blend in composite mode only",
+                    "parts of a frame join in composite, mip and minip modes only",
                 ));
             }
         }

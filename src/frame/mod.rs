@@ -35,7 +35,8 @@ pub struct Frame {
     /// Attribute name (without the `lacuna.` prefix) to value.
     pub metadata: BTreeMap<String, String>,
     /// Per pixel, an iso frame's surface depth (`render::HostDepthOut` says
-    /// what it holds); an EXR's `Z` channel.
+    /// what it holds), or a segment's MIP/MinIP ray value
+    /// (`FrameDesc::writes_ray_values`); an EXR's `Z` channel.
     pub depth: Option<Vec<f32>>,
 }
 

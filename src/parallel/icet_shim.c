@@ -6,6 +6,7 @@
 #include <IceT.h>
 #include <IceTMPI.h>
 #include <mpi.h>
+#include <stdlib.h>
 #include <string.h>
 
 int lacuna_mpi_init(int *rank, int *size) {
@@ -45,6 +46,50 @@ int lacuna_mpi_range(double lo, double hi, int ok, double *out) {
     out[0] = all[0];
     out[1] = -all[1];
     return all[2] == 0.0;
+}
+
+/* Per pixel, the RGBA (n pixels) of the rank whose value is the largest
+ * (largest != 0) or the smallest, the lowest such rank on ties, on rank 0
+ * in out (n * 4 floats; unused elsewhere), and the wall ms it took. One
+ * MAXLOC (MINLOC) reduction finds each pixel's rank; a sum then carries
+ * the winners' colours to rank 0, every other rank adding exact zeros.
+ * Returns 0 on success. Every rank must call it. */
+int lacuna_mpi_pick(int n, const float *value, int largest, const float *rgba, float *out, double *ms) {
+    int rank = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    struct pair {
+        float value;
+        int rank;
+    };
+    struct pair *mine = malloc((size_t)n * sizeof *mine);
+    struct pair *won = malloc((size_t)n * sizeof *won);
+    float *colour = malloc((size_t)n * 4 * sizeof *colour);
+    int ok = mine && won && colour;
+    /* Every rank allocated, or none goes on (a collective must not wait). */
+    int all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    int status = 1;
+    if (all_ok) {
+        MPI_Barrier(MPI_COMM_WORLD);
+        double start = MPI_Wtime();
+        for (int i = 0; i < n; ++i) {
+            mine[i].value = value[i];
+            mine[i].rank = rank;
+        }
+        MPI_Allreduce(mine, won, n, MPI_FLOAT_INT, largest ? MPI_MAXLOC : MPI_MINLOC, MPI_COMM_WORLD);
+        for (int i = 0; i < n; ++i) {
+            for (int c = 0; c < 4; ++c) {
+                colour[4 * i + c] = won[i].rank == rank ? rgba[4 * i + c] : 0.0f;
+            }
+        }
+        MPI_Reduce(colour, out, 4 * n, MPI_FLOAT, MPI_SUM, 0, MPI_COMM_WORLD);
+        *ms = (MPI_Wtime() - start) * 1e3;
+        status = 0;
+    }
+    free(mine);
+    free(won);
+    free(colour);
+    return status;
 }
 
 /* Ends every rank (a rank that panicked: the others would wait for it). */

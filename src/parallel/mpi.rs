@@ -13,6 +13,14 @@ extern "C" {
     fn lacuna_mpi_barrier();
     fn lacuna_mpi_abort(code: c_int);
     fn lacuna_mpi_range(lo: c_double, hi: c_double, ok: c_int, out: *mut c_double) -> c_int;
+    fn lacuna_mpi_pick(
+        n: c_int,
+        value: *const c_float,
+        largest: c_int,
+        rgba: *const c_float,
+        out: *mut c_float,
+        ms: *mut c_double,
+    ) -> c_int;
     fn lacuna_mpi_gather(values: *const c_double, n: c_int, out: *mut c_double);
     fn lacuna_icet_composite(
         width: c_int,
@@ -134,6 +142,51 @@ impl World {
                 "IceT",
                 "icetCompositeImage",
                 format!("failed with error {error:#x}"),
+            ));
+        }
+        Ok(((self.rank == 0).then_some(out), ms))
+    }
+
+    /// Keeps, per pixel, the colour of the rank whose ray value (`values`,
+    /// `FrameDesc::writes_ray_values`) is the largest (`largest`: MIP) or
+    /// the smallest (MinIP), as `super::pick` does on one machine: the one
+    /// process's MIP (MinIP) frame bit for bit. Rank 0 gets the frame's
+    /// pixels and the milliseconds; the others `None`. Every rank must call
+    /// it.
+    pub fn pick(
+        &self,
+        (width, height): (u32, u32),
+        pixels: &[[f32; 4]],
+        values: &[f32],
+        largest: bool,
+    ) -> Result<(Option<Vec<[f32; 4]>>, f64)> {
+        let n = width as usize * height as usize;
+        if pixels.len() != n || values.len() != n {
+            return Err(Error::invalid(
+                "composite",
+                format!("{} pixels and {} values", pixels.len(), values.len()),
+                format!("expected {width}x{height} of each"),
+            ));
+        }
+        let mut out = vec![[0.0f32; 4]; if self.rank == 0 { n } else { 1 }];
+        let mut ms = 0.0;
+        // SAFETY: pixels, values and out hold n pixels (out on rank 0, the
+        // only one MPI_Reduce writes); every rank passes the same n.
+        let status = unsafe {
+            lacuna_mpi_pick(
+                n as c_int,
+                values.as_ptr(),
+                largest as c_int,
+                pixels.as_ptr().cast(),
+                out.as_mut_ptr().cast(),
+                &mut ms,
+            )
+        };
+        if status != 0 {
+            return Err(Error::invalid(
+                "composite",
+                format!("{width}x{height} ray values"),
+                "could not allocate the reduction's buffers on every rank",
             ));
         }
         Ok(((self.rank == 0).then_some(out), ms))

@@ -4,7 +4,7 @@
 use super::target::{Output, RenderTarget};
 use crate::accel::kernels::{MarchKernels, ProbeConstants};
 use crate::accel::{Builder, March, Structure};
-use crate::desc::{FrameDesc, Mode};
+use crate::desc::FrameDesc;
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
 use crate::gpu::record::{self, Access};
@@ -43,8 +43,9 @@ pub struct Renderer {
 struct Destination<'a> {
     variant: Option<&'static str>,
     output: Binding<'a>,
-    /// Where depth goes, and whether it is written (iso frames to the
-    /// target's buffer, every frame to a host's).
+    /// Where depth goes, and whether it is written (iso frames and a
+    /// segment's MIP/MinIP ray values to the target's buffer, every frame
+    /// to a host's).
     depth: Binding<'a>,
     write_depth: bool,
     rows: Option<[u32; 2]>,
@@ -135,10 +136,14 @@ impl Renderer {
                 format!("render target is {}x{}", target.width, target.height),
             ));
         }
-        let iso = matches!(desc.mode(), Mode::Iso(_));
         let own_depth = Binding::Storage(&target.depth);
         let (variant, output, depth, write_depth) = match output {
-            Output::Buffer => (None, Binding::Storage(target.frame_buffer()?), own_depth, iso),
+            Output::Buffer => (
+                None,
+                Binding::Storage(target.frame_buffer()?),
+                own_depth,
+                desc.writes_depth(),
+            ),
             Output::Image(image) => {
                 image.check(width, height)?;
                 (
@@ -190,8 +195,12 @@ impl Renderer {
         let mut params = desc.params(volume)?;
         params.tf_channel_step = tf.channel_step();
         params.value_bound = desc.mode().value_bound(tf.visible);
+        if desc.writes_ray_values() {
+            volume.check_one_channel("a segment's MIP and MinIP ray values")?;
+        }
         params.depth_out = match write_depth {
             false => 0,
+            true if desc.writes_ray_values() => 3,
             true if desc.camera_has_ndc() => 1,
             true => 2,
         };
@@ -328,7 +337,7 @@ impl Renderer {
         }
         let (width, height) = desc.size();
         let target = RenderTarget::new(&self.ctx, width, height)?;
-        let iso = matches!(desc.mode(), Mode::Iso(_));
+        let with_depth = desc.writes_depth();
         let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
         let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
@@ -347,7 +356,7 @@ impl Renderer {
                     variant: None,
                     output: Binding::Storage(target.frame_buffer()?),
                     depth: Binding::Storage(&target.depth),
-                    write_depth: iso,
+                    write_depth: with_depth,
                     rows: Some([first, rows_per_band]),
                 };
                 self.record_frame(cmd, Some(&mut timer), &target, scene, desc, to)?;
@@ -367,7 +376,11 @@ impl Renderer {
             first += rows_per_band;
             bands += 1;
         }
-        let frame = if iso { target.read_with_depth()? } else { target.read()? };
+        let frame = if with_depth {
+            target.read_with_depth()?
+        } else {
+            target.read()?
+        };
         Ok((frame, timings, bands))
     }
 }
