@@ -44,8 +44,22 @@ fn ranks_composite_to_the_one_process_frame() {
         })
         .collect();
     std::fs::write(&raw, bytes).unwrap();
-    let cases: [&[&str]; 5] = [
+    let cases: [&[&str]; 6] = [
         &["nbody:64", "--accel", "auto"],
+        // Iso keeps each pixel's nearest surface: bit for bit.
+        &[
+            "turbulence:37x29x45",
+            "--mode",
+            "iso",
+            "--iso",
+            "0.45,0.6",
+            "--perspective",
+            "40",
+            "--camera",
+            "200,-30",
+            "--accel",
+            "grid",
+        ],
         // MIP and MinIP keep each pixel's extreme ray value: bit for bit.
         &["nbody:64", "--mode", "mip", "--tf", "ramp:0.1:1", "--accel", "auto"],
         &[
@@ -144,8 +158,8 @@ fn bad_requests_across_ranks_are_one_error() {
     fails_on_ranks(3, &["nbody:32", "--mode", "average"], "does not composite across ranks");
     fails_on_ranks(
         2,
-        &["nbody:32", "--mode", "iso", "--iso", "0.5"],
-        "does not composite across ranks",
+        &["nbody:32", "--mode", "iso", "--iso", "0.5", "--step", "15"],
+        "iso across ranks reads the sample one step before a block",
     );
     fails_on_ranks(
         2,

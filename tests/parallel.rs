@@ -173,20 +173,24 @@ fn rendered_in_parts(
     let rays = desc.camera().rays(volume.dims, volume.spacing, w, h).unwrap();
     let pixels: Vec<&[[f32; 4]]> = parts.iter().map(|f| f.pixels.as_slice()).collect();
     let joined = match desc.mode() {
-        Mode::Mip | Mode::MinIp => {
+        Mode::Composite => blend(&pixels, &split.order(&rays)),
+        mode => {
             let values: Vec<&[f32]> = parts
                 .iter()
-                .map(|f| f.depth.as_deref().expect("a MIP part carries its ray values"))
+                .map(|f| f.depth.as_deref().expect("a part carries its ray values or depths"))
                 .collect();
-            pick(&pixels, &values, *desc.mode() == Mode::Mip)
+            pick(&pixels, &values, *mode == Mode::Mip)
         }
-        _ => blend(&pixels, &split.order(&rays)),
     };
     Frame::new(w, h, joined)
 }
 
+fn iso(values: &str) -> Mode {
+    Mode::Iso(lacuna::render::Iso::parse(values).unwrap())
+}
+
 #[test]
-fn mip_and_minip_parts_picked_by_ray_value_are_the_one_process_frame_bit_for_bit() {
+fn mip_minip_and_iso_parts_picked_by_ray_value_or_depth_are_the_one_process_frame_bit_for_bit() {
     let ctx = gpu();
     let cases = [
         (
@@ -216,6 +220,21 @@ fn mip_and_minip_parts_picked_by_ray_value_are_the_one_process_frame_bit_for_bit
             10.0,
             Projection::Orthographic,
         ),
+        // Iso surfaces crossing the blocks' faces: a crossing between two
+        // blocks' samples is the later block's (it pairs its first sample
+        // with the one before), and the nearest surface wins.
+        ("nbody:48", "ramp:0:1", iso("0.3"), 30.0, 20.0, Projection::Orthographic),
+        (
+            "turbulence:37x29x45",
+            "ramp:0:1",
+            iso("0.45,0.6"),
+            200.0,
+            -30.0,
+            Projection::Perspective {
+                fov_deg: 40.0,
+                distance: None,
+            },
+        ),
     ];
     for (spec, tf, mode, az, el, projection) in cases {
         let volume = load(spec);
@@ -237,6 +256,18 @@ fn mip_and_minip_parts_picked_by_ray_value_are_the_one_process_frame_bit_for_bit
             let picked = rendered_in_parts(&volume, &tf, &desc, ranks, &structures);
             let d = diff(&whole, &picked).unwrap();
             assert_eq!(d.differing, 0, "{spec} {mode:?} in {ranks} parts: {d:?}");
+        }
+        // Each iso part against the CPU reference of the same part.
+        if matches!(mode, Mode::Iso(_)) {
+            let split = Decomposition::new(volume.dims, 16, 3).unwrap();
+            for block in &split.blocks {
+                let (lo, hi) = block.bounds();
+                let part = desc.to_builder().segment(Some([lo, hi])).build().unwrap();
+                let gpu_part = common::render(&ctx, &volume, &tf, &part, accel("naive"));
+                let cpu_part = lacuna::render::reference::render_frame(&volume, &tf, &part).unwrap();
+                let d = diff(&gpu_part, &cpu_part).unwrap();
+                assert!(d.max_abs <= 1e-4, "{spec} block {block:?}: {d:?}");
+            }
         }
     }
 }
@@ -368,17 +399,15 @@ fn a_segment_is_a_composite_mip_or_minip_frame_s_part_only() {
             .segment(Some([[0.0; 3], [8.0; 3]]))
             .build()
     };
-    for mode in [Mode::Average, Mode::Iso(lacuna::render::Iso::parse("0.5").unwrap())] {
-        let e = part(mode).unwrap_err().to_string();
-        assert!(
-            e.starts_with(&format!("invalid segment '{}'", mode.name()))
-                && e.contains("composite, mip and minip modes only"),
-            "{e}"
-        );
-    }
-    for mode in [Mode::Composite, Mode::Mip, Mode::MinIp] {
+    let e = part(Mode::Average).unwrap_err().to_string();
+    assert!(
+        e.starts_with("invalid segment 'average'") && e.contains("composite, mip, minip and iso modes only"),
+        "{e}"
+    );
+    for mode in [Mode::Composite, Mode::Mip, Mode::MinIp, iso("0.5")] {
         let desc = part(mode).unwrap();
-        assert_eq!(desc.writes_ray_values(), mode != Mode::Composite);
+        assert_eq!(desc.writes_ray_values(), matches!(mode, Mode::Mip | Mode::MinIp));
+        assert_eq!(desc.writes_depth(), mode != Mode::Composite);
     }
     let e = FrameDesc::builder(8, 8)
         .segment(Some([[4.0, 0.0, 0.0], [2.0, 8.0, 8.0]]))

@@ -248,9 +248,19 @@ bool march_pixel(uvec2 px, out March m) {
     // samples inside its block, each weighted as the whole ray weights it,
     // so the blocks' parts blended front to back are the whole ray.
     if (hit && !m.done && params.segment != 0u) {
+        int whole_first = m.k;
         vec2 part = segment_interval(m.ray);
         march_set_stop(m, min(m.t_exit, part.y));
         march_skip_to(m, part.x);
+        // An iso segment pairs its first sample with the whole ray's sample
+        // before it (in the ghost bricks, within one step of the block), as
+        // one march would: a crossing between two blocks' samples is found
+        // by the later block only.
+        if (MARCH_MODE == MODE_ISO && !m.done && m.k > whole_first) {
+            float v = sample_volume(m.vr, lattice_t(m, m.k - 1));
+            m.prev = v;
+            m.has_prev = !(VOLUME_NAN != 0u && is_nan(v));
+        }
     }
     return !m.done;
 }

@@ -1,7 +1,7 @@
 //! `mpirun -np N lacuna render ...` (feature `mpi`): each rank renders its
 //! block of the volume, IceT composites the ranks' frames in visibility
 //! order (MIP and MinIP frames: each pixel's extreme ray value picks the
-//! colour), rank 0 prints and writes the frame (`lacuna::parallel`).
+//! colour; iso frames: the nearest surface), rank 0 prints and writes the frame (`lacuna::parallel`).
 
 use super::render::{build_and_render, describe, look_notes, peak_host_bytes, RenderArgs, Rendered};
 use super::{context, tf_for, validation_verdict};
@@ -48,7 +48,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
 
 /// The ranks' frames as one: composite frames blended front to back by
 /// IceT, MIP (MinIP) frames by the colour of each pixel's largest
-/// (smallest) ray value.
+/// (smallest) ray value, iso frames by the nearest surface's.
 fn composite(world: &World, part: &Part) -> Result<(Option<Vec<[f32; 4]>>, f64)> {
     let size = part.desc.size();
     match (part.desc.mode(), &part.frame.depth) {
@@ -70,6 +70,7 @@ fn composited_how(mode: &Mode, order: &[u32]) -> String {
             format!("IceT ordered blend, ranks front to back {}", order.join(" "))
         }
         Mode::Mip => "each pixel's largest ray value and its colour, by an MPI MAXLOC reduction".into(),
+        Mode::Iso(_) => "each pixel's nearest surface and its colour, by an MPI MINLOC reduction".into(),
         _ => "each pixel's smallest ray value and its colour, by an MPI MINLOC reduction".into(),
     }
 }
@@ -89,23 +90,6 @@ fn fail(world: &World, first: Option<u32>, outcome: Result<()>) -> Result<ExitCo
 
 fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     let (params, desc, _) = args.options()?;
-    match desc.mode() {
-        Mode::Composite | Mode::Mip | Mode::MinIp => {}
-        Mode::Average => {
-            return Err(Error::invalid(
-                "mode",
-                "average",
-                "does not composite across ranks: the mean of the ray's samples goes through the transfer function after every rank's sum and count would be joined; render it in one process",
-            ))
-        }
-        Mode::Iso(_) => {
-            return Err(Error::invalid(
-                "mode",
-                "iso",
-                "does not composite across ranks: a surface crossing between two ranks' samples is seen by neither; render it in one process",
-            ))
-        }
-    }
     let edge = match args.volume.storage {
         Storage::Bricks { edge } => edge,
         Storage::Auto => POOL_BRICK,
@@ -117,6 +101,29 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
             ))
         }
     };
+    match desc.mode() {
+        Mode::Composite | Mode::Mip | Mode::MinIp => {}
+        Mode::Average => {
+            return Err(Error::invalid(
+                "mode",
+                "average",
+                "does not composite across ranks: the mean of the ray's samples goes through the transfer function after every rank's sum and count would be joined; render it in one process",
+            ))
+        }
+        // The sample before a rank's first (an iso bracket's start) and the
+        // gradient around it must lie in the ghost bricks.
+        Mode::Iso(_) if desc.step() > edge.saturating_sub(2) as f32 => {
+            return Err(Error::invalid(
+                "step",
+                desc.step().to_string(),
+                format!(
+                    "iso across ranks reads the sample one step before a block in its ghost bricks of {edge}^3: use --step {} or less, or larger bricks",
+                    edge.saturating_sub(2)
+                ),
+            ))
+        }
+        Mode::Iso(_) => {}
+    }
     let ctx = context(args.validate)?;
     let series = args.volume.series()?;
     let clock = Instant::now();

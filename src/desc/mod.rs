@@ -18,6 +18,8 @@ mod mode;
 mod orbit;
 mod parse;
 pub use parse::parse_size;
+mod rays;
+pub use rays::Rays;
 mod shading;
 
 pub use crate::volume::Filter;
@@ -102,54 +104,6 @@ impl Camera {
             Camera::Matrices(m) => m.validate(),
             Camera::Rays(r) => r.validate(),
         }
-    }
-}
-
-/// Rays in voxel space (the volume box is `[0, dims]`, voxel i centred at
-/// i + 0.5): pixel (x, y) passes through `base + (x + 0.5) du + (y + 0.5) dv`;
-/// orthographic rays start there along `eye_or_dir`, perspective rays start
-/// at the eye `eye_or_dir` and pass there.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Rays {
-    pub base: [f32; 3],
-    pub du: [f32; 3],
-    pub dv: [f32; 3],
-    pub eye_or_dir: [f32; 3],
-    pub perspective: bool,
-    /// NDC (x, y, depth, 1) to homogeneous voxel space: unprojects a host depth.
-    pub ndc_to_voxel: [[f32; 4]; 4],
-    /// The depth of the far plane (where a host depth image has nothing).
-    pub far_depth: f32,
-    /// Voxel space to NDC, where the camera has one (host matrices): where
-    /// iso frames write their surface depth.
-    pub voxel_to_ndc: Option<[[f32; 4]; 4]>,
-}
-
-impl Rays {
-    /// Orthographic rays along `dir` (not normalised: the shaders do)
-    /// starting at pixel (0, 0)'s corner `base`.
-    pub fn orthographic(base: [f32; 3], du: [f32; 3], dv: [f32; 3], dir: [f32; 3]) -> Rays {
-        Rays {
-            base,
-            du,
-            dv,
-            eye_or_dir: dir,
-            perspective: false,
-            ndc_to_voxel: [[0.0; 4]; 4],
-            far_depth: 0.0,
-            voxel_to_ndc: None,
-        }
-    }
-
-    fn validate(&self) -> Result<()> {
-        let finite = [self.base, self.du, self.dv, self.eye_or_dir]
-            .iter()
-            .flatten()
-            .all(|v| v.is_finite());
-        if !finite {
-            return Err(Error::invalid("rays", format!("{self:?}"), "must be finite"));
-        }
-        Ok(())
     }
 }
 
@@ -595,14 +549,14 @@ impl FrameBuilder {
                     "must be finite, LO <= HI per axis",
                 ));
             }
-            // Parts blend front to back (composite) or keep the extreme
-            // ray value (MIP, MinIP); an average's mean and an iso
-            // crossing between two parts' samples are not parts' sums.
-            if matches!(d.mode, Mode::Average | Mode::Iso(_)) {
+            // Parts blend front to back (composite), keep the extreme ray
+            // value (MIP, MinIP) or the nearest surface (iso); an
+            // average's mean is no join of the parts' colours.
+            if d.mode == Mode::Average {
                 return Err(Error::invalid(
                     "segment",
                     d.mode.name(),
-                    "parts of a frame join in composite, mip and minip modes only",
+                    "parts of a frame join in composite, mip, minip and iso modes only",
                 ));
             }
         }

@@ -8,9 +8,9 @@
 //! ray is taken by exactly one rank. The ranks' premultiplied frames are
 //! blended front to back in the k-d tree's visibility order by IceT
 //! (`mpi.rs`, feature `mpi`); MIP and MinIP frames keep, per pixel, the
-//! colour of the rank with the largest (smallest) ray value (`pick`, by an
-//! MPI max-location reduction), which is the one process's frame bit for
-//! bit. Rank 0 writes the frame. docs/parallel.md has the measurements and
+//! colour of the rank with the largest (smallest) ray value, iso frames
+//! that of the nearest surface (`pick`, by an MPI max-location
+//! reduction), which is the one process's frame bit for bit. Rank 0 writes the frame. docs/parallel.md has the measurements and
 //! how it scales.
 
 mod decompose;
@@ -77,10 +77,11 @@ pub fn blend(parts: &[&[[f32; 4]]], order: &[u32]) -> Vec<[f32; 4]> {
 
 /// Per pixel, the colour of the part whose value is the largest
 /// (`largest`) or the smallest, the first such part on ties: how ranks'
-/// MIP (MinIP) frames composite (`FrameDesc::writes_ray_values` gives each
-/// part's values). Each part's colour is the transfer function of its own
-/// value, so the pick is the one process's colour of the ray's extreme
-/// sample, bit for bit. `parts[r]` and `values[r]` are rank r's.
+/// MIP (MinIP) frames composite by their ray values
+/// (`FrameDesc::writes_ray_values`), and iso frames by their surface
+/// depths (the smallest: the nearest surface). Each part's colour is that
+/// of its own value or surface, so the pick is the one process's colour,
+/// bit for bit. `parts[r]` and `values[r]` are rank r's (`Frame::depth`).
 pub fn pick(parts: &[&[[f32; 4]]], values: &[&[f32]], largest: bool) -> Vec<[f32; 4]> {
     let n = parts.first().map_or(0, |p| p.len());
     (0..n)

@@ -149,8 +149,8 @@ impl World {
 
     /// Keeps, per pixel, the colour of the rank whose ray value (`values`,
     /// `FrameDesc::writes_ray_values`) is the largest (`largest`: MIP) or
-    /// the smallest (MinIP), as `super::pick` does on one machine: the one
-    /// process's MIP (MinIP) frame bit for bit. Rank 0 gets the frame's
+    /// the smallest (MinIP; an iso frame's surface depth), as `super::pick`
+    /// does on one machine: the one process's frame bit for bit. Rank 0 gets the frame's
     /// pixels and the milliseconds; the others `None`. Every rank must call
     /// it.
     pub fn pick(

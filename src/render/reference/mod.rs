@@ -285,6 +285,7 @@ impl<'a> Tracer<'a> {
         }
         // A rank's segment stops the samples, not the ray (`march_pixel`).
         let mut t_stop = t_exit;
+        let whole_first = k;
         if p.segment != 0 {
             let (lo, hi) = segment_interval(p, org, dir);
             t_stop = t_stop.min(hi);
@@ -307,7 +308,13 @@ impl<'a> Tracer<'a> {
         let mut acc = [0f32; 4];
         let mut best = if mode == MODE_MINIP { 2.0f32 } else { -1.0 };
         let (mut sum, mut count) = (0f32, 0f32);
+        // An iso segment pairs its first sample with the whole ray's one
+        // before it, as `march_pixel` does.
         let mut prev: Option<(f32, f32)> = None;
+        if mode == MODE_ISO && k > whole_first {
+            let t = lattice_t(k - 1);
+            prev = Some((t, self.sample(org + dir * t))).filter(|(_, v)| !v.is_nan());
+        }
         for (t, w) in samples {
             let pos = org + dir * t;
             let v = self.sample(pos);
