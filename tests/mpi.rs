@@ -1,7 +1,8 @@
 //! `mpirun -np N lacuna render` (feature `mpi`; `cargo xtask test` installs
 //! OpenMPI and IceT and runs these): with 2 and 3 ranks the IceT-composited
-//! frame equals the one-process frame within 1e-5, and bad requests end
-//! every rank with one `error:` line and no file.
+//! frame equals the one-process frame within 1e-5 (MIP, MinIP and iso
+//! frames bit for bit), and bad requests, or one rank failing while the
+//! others stream, end every rank with one `error:` line and no file.
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -11,10 +12,16 @@ use std::process::Command;
 
 /// `mpirun -np ranks lacuna ARGS` (as root too, more ranks than cores).
 fn mpirun(ranks: u32, args: &[&str]) -> common::Run {
+    let mut program = vec![env!("CARGO_BIN_EXE_lacuna")];
+    program.extend_from_slice(args);
+    mpirun_program(ranks, &program)
+}
+
+/// `mpirun -np ranks PROGRAM...`.
+fn mpirun_program(ranks: u32, program: &[&str]) -> common::Run {
     let out = Command::new("mpirun")
         .args(["--oversubscribe", "-np", &ranks.to_string()])
-        .arg(env!("CARGO_BIN_EXE_lacuna"))
-        .args(args)
+        .args(program)
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env(
@@ -33,14 +40,19 @@ fn mpirun(ranks: u32, args: &[&str]) -> common::Run {
 #[test]
 fn ranks_composite_to_the_one_process_frame() {
     let dir = tempfile::tempdir().unwrap();
-    // A uint16 file each rank reads only its layers of (odd dims, values
-    // that vary along z so that no rank's layers hold the whole range).
-    let raw = dir.path().join("ramp_37x29x45_uint16.raw");
+    // A float32 file each rank reads only its layers of (odd dims, values
+    // that vary along z so that no rank's layers hold the whole range, and
+    // NaN): the ranks agree on its source range, then its stored range.
+    let raw = dir.path().join("ramp_37x29x45_float32.raw");
     let bytes: Vec<u8> = (0..37 * 29 * 45u32)
         .flat_map(|i| {
             let (x, y, z) = (i % 37, i / 37 % 29, i / (37 * 29));
-            let v = if (x + y) % 5 == 0 { 900 * z + 40 * x } else { 0 };
-            (v as u16).to_le_bytes()
+            let v = match (x + y) % 5 {
+                0 => 0.9 * z as f32 + 0.04 * x as f32 - 3.0,
+                1 if z % 7 == 0 => f32::NAN,
+                _ => -3.0,
+            };
+            v.to_le_bytes()
         })
         .collect();
     std::fs::write(&raw, bytes).unwrap();
@@ -103,7 +115,9 @@ fn ranks_composite_to_the_one_process_frame() {
             one.pixels.iter().filter(|p| p[3] > 0.001).count() > 20,
             "{case:?} shows the volume"
         );
-        for ranks in [2, 3] {
+        // The modes that pick by value: three ranks (cut across z and y).
+        let rank_counts: &[u32] = if case.contains(&"--mode") { &[3] } else { &[2, 3] };
+        for &ranks in rank_counts {
             let out = dir.path().join(format!("ranks{i}_{ranks}.exr"));
             let mut all = args.clone();
             all.extend(["--out", out.to_str().unwrap()]);
@@ -181,4 +195,30 @@ fn bad_requests_across_ranks_are_one_error() {
         &[short, "--dims", "64x64x64", "--type", "uint8"],
         "holds 100 bytes of voxel data but 64x64x64 uint8 needs 262144",
     );
+}
+
+#[test]
+fn a_rank_that_fails_before_the_others_stream_ends_every_rank_with_its_error() {
+    // Rank 1 finds no device and fails before its load, while the others
+    // stream their layers and wait on the ranks' agreement on the range:
+    // they must stop, not hang, and rank 1 alone reports.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let script = format!(
+        "if [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then export LACUNA_DEVICE=no-such-device; fi; exec {} render nbody:64 --size 32x32 --validate --out {}",
+        env!("CARGO_BIN_EXE_lacuna"),
+        out.display()
+    );
+    for ranks in [2, 3] {
+        let r = mpirun_program(ranks, &["sh", "-c", &script]);
+        assert_ne!(r.code, 0, "{}", r.stdout);
+        let errors: Vec<&str> = r.stderr.lines().filter(|l| l.starts_with("error:")).collect();
+        assert_eq!(errors.len(), 1, "expected one error line, got:\n{}", r.stderr);
+        assert!(
+            errors[0].contains("no-such-device") && errors[0].contains(&format!("(rank 1 of {ranks})")),
+            "{}",
+            errors[0]
+        );
+        assert!(!out.exists(), "a file was written");
+    }
 }

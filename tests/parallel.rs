@@ -337,6 +337,22 @@ fn parts_blended_front_to_back_are_the_one_process_frame() {
 }
 
 #[test]
+fn a_cube_s_first_cut_parts_its_layers() {
+    // z first among equal sides: each side streams only its own layers.
+    for (dims, ranks) in [([64, 64, 64], 2), ([48, 48, 48], 3), ([80, 64, 80], 2)] {
+        let d = Decomposition::new(dims, 16, ranks).unwrap();
+        let counts = dims.map(|v| v / 16);
+        let first = &d.blocks[0];
+        assert_eq!(
+            (first.bricks[0][2], first.bricks[1][0], first.bricks[1][1]),
+            (0, counts[0], counts[1]),
+            "{dims:?} in {ranks}: {first:?}"
+        );
+        assert!(first.bricks[1][2] < counts[2]);
+    }
+}
+
+#[test]
 fn mpirun_without_the_feature_is_one_error() {
     use lacuna::parallel::across_ranks;
     let e = across_ranks(Some(3), false).unwrap_err().to_string();
@@ -351,7 +367,7 @@ fn mpirun_without_the_feature_is_one_error() {
 }
 
 #[test]
-fn segments_under_a_crop_clip_planes_and_jitter_blend_to_the_frame_and_match_the_cpu() {
+fn segments_under_a_crop_clip_planes_and_jitter_join_to_the_frame_and_match_the_cpu() {
     use lacuna::render::{reference, Clip};
     let ctx = gpu();
     let volume = load("turbulence:37x29x45");
@@ -370,22 +386,31 @@ fn segments_under_a_crop_clip_planes_and_jitter_blend_to_the_frame_and_match_the
         .filter(Filter::Manual)
         .build()
         .unwrap();
-    let whole = common::render(&ctx, &volume, &tf, &desc, accel("naive"));
-    assert!(whole.pixels.iter().filter(|p| p[3] > 0.001).count() > 20);
-    for ranks in [2, 3] {
-        let blended = rendered_in_parts(&volume, &tf, &desc, ranks, &[accel("auto"), accel("grid")]);
-        let d = diff(&whole, &blended).unwrap();
-        assert!(d.max_abs < 1e-5, "{ranks} parts: {d:?}");
-    }
-    // Each part against the CPU reference of the same part.
-    let split = Decomposition::new(volume.dims, 16, 3).unwrap();
-    for block in &split.blocks {
-        let (lo, hi) = block.bounds();
-        let part = desc.to_builder().segment(Some([lo, hi])).build().unwrap();
-        let gpu_part = common::render(&ctx, &volume, &tf, &part, accel("naive"));
-        let cpu_part = reference::render_frame(&volume, &tf, &part).unwrap();
-        let d = diff(&gpu_part, &cpu_part).unwrap();
-        assert!(d.max_abs <= 1e-4, "block {block:?}: {d:?}");
+    // Composite, and iso: a clipped ray's first sample has no sample
+    // before it in any part, and a jittered lattice's crossing between two
+    // parts is the later part's.
+    let iso = desc.to_builder().mode(iso("0.5,0.62")).build().unwrap();
+    for desc in [desc, iso] {
+        let whole = common::render(&ctx, &volume, &tf, &desc, accel("naive"));
+        assert!(whole.pixels.iter().filter(|p| p[3] > 0.001).count() > 20);
+        for ranks in [2, 3] {
+            let joined = rendered_in_parts(&volume, &tf, &desc, ranks, &[accel("auto"), accel("grid")]);
+            let d = diff(&whole, &joined).unwrap();
+            match desc.mode() {
+                Mode::Composite => assert!(d.max_abs < 1e-5, "{ranks} parts: {d:?}"),
+                _ => assert_eq!(d.differing, 0, "iso in {ranks} parts: {d:?}"),
+            }
+        }
+        // Each part against the CPU reference of the same part.
+        let split = Decomposition::new(volume.dims, 16, 3).unwrap();
+        for block in &split.blocks {
+            let (lo, hi) = block.bounds();
+            let part = desc.to_builder().segment(Some([lo, hi])).build().unwrap();
+            let gpu_part = common::render(&ctx, &volume, &tf, &part, accel("naive"));
+            let cpu_part = reference::render_frame(&volume, &tf, &part).unwrap();
+            let d = diff(&gpu_part, &cpu_part).unwrap();
+            assert!(d.max_abs <= 1e-4, "{:?} block {block:?}: {d:?}", desc.mode());
+        }
     }
 }
 

@@ -7,7 +7,7 @@ use super::render::{build_and_render, describe, look_notes, peak_host_bytes, Ren
 use super::{context, tf_for, validation_verdict};
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
-use lacuna::parallel::{Decomposition, World};
+use lacuna::parallel::{Decomposition, Failed, World};
 use lacuna::render::{FrameDesc, Mode, Scene};
 use lacuna::volume::{GpuVolume, PoolLimits, Storage, StreamTo, POOL_BRICK};
 use lacuna::{Error, Result, Timings, TransferFunction};
@@ -32,12 +32,20 @@ struct Part {
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let world = World::init()?;
     let part = render_block(args, &world);
+    // Every rank ends its part in the streaming agreement, however its
+    // part ended, before any other collective.
+    world.end_streams(part.is_err());
     // A rank that failed only because another did leaves the report to it.
-    let own_failure = matches!(part, Err(ref e) if !matches!(e, Error::Elsewhere(_)));
-    match (world.first_failed(!own_failure), part) {
+    let outcome = match &part {
+        Ok(_) => Failed::No,
+        Err(Error::Elsewhere(_)) => Failed::Elsewhere,
+        Err(_) => Failed::Own,
+    };
+    match (world.first_failed(outcome), part) {
         (None, Ok(part)) => {
             let composited = composite(&world, &part);
-            match (world.first_failed(composited.is_ok()), composited) {
+            let outcome = if composited.is_ok() { Failed::No } else { Failed::Own };
+            match (world.first_failed(outcome), composited) {
                 (None, Ok(c)) => finish(args, &world, part, c),
                 (first, c) => fail(&world, first, c.map(|_| ())),
             }

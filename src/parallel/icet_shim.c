@@ -35,17 +35,21 @@ int lacuna_mpi_min(int v) {
     return out;
 }
 
-/* The least lo and greatest hi over every rank where every rank is ok
- * (returns 1), else 0 (every rank gets the same answer). */
-int lacuna_mpi_range(double lo, double hi, int ok, double *out) {
+/* One round of the ranks' streaming agreement (src/parallel/mpi.rs): the
+ * least lo and greatest hi over every rank in out[0..2], whether any rank
+ * failed (out[2]), whether any rank is done streaming (out[3]) and whether
+ * every rank is (out[4]), each 1 or 0. Every rank gets the same answer. */
+void lacuna_mpi_stream_round(double lo, double hi, int failed, int done, double *out) {
     /* Negated where the wanted reduction is a maximum, so one MPI_MIN
-     * reduces all three. */
-    double mine[3] = {lo, -hi, ok ? 0.0 : -1.0};
-    double all[3] = {0, 0, 0};
-    MPI_Allreduce(mine, all, 3, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+     * reduces them all. */
+    double mine[5] = {lo, -hi, failed ? -1.0 : 0.0, done ? -1.0 : 0.0, done ? 0.0 : -1.0};
+    double all[5] = {0, 0, 0, 0, 0};
+    MPI_Allreduce(mine, all, 5, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
     out[0] = all[0];
     out[1] = -all[1];
-    return all[2] == 0.0;
+    out[2] = all[2] < 0.0;
+    out[3] = all[3] < 0.0;
+    out[4] = all[4] == 0.0;
 }
 
 /* Per pixel, the RGBA (n pixels) of the rank whose value is the largest

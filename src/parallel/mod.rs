@@ -19,7 +19,7 @@ mod mpi;
 
 pub use decompose::{Block, Decomposition};
 #[cfg(feature = "mpi")]
-pub use mpi::World;
+pub use mpi::{Failed, World};
 
 /// The ranks this process was launched with by `mpirun`/`mpiexec`
 /// (OpenMPI's or MPICH's environment); None when not launched so.
@@ -82,6 +82,9 @@ pub fn blend(parts: &[&[[f32; 4]]], order: &[u32]) -> Vec<[f32; 4]> {
 /// depths (the smallest: the nearest surface). Each part's colour is that
 /// of its own value or surface, so the pick is the one process's colour,
 /// bit for bit. `parts[r]` and `values[r]` are rank r's (`Frame::depth`).
+/// Iso depths are the smallest where nearest only as distances (an orbit
+/// camera's) or standard NDC depth; with reverse-Z host matrices the
+/// nearest is the largest (and a miss is 0): pick with `largest`.
 pub fn pick(parts: &[&[[f32; 4]]], values: &[&[f32]], largest: bool) -> Vec<[f32; 4]> {
     let n = parts.first().map_or(0, |p| p.len());
     (0..n)

@@ -12,7 +12,7 @@ extern "C" {
     fn lacuna_mpi_min(v: c_int) -> c_int;
     fn lacuna_mpi_barrier();
     fn lacuna_mpi_abort(code: c_int);
-    fn lacuna_mpi_range(lo: c_double, hi: c_double, ok: c_int, out: *mut c_double) -> c_int;
+    fn lacuna_mpi_stream_round(lo: c_double, hi: c_double, failed: c_int, done: c_int, out: *mut c_double);
     fn lacuna_mpi_pick(
         n: c_int,
         value: *const c_float,
@@ -52,31 +52,51 @@ impl World {
         })
     }
 
-    /// The lowest rank that is not `ok`, on every rank (a collective: every
-    /// rank calls it, so none waits on one that failed).
-    pub fn first_failed(&self, ok: bool) -> Option<u32> {
-        let mine = if ok { self.size as c_int } else { self.rank as c_int };
+    /// The rank that reports a failure, on every rank (a collective: every
+    /// rank calls it, so none waits on one that failed): the lowest rank
+    /// that failed on its own (`Failed::Own`), else the lowest that failed
+    /// because another did (`Failed::Elsewhere`); None where none failed.
+    pub fn first_failed(&self, outcome: Failed) -> Option<u32> {
+        let n = self.size as c_int;
+        let mine = match outcome {
+            Failed::Own => self.rank as c_int,
+            Failed::Elsewhere => n + self.rank as c_int,
+            Failed::No => 2 * n,
+        };
         // SAFETY: a collective over plain ints.
         let first = unsafe { lacuna_mpi_min(mine) };
-        (first < self.size as c_int).then_some(first as u32)
+        (first < 2 * n).then_some((first % n) as u32)
     }
 
     /// How the ranks streaming their own layers agree on the volume's range
     /// (`StreamTo::across`): the least and greatest of every rank's, where
     /// every rank has one; `Error::Elsewhere` where another rank's stream
-    /// failed (this rank's own failure is its own to report).
+    /// failed or ended (this rank's own failure is its own to report). Each
+    /// call is one round of a collective that `end_streams` ends, so a rank
+    /// that fails before, between or after its agreements never leaves the
+    /// others waiting in one.
     pub fn range_across(&self) -> RangeAcross {
         std::sync::Arc::new(|mine: Option<(f64, f64)>| {
             let (lo, hi) = mine.unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
-            let mut out = [0.0; 2];
-            // SAFETY: a collective over plain doubles (MPI is initialized
-            // while a World lives); out holds two.
-            let all_ok = unsafe { lacuna_mpi_range(lo, hi, mine.is_some() as c_int, out.as_mut_ptr()) } != 0;
-            match all_ok {
-                true => Ok((out[0], out[1])),
-                false => Err(Error::Elsewhere("streaming the volume".into())),
+            let round = stream_round(lo, hi, mine.is_none(), false);
+            match round {
+                Round {
+                    failed: false,
+                    any_done: false,
+                    ..
+                } => Ok((round.lo, round.hi)),
+                _ => Err(Error::Elsewhere("streaming the volume".into())),
             }
         })
+    }
+
+    /// Ends this rank's part in the streaming agreement (`range_across`),
+    /// whatever its load did: rounds until every rank has ended its part.
+    /// A rank still streaming meets these rounds as a failure elsewhere,
+    /// stops, and ends its part too. Every rank calls it once, after its
+    /// load.
+    pub fn end_streams(&self, failed: bool) {
+        while !stream_round(f64::INFINITY, f64::NEG_INFINITY, failed, true).all_done {}
     }
 
     /// Waits for every rank.
@@ -190,6 +210,39 @@ impl World {
             ));
         }
         Ok(((self.rank == 0).then_some(out), ms))
+    }
+}
+
+/// How a rank's part ended (`World::first_failed`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Failed {
+    No,
+    /// Its own error.
+    Own,
+    /// Because another rank failed (`Error::Elsewhere`).
+    Elsewhere,
+}
+
+/// One round of the streaming agreement, as every rank sees it.
+struct Round {
+    lo: f64,
+    hi: f64,
+    failed: bool,
+    any_done: bool,
+    all_done: bool,
+}
+
+fn stream_round(lo: f64, hi: f64, failed: bool, done: bool) -> Round {
+    let mut out = [0.0; 5];
+    // SAFETY: a collective over plain doubles (MPI is initialized while a
+    // World lives); out holds five.
+    unsafe { lacuna_mpi_stream_round(lo, hi, failed as c_int, done as c_int, out.as_mut_ptr()) };
+    Round {
+        lo: out[0],
+        hi: out[1],
+        failed: out[2] != 0.0,
+        any_done: out[3] != 0.0,
+        all_done: out[4] != 0.0,
     }
 }
 

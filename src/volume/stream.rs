@@ -238,7 +238,9 @@ pub struct PoolStream {
 impl PoolStream {
     /// A stream for a volume of `dims` with texels of `texel_bytes`, in
     /// bricks of `edge` (bricks outside `keep` left out as their first
-    /// texel's value, as `PoolLayout::plan_kept`).
+    /// texel's value, as `PoolLayout::plan_kept`; with `StreamTo::across`,
+    /// the brick rows outside the streamed layers as the first texel
+    /// streamed).
     pub fn new(
         dims: [u32; 3],
         texel_bytes: u64,
