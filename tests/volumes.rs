@@ -2,7 +2,7 @@
 //! procedural generators, brick ranges, and every bad-input error.
 
 mod common;
-use common::gzip;
+use common::{encode, gzip};
 use lacuna::volume::{BrickGrid, GpuVolume, LoadOptions, RawLayout, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
 use std::path::{Path, PathBuf};
@@ -20,27 +20,6 @@ fn pattern(dims: [u32; 3]) -> Vec<f64> {
 
 fn write(path: &Path, bytes: &[u8]) {
     std::fs::write(path, bytes).unwrap();
-}
-
-fn encode(values: &[f64], ty: VoxelType, little: bool) -> Vec<u8> {
-    let mut out = Vec::new();
-    for &v in values {
-        let mut b: Vec<u8> = match ty {
-            VoxelType::U8 => vec![v as u8],
-            VoxelType::I8 => vec![(v as i64 - 100) as i8 as u8],
-            VoxelType::U16 => (v as u16 * 300).to_le_bytes().to_vec(),
-            VoxelType::I16 => ((v as i16 - 100) * 300).to_le_bytes().to_vec(),
-            VoxelType::U32 => (v as u32 * 70000).to_le_bytes().to_vec(),
-            VoxelType::I32 => ((v as i32 - 100) * 70000).to_le_bytes().to_vec(),
-            VoxelType::F32 => ((v as f32) * 0.25 - 3.0).to_le_bytes().to_vec(),
-            VoxelType::F64 => (v * 0.25 - 3.0).to_le_bytes().to_vec(),
-        };
-        if !little {
-            b.reverse();
-        }
-        out.extend(b);
-    }
-    out
 }
 
 /// Every voxel's normalised value equals the pattern normalised over its range.

@@ -17,6 +17,7 @@ mod pool;
 pub mod procedural;
 mod raw;
 mod series;
+mod slabs;
 mod spec;
 mod stream;
 

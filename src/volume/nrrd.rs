@@ -5,7 +5,7 @@
 //! on a `time` axis last.
 
 use super::decode::{decode, VoxelType};
-use super::Volume;
+use super::{StreamTo, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::borrow::Cow;
@@ -79,14 +79,10 @@ fn stepped(path: &Path, parsed: Result<(Option<Volume>, u32)>) -> Result<Volume>
 /// How many time steps a NRRD holds (1 without a time axis); reads its header.
 pub fn steps(path: &Path) -> Result<u32> {
     // Headers are short: the first 64 KiB hold one, else read it all.
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut head = Vec::new();
-    file.take(1 << 16)
-        .read_to_end(&mut head)
-        .map_err(|e| Error::io(path, e))?;
+    let head = head(path)?;
     match parse(path, &head, true, None, None) {
         Ok((_, steps)) => Ok(steps),
-        Err(_) if head.len() == 1 << 16 => {
+        Err(_) if head.len() == HEAD_BYTES => {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
             parse(path, &bytes, true, None, None).map(|v| v.1)
         }
@@ -171,16 +167,48 @@ fn axes(path: &Path, dimension: usize, sizes: &[f64], kinds: Option<&str>) -> Re
     ))
 }
 
-/// Parses the header of `bytes`, checks the volume's size, then reads step
-/// `step`'s data (None: the header only): attached, or (when `detached`
-/// allows) from the named file. Returns the volume and the time steps.
-fn parse(
-    path: &Path,
-    bytes: &[u8],
-    detached: bool,
-    device: Option<&DeviceInfo>,
-    step: Option<u32>,
-) -> Result<(Option<Volume>, u32)> {
+/// What a NRRD header says: the voxels' type, grid and axes, and where its
+/// data lies.
+struct Header {
+    ty: VoxelType,
+    dims: [u32; 3],
+    axes: Axes,
+    little: bool,
+    spacing: [f32; 3],
+    /// Bytes before the data (`byte skip`), inflated bytes for gzip.
+    skip: u64,
+    gzip: bool,
+    /// A detached header's data file; None: attached, from `offset` on.
+    data_file: Option<PathBuf>,
+    offset: usize,
+}
+
+impl Header {
+    /// Bytes of one step (every channel).
+    fn block(&self) -> u64 {
+        self.dims.iter().map(|&d| d as u64).product::<u64>() * self.ty.bytes() as u64 * self.axes.channels as u64
+    }
+
+    fn check_step(&self, path: &Path, step: u32) -> Result<()> {
+        if step >= self.axes.steps {
+            return Err(Error::invalid(
+                "time",
+                step.to_string(),
+                format!(
+                    "{} has {} time step(s), 0 to {}",
+                    path.display(),
+                    self.axes.steps,
+                    self.axes.steps - 1
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Parses the header of `bytes` (a detached data file is allowed where
+/// `detached` says so).
+fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
     if !bytes.starts_with(b"NRRD000") {
         return Err(Error::format(path, "not a NRRD file (no NRRD000x magic)"));
     }
@@ -234,24 +262,6 @@ fn parse(
     }
     let axes = axes(path, dimension, &sizes, get("kinds"))?;
     let dims = axes.spatial.map(|a| sizes[a] as u32);
-    let Some(step) = step else {
-        return Ok((None, axes.steps));
-    };
-    if step >= axes.steps {
-        return Err(Error::invalid(
-            "time",
-            step.to_string(),
-            format!(
-                "{} has {} time step(s), 0 to {}",
-                path.display(),
-                axes.steps,
-                axes.steps - 1
-            ),
-        ));
-    }
-    for _ in 0..axes.channels {
-        super::check_size(dims, ty, &path.display().to_string(), device)?;
-    }
     let little = match get("endian") {
         None | Some("little") => true,
         Some("big") => false,
@@ -287,13 +297,7 @@ fn parse(
             ))
         }
     };
-    // The bytes the header describes: nothing reads or inflates beyond them
-    // (one more tells a longer input), so no input expands without bound.
-    let one = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
-    let block = one * axes.channels as u64;
-    let wanted = skip.saturating_add(block * axes.steps as u64);
-    let datafile = get("data file").or_else(|| get("datafile"));
-    let (source, raw): (PathBuf, Cow<[u8]>) = match datafile {
+    let data_file = match get("data file").or_else(|| get("datafile")) {
         Some(name) => {
             if !detached {
                 return Err(Error::format(
@@ -307,45 +311,69 @@ fn parse(
                     "NRRD multi-file data ('LIST' or format patterns) is not supported",
                 ));
             }
-            let data_path = path.parent().unwrap_or(Path::new(".")).join(name);
+            Some(path.parent().unwrap_or(Path::new(".")).join(name))
+        }
+        None if !ended => return Err(Error::format(path, "NRRD header has no blank line before the data")),
+        None => None,
+    };
+    Ok(Header {
+        ty,
+        dims,
+        axes,
+        little,
+        spacing,
+        skip,
+        gzip,
+        data_file,
+        offset: pos.min(bytes.len()),
+    })
+}
+
+/// Parses the header of `bytes`, checks the volume's size, then reads step
+/// `step`'s data (None: the header only): attached, or (when `detached`
+/// allows) from the named file. Returns the volume and the time steps.
+fn parse(
+    path: &Path,
+    bytes: &[u8],
+    detached: bool,
+    device: Option<&DeviceInfo>,
+    step: Option<u32>,
+) -> Result<(Option<Volume>, u32)> {
+    let h = header(path, bytes, detached)?;
+    let Some(step) = step else {
+        return Ok((None, h.axes.steps));
+    };
+    h.check_step(path, step)?;
+    let (ty, dims, axes, little, spacing) = (h.ty, h.dims, &h.axes, h.little, h.spacing);
+    for _ in 0..axes.channels {
+        super::check_size(dims, ty, &path.display().to_string(), device)?;
+    }
+    // The bytes the header describes: nothing reads or inflates beyond them
+    // (one more tells a longer input), so no input expands without bound.
+    let block = h.block();
+    let wanted = h.skip.saturating_add(block * axes.steps as u64);
+    let (source, raw): (PathBuf, Cow<[u8]>) = match &h.data_file {
+        Some(data_path) => {
             // Deflate's worst case grows data by well under 1 %.
-            let limit = if gzip {
+            let limit = if h.gzip {
                 wanted.saturating_mul(2).saturating_add(1 << 16)
             } else {
                 wanted
             };
-            let raw = read_at_most(&data_path, limit)?;
-            (data_path, Cow::Owned(raw))
+            (data_path.clone(), Cow::Owned(read_at_most(data_path, limit)?))
         }
-        None => {
-            if !ended {
-                return Err(Error::format(path, "NRRD header has no blank line before the data"));
-            }
-            (path.to_path_buf(), Cow::Borrowed(&bytes[pos.min(bytes.len())..]))
-        }
+        None => (path.to_path_buf(), Cow::Borrowed(&bytes[h.offset..])),
     };
     let inflated;
-    let data: &[u8] = if gzip {
+    let data: &[u8] = if h.gzip {
         inflated = inflate(&source, &raw, wanted)?;
         &inflated
     } else {
         &raw
     };
-    let payload = data.get(skip.min(usize::MAX as u64) as usize..).unwrap_or_default();
+    let payload = data.get(h.skip.min(usize::MAX as u64) as usize..).unwrap_or_default();
     if payload.len() as u64 != block * axes.steps as u64 {
-        return Err(Error::format(
-            &source,
-            format!(
-                "holds {} bytes of voxel data but {}x{}x{} {ty} ({} channels, {} steps) needs {}",
-                payload.len(),
-                dims[0],
-                dims[1],
-                dims[2],
-                axes.channels,
-                axes.steps,
-                block * axes.steps as u64
-            ),
-        ));
+        return Err(short_data(&source, &h, payload.len() as u64));
     }
     // This step's block: voxels with their channels interleaved, fastest.
     let at = (block * step as u64) as usize;
@@ -373,6 +401,109 @@ fn parse(
         v.name = name;
         (Some(v), axes.steps)
     })
+}
+
+/// The error for data of `len` bytes where `h` needs another length.
+fn short_data(source: &Path, h: &Header, len: u64) -> Error {
+    let [w, ht, d] = h.dims;
+    Error::format(
+        source,
+        format!(
+            "holds {len} bytes of voxel data but {w}x{ht}x{d} {} ({} channels, {} steps) needs {}",
+            h.ty,
+            h.axes.channels,
+            h.axes.steps,
+            h.block() * h.axes.steps as u64
+        ),
+    )
+}
+
+/// The first 64 KiB of `path`, where a header is read from (headers are short).
+fn head(path: &Path) -> Result<Vec<u8>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut head = Vec::new();
+    file.take(HEAD_BYTES as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| Error::io(path, e))?;
+    Ok(head)
+}
+
+const HEAD_BYTES: usize = 1 << 16;
+
+/// The grid and type of a one-channel NRRD whose data can stream (raw, or
+/// gzip with the `loaders` feature; a header within 64 KiB); None else.
+pub fn streamed_layout(path: &Path) -> Option<([u32; 3], VoxelType)> {
+    let h = header(path, &head(path).ok()?, true).ok()?;
+    (h.axes.channels == 1 && (!h.gzip || cfg!(feature = "loaders"))).then_some((h.dims, h.ty))
+}
+
+/// Step `step` of a NRRD streamed into bricks as `to` says (`slabs.rs`):
+/// raw data read from its first needed layer on, gzip data inflated on the
+/// fly, so the host never holds the dense volume. A NRRD with channels (or
+/// a header past 64 KiB) loads whole.
+pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume> {
+    if streamed_layout(path).is_none() {
+        return load_step(path, step, None);
+    }
+    let h = header(path, &head(path)?, true)?;
+    h.check_step(path, step)?;
+    let (source, start) = match &h.data_file {
+        Some(data_path) => (data_path.clone(), 0),
+        None => (path.to_path_buf(), h.offset as u64),
+    };
+    let all = h.block() * h.axes.steps as u64;
+    if !h.gzip {
+        // A short (or long) file is found before a layer is read.
+        let len = std::fs::metadata(&source).map_err(|e| Error::io(&source, e))?.len();
+        let data = len.saturating_sub(start).saturating_sub(h.skip);
+        if data != all || len < start + h.skip {
+            return Err(short_data(&source, &h, data));
+        }
+    }
+    let layer = h.dims[0] as u64 * h.dims[1] as u64 * h.ty.bytes() as u64;
+    let first = h.skip + h.block() * step as u64;
+    let open = |z: u32| -> Result<Box<dyn Read + '_>> {
+        let mut file = std::fs::File::open(&source).map_err(|e| Error::io(&source, e))?;
+        let at = first + z as u64 * layer;
+        match h.gzip {
+            false => {
+                std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(start + at))
+                    .map_err(|e| Error::io(&source, e))?;
+                Ok(Box::new(std::io::BufReader::new(file)))
+            }
+            true => inflating(&source, file, start, at),
+        }
+    };
+    let file = super::slabs::SlabFile {
+        path: &source,
+        dims: h.dims,
+        ty: h.ty,
+        little: h.little,
+        open: &open,
+    };
+    super::slabs::stream(&file, to, path.display().to_string(), h.spacing)
+}
+
+/// `file`'s gzip data from byte `start` on, inflated, its first `skip`
+/// inflated bytes passed over.
+#[cfg(feature = "loaders")]
+fn inflating<'a>(source: &Path, mut file: std::fs::File, start: u64, skip: u64) -> Result<Box<dyn Read + 'a>> {
+    std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(start)).map_err(|e| Error::io(source, e))?;
+    let mut inflated = flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file));
+    let passed = std::io::copy(&mut (&mut inflated).take(skip), &mut std::io::sink())
+        .map_err(|e| Error::format(source, format!("corrupt gzip data: {e}")))?;
+    if passed < skip {
+        return Err(Error::format(
+            source,
+            format!("holds {passed} bytes of inflated data before the layers asked for, at byte {skip}"),
+        ));
+    }
+    Ok(Box::new(inflated))
+}
+
+#[cfg(not(feature = "loaders"))]
+fn inflating<'a>(source: &Path, _: std::fs::File, _: u64, _: u64) -> Result<Box<dyn Read + 'a>> {
+    inflate(source, &[], 0).map(|_| -> Box<dyn Read + 'a> { Box::new(std::io::empty()) })
 }
 
 /// Reads `path`, or fails (without reading on) when it holds more than

@@ -2,7 +2,7 @@
 //! layout from `--dims`/`--type`. Little-endian.
 
 use super::decode::{decode, VoxelType};
-use super::{StreamTo, Volume, VoxelData};
+use super::{StreamTo, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::Path;
@@ -88,46 +88,32 @@ pub fn load(
     decode(path, &bytes, layout.ty, true, layout.dims, spacing.unwrap_or([1.0; 3]))
 }
 
-/// As `load`, streamed into bricks (`Series::load_bricks`): uint8 and
-/// uint16 files are read a slab at a time into a `PoolStream` (their
-/// texels are their bytes), so the host never holds the dense volume (and
-/// a rank reads only its block's layers, `StreamTo::across`); other types
-/// load whole.
+/// As `load`, streamed into bricks (`Series::load_bricks`): the file is
+/// read a slab at a time into a `PoolStream` and decoded as `load` decodes
+/// it (a float file is read twice: its range first), so the host never
+/// holds the dense volume, and a rank reads only its block's layers
+/// (`StreamTo::across`).
 pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Result<Volume> {
     let layout = match layout {
         Some(l) => l,
         None => layout_from_name(path)?,
     };
-    let tb = match layout.ty {
-        VoxelType::U8 => 1,
-        VoxelType::U16 => 2,
-        _ => return load(path, Some(layout), None, None),
-    };
     let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
     check_length(path, len, layout)?;
-    let [w, h, _] = layout.dims;
-    let layer = w as usize * h as usize * tb as usize;
-    let pool = to.run(layout.dims, tb, |stream, layers| {
-        // Slabs of about 64 MiB.
-        let per_slab = ((64usize << 20) / layer).clamp(1, layers.len().max(1));
-        let mut slab = crate::limits::zeroed::<u8>(
-            format_args!("raw slab of {}", path.display()),
-            (per_slab * layer) as u64,
-        )?;
-        let mut file = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| Error::io(path, e))?);
-        std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(layers.start as u64 * layer as u64))
-            .map_err(|e| Error::io(path, e))?;
-        let mut z = layers.start as usize;
-        while z < layers.end as usize {
-            let n = per_slab.min(layers.end as usize - z);
-            std::io::Read::read_exact(&mut file, &mut slab[..n * layer]).map_err(|e| Error::io(path, e))?;
-            stream.push(&slab[..n * layer])?;
-            z += n;
-        }
-        Ok(())
-    })?;
-    let data = VoxelData::Bricks(std::sync::Arc::new(pool));
-    Volume::new(path.display().to_string(), layout.dims, [1.0; 3], layout.ty, data)
+    let layer = layout.dims[0] as u64 * layout.dims[1] as u64 * layout.ty.bytes() as u64;
+    let open = |z: u32| -> Result<Box<dyn std::io::Read>> {
+        let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(z as u64 * layer)).map_err(|e| Error::io(path, e))?;
+        Ok(Box::new(std::io::BufReader::new(file)))
+    };
+    let file = super::slabs::SlabFile {
+        path,
+        dims: layout.dims,
+        ty: layout.ty,
+        little: true,
+        open: &open,
+    };
+    super::slabs::stream(&file, to, path.display().to_string(), [1.0; 3])
 }
 
 /// A raw volume from memory: `name` gives the layout as a file name does

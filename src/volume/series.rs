@@ -13,7 +13,7 @@
 //! dimensions and voxel type.
 
 use super::procedural::{self, Generator};
-use super::spec::{LoadOptions, VolumeSpec};
+use super::spec::{is_nrrd, LoadOptions, VolumeSpec};
 use super::{PoolLimits, Storage, StreamProgress, StreamTo, Volume, VoxelType, POOL_BRICK};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
@@ -171,7 +171,9 @@ impl Series {
                 Some((*dims, VoxelType::U8))
             }
             Source::Still(VolumeSpec::File(path)) => raw(path),
+            Source::Files(files) if is_nrrd(&files[0]) => super::nrrd::streamed_layout(&files[0]),
             Source::Files(files) => raw(&files[0]),
+            Source::Nrrd { path, .. } => super::nrrd::streamed_layout(path),
             _ => None,
         }
     }
@@ -199,14 +201,9 @@ impl Series {
             Storage::Dense => self.load(k, Some(info)),
             Storage::Bricks { edge } => self.load_bricks(k, &to(edge)),
             Storage::Auto => {
-                let too_big = self.streamed_layout().is_some_and(|(dims, ty)| {
-                    let texel = match ty {
-                        VoxelType::U8 => 1,
-                        VoxelType::U16 => 2,
-                        _ => 4,
-                    };
-                    crate::gpu::check_image3d(info, dims, texel).is_err()
-                });
+                let too_big = self
+                    .streamed_layout()
+                    .is_some_and(|(dims, ty)| crate::gpu::check_image3d(info, dims, super::stored_bytes(ty)).is_err());
                 match too_big {
                     true => self.load_bricks(k, &to(POOL_BRICK)),
                     false => self.load(k, None),
@@ -259,6 +256,7 @@ impl Series {
                 VolumeSpec::File(files[k as usize].clone()).load_bricks(&self.options, b)
             }
             (Source::Generator { generator, dims, param }, Some(b)) => generator.generate_bricks(*dims, *param, k, b),
+            (Source::Nrrd { path, .. }, Some(b)) => super::nrrd::load_step_bricks(path, k, b),
             _ => self.load_dense(k, device),
         }
     }
@@ -336,11 +334,6 @@ impl StepNorm {
 }
 
 #[cfg(feature = "loaders")]
-fn is_nrrd(path: &Path) -> bool {
-    let name = path.to_string_lossy().to_lowercase();
-    name.ends_with(".nrrd") || name.ends_with(".nhdr")
-}
-
 fn is_nifti(path: &Path) -> bool {
     let name = path.to_string_lossy().to_lowercase();
     name.ends_with(".nii") || name.ends_with(".nii.gz")

@@ -113,6 +113,7 @@ impl VolumeSpec {
                 }
                 super::raw::load_bricks(path, options.raw, bricks)
             }
+            VolumeSpec::File(path) if is_nrrd(path) && path.exists() => super::nrrd::load_step_bricks(path, 0, bricks),
             _ => self.load_within(options, None),
         }
     }
@@ -146,6 +147,11 @@ fn is_raw(path: &Path, options: &LoadOptions) -> bool {
     options.raw.is_some() || name.ends_with(".raw")
 }
 
+pub(super) fn is_nrrd(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
+    name.ends_with(".nrrd") || name.ends_with(".nhdr")
+}
+
 fn not_found(path: &Path) -> Error {
     Error::io(
         path,
@@ -161,7 +167,7 @@ fn load_file(path: &Path, options: &LoadOptions, device: Option<&DeviceInfo>) ->
         }
         return super::raw::load(path, options.raw, None, device);
     }
-    if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+    if is_nrrd(path) {
         return super::nrrd::load(path, device);
     }
     if name.ends_with(".nii") || name.ends_with(".nii.gz") {

@@ -185,6 +185,30 @@ pub fn masked(spec: &str) -> Volume {
 }
 
 /// `bytes` gzip-compressed.
+/// `values` as voxels of `ty` (spread over the type's range: signed types
+/// shifted below zero, wide types scaled), little- or big-endian.
+pub fn encode(values: &[f64], ty: lacuna::volume::VoxelType, little: bool) -> Vec<u8> {
+    use lacuna::volume::VoxelType;
+    let mut out = Vec::new();
+    for &v in values {
+        let mut b: Vec<u8> = match ty {
+            VoxelType::U8 => vec![v as u8],
+            VoxelType::I8 => vec![(v as i64 - 100) as i8 as u8],
+            VoxelType::U16 => (v as u16 * 300).to_le_bytes().to_vec(),
+            VoxelType::I16 => ((v as i16 - 100) * 300).to_le_bytes().to_vec(),
+            VoxelType::U32 => (v as u32 * 70000).to_le_bytes().to_vec(),
+            VoxelType::I32 => ((v as i32 - 100) * 70000).to_le_bytes().to_vec(),
+            VoxelType::F32 => ((v as f32) * 0.25 - 3.0).to_le_bytes().to_vec(),
+            VoxelType::F64 => (v * 0.25 - 3.0).to_le_bytes().to_vec(),
+        };
+        if !little {
+            b.reverse();
+        }
+        out.extend(b);
+    }
+    out
+}
+
 pub fn gzip(bytes: &[u8]) -> Vec<u8> {
     use std::io::Write;
     let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());

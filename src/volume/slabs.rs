@@ -1,0 +1,187 @@
+//! A file's voxels streamed into bricks slab by slab (`PoolStream`), in any
+//! source type: each slab is decoded to the texels a dense load stores
+//! (`decode.rs`: integers shifted into the unsigned range, wider types
+//! normalised over the file's finite range as f32, big-endian words
+//! swapped), so a streamed file is its dense load bit for bit and the host
+//! holds one slab of it, not the volume.
+
+use super::decode::VoxelType;
+use super::{stored_bytes, NoData, StreamTo, Volume, VoxelData};
+use crate::error::{Error, Result};
+use std::io::Read;
+use std::path::Path;
+
+/// Bytes of source voxels read at once (whole layers, at least one).
+const SLAB_BYTES: usize = 64 << 20;
+
+/// A file's voxels: x fastest, then y, then z, from layer `z` on when
+/// opened at `z`.
+pub(super) struct SlabFile<'a> {
+    /// Named in errors.
+    pub path: &'a Path,
+    pub dims: [u32; 3],
+    pub ty: VoxelType,
+    pub little: bool,
+    /// A reader positioned at the first byte of layer `z`.
+    pub open: &'a dyn Fn(u32) -> Result<Box<dyn Read + 'a>>,
+}
+
+impl SlabFile<'_> {
+    fn layer_bytes(&self) -> usize {
+        self.dims[0] as usize * self.dims[1] as usize * self.ty.bytes()
+    }
+
+    /// Calls `f` with the source bytes of `layers`, whole layers in order.
+    fn each_slab(&self, layers: std::ops::Range<u32>, mut f: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
+        let layer = self.layer_bytes();
+        let per_slab = (SLAB_BYTES / layer).clamp(1, layers.len().max(1));
+        let mut slab = crate::limits::zeroed::<u8>(
+            format_args!("slab of {}", self.path.display()),
+            (per_slab * layer) as u64,
+        )?;
+        let mut reader = (self.open)(layers.start)?;
+        let mut z = layers.start as usize;
+        while z < layers.end as usize {
+            let n = per_slab.min(layers.end as usize - z);
+            reader.read_exact(&mut slab[..n * layer]).map_err(|e| {
+                Error::format(
+                    self.path,
+                    format!("ends before layer {} of its {} voxel layers ({e})", z + n, self.dims[2]),
+                )
+            })?;
+            f(&slab[..n * layer])?;
+            z += n;
+        }
+        Ok(())
+    }
+
+    /// The least and greatest finite value of `layers` in source units
+    /// (`(inf, -inf)` where there is none).
+    fn finite_range(&self, layers: std::ops::Range<u32>) -> Result<(f64, f64)> {
+        let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+        self.each_slab(layers, |bytes| {
+            for v in source_values(bytes, self.ty, self.little).filter(|v| v.is_finite()) {
+                range = (range.0.min(v), range.1.max(v));
+            }
+            Ok(())
+        })?;
+        Ok(range)
+    }
+}
+
+/// The volume of `file` streamed into bricks as `to` says, named `name`.
+pub(super) fn stream(file: &SlabFile, to: &StreamTo, name: String, spacing: [f32; 3]) -> Result<Volume> {
+    let (_, layers) = to.rows_and_layers(file.dims);
+    // Wider types store values normalised over the finite range: a first
+    // pass finds it (the ranks' layers' ranges, agreed).
+    let source_range = match file.ty {
+        VoxelType::U8 | VoxelType::I8 | VoxelType::U16 | VoxelType::I16 => None,
+        _ => {
+            let mine = file.finite_range(layers);
+            Some(match &to.across {
+                Some(agree) => {
+                    let whole = agree(mine.as_ref().ok().copied());
+                    mine?;
+                    whole?
+                }
+                None => mine?,
+            })
+        }
+    };
+    let mut no_data = NoData::default();
+    let pool = to.run(file.dims, stored_bytes(file.ty), |stream, layers| {
+        let mut texels = Vec::new();
+        file.each_slab(layers, |bytes| {
+            stored_texels(bytes, file.ty, file.little, source_range, &mut texels, &mut no_data);
+            stream.push(&texels)
+        })
+    })?;
+    let mut volume = Volume::new(
+        name,
+        file.dims,
+        spacing,
+        file.ty,
+        VoxelData::Bricks(std::sync::Arc::new(pool)),
+    )?;
+    // The range in source units, as `decode` reports it.
+    volume.value_range = match (file.ty, source_range) {
+        (VoxelType::I8, _) => volume.value_range.map(|v| v - 128.0),
+        (VoxelType::I16, _) => volume.value_range.map(|v| v - 32768.0),
+        (_, Some((lo, hi))) if lo <= hi => [lo, hi],
+        (_, Some(_)) => [0.0, 0.0],
+        _ => volume.value_range,
+    };
+    volume.no_data = no_data;
+    Ok(volume)
+}
+
+/// A slab's source values as f64 (the wider types'; `decode`'s words).
+fn source_values(bytes: &[u8], ty: VoxelType, little: bool) -> impl Iterator<Item = f64> + '_ {
+    bytes.chunks_exact(ty.bytes()).map(move |c| {
+        let mut w = [0u8; 8];
+        w[..c.len()].copy_from_slice(c);
+        if !little {
+            w[..c.len()].reverse();
+        }
+        match ty {
+            VoxelType::U32 => u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
+            VoxelType::I32 => i32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
+            VoxelType::F32 => f32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
+            VoxelType::F64 => f64::from_le_bytes(w),
+            VoxelType::U8 | VoxelType::I8 => w[0] as f64,
+            VoxelType::U16 | VoxelType::I16 => u16::from_le_bytes([w[0], w[1]]) as f64,
+        }
+    })
+}
+
+/// A slab's stored texels into `out` (little-endian, `stored_bytes` each),
+/// as `decode` and `Volume::new` store them: non-finite values become NaN
+/// and are counted in `no_data`.
+fn stored_texels(
+    bytes: &[u8],
+    ty: VoxelType,
+    little: bool,
+    range: Option<(f64, f64)>,
+    out: &mut Vec<u8>,
+    no_data: &mut NoData,
+) {
+    out.clear();
+    let word = |c: &[u8]| -> [u8; 2] {
+        match little {
+            true => [c[0], c[1]],
+            false => [c[1], c[0]],
+        }
+    };
+    match ty {
+        VoxelType::U8 => out.extend_from_slice(bytes),
+        VoxelType::I8 => out.extend(bytes.iter().map(|&b| (b as i8 as i16 + 128) as u8)),
+        VoxelType::U16 => out.extend(bytes.chunks_exact(2).flat_map(word)),
+        VoxelType::I16 => out.extend(
+            bytes
+                .chunks_exact(2)
+                .flat_map(|c| ((i16::from_le_bytes(word(c)) as i32 + 32768) as u16).to_le_bytes()),
+        ),
+        _ => {
+            let (lo, hi) = range.unwrap_or((0.0, 0.0));
+            let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
+            for v in source_values(bytes, ty, little) {
+                let stored = match v {
+                    v if v.is_finite() => ((v - lo) * scale) as f32,
+                    f64::INFINITY => {
+                        no_data.pos_inf += 1;
+                        f32::NAN
+                    }
+                    f64::NEG_INFINITY => {
+                        no_data.neg_inf += 1;
+                        f32::NAN
+                    }
+                    _ => {
+                        no_data.nan += 1;
+                        f32::NAN
+                    }
+                };
+                out.extend_from_slice(&stored.to_le_bytes());
+            }
+        }
+    }
+}
