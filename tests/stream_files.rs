@@ -1,6 +1,6 @@
 //! Files of every type streamed into bricks (`volume::slabs`): raw files of
-//! each voxel type and NRRDs (attached and detached, raw and gzip, either
-//! endianness, a time axis) stream slab by slab into the pool their dense
+//! each voxel type, NRRDs (attached and detached, raw and gzip, either
+//! endianness, a time axis) and NIfTI files (`.nii`, `.nii.gz`, a time axis) stream slab by slab into the pool their dense
 //! load plans, every voxel bit for bit with the same range, normalisation
 //! and no-data counts; a rank's float file agrees on its source range
 //! before its stored range; a file shorter than its header says is one
@@ -224,7 +224,37 @@ fn nrrds_stream_as_they_load_bit_for_bit() {
 }
 
 #[test]
-fn a_nrrd_or_raw_file_shorter_than_its_header_is_one_error_before_any_layer_is_used() {
+fn nifti_files_stream_as_they_load_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let dims = DIMS.to_vec();
+    let nii = dir.path().join("a.nii");
+    let i16_le = encode(&values(false), VoxelType::I16, true);
+    std::fs::write(&nii, common::nifti_bytes(&dims, 4, 16, [0.5, 0.75, 2.0], &i16_le)).unwrap();
+    let gz = dir.path().join("b.nii.gz");
+    let f32_le = encode(&values(true), VoxelType::F32, true);
+    std::fs::write(&gz, gzip(&common::nifti_bytes(&dims, 16, 32, [1.0; 3], &f32_le))).unwrap();
+    // A time axis: step 2 of 3.
+    let series = dir.path().join("t.nii.gz");
+    let steps: Vec<u8> = (0..3)
+        .flat_map(|k| {
+            let shifted: Vec<f64> = values(false).iter().map(|v| v + 3.0 * k as f64).collect();
+            encode(&shifted, VoxelType::U16, true)
+        })
+        .collect();
+    let with_time = [&dims[..], &[3]].concat();
+    std::fs::write(
+        &series,
+        gzip(&common::nifti_bytes(&with_time, 512, 16, [1.0; 3], &steps)),
+    )
+    .unwrap();
+    for (path, k, edge) in [(&nii, 0, 4), (&gz, 0, 8), (&series, 2, 4)] {
+        let (d, s) = dense_and_streamed(path, k, edge);
+        assert_same(&format!("step {k} of {}", path.display()), &d, &s, edge);
+    }
+}
+
+#[test]
+fn a_file_shorter_than_its_header_says_is_one_error_before_any_layer_is_used() {
     let dir = tempfile::tempdir().unwrap();
     let sizes = "23 17 29";
     let data = encode(&values(false), VoxelType::I16, true);
@@ -239,6 +269,10 @@ fn a_nrrd_or_raw_file_shorter_than_its_header_is_one_error_before_any_layer_is_u
     std::fs::write(&gz, bytes).unwrap();
     let float = dir.path().join("f_23x17x29_float32.raw");
     std::fs::write(&float, &encode(&values(true), VoxelType::F32, true)[4..]).unwrap();
+    let nii = dir.path().join("c.nii");
+    std::fs::write(&nii, common::nifti_bytes(&DIMS, 4, 16, [1.0; 3], short)).unwrap();
+    let nii_gz = dir.path().join("d.nii.gz");
+    std::fs::write(&nii_gz, gzip(&common::nifti_bytes(&DIMS, 4, 16, [1.0; 3], short))).unwrap();
     for (path, needle) in [
         (
             &raw,
@@ -249,6 +283,11 @@ fn a_nrrd_or_raw_file_shorter_than_its_header_is_one_error_before_any_layer_is_u
             &float,
             "holds 45352 bytes of voxel data but 23x17x29 float32 needs 45356",
         ),
+        (
+            &nii,
+            "holds 23028 bytes, but step 0 of its 23x17x29 int16 voxels ends at byte 23030",
+        ),
+        (&nii_gz, "ends before layer 29 of its 29 voxel layers"),
     ] {
         let series = Series::open(path.to_str().unwrap(), &LoadOptions::default()).unwrap();
         let e = series

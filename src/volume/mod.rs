@@ -177,6 +177,18 @@ impl NoData {
     }
 }
 
+/// Checks that `step` is one of the `steps` time steps of the file at `path`.
+fn check_file_step(path: &std::path::Path, step: u32, steps: u32) -> Result<()> {
+    if step >= steps {
+        return Err(Error::invalid(
+            "time",
+            step.to_string(),
+            format!("{} has {steps} time step(s), 0 to {}", path.display(), steps - 1),
+        ));
+    }
+    Ok(())
+}
+
 /// Checks dims are non-zero and their product fits memory indexing.
 pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
     if dims.contains(&0) {

@@ -3,7 +3,7 @@
 //! itself, reading (or inflating) no more bytes than the header describes.
 
 use super::decode::{decode, VoxelType};
-use super::Volume;
+use super::{StreamTo, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use nifti::{NiftiHeader, NiftiType};
@@ -26,14 +26,20 @@ pub fn steps(path: &Path) -> Result<u32> {
     Ok(layout(path, &header(path, open(path)?)?)?.steps)
 }
 
+/// Whether the file starts with the gzip magic.
+fn gzipped(path: &Path) -> Result<bool> {
+    let mut magic = [0u8; 2];
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let n = file.read(&mut magic).map_err(|e| Error::io(path, e))?;
+    Ok(n == 2 && magic == [0x1f, 0x8b])
+}
+
 /// The file's bytes, inflated when it starts with the gzip magic.
 fn open(path: &Path) -> Result<Box<dyn Read>> {
-    let file = || std::fs::File::open(path).map_err(|e| Error::io(path, e));
-    let mut magic = [0u8; 2];
-    let n = file()?.read(&mut magic).map_err(|e| Error::io(path, e))?;
-    Ok(match n == 2 && magic == [0x1f, 0x8b] {
-        true => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file()?))),
-        false => Box::new(std::io::BufReader::new(file()?)),
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    Ok(match gzipped(path)? {
+        true => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))),
+        false => Box::new(std::io::BufReader::new(file)),
     })
 }
 
@@ -131,29 +137,13 @@ fn layout(path: &Path, header: &NiftiHeader) -> Result<Layout> {
 
 fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
     let header = header(path, &mut reader)?;
-    let Layout {
-        ty,
-        dims,
-        steps,
-        channels,
-    } = layout(path, &header)?;
-    if step >= steps {
-        return Err(Error::invalid(
-            "time",
-            step.to_string(),
-            format!("{} has {steps} time step(s), 0 to {}", path.display(), steps - 1),
-        ));
-    }
+    let l = layout(path, &header)?;
+    super::check_file_step(path, step, l.steps)?;
+    let (ty, dims, steps, channels) = (l.ty, l.dims, l.steps, l.channels);
     for _ in 0..channels {
         super::check_size(dims, ty, &path.display().to_string(), device)?;
     }
-    let offset = header.vox_offset;
-    if !(offset.is_finite() && (348.0..=(1u64 << 32) as f32).contains(&offset)) {
-        return Err(Error::format(
-            path,
-            format!("NIfTI vox_offset {offset} is not a byte offset past the header"),
-        ));
-    }
+    let offset = voxel_offset(path, &header)?;
     let voxel_bytes = dims.iter().map(|&d| d as u64).product::<u64>() * ty.bytes() as u64;
     // Each channel's block of this step (x, y, z, then time, then
     // components, slowest): skip to it and read it, in file order.
@@ -175,25 +165,11 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
         blocks.push(data);
     }
     // Data past the voxels (none in a well-formed file) is ignored, as the crate did.
-    let spacing = [1, 2, 3].map(|i| {
-        let s = header.pixdim[i].abs();
-        if s.is_finite() && s > 0.0 {
-            s
-        } else {
-            1.0
-        }
-    });
     let little = header.endianness == nifti::Endianness::Little;
     let mut volumes = Vec::new();
     for (c, data) in blocks.iter().enumerate() {
-        let mut volume = decode(path, data, ty, little, dims, spacing)?;
-        // scl_slope/scl_inter rescale linearly; normalised values are unchanged
-        // for a positive slope, so only the reported range moves.
-        let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
-        if slope != 0.0 && slope.is_finite() && inter.is_finite() {
-            let [a, b] = volume.value_range.map(|v| v * slope + inter);
-            volume.value_range = [a.min(b), a.max(b)];
-        }
+        let mut volume = decode(path, data, ty, little, dims, spacing(&header))?;
+        rescale_range(&mut volume, &header);
         if channels > 1 {
             volume.name = format!("{}[{c}]", path.display());
         }
@@ -205,6 +181,109 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
     let mut joined = Volume::join(volumes)?;
     joined.name = path.display().to_string();
     Ok(joined)
+}
+
+/// Where the voxels start: `vox_offset`, checked.
+fn voxel_offset(path: &Path, header: &NiftiHeader) -> Result<u64> {
+    let offset = header.vox_offset;
+    if !(offset.is_finite() && (348.0..=(1u64 << 32) as f32).contains(&offset)) {
+        return Err(Error::format(
+            path,
+            format!("NIfTI vox_offset {offset} is not a byte offset past the header"),
+        ));
+    }
+    Ok(offset as u64)
+}
+
+/// `pixdim[1..=3]`, 1 where one is not a positive number.
+fn spacing(header: &NiftiHeader) -> [f32; 3] {
+    [1, 2, 3].map(|i| {
+        let s = header.pixdim[i].abs();
+        if s.is_finite() && s > 0.0 {
+            s
+        } else {
+            1.0
+        }
+    })
+}
+
+/// scl_slope/scl_inter rescale linearly; normalised values are unchanged
+/// for a positive slope, so only the reported range moves.
+fn rescale_range(volume: &mut Volume, header: &NiftiHeader) {
+    let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
+    if slope != 0.0 && slope.is_finite() && inter.is_finite() {
+        let [a, b] = volume.value_range.map(|v| v * slope + inter);
+        volume.value_range = [a.min(b), a.max(b)];
+    }
+}
+
+/// The grid and type of a one-channel NIfTI (from its header); None for
+/// one with channels or a header that does not parse.
+pub fn streamed_layout(path: &Path) -> Option<([u32; 3], VoxelType)> {
+    let l = layout(path, &header(path, open(path).ok()?).ok()?).ok()?;
+    (l.channels == 1).then_some((l.dims, l.ty))
+}
+
+/// Step `step` of a one-channel NIfTI streamed into bricks as `to` says
+/// (`slabs.rs`): a `.nii` read from its first needed layer on, a `.nii.gz`
+/// inflated on the fly, so the host never holds the dense volume. A file
+/// with channels loads whole.
+pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume> {
+    let header = header(path, open(path)?)?;
+    let l = layout(path, &header)?;
+    if l.channels > 1 {
+        return load_step(path, step, None);
+    }
+    super::check_file_step(path, step, l.steps)?;
+    let (ty, dims) = (l.ty, l.dims);
+    let layer = dims[0] as u64 * dims[1] as u64 * ty.bytes() as u64;
+    let voxel_bytes = layer * dims[2] as u64;
+    let first = voxel_offset(path, &header)? + step as u64 * voxel_bytes;
+    let gzip = gzipped(path)?;
+    if !gzip {
+        // A short file is found before a layer is read.
+        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+        if len < first + voxel_bytes {
+            return Err(Error::format(
+                path,
+                format!(
+                    "holds {len} bytes, but step {step} of its {}x{}x{} {ty} voxels ends at byte {}",
+                    dims[0],
+                    dims[1],
+                    dims[2],
+                    first + voxel_bytes
+                ),
+            ));
+        }
+    }
+    let open_at = |z: u32| -> Result<Box<dyn Read>> {
+        let at = first + z as u64 * layer;
+        if !gzip {
+            let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+            std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(at)).map_err(|e| Error::io(path, e))?;
+            return Ok(Box::new(std::io::BufReader::new(file)));
+        }
+        let mut reader = open(path)?;
+        let skipped =
+            std::io::copy(&mut (&mut reader).take(at), &mut std::io::sink()).map_err(|e| unreadable(path, e))?;
+        if skipped < at {
+            return Err(Error::format(
+                path,
+                format!("holds {skipped} bytes of inflated data, but step {step} starts past byte {at}"),
+            ));
+        }
+        Ok(reader)
+    };
+    let file = super::slabs::SlabFile {
+        path,
+        dims,
+        ty,
+        little: header.endianness == nifti::Endianness::Little,
+        open: &open_at,
+    };
+    let mut volume = super::slabs::stream(&file, to, path.display().to_string(), spacing(&header))?;
+    rescale_range(&mut volume, &header);
+    Ok(volume)
 }
 
 fn voxel_type(path: &Path, header: &NiftiHeader) -> Result<VoxelType> {

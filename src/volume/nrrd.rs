@@ -188,22 +188,6 @@ impl Header {
     fn block(&self) -> u64 {
         self.dims.iter().map(|&d| d as u64).product::<u64>() * self.ty.bytes() as u64 * self.axes.channels as u64
     }
-
-    fn check_step(&self, path: &Path, step: u32) -> Result<()> {
-        if step >= self.axes.steps {
-            return Err(Error::invalid(
-                "time",
-                step.to_string(),
-                format!(
-                    "{} has {} time step(s), 0 to {}",
-                    path.display(),
-                    self.axes.steps,
-                    self.axes.steps - 1
-                ),
-            ));
-        }
-        Ok(())
-    }
 }
 
 /// Parses the header of `bytes` (a detached data file is allowed where
@@ -343,7 +327,7 @@ fn parse(
     let Some(step) = step else {
         return Ok((None, h.axes.steps));
     };
-    h.check_step(path, step)?;
+    super::check_file_step(path, step, h.axes.steps)?;
     let (ty, dims, axes, little, spacing) = (h.ty, h.dims, &h.axes, h.little, h.spacing);
     for _ in 0..axes.channels {
         super::check_size(dims, ty, &path.display().to_string(), device)?;
@@ -446,7 +430,7 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         return load_step(path, step, None);
     }
     let h = header(path, &head(path)?, true)?;
-    h.check_step(path, step)?;
+    super::check_file_step(path, step, h.axes.steps)?;
     let (source, start) = match &h.data_file {
         Some(data_path) => (data_path.clone(), 0),
         None => (path.to_path_buf(), h.offset as u64),

@@ -13,6 +13,8 @@
 //! dimensions and voxel type.
 
 use super::procedural::{self, Generator};
+#[cfg(feature = "loaders")]
+use super::spec::is_nifti;
 use super::spec::{is_nrrd, LoadOptions, VolumeSpec};
 use super::{PoolLimits, Storage, StreamProgress, StreamTo, Volume, VoxelType, POOL_BRICK};
 use crate::error::{Error, Result};
@@ -172,8 +174,12 @@ impl Series {
             }
             Source::Still(VolumeSpec::File(path)) => raw(path),
             Source::Files(files) if is_nrrd(&files[0]) => super::nrrd::streamed_layout(&files[0]),
+            #[cfg(feature = "loaders")]
+            Source::Files(files) if is_nifti(&files[0]) => super::nifti::streamed_layout(&files[0]),
             Source::Files(files) => raw(&files[0]),
             Source::Nrrd { path, .. } => super::nrrd::streamed_layout(path),
+            #[cfg(feature = "loaders")]
+            Source::Nifti { path, .. } => super::nifti::streamed_layout(path),
             _ => None,
         }
     }
@@ -257,6 +263,8 @@ impl Series {
             }
             (Source::Generator { generator, dims, param }, Some(b)) => generator.generate_bricks(*dims, *param, k, b),
             (Source::Nrrd { path, .. }, Some(b)) => super::nrrd::load_step_bricks(path, k, b),
+            #[cfg(feature = "loaders")]
+            (Source::Nifti { path, .. }, Some(b)) => super::nifti::load_step_bricks(path, k, b),
             _ => self.load_dense(k, device),
         }
     }
@@ -331,12 +339,6 @@ impl StepNorm {
             false => [(-(lo - lo0) / (hi0 - lo0)) as f32, 1.0],
         }
     }
-}
-
-#[cfg(feature = "loaders")]
-fn is_nifti(path: &Path) -> bool {
-    let name = path.to_string_lossy().to_lowercase();
-    name.ends_with(".nii") || name.ends_with(".nii.gz")
 }
 
 /// A printf pattern: the text before and after one `%d` or `%0Nd`.

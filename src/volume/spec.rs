@@ -114,6 +114,10 @@ impl VolumeSpec {
                 super::raw::load_bricks(path, options.raw, bricks)
             }
             VolumeSpec::File(path) if is_nrrd(path) && path.exists() => super::nrrd::load_step_bricks(path, 0, bricks),
+            #[cfg(feature = "loaders")]
+            VolumeSpec::File(path) if is_nifti(path) && path.exists() => {
+                super::nifti::load_step_bricks(path, 0, bricks)
+            }
             _ => self.load_within(options, None),
         }
     }
@@ -145,6 +149,12 @@ impl VolumeSpec {
 fn is_raw(path: &Path, options: &LoadOptions) -> bool {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
     options.raw.is_some() || name.ends_with(".raw")
+}
+
+#[cfg(feature = "loaders")]
+pub(super) fn is_nifti(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
+    name.ends_with(".nii") || name.ends_with(".nii.gz")
 }
 
 pub(super) fn is_nrrd(path: &Path) -> bool {
