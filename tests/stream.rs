@@ -80,6 +80,58 @@ fn a_streamed_pool_is_the_planned_pool_byte_for_byte() {
 }
 
 #[test]
+fn every_generator_streams_its_layers_as_it_generates_them() {
+    // Odd dims, a step of each animation, bricks of 4 and 16; whole, and a
+    // rank's layers only (normalised by the agreed range).
+    for spec in [
+        "menger:37x29x45:2",
+        "vessels:37x29x45",
+        "turbulence:37x29x45",
+        "shells:37x29x45",
+    ] {
+        for (time, edge) in [(0, 4), (5, 16)] {
+            let series = Series::open(spec, &LoadOptions::default()).unwrap();
+            let d = series.load(time, None).unwrap();
+            let s = Series::open(spec, &LoadOptions::default())
+                .unwrap()
+                .load_bricks(time, &StreamTo::new(edge, limits(u64::MAX)))
+                .unwrap();
+            let planned = PoolLayout::of_volume(&d, edge, limits(u64::MAX)).unwrap();
+            assert_eq!(host(&s).layout.table, planned.table, "{spec} step {time}");
+            assert!(
+                (0..d.data.len()).all(|i| s.data.texel(i) == d.data.texel(i)),
+                "{spec} step {time}"
+            );
+            assert_eq!((s.value_range, s.norm, &s.name), (d.value_range, d.norm, &d.name));
+        }
+        let d = dense(spec);
+        let whole = (d.value_range[0], d.value_range[1]);
+        let heard = std::sync::Arc::new(std::sync::Mutex::new(0u32));
+        let seen = heard.clone();
+        let keep = [[0, 0, 1], [3, 2, 2]];
+        let to = StreamTo::new(16, limits(u64::MAX))
+            .keep(Some(keep))
+            .across(std::sync::Arc::new(move |_| Ok(whole)))
+            .progress(std::sync::Arc::new(move |_, total| *seen.lock().unwrap() = total));
+        let s = Series::open(spec, &LoadOptions::default())
+            .unwrap()
+            .load_bricks(0, &to)
+            .unwrap();
+        // Layers 16 to 32, and the border layer after them.
+        assert_eq!(*heard.lock().unwrap(), 17, "{spec}: layers made");
+        assert_eq!((s.value_range, s.norm), (d.value_range, d.norm), "{spec}");
+        for z in 16..32 {
+            for y in 0..29 {
+                for x in 0..37 {
+                    let i = d.index(x, y, z);
+                    assert_eq!(s.data.texel(i), d.data.texel(i), "{spec}: voxel {x},{y},{z}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn a_raw_file_streams_as_it_loads() {
     let dir = tempfile::tempdir().unwrap();
     let (path, bytes) = raw_u16(dir.path());

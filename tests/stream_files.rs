@@ -94,6 +94,25 @@ fn every_raw_type_streams_as_it_loads_bit_for_bit() {
         }
         assert_same(&ty.to_string(), &d, &s, 4);
     }
+    // A constant float file and one of NaN only: nothing to normalise by.
+    for (name, v) in [("constant", 2.5f32), ("nothing", f32::NAN)] {
+        let path = dir.path().join(format!("{name}_23x17x29_float32.raw"));
+        std::fs::write(&path, v.to_le_bytes().repeat(23 * 17 * 29)).unwrap();
+        let (d, s) = dense_and_streamed(&path, 0, 4);
+        let VoxelData::Bricks(pool) = &s.data else {
+            panic!("{name} was not streamed")
+        };
+        assert!(
+            (0..d.data.len()).all(|i| s.data.texel(i).to_bits() == d.data.texel(i).to_bits()),
+            "{name}"
+        );
+        assert_eq!(
+            (s.value_range, s.norm, s.no_data),
+            (d.value_range, d.norm, d.no_data),
+            "{name}"
+        );
+        assert_eq!(pool.layout.stored.len(), 0, "{name}: every brick is one value");
+    }
 }
 
 #[test]
@@ -194,7 +213,23 @@ fn nrrds_stream_as_they_load_bit_for_bit() {
     )
     .unwrap();
     std::fs::write(dir.path().join("d.raw.gz"), gzip(&u16_le)).unwrap();
-    for (path, edge) in [(&attached, 4), (&gz, 8), (&detached, 8), (&detached_gz, 4)] {
+    // Signed bytes and unsigned 32-bit words, big-endian.
+    let i8_nrrd = dir.path().join("e.nrrd");
+    let mut bytes = nrrd_header("int8", sizes, "raw", "little", "\n").into_bytes();
+    bytes.extend(encode(&values(false), VoxelType::I8, true));
+    std::fs::write(&i8_nrrd, bytes).unwrap();
+    let u32_nrrd = dir.path().join("f.nrrd");
+    let mut bytes = nrrd_header("uint", sizes, "gzip", "big", "\n").into_bytes();
+    bytes.extend(gzip(&encode(&values(false), VoxelType::U32, false)));
+    std::fs::write(&u32_nrrd, bytes).unwrap();
+    for (path, edge) in [
+        (&attached, 4),
+        (&gz, 8),
+        (&detached, 8),
+        (&detached_gz, 4),
+        (&i8_nrrd, 4),
+        (&u32_nrrd, 4),
+    ] {
         let (d, s) = dense_and_streamed(path, 0, edge);
         assert_same(&path.display().to_string(), &d, &s, edge);
     }
@@ -254,7 +289,7 @@ fn nifti_files_stream_as_they_load_bit_for_bit() {
 }
 
 #[test]
-fn a_file_shorter_than_its_header_says_is_one_error_before_any_layer_is_used() {
+fn a_file_shorter_or_longer_than_its_header_says_is_one_error() {
     let dir = tempfile::tempdir().unwrap();
     let sizes = "23 17 29";
     let data = encode(&values(false), VoxelType::I16, true);
@@ -267,6 +302,12 @@ fn a_file_shorter_than_its_header_says_is_one_error_before_any_layer_is_used() {
     let mut bytes = nrrd_header("short", sizes, "gzip", "little", "\n").into_bytes();
     bytes.extend(gzip(short));
     std::fs::write(&gz, bytes).unwrap();
+    // Gzip data longer than the header says: the dense load refuses it,
+    // and so does a stream that reaches the last layer.
+    let long = dir.path().join("long.nrrd");
+    let mut bytes = nrrd_header("short", sizes, "gzip", "little", "\n").into_bytes();
+    bytes.extend(gzip(&[&data[..], &[1, 2, 3, 4]].concat()));
+    std::fs::write(&long, bytes).unwrap();
     let float = dir.path().join("f_23x17x29_float32.raw");
     std::fs::write(&float, &encode(&values(true), VoxelType::F32, true)[4..]).unwrap();
     let nii = dir.path().join("c.nii");
@@ -279,6 +320,10 @@ fn a_file_shorter_than_its_header_says_is_one_error_before_any_layer_is_used() {
             "holds 22676 bytes of voxel data but 23x17x29 int16 (1 channels, 1 steps) needs 22678",
         ),
         (&gz, "ends before layer 29 of its 29 voxel layers"),
+        (
+            &long,
+            "holds 22679 bytes of voxel data but 23x17x29 int16 (1 channels, 1 steps) needs 22678",
+        ),
         (
             &float,
             "holds 45352 bytes of voxel data but 23x17x29 float32 needs 45356",

@@ -280,6 +280,8 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         ty,
         little: header.endianness == nifti::Endianness::Little,
         open: &open_at,
+        tail: None,
+        slab_bytes: super::slabs::SLAB_BYTES,
     };
     let mut volume = super::slabs::stream(&file, to, path.display().to_string(), spacing(&header))?;
     rescale_range(&mut volume, &header);

@@ -82,7 +82,11 @@ pub fn steps(path: &Path) -> Result<u32> {
     let head = head(path)?;
     match parse(path, &head, true, None, None) {
         Ok((_, steps)) => Ok(steps),
-        Err(_) if head.len() == HEAD_BYTES => {
+        Err(_)
+            if head.len() == HEAD_BYTES
+                && !head.windows(2).any(|w| w == b"\n\n")
+                && !head.windows(4).any(|w| w == b"\r\n\r\n") =>
+        {
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
             parse(path, &bytes, true, None, None).map(|v| v.1)
         }
@@ -181,6 +185,8 @@ struct Header {
     /// A detached header's data file; None: attached, from `offset` on.
     data_file: Option<PathBuf>,
     offset: usize,
+    /// Whether the header's blank line was found (it ends the header).
+    ended: bool,
 }
 
 impl Header {
@@ -310,6 +316,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         gzip,
         data_file,
         offset: pos.min(bytes.len()),
+        ended,
     })
 }
 
@@ -417,8 +424,12 @@ const HEAD_BYTES: usize = 1 << 16;
 /// The grid and type of a one-channel NRRD whose data can stream (raw, or
 /// gzip with the `loaders` feature; a header within 64 KiB); None else.
 pub fn streamed_layout(path: &Path) -> Option<([u32; 3], VoxelType)> {
-    let h = header(path, &head(path).ok()?, true).ok()?;
-    (h.axes.channels == 1 && (!h.gzip || cfg!(feature = "loaders"))).then_some((h.dims, h.ty))
+    let head = head(path).ok()?;
+    let h = header(path, &head, true).ok()?;
+    // A detached header without its blank line is whole only if the head
+    // holds the whole file.
+    let whole = h.ended || head.len() < HEAD_BYTES;
+    (whole && h.axes.channels == 1 && (!h.gzip || cfg!(feature = "loaders"))).then_some((h.dims, h.ty))
 }
 
 /// Step `step` of a NRRD streamed into bricks as `to` says (`slabs.rs`):
@@ -431,21 +442,39 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
     }
     let h = header(path, &head(path)?, true)?;
     super::check_file_step(path, step, h.axes.steps)?;
+    // Sizes before arithmetic on them: as the dense load checks them.
+    super::check_dims(h.dims, &path.display().to_string())?;
+    let too_big = || Error::format(path, "NRRD data is larger than a file can be");
+    let all = h.block().checked_mul(h.axes.steps as u64).ok_or_else(too_big)?;
     let (source, start) = match &h.data_file {
         Some(data_path) => (data_path.clone(), 0),
         None => (path.to_path_buf(), h.offset as u64),
     };
-    let all = h.block() * h.axes.steps as u64;
+    let end = start
+        .checked_add(h.skip)
+        .and_then(|b| b.checked_add(all))
+        .ok_or_else(too_big)?;
     if !h.gzip {
         // A short (or long) file is found before a layer is read.
         let len = std::fs::metadata(&source).map_err(|e| Error::io(&source, e))?.len();
-        let data = len.saturating_sub(start).saturating_sub(h.skip);
-        if data != all || len < start + h.skip {
-            return Err(short_data(&source, &h, data));
+        if len != end {
+            return Err(short_data(&source, &h, len.saturating_sub(start + h.skip)));
         }
     }
     let layer = h.dims[0] as u64 * h.dims[1] as u64 * h.ty.bytes() as u64;
     let first = h.skip + h.block() * step as u64;
+    // Gzip data is whole where a stream reaches the step's last layer: the
+    // steps after it inflate and the data ends there (its trailer's CRC
+    // checked), as the dense load requires.
+    let rest = all - h.block() * (step as u64 + 1);
+    let tail = |reader: &mut dyn Read| -> Result<()> {
+        let more = std::io::copy(&mut reader.take(rest + 1), &mut std::io::sink())
+            .map_err(|e| Error::format(&source, format!("corrupt gzip data: {e}")))?;
+        match more == rest {
+            true => Ok(()),
+            false => Err(short_data(&source, &h, h.skip + all - rest + more)),
+        }
+    };
     let open = |z: u32| -> Result<Box<dyn Read + '_>> {
         let mut file = std::fs::File::open(&source).map_err(|e| Error::io(&source, e))?;
         let at = first + z as u64 * layer;
@@ -464,6 +493,8 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         ty: h.ty,
         little: h.little,
         open: &open,
+        tail: if h.gzip { Some(&tail) } else { None },
+        slab_bytes: super::slabs::SLAB_BYTES,
     };
     super::slabs::stream(&file, to, path.display().to_string(), h.spacing)
 }

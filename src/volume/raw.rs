@@ -112,6 +112,8 @@ pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Res
         ty: layout.ty,
         little: true,
         open: &open,
+        tail: None,
+        slab_bytes: super::slabs::SLAB_BYTES,
     };
     super::slabs::stream(&file, to, path.display().to_string(), [1.0; 3])
 }

@@ -156,8 +156,8 @@ impl Series {
     }
 
     /// The grid and voxel type of a source that comes in slabs (a
-    /// generator, raw files), known before any voxel is read; None for
-    /// the others.
+    /// generator, raw files, one-channel NRRD and NIfTI files), known
+    /// before any voxel is read; None for the others.
     pub fn streamed_layout(&self) -> Option<([u32; 3], VoxelType)> {
         let raw = |path: &Path| -> Option<([u32; 3], VoxelType)> {
             let name = path.file_name()?.to_str()?.to_lowercase();
@@ -225,8 +225,8 @@ impl Series {
     }
 
     /// As `load`, streamed into bricks (`PoolStream`) where the source
-    /// comes in slabs (the nbody generator, raw uint8 and uint16 files):
-    /// `bricks` is the brick edge, the pool's limits and the bricks to keep.
+    /// comes in slabs (`streamed_layout`): `bricks` is the brick edge, the
+    /// pool's limits, the bricks to keep and how ranks agree (`StreamTo`).
     /// Other sources load whole, unchecked against the device (their
     /// upload plans the pool).
     pub fn load_bricks(&self, k: u32, bricks: &StreamTo) -> Result<Volume> {

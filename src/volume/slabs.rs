@@ -12,7 +12,10 @@ use std::io::Read;
 use std::path::Path;
 
 /// Bytes of source voxels read at once (whole layers, at least one).
-const SLAB_BYTES: usize = 64 << 20;
+pub(super) const SLAB_BYTES: usize = 64 << 20;
+
+/// Checks the bytes after a file's last voxel layer.
+pub(super) type TailCheck<'a> = dyn Fn(&mut dyn Read) -> Result<()> + 'a;
 
 /// A file's voxels: x fastest, then y, then z, from layer `z` on when
 /// opened at `z`.
@@ -24,6 +27,10 @@ pub(super) struct SlabFile<'a> {
     pub little: bool,
     /// A reader positioned at the first byte of layer `z`.
     pub open: &'a dyn Fn(u32) -> Result<Box<dyn Read + 'a>>,
+    /// Checks what follows the volume's last layer, where a stream reads it.
+    pub tail: Option<&'a TailCheck<'a>>,
+    /// Source bytes read at once (`SLAB_BYTES`).
+    pub slab_bytes: usize,
 }
 
 impl SlabFile<'_> {
@@ -33,8 +40,8 @@ impl SlabFile<'_> {
 
     /// Calls `f` with the source bytes of `layers`, whole layers in order.
     fn each_slab(&self, layers: std::ops::Range<u32>, mut f: impl FnMut(&[u8]) -> Result<()>) -> Result<()> {
-        let layer = self.layer_bytes();
-        let per_slab = (SLAB_BYTES / layer).clamp(1, layers.len().max(1));
+        let layer = self.layer_bytes().max(1);
+        let per_slab = (self.slab_bytes / layer).clamp(1, layers.len().max(1));
         let mut slab = crate::limits::zeroed::<u8>(
             format_args!("slab of {}", self.path.display()),
             (per_slab * layer) as u64,
@@ -43,16 +50,20 @@ impl SlabFile<'_> {
         let mut z = layers.start as usize;
         while z < layers.end as usize {
             let n = per_slab.min(layers.end as usize - z);
-            reader.read_exact(&mut slab[..n * layer]).map_err(|e| {
-                Error::format(
+            reader.read_exact(&mut slab[..n * layer]).map_err(|e| match e.kind() {
+                std::io::ErrorKind::UnexpectedEof => Error::format(
                     self.path,
-                    format!("ends before layer {} of its {} voxel layers ({e})", z + n, self.dims[2]),
-                )
+                    format!("ends before layer {} of its {} voxel layers", z + n, self.dims[2]),
+                ),
+                _ => Error::format(self.path, format!("cannot read layers {z} to {}: {e}", z + n)),
             })?;
             f(&slab[..n * layer])?;
             z += n;
         }
-        Ok(())
+        match self.tail {
+            Some(tail) if layers.end == self.dims[2] => tail(&mut reader),
+            _ => Ok(()),
+        }
     }
 
     /// The least and greatest finite value of `layers` in source units
@@ -166,6 +177,12 @@ fn stored_texels(
             let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
             for v in source_values(bytes, ty, little) {
                 let stored = match v {
+                    // A range too wide for f64 (hi - lo overflows) makes a
+                    // NaN: no data, as the dense load counts it.
+                    v if v.is_finite() && ((v - lo) * scale).is_nan() => {
+                        no_data.nan += 1;
+                        f32::NAN
+                    }
                     v if v.is_finite() => ((v - lo) * scale) as f32,
                     f64::INFINITY => {
                         no_data.pos_inf += 1;
@@ -181,6 +198,84 @@ fn stored_texels(
                     }
                 };
                 out.extend_from_slice(&stored.to_le_bytes());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::{PoolLimits, StreamTo};
+
+    /// Values with NaN, both infinities and a constant run, as `ty` words.
+    fn file_bytes(ty: VoxelType, little: bool, n: usize) -> Vec<u8> {
+        (0..n)
+            .flat_map(|i| {
+                let v = match i % 41 {
+                    3 => f64::NAN,
+                    7 => f64::INFINITY,
+                    9 => f64::NEG_INFINITY,
+                    _ if i % 100 < 30 => 5.0,
+                    _ => (i * 37 % 1000) as f64 - 300.0,
+                };
+                let mut w = match ty {
+                    VoxelType::I16 => (v as i16).to_le_bytes().to_vec(),
+                    VoxelType::U32 => (v.max(0.0) as u32).to_le_bytes().to_vec(),
+                    VoxelType::F32 => (v as f32).to_le_bytes().to_vec(),
+                    _ => v.to_le_bytes().to_vec(),
+                };
+                if !little {
+                    w.reverse();
+                }
+                w
+            })
+            .collect()
+    }
+
+    #[test]
+    fn slabs_of_one_or_two_layers_decode_as_the_dense_load() {
+        let dims = [13, 7, 11];
+        let n = 13 * 7 * 11;
+        let path = Path::new("mem");
+        for (ty, little) in [
+            (VoxelType::F32, false),
+            (VoxelType::F64, true),
+            (VoxelType::I16, false),
+            (VoxelType::U32, true),
+        ] {
+            let bytes = file_bytes(ty, little, n);
+            let dense = crate::volume::decode::decode(path, &bytes, ty, little, dims, [1.0; 3]).unwrap();
+            let layer = 13 * 7 * ty.bytes();
+            for slab_layers in [1, 2] {
+                let open = |z: u32| -> Result<Box<dyn Read>> {
+                    Ok(Box::new(std::io::Cursor::new(bytes[z as usize * layer..].to_vec())))
+                };
+                let file = SlabFile {
+                    path,
+                    dims,
+                    ty,
+                    little,
+                    open: &open,
+                    tail: None,
+                    slab_bytes: slab_layers * layer,
+                };
+                let limits = PoolLimits {
+                    max_image_dim: 4096,
+                    max_image_bytes: u64::MAX,
+                    max_table_entries: 1 << 30,
+                };
+                let s = stream(&file, &StreamTo::new(4, limits), "mem".into(), [1.0; 3]).unwrap();
+                let what = format!("{ty} little={little} in slabs of {slab_layers}");
+                assert!(
+                    (0..n).all(|i| s.data.texel(i).to_bits() == dense.data.texel(i).to_bits()),
+                    "{what}"
+                );
+                assert_eq!(
+                    (s.value_range, s.norm, s.no_data),
+                    (dense.value_range, dense.norm, dense.no_data),
+                    "{what}"
+                );
             }
         }
     }

@@ -297,12 +297,18 @@ impl PoolStream {
         let tb = self.tb;
         let (lo, hi) = layers
             .par_chunks(tb * 4096)
-            .map(|c| {
-                c.chunks_exact(tb)
+            .map(|c| match tb {
+                // Bytes in a plain loop the compiler vectorises.
+                1 => {
+                    let (lo, hi) = c.iter().fold((u8::MAX, 0u8), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+                    (lo as f64, hi as f64)
+                }
+                _ => c
+                    .chunks_exact(tb)
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
                         let v = stored_value(t);
                         (lo.min(v), hi.max(v))
-                    })
+                    }),
             })
             .reduce(
                 || (f64::INFINITY, f64::NEG_INFINITY),
@@ -349,10 +355,6 @@ impl PoolStream {
         let n = (edge + 1) as usize;
         let window = &self.window;
         let layer = self.layer_bytes();
-        let texel = |x: u32, y: u32, z: u32| -> &[u8] {
-            let at = (z - base) as usize * layer + (y as usize * dims[0] as usize + x as usize) * tb;
-            &window[at..at + tb]
-        };
         let row = self.row;
         let per_row = counts[0] as u64 * counts[1] as u64;
         let keep = self.keep;
@@ -361,28 +363,40 @@ impl PoolStream {
             .map(|i| {
                 let b = i + per_row * row as u64;
                 let lo = brick_origin(b, counts, edge);
-                let first = texel(lo[0], lo[1], lo[2]);
-                if outside(keep, lo, edge) {
+                // The slot's x-rows in the window, clamped to the volume as
+                // the sampler clamps: the texels inside the volume (past
+                // its last x the row repeats its last texel).
+                let inside = (dims[0] - lo[0]).min(n as u32) as usize;
+                let rows = || {
+                    (0..=edge).flat_map(move |lz| {
+                        let z = (lo[2] + lz).min(dims[2] - 1);
+                        (0..=edge).map(move |ly| {
+                            let y = (lo[1] + ly).min(dims[1] - 1);
+                            let at =
+                                (z - base) as usize * layer + (y as usize * dims[0] as usize + lo[0] as usize) * tb;
+                            &window[at..at + inside * tb]
+                        })
+                    })
+                };
+                let first = &window
+                    [(lo[2] - base) as usize * layer + (lo[1] as usize * dims[0] as usize + lo[0] as usize) * tb..]
+                    [..tb];
+                let same = |r: &[u8]| match tb {
+                    1 => r.iter().all(|&v| v == first[0]),
+                    _ => r.chunks_exact(tb).all(|t| t == first),
+                };
+                if outside(keep, lo, edge) || rows().all(same) {
                     return (Some(first.to_vec()), Vec::new());
                 }
-                // The slot's texels, clamped to the volume as the sampler clamps.
                 let mut slot = Vec::with_capacity(n * n * n * tb);
-                let mut same = true;
-                for lz in 0..=edge {
-                    for ly in 0..=edge {
-                        for lx in 0..=edge {
-                            let v = [0, 1, 2].map(|a| (lo[a] + [lx, ly, lz][a]).min(dims[a] - 1));
-                            let t = texel(v[0], v[1], v[2]);
-                            same &= t == first;
-                            slot.extend_from_slice(t);
-                        }
+                for r in rows() {
+                    slot.extend_from_slice(r);
+                    let last = &r[r.len() - tb..];
+                    for _ in inside..n {
+                        slot.extend_from_slice(last);
                     }
                 }
-                if same {
-                    (Some(first.to_vec()), Vec::new())
-                } else {
-                    (None, slot)
-                }
+                (None, slot)
             })
             .collect();
         for (value, slot) in cut {

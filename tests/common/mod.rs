@@ -184,7 +184,6 @@ pub fn masked(spec: &str) -> Volume {
     m
 }
 
-/// `bytes` gzip-compressed.
 /// `values` as voxels of `ty` (spread over the type's range: signed types
 /// shifted below zero, wide types scaled), little- or big-endian.
 pub fn encode(values: &[f64], ty: lacuna::volume::VoxelType, little: bool) -> Vec<u8> {
@@ -209,6 +208,7 @@ pub fn encode(values: &[f64], ty: lacuna::volume::VoxelType, little: bool) -> Ve
     out
 }
 
+/// `bytes` gzip-compressed.
 pub fn gzip(bytes: &[u8]) -> Vec<u8> {
     use std::io::Write;
     let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());

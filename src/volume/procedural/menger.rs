@@ -3,9 +3,12 @@
 //! gradient so the transfer function's colours show depth. Over time the
 //! sponge slides along x, a voxel a step, wrapping around.
 
-pub fn generate(dims: [u32; 3], level: u32, time: u32) -> Vec<u8> {
+use std::ops::Range;
+
+/// Layers `layers` (z) of the volume, x fastest.
+pub fn generate(dims: [u32; 3], level: u32, time: u32, layers: Range<u32>) -> Vec<u8> {
     let scale = 3u64.pow(level);
-    super::fill(dims, |x, y, z| {
+    super::fill(dims, layers, |x, y, z| {
         let x = ((x as u64 + time as u64) % dims[0] as u64) as u32;
         // The cell of the level-`level` grid that holds this voxel's centre.
         let cell = |i: u32, n: u32| (2 * i as u64 + 1) * scale / (2 * n as u64);

@@ -14,6 +14,7 @@ mod vessels;
 use super::{StreamTo, Volume, VoxelData, VoxelType};
 use crate::error::{Error, Result};
 use rayon::prelude::*;
+use std::ops::Range;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Generator {
@@ -28,6 +29,9 @@ pub enum Generator {
     /// Thin concentric spherical shells (PARAM: count, default 4).
     Shells,
 }
+
+/// Bytes of u8 voxels a stream makes at once (whole layers, at least one).
+const SLAB_BYTES: u64 = 64 << 20;
 
 /// Time steps of every generator's animation (`generate_at`).
 pub const STEPS: u32 = 64;
@@ -81,15 +85,16 @@ impl Generator {
     }
 
     /// As `generate_at`, streamed into bricks as `to` says
-    /// (`volume::PoolStream`) where the generator makes its volume
-    /// in slabs (nbody): the host then holds the stored bricks, not the
-    /// dense volume. The others are made whole (their upload plans the pool).
+    /// (`volume::PoolStream`): every generator makes its volume a slab of
+    /// layers at a time (the nbody generator its density too), so the host
+    /// holds the stored bricks, not the dense volume, and a rank makes only
+    /// its own layers (`StreamTo::across`). The voxels are those of
+    /// `generate_at`, bit for bit.
     pub fn generate_bricks(self, dims: [u32; 3], param: Option<f64>, time: u32, to: &StreamTo) -> Result<Volume> {
         self.generate_as(dims, param, time, Some(to))
     }
 
     fn generate_as(self, dims: [u32; 3], param: Option<f64>, time: u32, bricks: Option<&StreamTo>) -> Result<Volume> {
-        let streamed = bricks.filter(|_| self == Generator::Nbody);
         if time >= STEPS {
             return Err(Error::invalid(
                 "time",
@@ -98,13 +103,16 @@ impl Generator {
             ));
         }
         let n = super::check_dims(dims, self.name())?;
-        // The u8 voxels, and the n-body's slabs of f32 density beside them.
-        let peak = match (self, streamed) {
-            (Generator::Nbody, Some(_)) => nbody::peak_bytes(n) - n,
-            (Generator::Nbody, None) => nbody::peak_bytes(n),
-            _ => n,
-        };
         let [w, h, d] = dims;
+        let layer = w as u64 * h as u64;
+        let per_slab = (SLAB_BYTES / layer).clamp(1, d as u64) as u32;
+        // The u8 voxels (a stream's slab of them), and the n-body's slabs of
+        // f32 density beside them.
+        let voxels = if bricks.is_some() { per_slab as u64 * layer } else { n };
+        let peak = match self {
+            Generator::Nbody => nbody::peak_bytes(n) - n + voxels,
+            _ => voxels,
+        };
         crate::limits::check_host(format_args!("volume {}:{w}x{h}x{d}", self.name()), peak, 1)?;
         let bad = |why: &str| {
             Error::invalid(
@@ -120,35 +128,54 @@ impl Generator {
                 Some(_) => Err(bad("the seed must be a non-negative integer")),
             }
         };
-        let data = match self {
+        // Layers of the volume, its parameter checked.
+        let layers: Box<dyn Fn(Range<u32>) -> Vec<u8>> = match self {
             Generator::Menger => {
                 let level = param.unwrap_or(3.0);
                 if !((0.0..=12.0).contains(&level) && level.fract() == 0.0) {
                     return Err(bad("the Menger level must be an integer in 0..=12"));
                 }
-                menger::generate(dims, level as u32, time)
+                Box::new(move |z| menger::generate(dims, level as u32, time, z))
             }
-            Generator::Nbody => match streamed {
-                Some(to) => {
-                    let seed = seed(param)?;
-                    let pool = to.run(dims, 1, |stream, layers| {
-                        nbody::stream(dims, seed, time, layers, |slab| stream.push(slab))
-                    })?;
-                    return self.named(dims, param, VoxelData::Bricks(std::sync::Arc::new(pool)));
-                }
-                None => nbody::generate(dims, seed(param)?, time),
-            },
-            Generator::Vessels => vessels::generate(dims, seed(param)?, time),
-            Generator::Turbulence => turbulence::generate(dims, seed(param)?, time),
+            Generator::Nbody => {
+                let seed = seed(param)?;
+                let data = match bricks {
+                    Some(to) => VoxelData::Bricks(std::sync::Arc::new(to.run(dims, 1, |stream, z| {
+                        nbody::stream(dims, seed, time, z, |slab| stream.push(slab))
+                    })?)),
+                    None => VoxelData::U8(nbody::generate(dims, seed, time)),
+                };
+                return self.named(dims, param, data);
+            }
+            Generator::Vessels => {
+                let seed = seed(param)?;
+                Box::new(move |z| vessels::generate(dims, seed, time, z))
+            }
+            Generator::Turbulence => {
+                let seed = seed(param)?;
+                Box::new(move |z| turbulence::generate(dims, seed, time, z))
+            }
             Generator::Shells => {
                 let count = param.unwrap_or(4.0);
                 if !((1.0..=64.0).contains(&count) && count.fract() == 0.0) {
                     return Err(bad("the shell count must be an integer in 1..=64"));
                 }
-                shells::generate(dims, count as u32, time)
+                Box::new(move |z| shells::generate(dims, count as u32, time, z))
             }
         };
-        self.named(dims, param, VoxelData::U8(data))
+        let data = match bricks {
+            None => VoxelData::U8(layers(0..d)),
+            Some(to) => VoxelData::Bricks(std::sync::Arc::new(to.run(dims, 1, |stream, z| {
+                let mut at = z.start;
+                while at < z.end {
+                    let end = (at + per_slab).min(z.end);
+                    stream.push(&layers(at..end))?;
+                    at = end;
+                }
+                Ok(())
+            })?)),
+        };
+        self.named(dims, param, data)
     }
 
     /// The volume of `data`, named by its spec, with the default TF.
@@ -163,15 +190,17 @@ impl Generator {
     }
 }
 
-/// Fills a u8 volume in parallel over z-slices from `f(x, y, z)`.
-pub(crate) fn fill(dims: [u32; 3], f: impl Fn(u32, u32, u32) -> u8 + Sync) -> Vec<u8> {
-    let [w, h, d] = dims;
+/// Layers `layers` (z) of a u8 volume from `f(x, y, z)`, in parallel over
+/// z-slices.
+pub(crate) fn fill(dims: [u32; 3], layers: Range<u32>, f: impl Fn(u32, u32, u32) -> u8 + Sync) -> Vec<u8> {
+    let [w, h, _] = dims;
     let slice = w as usize * h as usize;
-    let mut data = vec![0u8; slice * d as usize];
-    data.par_chunks_mut(slice).enumerate().for_each(|(z, out)| {
+    let mut data = vec![0u8; slice * layers.len()];
+    data.par_chunks_mut(slice).enumerate().for_each(|(i, out)| {
+        let z = layers.start + i as u32;
         for y in 0..h {
             for x in 0..w {
-                out[x as usize + y as usize * w as usize] = f(x, y, z as u32);
+                out[x as usize + y as usize * w as usize] = f(x, y, z);
             }
         }
     });

@@ -3,6 +3,8 @@
 //! Over time each octave drifts through the noise, finer ones faster, so
 //! the field evolves rather than slides.
 
+use std::ops::Range;
+
 fn hash(x: i64, y: i64, z: i64, seed: u64) -> f32 {
     let mut h = seed
         ^ (x as u64).wrapping_mul(0x8DA6_B343)
@@ -39,9 +41,10 @@ fn value_noise(p: [f32; 3], seed: u64) -> f32 {
 /// How far octave 0 drifts a step, in noise cells (4 across the volume).
 const DRIFT: [f32; 3] = [0.05, 0.03, 0.02];
 
-pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
+/// Layers `layers` (z) of the volume, x fastest.
+pub fn generate(dims: [u32; 3], seed: u64, time: u32, layers: Range<u32>) -> Vec<u8> {
     let n = dims.into_iter().max().unwrap_or(1) as f32;
-    super::fill(dims, |x, y, z| {
+    super::fill(dims, layers, |x, y, z| {
         let p = [x, y, z].map(|c| (c as f32 + 0.5) / n * 4.0);
         let (mut sum, mut amp, mut norm, mut freq) = (0.0f32, 1.0f32, 0.0f32, 1.0f32);
         for octave in 0..4u64 {

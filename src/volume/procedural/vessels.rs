@@ -2,6 +2,8 @@
 //! the bottom of the volume, rasterised with a soft radial profile. Over
 //! time the tubes grow thicker, 5 % of their radius a step.
 
+use std::ops::Range;
+
 use super::Rng;
 
 struct Segment {
@@ -35,7 +37,9 @@ fn grow(rng: &mut Rng, out: &mut Vec<Segment>, start: [f32; 3], dir: [f32; 3], r
     }
 }
 
-pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
+/// Layers `layers` (z) of the volume, x fastest: each tube segment is
+/// drawn where it meets them (a voxel keeps its largest value, in any order).
+pub fn generate(dims: [u32; 3], seed: u64, time: u32, layers: Range<u32>) -> Vec<u8> {
     let growth = 1.0 + 0.05 * time as f32;
     let mut rng = Rng::new(seed);
     let mut segments = Vec::new();
@@ -62,14 +66,14 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
         })
         .collect();
     let [w, h, _] = dims;
-    let mut data = vec![0u8; dims.iter().map(|&d| d as usize).product()];
+    let mut data = vec![0u8; w as usize * h as usize * layers.len()];
     for (a, b, r) in &segs {
         let reach = r + 1.5;
         let lo = [0, 1, 2].map(|i| ((a[i].min(b[i]) - reach).floor().max(0.0)) as u32);
         let hi = [0, 1, 2].map(|i| ((a[i].max(b[i]) + reach).ceil() as u32).min(dims[i]));
         let ab = [0, 1, 2].map(|i| b[i] - a[i]);
         let ab2 = ab.iter().map(|c| c * c).sum::<f32>().max(1e-12);
-        for z in lo[2]..hi[2] {
+        for z in lo[2].max(layers.start)..hi[2].min(layers.end) {
             for y in lo[1]..hi[1] {
                 for x in lo[0]..hi[0] {
                     let p = [x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5];
@@ -77,7 +81,7 @@ pub fn generate(dims: [u32; 3], seed: u64, time: u32) -> Vec<u8> {
                     let t = ((ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2]) / ab2).clamp(0.0, 1.0);
                     let d2 = (0..3).map(|i| (ap[i] - t * ab[i]).powi(2)).sum::<f32>();
                     let v = (1.0 - (d2.sqrt() - r + 1.0) / 2.0).clamp(0.0, 1.0);
-                    let i = x as usize + w as usize * (y as usize + h as usize * z as usize);
+                    let i = x as usize + w as usize * (y as usize + h as usize * (z - layers.start) as usize);
                     data[i] = data[i].max((v * 255.0).round() as u8);
                 }
             }
