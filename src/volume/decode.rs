@@ -63,7 +63,7 @@ impl std::fmt::Display for VoxelType {
     }
 }
 
-fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8; N]> + '_ {
+pub(super) fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8; N]> + '_ {
     bytes.chunks_exact(N).map(move |c| {
         let mut w = [0u8; N];
         w.copy_from_slice(c);
@@ -74,20 +74,57 @@ fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator<Item = [u8
     })
 }
 
-/// f32 values normalised over their finite range; NaN and infinities are
-/// kept as they are (`Volume::new` stores them as no data).
-fn normalized_f32(values: Vec<f64>) -> VoxelData {
-    let finite = || values.iter().copied().filter(|v| v.is_finite());
-    let lo = finite().fold(f64::INFINITY, f64::min);
-    let hi = finite().fold(f64::NEG_INFINITY, f64::max);
+/// A signed byte shifted into the unsigned range, so it stays native.
+pub(super) fn shifted_i8(b: u8) -> u8 {
+    (b as i8 as i16 + 128) as u8
+}
+
+/// A signed 16-bit word (little-endian bytes) shifted into the unsigned range.
+pub(super) fn shifted_i16(w: [u8; 2]) -> u16 {
+    (i16::from_le_bytes(w) as i32 + 32768) as u16
+}
+
+/// The values of a wide type (uint32, int32, float32, float64) as f64.
+pub(super) fn wide_values(bytes: &[u8], ty: VoxelType, little: bool) -> Box<dyn Iterator<Item = f64> + '_> {
+    match ty {
+        VoxelType::U32 => Box::new(words::<4>(bytes, little).map(|w| u32::from_le_bytes(w) as f64)),
+        VoxelType::I32 => Box::new(words::<4>(bytes, little).map(|w| i32::from_le_bytes(w) as f64)),
+        VoxelType::F32 => Box::new(words::<4>(bytes, little).map(|w| f32::from_le_bytes(w) as f64)),
+        _ => Box::new(words::<8>(bytes, little).map(f64::from_le_bytes)),
+    }
+}
+
+/// The least and greatest finite value (`(inf, -inf)` where none is).
+pub(super) fn finite_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    super::minmax(values.filter(|v| v.is_finite()))
+}
+
+/// A wide type's range in source units, as volumes report it: [0, 0]
+/// where no value is finite.
+pub(super) fn source_units((lo, hi): (f64, f64)) -> [f64; 2] {
+    if lo > hi {
+        [0.0, 0.0]
+    } else {
+        [lo, hi]
+    }
+}
+
+/// Wide values normalised as f32 over the finite range `(lo, hi)`; NaN and
+/// infinities kept as they are (`Volume::new` stores them as no data).
+pub(super) fn normalizer((lo, hi): (f64, f64)) -> impl Fn(f64) -> f32 {
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
-    let normalize = |v: f64| {
+    move |v: f64| {
         if v.is_finite() {
             ((v - lo) * scale) as f32
         } else {
             v as f32
         }
-    };
+    }
+}
+
+/// f32 values normalised over their finite range.
+fn normalized_f32(values: Vec<f64>) -> VoxelData {
+    let normalize = normalizer(finite_range(values.iter().copied()));
     VoxelData::F32(values.iter().map(|&v| normalize(v)).collect())
 }
 
@@ -118,9 +155,8 @@ pub fn decode(
     }
     let (data, range) = match ty {
         VoxelType::U8 => (VoxelData::U8(bytes.to_vec()), None),
-        // Signed integers shift into the unsigned range so they stay native.
         VoxelType::I8 => (
-            VoxelData::U8(bytes.iter().map(|&b| (b as i8 as i16 + 128) as u8).collect()),
+            VoxelData::U8(bytes.iter().map(|&b| shifted_i8(b)).collect()),
             Some(-128.0),
         ),
         VoxelType::U16 => (
@@ -128,41 +164,10 @@ pub fn decode(
             None,
         ),
         VoxelType::I16 => (
-            VoxelData::U16(
-                words::<2>(bytes, little)
-                    .map(|w| (i16::from_le_bytes(w) as i32 + 32768) as u16)
-                    .collect(),
-            ),
+            VoxelData::U16(words::<2>(bytes, little).map(shifted_i16).collect()),
             Some(-32768.0),
         ),
-        VoxelType::U32 => (
-            normalized_f32(
-                words::<4>(bytes, little)
-                    .map(|w| u32::from_le_bytes(w) as f64)
-                    .collect(),
-            ),
-            None,
-        ),
-        VoxelType::I32 => (
-            normalized_f32(
-                words::<4>(bytes, little)
-                    .map(|w| i32::from_le_bytes(w) as f64)
-                    .collect(),
-            ),
-            None,
-        ),
-        VoxelType::F32 => (
-            normalized_f32(
-                words::<4>(bytes, little)
-                    .map(|w| f32::from_le_bytes(w) as f64)
-                    .collect(),
-            ),
-            None,
-        ),
-        VoxelType::F64 => (
-            normalized_f32(words::<8>(bytes, little).map(f64::from_le_bytes).collect()),
-            None,
-        ),
+        _ => (normalized_f32(wide_values(bytes, ty, little).collect()), None),
     };
     let mut volume = Volume::new(path.display().to_string(), dims, spacing, ty, data)?;
     // Report the range in source units.
@@ -175,15 +180,6 @@ pub fn decode(
 }
 
 fn source_range(bytes: &[u8], ty: VoxelType, little: bool) -> [f64; 2] {
-    let values: Box<dyn Iterator<Item = f64>> = match ty {
-        VoxelType::U32 => Box::new(words::<4>(bytes, little).map(|w| u32::from_le_bytes(w) as f64)),
-        VoxelType::I32 => Box::new(words::<4>(bytes, little).map(|w| i32::from_le_bytes(w) as f64)),
-        VoxelType::F32 => Box::new(words::<4>(bytes, little).map(|w| f32::from_le_bytes(w) as f64)),
-        _ => Box::new(words::<8>(bytes, little).map(f64::from_le_bytes)),
-    };
     // The finite values' range (NaN and infinities are no data).
-    match super::minmax(values.filter(|v| v.is_finite())) {
-        (lo, hi) if lo > hi => [0.0, 0.0],
-        (lo, hi) => [lo, hi],
-    }
+    source_units(finite_range(wide_values(bytes, ty, little)))
 }

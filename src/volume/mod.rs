@@ -160,16 +160,22 @@ impl NoData {
     fn mark(data: &mut VoxelData) -> NoData {
         let mut counts = NoData::default();
         if let VoxelData::F32(values) = data {
-            for v in values.iter_mut().filter(|v| !v.is_finite()) {
-                match *v {
-                    f32::INFINITY => counts.pos_inf += 1,
-                    f32::NEG_INFINITY => counts.neg_inf += 1,
-                    _ => counts.nan += 1,
-                }
-                *v = f32::NAN;
-            }
+            counts.mark_values(values);
         }
         counts
+    }
+
+    /// Adds the non-finite values of `values` to the counts and stores
+    /// them as NaN (a slab of a streamed volume, or a whole one).
+    fn mark_values(&mut self, values: &mut [f32]) {
+        for v in values.iter_mut().filter(|v| !v.is_finite()) {
+            match *v {
+                f32::INFINITY => self.pos_inf += 1,
+                f32::NEG_INFINITY => self.neg_inf += 1,
+                _ => self.nan += 1,
+            }
+            *v = f32::NAN;
+        }
     }
 
     pub fn total(&self) -> u64 {

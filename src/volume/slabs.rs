@@ -5,7 +5,7 @@
 //! swapped), so a streamed file is its dense load bit for bit and the host
 //! holds one slab of it, not the volume.
 
-use super::decode::VoxelType;
+use super::decode::{self, VoxelType};
 use super::{stored_bytes, NoData, StreamTo, Volume, VoxelData};
 use crate::error::{Error, Result};
 use std::io::Read;
@@ -71,9 +71,8 @@ impl SlabFile<'_> {
     fn finite_range(&self, layers: std::ops::Range<u32>) -> Result<(f64, f64)> {
         let mut range = (f64::INFINITY, f64::NEG_INFINITY);
         self.each_slab(layers, |bytes| {
-            for v in source_values(bytes, self.ty, self.little).filter(|v| v.is_finite()) {
-                range = (range.0.min(v), range.1.max(v));
-            }
+            let (lo, hi) = decode::finite_range(decode::wide_values(bytes, self.ty, self.little));
+            range = (range.0.min(lo), range.1.max(hi));
             Ok(())
         })?;
         Ok(range)
@@ -118,31 +117,11 @@ pub(super) fn stream(file: &SlabFile, to: &StreamTo, name: String, spacing: [f32
     volume.value_range = match (file.ty, source_range) {
         (VoxelType::I8, _) => volume.value_range.map(|v| v - 128.0),
         (VoxelType::I16, _) => volume.value_range.map(|v| v - 32768.0),
-        (_, Some((lo, hi))) if lo <= hi => [lo, hi],
-        (_, Some(_)) => [0.0, 0.0],
+        (_, Some(range)) => decode::source_units(range),
         _ => volume.value_range,
     };
     volume.no_data = no_data;
     Ok(volume)
-}
-
-/// A slab's source values as f64 (the wider types'; `decode`'s words).
-fn source_values(bytes: &[u8], ty: VoxelType, little: bool) -> impl Iterator<Item = f64> + '_ {
-    bytes.chunks_exact(ty.bytes()).map(move |c| {
-        let mut w = [0u8; 8];
-        w[..c.len()].copy_from_slice(c);
-        if !little {
-            w[..c.len()].reverse();
-        }
-        match ty {
-            VoxelType::U32 => u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
-            VoxelType::I32 => i32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
-            VoxelType::F32 => f32::from_le_bytes([w[0], w[1], w[2], w[3]]) as f64,
-            VoxelType::F64 => f64::from_le_bytes(w),
-            VoxelType::U8 | VoxelType::I8 => w[0] as f64,
-            VoxelType::U16 | VoxelType::I16 => u16::from_le_bytes([w[0], w[1]]) as f64,
-        }
-    })
 }
 
 /// A slab's stored texels into `out` (little-endian, `stored_bytes` each),
@@ -157,48 +136,18 @@ fn stored_texels(
     no_data: &mut NoData,
 ) {
     out.clear();
-    let word = |c: &[u8]| -> [u8; 2] {
-        match little {
-            true => [c[0], c[1]],
-            false => [c[1], c[0]],
-        }
-    };
     match ty {
         VoxelType::U8 => out.extend_from_slice(bytes),
-        VoxelType::I8 => out.extend(bytes.iter().map(|&b| (b as i8 as i16 + 128) as u8)),
-        VoxelType::U16 => out.extend(bytes.chunks_exact(2).flat_map(word)),
-        VoxelType::I16 => out.extend(
-            bytes
-                .chunks_exact(2)
-                .flat_map(|c| ((i16::from_le_bytes(word(c)) as i32 + 32768) as u16).to_le_bytes()),
-        ),
+        VoxelType::I8 => out.extend(bytes.iter().map(|&b| decode::shifted_i8(b))),
+        VoxelType::U16 => out.extend(decode::words::<2>(bytes, little).flatten()),
+        VoxelType::I16 => {
+            out.extend(decode::words::<2>(bytes, little).flat_map(|w| decode::shifted_i16(w).to_le_bytes()))
+        }
         _ => {
-            let (lo, hi) = range.unwrap_or((0.0, 0.0));
-            let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
-            for v in source_values(bytes, ty, little) {
-                let stored = match v {
-                    // A range too wide for f64 (hi - lo overflows) makes a
-                    // NaN: no data, as the dense load counts it.
-                    v if v.is_finite() && ((v - lo) * scale).is_nan() => {
-                        no_data.nan += 1;
-                        f32::NAN
-                    }
-                    v if v.is_finite() => ((v - lo) * scale) as f32,
-                    f64::INFINITY => {
-                        no_data.pos_inf += 1;
-                        f32::NAN
-                    }
-                    f64::NEG_INFINITY => {
-                        no_data.neg_inf += 1;
-                        f32::NAN
-                    }
-                    _ => {
-                        no_data.nan += 1;
-                        f32::NAN
-                    }
-                };
-                out.extend_from_slice(&stored.to_le_bytes());
-            }
+            let normalize = decode::normalizer(range.unwrap_or((0.0, 0.0)));
+            let mut values: Vec<f32> = decode::wide_values(bytes, ty, little).map(normalize).collect();
+            no_data.mark_values(&mut values);
+            out.extend(values.iter().flat_map(|v| v.to_le_bytes()));
         }
     }
 }
