@@ -173,10 +173,16 @@ fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
         let row = (v.dims[0] as u64 + 1) * kind.bytes_per_voxel();
         for range in [u64::MAX, 3 * row + 1] {
             let image = (gv.image.view, gv.sampler);
+            let mut timer = lacuna::gpu::Timer::new(&ctx, 1).unwrap();
             let got = ctx
-                .submit_and_wait(|cmd| record_pack_cells(&ctx, cmd, image, v.dims, kind, range))
+                .submit_and_wait(|cmd| {
+                    timer.reset(cmd);
+                    record_pack_cells(&ctx, cmd, Some(&mut timer), image, v.dims, kind, range)
+                })
                 .unwrap()
                 .0;
+            // The pass is timed.
+            assert!(timer.results().unwrap().phase("cells").unwrap() >= 0.0);
             let got = got.buffer().download(0, want.len() as u64).unwrap();
             assert!(
                 got == want,

@@ -22,26 +22,6 @@ pub struct GpuBricks {
 }
 
 impl GpuBricks {
-    /// Computes the ranges of `volume`'s `brick`^3 bricks and waits (from
-    /// `finer` where given: see `record`); returns them and the GPU
-    /// milliseconds it took.
-    pub fn compute(
-        ctx: &Context,
-        minmax: &BrickMinMax,
-        volume: &GpuVolume,
-        brick: u32,
-        finer: Option<&GpuBricks>,
-    ) -> Result<(Self, f64)> {
-        let bricks = Self::allocate(ctx, volume, brick)?;
-        let mut timer = Timer::new(ctx, 1)?;
-        ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            bricks.record(cmd, Some(&mut timer), "ranges", minmax, volume, finer)
-        })?;
-        let ms = timer.results()?.phase("ranges")?;
-        Ok((bricks, ms))
-    }
-
     /// Records the computation of the ranges (timed as `pass`) into `cmd`:
     /// from `finer` (ranges of smaller bricks whose edge divides this one's,
     /// recorded before) where the volume's normalisation allows it

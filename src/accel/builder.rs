@@ -134,16 +134,20 @@ impl Builder {
     /// The per-volume ranges of every kind in `kinds` (each once), computed
     /// and waited for: once per volume upload.
     pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
-        let mut t = Timings::default();
-        let mut ranges = Ranges::default();
-        let kinds = distinct(kinds)?;
-        let several = several_cells(&kinds);
-        for kind in kinds {
-            let minmax = self.shared::<BrickMinMax>()?;
-            let (size, pass) = size_and_pass(kind, several);
-            let (b, ms) = GpuBricks::compute(&self.ctx, &minmax, volume, size, ranges.finer(size))?;
-            t.push(pass, ms);
-            ranges.insert(kind, b, ms);
+        // One submission, one timed pass a kind.
+        let passes = distinct(kinds)?.len() as u32;
+        let mut timer = Timer::new(&self.ctx, passes)?;
+        let mut ranges = self.ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record_ranges(cmd, Some(&mut timer), kinds, volume)
+        })?;
+        let t = timer.results()?;
+        let several = ranges.cells.len() > 1;
+        if let Some((_, ms)) = &mut ranges.bricks {
+            *ms = t.phase(&size_and_pass(RangeKind::Bricks, several).1)?;
+        }
+        for (b, ms) in &mut ranges.cells {
+            *ms = t.phase(&size_and_pass(RangeKind::Cells(b.brick), several).1)?;
         }
         Ok((ranges, t))
     }

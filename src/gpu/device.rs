@@ -39,6 +39,12 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
+    /// Whether the device is the host's CPU (lavapipe, SwiftShader): its
+    /// memory is the host's.
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == vk::PhysicalDeviceType::CPU
+    }
+
     pub fn api_string(&self) -> String {
         let v = self.api_version;
         format!(

@@ -5,7 +5,7 @@
 //! narrow workgroup with long serial runs is several times faster there.
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, DeviceInfo};
+use crate::gpu::DeviceInfo;
 
 /// Elements per workgroup of the block-wise primitives.
 pub const BLOCK: u64 = 1024;
@@ -19,7 +19,7 @@ pub struct BlockLayout {
 impl BlockLayout {
     /// 256 x 4 on GPUs, 32 x 32 on CPU devices.
     pub fn for_device(info: &DeviceInfo) -> Self {
-        if info.device_type == vk::PhysicalDeviceType::CPU {
+        if info.is_cpu() {
             BlockLayout { width: 32, items: 32 }
         } else {
             BlockLayout { width: 256, items: 4 }

@@ -23,7 +23,7 @@ use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, volume_cells as k};
-use crate::gpu::{vk, Binding, Buffer, Context, DeviceInfo, Kernel, MemoryLocation, TexelBuffer};
+use crate::gpu::{vk, Binding, Buffer, Context, DeviceInfo, Kernel, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
 use rayon::prelude::*;
 
 /// How a volume's texels are stored, as the march kernels' `VOLUME_KIND`.
@@ -279,27 +279,17 @@ pub fn upload_gradient_cells(ctx: &Context, gradient: &[[half::f16; 4]], dims: [
 /// (`shared_cells`: 34 ms for nbody:256 on lavapipe, where the device's
 /// packing took 150 ms and packing, staging and copying 300 ms).
 pub fn host_shared(ctx: &Context) -> bool {
-    ctx.info().device_type == vk::PhysicalDeviceType::CPU
+    ctx.info().is_cpu()
 }
 
 /// Cell layers per upload: bounds the host memory packing takes.
 const LAYER_BYTES: u64 = 64 << 20;
 
-/// Fills `out`, `per_cell` items a cell for every cell of a volume of
-/// `dims` (cells x fastest, from -1), with `put(cell, corners)`: the cell's
-/// eight voxels of `v` clamped to the volume, in corner order (x fastest).
-/// Row by row: the four voxel rows a row of cells reads are sliced once.
-fn cell_rows<T: Copy + Sync, U: Send>(
-    v: &[T],
-    dims: [u32; 3],
-    out: &mut [U],
-    per_cell: usize,
-    put: impl Fn(&mut [U], [T; 8]) + Sync,
-) {
-    cell_layers(v, dims, 0, out, per_cell, put)
-}
-
-/// As `cell_rows` for the cell layers from `first` on that `out` holds.
+/// Fills `out`, `per_cell` items a cell for the cell layers from `first`
+/// on that `out` holds (cells x fastest, from -1), with `put(cell,
+/// corners)`: the cell's eight voxels of `v` clamped to the volume, in
+/// corner order (x fastest). Row by row: the four voxel rows a row of
+/// cells reads are sliced once.
 fn cell_layers<T: Copy + Sync, U: Send>(
     v: &[T],
     dims: [u32; 3],
@@ -330,7 +320,7 @@ fn cell_layers<T: Copy + Sync, U: Send>(
 /// in corner order, which is the words' layout for every kind (bytes,
 /// halves and words are little-endian).
 fn pack_rows<T: Copy + Send + Sync>(v: &[T], dims: [u32; 3], out: &mut [T]) {
-    cell_rows(v, dims, out, 8, |cell, corners| cell.copy_from_slice(&corners));
+    cell_layers(v, dims, 0, out, 8, |cell, corners| cell.copy_from_slice(&corners));
 }
 
 /// Packs dense `volume`'s cells copy into `out` (its `cells_bytes`).
@@ -384,11 +374,12 @@ pub fn cells_words(volume: &Volume) -> Vec<u32> {
 /// one dispatch per block of cell rows of at most `range` bytes (the
 /// device's `maxStorageBufferRange`, or less), then a barrier from their
 /// writes to compute-shader reads. No host packing and no staging of 8 to
-/// 32 bytes a voxel. Keep the returned kernel until the submission
-/// completed.
+/// 32 bytes a voxel. Timed as pass "cells" on `timer`. Keep the returned
+/// kernel until the submission completed.
 pub fn record_pack_cells(
     ctx: &Context,
     cmd: vk::CommandBuffer,
+    mut timer: Option<&mut Timer>,
     (view, sampler): (vk::ImageView, vk::Sampler),
     dims: [u32; 3],
     kind: TexelKind,
@@ -413,6 +404,7 @@ pub fn record_pack_cells(
         ));
     }
     let rows = counts[1] * counts[2];
+    let pass = timer.begin(cmd, "cells")?;
     let mut first = 0;
     while first < rows {
         let n = per_dispatch.min(rows - first);
@@ -430,6 +422,7 @@ pub fn record_pack_cells(
         kernel.dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
         first += n;
     }
+    timer.end(cmd, pass);
     record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
     Ok((TexelBuffer::new(ctx, buffer, kind.format().0)?, kernel))
 }

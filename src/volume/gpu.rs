@@ -513,7 +513,7 @@ impl GpuVolume {
     /// device, where one fetch per sample instead of eight makes it the
     /// faster filter) and the device holds it (`cells::check_cells`).
     pub fn prepare(&mut self, volume: &Volume, lit: bool, filter: Option<Filter>) -> Result<()> {
-        let cpu = self.ctx.info().device_type == vk::PhysicalDeviceType::CPU;
+        let cpu = self.ctx.info().is_cpu();
         let manual = match filter {
             Some(f) => f == Filter::Manual,
             None => cpu,

@@ -5,7 +5,7 @@
 use super::cells;
 use super::{GpuVolume, Volume};
 use crate::error::Result;
-use crate::gpu::{vk, Kernel, TexelBuffer};
+use crate::gpu::{vk, Kernel, TexelBuffer, Timer, Timings};
 
 impl GpuVolume {
     /// Makes the cells copy (`volume`'s, the volume this was uploaded
@@ -15,26 +15,39 @@ impl GpuVolume {
     /// bit for bit. Costs `TexelKind::bytes_per_voxel` bytes
     /// per voxel (checked against the device's limits first); once is
     /// enough.
-    pub fn add_cells(&mut self, volume: &Volume) -> Result<()> {
-        if self.cells.is_none() {
-            self.check_cells_of(volume)?;
-            let cells = if cells::host_shared(&self.ctx) {
-                cells::shared_cells(&self.ctx, volume)?
-            } else {
-                let ctx = self.ctx.clone();
-                ctx.submit_and_wait(|cmd| self.record_pack_cells(cmd))?.0
-            };
-            self.cells = Some(cells);
+    /// Returns the GPU passes it ran (the device's packing, "cells"; none
+    /// on a CPU device or where the copy was there).
+    pub fn add_cells(&mut self, volume: &Volume) -> Result<Timings> {
+        if self.cells.is_some() {
+            return Ok(Timings::default());
         }
-        Ok(())
+        self.check_cells_of(volume)?;
+        if cells::host_shared(&self.ctx) {
+            self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
+            return Ok(Timings::default());
+        }
+        let ctx = self.ctx.clone();
+        let mut timer = Timer::new(&ctx, 1)?;
+        let (cells, _kernel) = ctx.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            self.record_pack_cells(cmd, Some(&mut timer))
+        })?;
+        self.cells = Some(cells);
+        timer.results()
     }
 
     /// As `add_cells`, recorded into `cmd` after the volume's upload (see
-    /// `record_upload`), ending with a barrier to compute-shader reads;
+    /// `record_upload`; timed as pass "cells" on `timer`), ending with a
+    /// barrier to compute-shader reads;
     /// nothing to keep but this volume (it holds the kernel). On a CPU
     /// device the host packs the copy at once and nothing is recorded.
     /// Does nothing when the copy is already there.
-    pub fn record_add_cells(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<()> {
+    pub fn record_add_cells(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        volume: &Volume,
+    ) -> Result<()> {
         if self.cells.is_some() {
             return Ok(());
         }
@@ -43,7 +56,7 @@ impl GpuVolume {
             self.cells = Some(cells::shared_cells(&self.ctx, volume)?);
             return Ok(());
         }
-        let (cells, kernel) = self.record_pack_cells(cmd)?;
+        let (cells, kernel) = self.record_pack_cells(cmd, timer)?;
         self.cells = Some(cells);
         self.cells_kernel = Some(kernel);
         Ok(())
@@ -57,10 +70,10 @@ impl GpuVolume {
         self.check_one_channel("the cells copy")
     }
 
-    fn record_pack_cells(&self, cmd: vk::CommandBuffer) -> Result<(TexelBuffer, Kernel)> {
+    fn record_pack_cells(&self, cmd: vk::CommandBuffer, timer: Option<&mut Timer>) -> Result<(TexelBuffer, Kernel)> {
         let image = (self.image.view, self.sampler);
         let range = self.ctx.info().max_storage_buffer_range;
-        cells::record_pack_cells(&self.ctx, cmd, image, self.dims, self.kind, range)
+        cells::record_pack_cells(&self.ctx, cmd, timer, image, self.dims, self.kind, range)
     }
 
     /// The cells copy, where `add_cells` (or `record_add_cells`) made it.
