@@ -312,3 +312,61 @@ fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
     }
     assert_clean(&ctx);
 }
+
+/// Ranges read from the volume's cells copy (a 2x2x2 block of voxels a
+/// fetch) are the ranges read from its image, bit for bit: every texel
+/// kind (each unorm value once), NaN floats, odd dims, a one-voxel axis,
+/// edges from 1 (whose one-voxel boxes keep the image) to 8, aprons 0 to 2.
+#[test]
+fn ranges_from_the_cells_copy_are_the_images_bit_for_bit() {
+    let ctx = gpu();
+    let mm = BrickMinMax::new(&ctx).unwrap();
+    let load = |s: &str| Volume::load(s, &LoadOptions::default()).unwrap();
+    let ramp8 = VoxelData::U8((0..=255u8).rev().collect());
+    let ramp16 = VoxelData::U16((0..=65535u16).map(|v| v.wrapping_mul(40503)).collect());
+    let dims = [11u32, 7, 5];
+    let floats = (0..385)
+        .map(|i| {
+            if i % 13 == 0 || i < 30 {
+                f32::NAN
+            } else {
+                (i % 29) as f32 * 0.37 - 2.0
+            }
+        })
+        .collect();
+    let volumes = [
+        load("nbody:19x11x9"),
+        load("turbulence:9x1x7"),
+        Volume::new("u8 ramp", [16, 4, 4], [1.0; 3], VoxelType::U8, ramp8).unwrap(),
+        Volume::new("u16 ramp", [64, 32, 32], [1.0; 3], VoxelType::U16, ramp16).unwrap(),
+        Volume::new("floats", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(floats)).unwrap(),
+    ];
+    for v in volumes {
+        let mut gv = GpuVolume::upload(&ctx, &v).unwrap();
+        let cases: Vec<(u32, u32)> = [1, 2, 3, 4, 5, 8]
+            .iter()
+            .flat_map(|&b| [(b, 0), (b, 1), (b, 2)])
+            .collect();
+        let ranges = |gv: &GpuVolume| -> Vec<Vec<u32>> {
+            cases
+                .iter()
+                .map(|&(brick, apron)| {
+                    let n = lacuna::prims::brick_minmax::brick_counts(v.dims, brick)
+                        .iter()
+                        .product::<u32>();
+                    let out = buffer(&ctx, &vec![0; 2 * n as usize]);
+                    ctx.submit_and_wait(|cmd| mm.record(cmd, gv, brick, apron, &out))
+                        .unwrap();
+                    read(&out, 2 * n as usize)
+                })
+                .collect()
+        };
+        let from_image = ranges(&gv);
+        gv.add_cells(&v).unwrap();
+        let from_cells = ranges(&gv);
+        for ((brick, apron), (a, b)) in cases.iter().zip(from_image.iter().zip(&from_cells)) {
+            assert!(a == b, "{} brick {brick} apron {apron}: ranges differ", v.name);
+        }
+    }
+    assert_clean(&ctx);
+}

@@ -23,7 +23,13 @@ layout(push_constant) uniform Push {
     uint groups_x;
     uint channels;
     uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
+    uint cells;      // 1: read the volume's cells copy, of texels of `kind`
+    uint kind;       // VOLUME_KIND: 0 float, 1 unorm8, 2 unorm16
 } pc;
+
+// The volume's cells copy (src/volume/cells.rs), where it has one: each
+// cell's eight voxels in one texel (two for floats), stored values.
+layout(set = 0, binding = 6) uniform usamplerBuffer cells;
 
 // Widens the ranges by texel t's channels, NaN ignored.
 void take(vec4 t, inout vec4 mn, inout vec4 mx) {
@@ -73,6 +79,74 @@ void take_box(sampler3D tex, ivec3 t, ivec3 n, inout vec4 mn, inout vec4 mx) {
     }
 }
 
+// The low corner of the next cell along one axis of the box [lo, hi]:
+// every other voxel from lo, the last cell moved back to end at hi (a
+// voxel read twice changes no extreme); at a one-voxel box the cell at hi,
+// whose upper corner the copy clamps to hi where hi is the volume's last
+// voxel (the host sends no other one-voxel box here).
+int cell_at(int at, int lo, int hi) {
+    return hi > lo ? min(at, hi - 1) : at;
+}
+
+// As take_box over the box [lo, hi] of a dense one-channel volume, from
+// its cells copy: a 2x2x2 block of voxels a fetch, an eighth of
+// take_box's. Unorm extremes are found on the stored integers, then
+// scaled as the manual filter scales a sample (integer times 1 / unit;
+// on lavapipe also what texelFetch returns, tests/prims.rs).
+void take_cells(ivec3 lo, ivec3 hi, inout vec4 mn, inout vec4 mx) {
+    ivec3 n = ivec3(pc.dims.xyz) + 1;
+    uint a = 0xffffffffu;
+    uint b = 0u;
+    float lo1 = mn.x;
+    float hi1 = mx.x;
+    for (int z = lo.z; z <= hi.z; z += 2) {
+        for (int y = lo.y; y <= hi.y; y += 2) {
+            for (int x = lo.x; x <= hi.x; x += 2) {
+                ivec3 j = ivec3(cell_at(x, lo.x, hi.x), cell_at(y, lo.y, hi.y), cell_at(z, lo.z, hi.z)) + 1;
+                int at = j.x + n.x * (j.y + n.y * j.z);
+                if (pc.kind == 1u) {
+                    uvec2 w = texelFetch(cells, at).xy;
+                    for (uint s = 0u; s < 32u; s += 8u) {
+                        uint v0 = (w.x >> s) & 255u;
+                        uint v1 = (w.y >> s) & 255u;
+                        a = min(a, min(v0, v1));
+                        b = max(b, max(v0, v1));
+                    }
+                } else if (pc.kind == 2u) {
+                    uvec4 w = texelFetch(cells, at);
+                    uvec4 l = w & 65535u;
+                    uvec4 u = w >> 16u;
+                    uvec4 m0 = min(l, u);
+                    uvec4 m1 = max(l, u);
+                    a = min(a, min(min(m0.x, m0.y), min(m0.z, m0.w)));
+                    b = max(b, max(max(m1.x, m1.y), max(m1.z, m1.w)));
+                } else {
+                    for (int h = 0; h < 2; ++h) {
+                        uvec4 w = texelFetch(cells, 2 * at + h);
+                        for (int c = 0; c < 4; ++c) {
+                            float v = uintBitsToFloat(w[c]);
+                            if (!is_nan(v)) {
+                                lo1 = min(lo1, v);
+                                hi1 = max(hi1, v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if (pc.kind != 0u) {
+        // Constant reciprocals, as volume.glsl's (no division at run time).
+        float inv = pc.kind == 1u ? (1.0 / 255.0) : (1.0 / 65535.0);
+        precise float lo_v = float(a) * inv;
+        precise float hi_v = float(b) * inv;
+        lo1 = min(lo1, lo_v);
+        hi1 = max(hi1, hi_v);
+    }
+    mn.x = lo1;
+    mx.x = hi1;
+}
+
 void main() {
     uint b = linear_index(pc.groups_x);
     if (b >= pc.counts.w) {
@@ -85,7 +159,9 @@ void main() {
     vec4 mn = vec4(3.4e38);
     vec4 mx = vec4(-3.4e38);
     int edge = int(pc.pool_brick);
-    if (edge == 0) {
+    if (pc.cells != 0u) {
+        take_cells(lo, hi, mn, mx);
+    } else if (edge == 0) {
         take_box(volume_tex, lo, hi - lo, mn, mx);
     } else {
         // Bricked: pool brick by pool brick, each overlap with the box one

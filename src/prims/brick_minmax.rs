@@ -1,5 +1,6 @@
 //! Per-brick min/max of normalised voxel values over an apron, one invocation
-//! per brick, straight from the volume image, or from the ranges of finer
+//! per brick, straight from the volume image (from its cells copy where it
+//! has one: an eighth of the fetches), or from the ranges of finer
 //! bricks over the same apron (`record_coarsen`: exactly the same ranges,
 //! `glsl/prims/ranges_coarsen.comp` says why, for a fraction of the reads).
 
@@ -46,6 +47,9 @@ impl BrickMinMax {
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
         entry_barrier(self.ctx.device(), cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.kernel.local_size()[0])?;
+        // The cells copy serves every box but a one-voxel one inside the
+        // volume (brick 1 without apron): its cells pair voxels.
+        let cells = volume.cells().filter(|_| brick + apron >= 2);
         // dims.w: brick edge; counts.w: total bricks.
         let push = k::Push {
             dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
@@ -56,6 +60,8 @@ impl BrickMinMax {
             groups_x: groups[0],
             channels: volume.channels,
             pool_brick: volume.brick_edge(),
+            cells: cells.is_some() as u32,
+            kind: volume.kind.constant(),
         };
         self.kernel.dispatch(
             cmd,
@@ -66,6 +72,7 @@ impl BrickMinMax {
                 pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
                 pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
                 pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
+                cells: Binding::TexelBuffer(cells.unwrap_or(volume.brick_table()).view()),
             }
             .list(),
             bytemuck::bytes_of(&push),
