@@ -196,3 +196,80 @@ fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
     }
     assert_clean(&ctx);
 }
+
+/// Another step of `v`'s series: its voxels in reverse order, floats
+/// doubled (another normalisation), so every texel and copy changes.
+fn step_before(v: &Volume) -> Volume {
+    let data = match &v.data {
+        VoxelData::U8(d) => VoxelData::U8(d.iter().rev().copied().collect()),
+        VoxelData::U16(d) => VoxelData::U16(d.iter().rev().copied().collect()),
+        VoxelData::F32(d) => VoxelData::F32(d.iter().rev().map(|x| 2.0 * x).collect()),
+        VoxelData::Bricks(_) => unreachable!("volumes() are dense"),
+    };
+    Volume::new("step before", v.dims, v.spacing, v.source_type, data).unwrap()
+}
+
+/// A step put in place of the one before (`GpuVolume::replace`, as `view`
+/// and `bench` play a series) renders as a fresh upload of it, bit for
+/// bit, cells and gradient copies included, in every kind and mode; a
+/// volume on another grid, of another kind or bricked is not put in place.
+#[test]
+fn a_step_put_in_place_renders_as_its_fresh_upload() {
+    let ctx = gpu();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:0.9").unwrap();
+    let modes = [
+        (Mode::Composite, false),
+        (Mode::Composite, true),
+        (Mode::Mip, false),
+        (Mode::Iso(Iso::new(&[0.45]).unwrap()), false),
+    ];
+    let volumes = volumes();
+    for v in &volumes {
+        let before = step_before(v);
+        let mut placed = GpuVolume::upload(&ctx, &before).unwrap();
+        placed.prepare(&before, true, Some(Filter::Manual)).unwrap();
+        let desc = FrameDesc::builder(40, 32).filter(Filter::Manual).build().unwrap();
+        let old = frame(&ctx, &renderer, &placed, &before, &tf, &desc);
+        assert!(placed.replace(v).unwrap(), "{}: not put in place", v.name);
+        placed.prepare(v, true, Some(Filter::Manual)).unwrap();
+        let mut fresh = GpuVolume::upload(&ctx, v).unwrap();
+        fresh.prepare(v, true, Some(Filter::Manual)).unwrap();
+        assert_eq!((placed.norm, placed.has_nan), (fresh.norm, fresh.has_nan), "{}", v.name);
+        let words = |g: &GpuVolume| {
+            g.cells()
+                .unwrap()
+                .buffer()
+                .download(0, g.cells().unwrap().buffer().size())
+        };
+        assert!(
+            words(&placed).unwrap() == words(&fresh).unwrap(),
+            "{}: cells copies differ",
+            v.name
+        );
+        for (mode, shaded) in &modes {
+            let desc = FrameDesc::builder(40, 32)
+                .orbit(30.0, 20.0, Projection::Orthographic)
+                .filter(Filter::Manual)
+                .mode(*mode)
+                .shading(shaded.then(Shading::default))
+                .build()
+                .unwrap();
+            let a = frame(&ctx, &renderer, &placed, v, &tf, &desc);
+            let b = frame(&ctx, &renderer, &fresh, v, &tf, &desc);
+            let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+            assert!(bits(&a) == bits(&b), "{} {mode:?} shaded {shaded}: differs", v.name);
+            if matches!(mode, Mode::Composite) && !shaded {
+                assert!(bits(&a) != bits(&old), "{}: the step before looks the same", v.name);
+            }
+        }
+    }
+    // Not in place: other dims, another kind, bricked storage.
+    let mut u8s = GpuVolume::upload(&ctx, &volumes[0]).unwrap();
+    let smaller = lacuna::Volume::load("nbody:13x9x6", &Default::default()).unwrap();
+    assert!(!u8s.replace(&smaller).unwrap());
+    assert!(!u8s.replace(&volumes[1]).unwrap());
+    let mut bricked = GpuVolume::upload_bricks(&ctx, &volumes[0], 4).unwrap();
+    assert!(!bricked.replace(&volumes[0]).unwrap());
+    assert_clean(&ctx);
+}

@@ -6,6 +6,7 @@
 mod binding;
 mod context;
 mod device;
+mod image;
 mod instance;
 mod kernel;
 mod memory;
@@ -45,7 +46,8 @@ macro_rules! check_layout {
     };
 }
 pub(crate) use check_layout;
-pub use memory::{check_image3d, check_image3d_of, Buffer, Image3d, Staging, TexelBuffer};
+pub use image::{check_image3d, check_image3d_of, Image3d};
+pub use memory::{Buffer, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};
 pub use timings::Timings;
 pub use validation::ValidationMessage;

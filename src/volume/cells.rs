@@ -85,7 +85,7 @@ impl TexelKind {
 }
 
 /// Cells per axis: one more than voxels (the cells below voxel 0 too).
-fn cell_dims(dims: [u32; 3]) -> [u64; 3] {
+pub(super) fn cell_dims(dims: [u32; 3]) -> [u64; 3] {
     dims.map(|d| d as u64 + 1)
 }
 
@@ -107,7 +107,7 @@ pub fn check_cells(info: &DeviceInfo, dims: [u32; 3], kind: TexelKind) -> Result
 
 /// Checks a per-cell copy of `per_cell` texels of `format` (`bytes` in
 /// all) against the texel-buffer, allocation and heap limits.
-fn check_texel_copy(
+pub(super) fn check_texel_copy(
     info: &DeviceInfo,
     copy: &str,
     dims: [u32; 3],
@@ -202,78 +202,6 @@ fn pack_layers(volume: &Volume, layers: std::ops::Range<u64>) -> Vec<u32> {
     })
 }
 
-/// Words (u32) per cell of the gradient's cells copy: eight corners of three
-/// f16 components, two halves a word.
-const GRADIENT_WORDS: usize = 12;
-
-/// Bytes per voxel of the gradient's cells copy (`GpuVolume::add_gradient`
-/// makes it beside the volume's cells copy): 48.
-pub const GRADIENT_CELL_BYTES: u64 = 4 * GRADIENT_WORDS as u64;
-
-/// Whether the device can hold the gradient's cells copy of a volume of
-/// `dims` (as `check_cells`).
-pub fn check_gradient_cells(info: &DeviceInfo, dims: [u32; 3]) -> Result<u64> {
-    let bytes = cell_dims(dims)
-        .iter()
-        .fold(GRADIENT_CELL_BYTES, |acc, &n| acc.saturating_mul(n));
-    check_texel_copy(
-        info,
-        "gradient cells copy",
-        dims,
-        3,
-        bytes,
-        vk::Format::R32G32B32A32_UINT,
-    )
-}
-
-/// Packs the gradient's cell layers from `first` on into `out`: per cell
-/// the eight corners' (x, y, z) halves of `gradient` (the volume's gradient
-/// texels, `dims`), corner-major, as the words' little-endian halves.
-fn pack_gradient_layers(gradient: &[[half::f16; 4]], dims: [u32; 3], first: u64, out: &mut [u16]) {
-    cell_layers(
-        gradient,
-        dims,
-        first as usize,
-        out,
-        2 * GRADIENT_WORDS,
-        |cell, corners| {
-            for (b, g) in corners.iter().enumerate() {
-                for c in 0..3 {
-                    cell[3 * b + c] = g[c].to_bits();
-                }
-            }
-        },
-    );
-}
-
-/// The gradient's cells copy on the device: packed in place where the
-/// device's memory is the host's (`host_shared`), else uploaded layer block
-/// by layer block and waited for.
-pub fn upload_gradient_cells(ctx: &Context, gradient: &[[half::f16; 4]], dims: [u32; 3]) -> Result<TexelBuffer> {
-    let bytes = check_gradient_cells(ctx.info(), dims)?;
-    let format = vk::Format::R32G32B32A32_UINT;
-    let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
-    if host_shared(ctx) {
-        let mut buffer = Buffer::new(ctx, "gradient cells", bytes, usage, MemoryLocation::CpuToGpu)?;
-        let out = &mut buffer.host_mut()?[..bytes as usize];
-        pack_gradient_layers(gradient, dims, 0, bytemuck::cast_slice_mut(out));
-        return TexelBuffer::new(ctx, buffer, format);
-    }
-    let buffer = Buffer::upload_target(ctx, "gradient cells", bytes, usage)?;
-    let [cw, ch, cd] = cell_dims(dims);
-    let layer = cw * ch * GRADIENT_CELL_BYTES;
-    let per_upload = (LAYER_BYTES / layer).max(1);
-    let mut k = 0;
-    while k < cd {
-        let end = (k + per_upload).min(cd);
-        let mut halves = vec![0u16; ((end - k) * layer / 2) as usize];
-        pack_gradient_layers(gradient, dims, k, &mut halves);
-        buffer.upload(k * layer, bytemuck::cast_slice(&halves))?;
-        k = end;
-    }
-    TexelBuffer::new(ctx, buffer, format)
-}
-
 /// Whether the device's memory is the host's (a CPU device): then the host
 /// packs the cells copies in place, with no staging and no copy
 /// (`shared_cells`: 34 ms for nbody:256 on lavapipe, where the device's
@@ -283,14 +211,14 @@ pub fn host_shared(ctx: &Context) -> bool {
 }
 
 /// Cell layers per upload: bounds the host memory packing takes.
-const LAYER_BYTES: u64 = 64 << 20;
+pub(super) const LAYER_BYTES: u64 = 64 << 20;
 
 /// Fills `out`, `per_cell` items a cell for the cell layers from `first`
 /// on that `out` holds (cells x fastest, from -1), with `put(cell,
 /// corners)`: the cell's eight voxels of `v` clamped to the volume, in
 /// corner order (x fastest). Row by row: the four voxel rows a row of
 /// cells reads are sliced once.
-fn cell_layers<T: Copy + Sync, U: Send>(
+pub(super) fn cell_layers<T: Copy + Sync, U: Send>(
     v: &[T],
     dims: [u32; 3],
     first: usize,
@@ -357,9 +285,27 @@ const CELLS_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
 pub fn shared_cells(ctx: &Context, volume: &Volume) -> Result<TexelBuffer> {
     let kind = TexelKind::of(&volume.data);
     let bytes = check_cells(ctx.info(), volume.dims, kind)?;
-    let mut buffer = Buffer::new(ctx, "volume cells", bytes, CELLS_USAGE, MemoryLocation::CpuToGpu)?;
-    pack_into(volume, &mut buffer.host_mut()?[..bytes as usize]);
-    TexelBuffer::new(ctx, buffer, kind.format().0)
+    let buffer = Buffer::new(ctx, "volume cells", bytes, CELLS_USAGE, MemoryLocation::CpuToGpu)?;
+    let mut cells = TexelBuffer::new(ctx, buffer, kind.format().0)?;
+    repack_shared(&mut cells, volume)?;
+    Ok(cells)
+}
+
+/// Packs `volume`'s cells copy into `cells`, host-visible and made for a
+/// volume of its dims and kind (`shared_cells`): another time step's goes
+/// where the last one's was, with no new memory to fault in (on lavapipe
+/// that was 27 of nbody:256's 42 ms).
+pub fn repack_shared(cells: &mut TexelBuffer, volume: &Volume) -> Result<()> {
+    let bytes = cells_bytes(volume.dims, TexelKind::of(&volume.data)) as usize;
+    let out = cells.buffer_mut().host_mut()?;
+    if out.len() < bytes {
+        return Err(Error::Interface(format!(
+            "cells copy of {} bytes for {bytes}",
+            out.len()
+        )));
+    }
+    pack_into(volume, &mut out[..bytes]);
+    Ok(())
 }
 
 /// The words of `volume`'s cells copy packed on the host: what
@@ -481,38 +427,6 @@ pub(crate) mod tests {
         let blocks: Vec<u32> = (0..3).flat_map(|k| pack_layers(&v, k..k + 1)).collect();
         assert_eq!(blocks, words);
         assert_eq!(cells_bytes(dims, TexelKind::Unorm8), 4 * 3 * 3 * 8);
-    }
-
-    #[test]
-    fn a_gradient_cell_holds_its_corners_halves_in_order() {
-        let dims = [2u32, 2, 1];
-        let g: Vec<[half::f16; 4]> = (0..4)
-            .map(|v| [1.0, 2.0, 3.0].map(|c| half::f16::from_f32(c + 10.0 * v as f32)))
-            .map(|[x, y, z]| [x, y, z, half::f16::ZERO])
-            .collect();
-        let mut halves = vec![0u16; 3 * 3 * 2 * 2 * GRADIENT_WORDS];
-        pack_gradient_layers(&g, dims, 0, &mut halves);
-        let words: Vec<u32> = bytemuck::cast_slice(&halves).to_vec();
-        // Packing in blocks of layers gives the same halves.
-        let layer = halves.len() / 2;
-        let mut blocks = vec![0u16; halves.len()];
-        for k in 0..2 {
-            pack_gradient_layers(&g, dims, k as u64, &mut blocks[k * layer..(k + 1) * layer]);
-        }
-        assert_eq!(blocks, halves);
-        // Cell (0, 0, 0): texel 1 + 3 * (1 + 3 * 1) = 13; corner b is voxel
-        // (b & 1, b >> 1 & 1, 0) (z clamps).
-        let cell = &words[13 * GRADIENT_WORDS..14 * GRADIENT_WORDS];
-        let halves: Vec<f32> = cell
-            .iter()
-            .flat_map(|w| [*w as u16, (*w >> 16) as u16])
-            .map(|b| half::f16::from_bits(b).to_f32())
-            .collect();
-        for b in 0..8usize {
-            let v = (b & 1) + 2 * (b >> 1 & 1);
-            let want = [1.0, 2.0, 3.0].map(|c| c + 10.0 * v as f32);
-            assert_eq!(&halves[3 * b..3 * b + 3], &want, "corner {b}");
-        }
     }
 
     /// A 5x3x4 volume of each kind (a NaN among the floats), with

@@ -10,6 +10,7 @@
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
+use super::gradient_cells;
 use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, HostPool, Volume, VoxelData, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
@@ -42,7 +43,7 @@ pub struct GpuVolume {
     /// How texels are stored (the march kernels' `VOLUME_KIND`).
     pub kind: TexelKind,
     /// The gradient shaded and iso frames read (`add_gradient`).
-    gradient: Option<Image3d>,
+    pub(super) gradient: Option<Image3d>,
     /// The cells copy the manual filter reads (`add_cells`).
     pub(super) cells: Option<TexelBuffer>,
     /// The kernel `record_add_cells` recorded: kept while a recorded
@@ -50,7 +51,7 @@ pub struct GpuVolume {
     pub(super) cells_kernel: Option<Kernel>,
     /// The gradient's cells copy the manual filter reads in lit frames
     /// (`add_gradient`, when the volume has its cells copy).
-    gradient_cells: Option<TexelBuffer>,
+    pub(super) gradient_cells: Option<TexelBuffer>,
     /// The brick table (RG32UI); a 16-byte stand-in with dense storage.
     brick_table: TexelBuffer,
     /// The pool's images past the first (`image`), where it spans several.
@@ -124,7 +125,7 @@ fn pool_image_texels(layout: &PoolLayout, k: usize, bytes: &[u8]) -> Result<Vec<
 
 /// The image format, texel size and bytes of a volume (R8/R16 kept
 /// native; several channels interleaved, `channels.rs`).
-fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
+pub(super) fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
     let (kind, n) = (channels::common_kind(volume), volume.channel_count());
     (
         channels::format(kind, n),
@@ -368,7 +369,7 @@ impl GpuVolume {
     pub fn add_gradient(&mut self, volume: &Volume) -> Result<()> {
         let wants_cells = self.cells.is_some()
             && self.gradient_cells.is_none()
-            && cells::check_gradient_cells(self.ctx.info(), self.dims).is_ok();
+            && gradient_cells::check_gradient_cells(self.ctx.info(), self.dims).is_ok();
         if self.gradient.is_some() && !wants_cells {
             return Ok(());
         }
@@ -385,7 +386,7 @@ impl GpuVolume {
             )?);
         }
         if wants_cells {
-            self.gradient_cells = Some(cells::upload_gradient_cells(&self.ctx, &texels, self.dims)?);
+            self.gradient_cells = Some(gradient_cells::upload_gradient_cells(&self.ctx, &texels, self.dims)?);
         }
         Ok(())
     }
@@ -415,7 +416,7 @@ impl GpuVolume {
         Ok(Some(staging))
     }
 
-    fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {
+    pub(super) fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {
         self.check_same(volume, "gradient")?;
         self.check_one_channel("shaded and iso frames")?;
         check_image3d(self.ctx.info(), self.dims, GRADIENT_TEXEL_BYTES)?;

@@ -9,7 +9,9 @@ mod export;
 mod filter;
 mod gpu;
 mod gpu_cells;
+mod gpu_step;
 mod gradient;
+mod gradient_cells;
 #[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
@@ -23,8 +25,8 @@ mod stream;
 
 pub use bricks::{BrickGrid, BRICK};
 pub use cells::{
-    cells_bytes, cells_words, check_cells, check_gradient_cells, no_cells, record_pack_cells, TexelKind,
-    CELLS_CONSTANT_ID, GRADIENT_CELLS_CONSTANT_ID, GRADIENT_CELL_BYTES, KIND_CONSTANT_ID,
+    cells_bytes, cells_words, check_cells, no_cells, record_pack_cells, TexelKind, CELLS_CONSTANT_ID,
+    GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID,
 };
 pub use channels::{common_kind, stored_texel, CHANNELS_CONSTANT_ID};
 pub use decode::VoxelType;
@@ -34,6 +36,7 @@ pub use export::{
 pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
 pub use gpu::{resolve_storage, GpuVolume};
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
+pub use gradient_cells::{check_gradient_cells, GRADIENT_CELL_BYTES};
 pub use pool::{
     BrickBox, PoolLayout, PoolLimits, PoolStats, Storage, BRICK_CONSTANT_ID, MAX_POOL_IMAGES, POOL_BRICK,
     POOL_IMAGES_CONSTANT_ID,

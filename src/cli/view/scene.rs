@@ -104,14 +104,16 @@ impl Scene {
     }
 
     /// A new time step on the same grid: upload it (with its gradient when
-    /// frames are lit) in place of the last; its ranges and structure are
-    /// computed before the next frame.
+    /// frames are lit) in place of the last, into the last one's memory
+    /// where it fits (`GpuVolume::replace`; every frame has completed
+    /// here); its ranges and structure are computed before the next frame.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
-        let mut gpu_volume = GpuVolume::upload_as(&self.ctx, &volume, self.storage)?;
-        gpu_volume.prepare(&volume, lit, self.filter)?;
+        if !self.gpu_volume.replace(&volume)? {
+            self.gpu_volume = GpuVolume::upload_as(&self.ctx, &volume, self.storage)?;
+        }
+        self.gpu_volume.prepare(&volume, lit, self.filter)?;
         self.upload_ms = t.elapsed().as_secs_f64() * 1000.0;
-        self.gpu_volume = gpu_volume;
         self.volume = volume;
         self.ranges = None;
         self.stale = true;

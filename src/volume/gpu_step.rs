@@ -1,0 +1,89 @@
+//! Another time step on a `GpuVolume`: its voxels, and what `prepare`
+//! added for the last step, written where the last step's were.
+
+use super::filter::Filter;
+use super::gpu::{resolve_storage, texels};
+use super::gradient::GRADIENT_TEXEL_BYTES;
+use super::pool::Storage;
+use super::{cells, gradient_cells};
+use super::{channels, GpuVolume, Volume};
+use crate::error::Result;
+use crate::gpu::Context;
+
+impl GpuVolume {
+    /// Puts `volume`, another step on this volume's grid (the same dims,
+    /// channels and texel kind, dense storage), in place of the voxels this
+    /// holds, with the cells copy, gradient and gradient cells copy it has
+    /// made for `volume`, and waits. Playing a series this way allocates
+    /// nothing: on a CPU device the host packs the copies into the memory
+    /// the last step's filled (new memory to fault in was two thirds of
+    /// nbody:256's upload on lavapipe). Returns false, changing nothing,
+    /// where `volume` does not fit; upload it anew then.
+    ///
+    /// No submission reading this volume may still be pending (the host
+    /// writes memory the device reads). After an error its contents are
+    /// unspecified: drop it.
+    pub fn replace(&mut self, volume: &Volume) -> Result<bool> {
+        let fits = self.pool.is_none()
+            && volume.dims == self.dims
+            && volume.channel_count() as u32 == self.channels
+            && channels::common_kind(volume) == self.kind;
+        if !fits {
+            return Ok(false);
+        }
+        let (_, texel, bytes) = texels(volume);
+        self.image.upload(texel, &bytes)?;
+        self.spacing = volume.spacing;
+        self.norm = volume.norm;
+        self.norms = std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm));
+        self.has_nan = volume.no_data_total() > 0;
+        let shared = cells::host_shared(&self.ctx);
+        if let Some(copy) = &mut self.cells {
+            if shared {
+                cells::repack_shared(copy, volume)?;
+            } else {
+                // Made again from the image by the device's kernel.
+                self.cells = None;
+                self.cells_kernel = None;
+                self.add_cells(volume)?;
+            }
+        }
+        if self.gradient.is_some() {
+            let gradient = self.gradient_texels(volume)?;
+            if let Some(image) = &self.gradient {
+                image.upload(GRADIENT_TEXEL_BYTES, bytemuck::cast_slice(&gradient))?;
+            }
+            if let Some(copy) = &mut self.gradient_cells {
+                if shared {
+                    gradient_cells::repack_gradient_shared(copy, &gradient, self.dims)?;
+                } else {
+                    *copy = gradient_cells::upload_gradient_cells(&self.ctx, &gradient, self.dims)?;
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// `volume` uploaded with `storage` and prepared (`prepare`), in the
+    /// memory of `last` (the series' step before) where it fits
+    /// (`replace`), else anew, `last` dropped first.
+    pub fn upload_step(
+        ctx: &Context,
+        last: Option<GpuVolume>,
+        volume: &Volume,
+        storage: Storage,
+        lit: bool,
+        filter: Option<Filter>,
+    ) -> Result<GpuVolume> {
+        let dense = resolve_storage(ctx, volume, storage) == Storage::Dense;
+        if let (true, Some(mut gv)) = (dense, last) {
+            if gv.replace(volume)? {
+                gv.prepare(volume, lit, filter)?;
+                return Ok(gv);
+            }
+        }
+        let mut gv = GpuVolume::upload_as(ctx, volume, storage)?;
+        gv.prepare(volume, lit, filter)?;
+        Ok(gv)
+    }
+}
