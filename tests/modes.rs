@@ -107,6 +107,18 @@ fn shaded_composite_matches_the_cpu_reference() {
                 gradient_opacity: Some([0.0, 0.05]),
                 ..Shading::default()
             },
+            // Whole exponents are raised by repeated squaring, others by
+            // pow: both as the reference does.
+            Shading {
+                specular: 1.0,
+                shininess: 128.0,
+                ..Shading::default()
+            },
+            Shading {
+                specular: 1.0,
+                shininess: 7.5,
+                ..Shading::default()
+            },
         ];
         for shading in lights {
             for (az, el, proj) in [(30.0, 20.0, Projection::Orthographic), (-115.0, 35.0, PERSP)] {

@@ -13,6 +13,8 @@
 // compiles to the plain composite march.
 layout(constant_id = 17) const uint MARCH_MODE = 0u;
 layout(constant_id = 18) const uint MARCH_SHADE = 0u;
+// MARCH_SHADE: 1 lit; 2 lit, opacity times the gradient-opacity ramp.
+const uint SHADE_RAMP = 2u;
 const uint MODE_COMPOSITE = 0u;
 const uint MODE_MIP = 1u;
 const uint MODE_MINIP = 2u;
@@ -291,7 +293,7 @@ vec4 shade(March m, float v, float w) {
 vec4 composite_sample(March m, float v, float w, vec3 p, bool full) {
     vec4 c = full ? tf_lookup(v, 0u, m.tf_n) : shade(m, v, w);
     if (MARCH_SHADE != 0u && c.a > 0.0) {
-        c = light_sample(m.vr, m.lt, p, c);
+        c = light_sample(m.vr, m.lt, p, c, MARCH_SHADE == SHADE_RAMP);
     }
     return c;
 }
@@ -489,7 +491,7 @@ vec4 march_result(March m) {
         // Opaque, in the iso colour or the TF's colour at the value, lit.
         vec3 rgb = params.iso_colored != 0u ? params.iso_color : tf_lookup(m.hit_v, m.tf_n, m.tf_n).rgb;
         precise vec3 p = m.vr.org + m.hit_t * m.vr.dir;
-        return vec4(light_sample(m.vr, m.lt, p, vec4(rgb, 1.0)).rgb, 1.0);
+        return vec4(light_sample(m.vr, m.lt, p, vec4(rgb, 1.0), false).rgb, 1.0);
     }
     if (VOLUME_CHANNELS > 1u) {
         // Each channel's value through its raw table, mixed, premultiplied.

@@ -8,6 +8,31 @@
 #ifndef LACUNA_LIGHT_GLSL
 #define LACUNA_LIGHT_GLSL
 
+// The Phong exponent where it is a whole number (1 to 128; 0: any other,
+// through pow): x^n by repeated squaring, unrolled when the kernel is made,
+// in place of pow's logarithm and exponential (about 9 % of a lit ch2 frame
+// on lavapipe). Within a few ulps of pow; src/render/reference.rs mirrors it.
+layout(constant_id = 29) const uint MARCH_SHININESS = 0u;
+
+float specular_power(float x, float s) {
+    if (MARCH_SHININESS == 0u) {
+        return pow(x, s);
+    }
+    // Unrolled by hand over the exponent's eight bits: each test is a
+    // constant (lavapipe ran the loop form slower than pow).
+    float r = 1.0;
+    float b = x;
+    for (uint bit = 0u; bit < 8u; ++bit) {
+        if (((MARCH_SHININESS >> bit) & 1u) != 0u) {
+            r *= b;
+        }
+        if ((MARCH_SHININESS >> (bit + 1u)) != 0u) {
+            b *= b;
+        }
+    }
+    return r;
+}
+
 // What lighting a ray's samples needs, read from the parameters once per
 // ray (a storage-buffer read per sample is dear on lavapipe): the light and
 // half vectors for this ray's view direction, the Phong weights, the
@@ -16,7 +41,6 @@ struct Lighting {
     vec3 l;
     vec3 h;
     vec4 ks;       // ambient, diffuse, specular, shininess
-    bool ramp;     // gradient opacity on
     vec2 ramp_lo_hi;
 };
 
@@ -28,16 +52,16 @@ Lighting lighting_for(vec3 dir) {
     precise vec3 h = normalize(lt.l + view);
     lt.h = h;
     lt.ks = params.shading;
-    lt.ramp = params.gradient_opacity != 0u;
     lt.ramp_lo_hi = vec2(params.gradient_lo, params.gradient_hi);
     return lt;
 }
 
 // The sample colour c lit at p (the filter's coordinates); its opacity
-// times the gradient-opacity ramp when that is on. The gradient volume is
+// times the gradient-opacity ramp when `ramp` (a constant: a CPU SIMD lane
+// would run the ramp's code whether or not it is on). The gradient volume is
 // scaled by the spacing already (its ramp too), and the normal is the gradient times the
 // inverse square root of its square: no division per sample.
-vec4 light_sample(VolumeRay r, Lighting lt, vec3 p, vec4 c) {
+vec4 light_sample(VolumeRay r, Lighting lt, vec3 p, vec4 c, bool ramp) {
     precise vec3 g = sample_gradient(r, p);
     precise float d = dot(g, g);
     vec3 lit;
@@ -46,14 +70,14 @@ vec4 light_sample(VolumeRay r, Lighting lt, vec3 p, vec4 c) {
         precise vec3 n = g * inversesqrt(d);
         precise float nd = abs(dot(n, lt.l));
         precise float nh = abs(dot(n, lt.h));
-        precise vec3 shaded = c.rgb * (lt.ks.x + lt.ks.y * nd) + vec3(lt.ks.z * pow(nh, lt.ks.w));
+        precise vec3 shaded = c.rgb * (lt.ks.x + lt.ks.y * nd) + vec3(lt.ks.z * specular_power(nh, lt.ks.w));
         lit = shaded;
     } else {
         precise vec3 flat_lit = c.rgb * (lt.ks.x + lt.ks.y);
         lit = flat_lit;
     }
     float a = c.a;
-    if (lt.ramp) {
+    if (ramp) {
         precise float len = sqrt(d);
         precise float ramp = (len - lt.ramp_lo_hi.x) / (lt.ramp_lo_hi.y - lt.ramp_lo_hi.x);
         a *= is_nan(ramp) ? 0.0 : clamp(ramp, 0.0, 1.0);

@@ -5,32 +5,38 @@
 //! compiled per distinct set (`render::Renderer`, `accel::probe`), so no
 //! sample branches on any of them.
 
-use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
+use super::{FrameDesc, Mode, MODE_CONSTANT_ID, SHADE_CONSTANT_ID, SHININESS_CONSTANT_ID};
 use crate::volume::{
     Filter, GpuVolume, BRICK_CONSTANT_ID, CELLS_CONSTANT_ID, CHANNELS_CONSTANT_ID, FILTER_CONSTANT_ID,
     GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID, NAN_CONSTANT_ID, POOL_IMAGES_CONSTANT_ID,
 };
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 10];
+pub type KernelConstants = [(u32, u32); 11];
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
     /// filter (`filter_for`), the mode, whether composite samples are lit
-    /// (iso surfaces are always lit, by their own path), whether the volume
-    /// has NaN voxels, how its texels are stored, whether the manual
-    /// filter reads its cells copy and (lit frames) the gradient's, how
-    /// many channels it has, and its pool's brick edge (0: dense) and images.
+    /// (iso surfaces are always lit, by their own path) and with gradient
+    /// opacity, a lit frame's whole Phong exponent, whether the volume has
+    /// NaN voxels, how its texels are stored, whether the manual filter
+    /// reads its cells copy and (lit frames) the gradient's, how many
+    /// channels it has, and its pool's brick edge (0: dense) and images.
     pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
         let filter = self.filter_for(volume);
         let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
         let cells = filter == Filter::Manual && volume.cells().is_some();
         let lit = shade || matches!(self.mode(), Mode::Iso(_));
         let gradient_cells = filter == Filter::Manual && lit && volume.gradient_cells().is_some();
+        let shininess = match (lit, self.lighting()) {
+            (true, Some(l)) => l.whole_shininess(),
+            _ => 0,
+        };
         [
             (FILTER_CONSTANT_ID, filter.constant()),
             (MODE_CONSTANT_ID, self.mode().constant()),
-            (SHADE_CONSTANT_ID, shade as u32),
+            (SHADE_CONSTANT_ID, shade_constant(shade, self)),
+            (SHININESS_CONSTANT_ID, shininess),
             (NAN_CONSTANT_ID, volume.has_nan as u32),
             (KIND_CONSTANT_ID, volume.kind.constant()),
             (CELLS_CONSTANT_ID, cells as u32),
@@ -39,5 +45,13 @@ impl FrameDesc {
             (BRICK_CONSTANT_ID, volume.brick_edge()),
             (POOL_IMAGES_CONSTANT_ID, volume.pool_image_count()),
         ]
+    }
+}
+
+/// `MARCH_SHADE`: 0 unlit, 1 lit, 2 lit with gradient opacity.
+fn shade_constant(shade: bool, desc: &FrameDesc) -> u32 {
+    match desc.lighting() {
+        Some(l) if shade && l.gradient_opacity.is_some() => 2,
+        _ => shade as u32,
     }
 }

@@ -27,7 +27,7 @@ pub use clip::{Clip, MAX_CLIP};
 pub use kernel::KernelConstants;
 pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
-pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID};
+pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID, SHININESS_CONSTANT_ID};
 pub use orbit::{Orbit, Projection};
 pub use shading::{Light, Shading};
 

@@ -9,6 +9,9 @@ use crate::tf::LUT_SIZE;
 /// (`MARCH_MODE`, `MARCH_SHADE` in `glsl/common/lattice.glsl`).
 pub const MODE_CONSTANT_ID: u32 = 17;
 pub const SHADE_CONSTANT_ID: u32 = 18;
+/// `constant_id` of `MARCH_SHININESS` (`glsl/common/light.glsl`): the
+/// whole Phong exponent of lit frames, 0 for pow.
+pub const SHININESS_CONSTANT_ID: u32 = 29;
 
 /// Iso values a frame can show at once.
 pub const MAX_ISO: usize = 4;

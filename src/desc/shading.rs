@@ -60,6 +60,16 @@ impl Default for Shading {
 }
 
 impl Shading {
+    /// The shininess where it is a whole number (then a lit sample raises
+    /// to it by repeated squaring, `glsl/common/light.glsl`), else 0 (pow).
+    pub fn whole_shininess(&self) -> u32 {
+        let s = self.shininess;
+        match s.fract() == 0.0 && (1.0..=128.0).contains(&s) {
+            true => s as u32,
+            false => 0,
+        }
+    }
+
     pub(crate) fn validate(&self) -> Result<()> {
         for (name, v) in [
             ("ambient", self.ambient),

@@ -235,7 +235,7 @@ impl<'a> Tracer<'a> {
             let h = (l + view).normalize();
             let nd = n.dot(l).abs();
             let nh = n.dot(h).abs();
-            rgb * (ka + kd * nd) + Vec3::splat(ks * nh.powf(shininess))
+            rgb * (ka + kd * nd) + Vec3::splat(ks * specular_power(nh, shininess))
         } else {
             rgb * (ka + kd)
         };
@@ -519,4 +519,21 @@ fn render_look(tracer: &Tracer, limits: Option<&[f32]>) -> Frame {
         .map(|(x, y)| tracer.pixel(x, y, limits.map(|l| l[(y * w + x) as usize])))
         .collect();
     Frame::new(w, h, pixels)
+}
+
+/// `nh` to the Phong exponent as `light.glsl`'s `specular_power`: by
+/// repeated squaring where it is whole, else `powf`.
+fn specular_power(nh: f32, shininess: f32) -> f32 {
+    if !(shininess.fract() == 0.0 && (1.0..=128.0).contains(&shininess)) {
+        return nh.powf(shininess);
+    }
+    let (mut r, mut b, mut e) = (1.0f32, nh, shininess as u32);
+    while e != 0 {
+        if e & 1 != 0 {
+            r *= b;
+        }
+        b *= b;
+        e >>= 1;
+    }
+    r
 }
