@@ -198,15 +198,17 @@ fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
 }
 
 /// Another step of `v`'s series: its voxels in reverse order, floats
-/// doubled (another normalisation), so every texel and copy changes.
+/// doubled (another normalisation) and without NaN, on another spacing,
+/// so every texel, copy and flag changes.
 fn step_before(v: &Volume) -> Volume {
     let data = match &v.data {
         VoxelData::U8(d) => VoxelData::U8(d.iter().rev().copied().collect()),
         VoxelData::U16(d) => VoxelData::U16(d.iter().rev().copied().collect()),
-        VoxelData::F32(d) => VoxelData::F32(d.iter().rev().map(|x| 2.0 * x).collect()),
+        VoxelData::F32(d) => VoxelData::F32(d.iter().rev().map(|x| if x.is_nan() { 0.5 } else { 2.0 * x }).collect()),
         VoxelData::Bricks(_) => unreachable!("volumes() are dense"),
     };
-    Volume::new("step before", v.dims, v.spacing, v.source_type, data).unwrap()
+    let spacing = v.spacing.map(|s| 1.5 * s);
+    Volume::new("step before", v.dims, spacing, v.source_type, data).unwrap()
 }
 
 /// A step put in place of the one before (`GpuVolume::replace`, as `view`
@@ -236,6 +238,12 @@ fn a_step_put_in_place_renders_as_its_fresh_upload() {
         let mut fresh = GpuVolume::upload(&ctx, v).unwrap();
         fresh.prepare(v, true, Some(Filter::Manual)).unwrap();
         assert_eq!((placed.norm, placed.has_nan), (fresh.norm, fresh.has_nan), "{}", v.name);
+        assert_eq!(
+            (placed.spacing, placed.has_nan),
+            (v.spacing, v.no_data_total() > 0),
+            "{}",
+            v.name
+        );
         let words = |g: &GpuVolume| {
             g.cells()
                 .unwrap()

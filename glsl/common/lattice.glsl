@@ -161,7 +161,7 @@ bool march_begin(Ray ray, float dt, out March m) {
 }
 
 // A fixed per-pixel fraction in [0, 1) (PCG hash of the pixel), the same on
-// every device and in src/render/reference.rs.
+// every device and in src/render/reference/mod.rs.
 float pixel_jitter(uvec2 px) {
     uint h = px.x * 747796405u + px.y * 2891336453u + 277803737u;
     h = ((h >> ((h >> 28u) + 4u)) ^ h) * 277803737u;

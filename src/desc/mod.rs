@@ -29,7 +29,7 @@ pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
 pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID, SHININESS_CONSTANT_ID};
 pub use orbit::{Orbit, Projection};
-pub use shading::{Light, Shading};
+pub use shading::{whole_exponent, Light, Shading};
 
 use crate::error::{Error, Result};
 use crate::gpu::shaders::blocks::RenderParams;

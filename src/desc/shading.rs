@@ -63,11 +63,7 @@ impl Shading {
     /// The shininess where it is a whole number (then a lit sample raises
     /// to it by repeated squaring, `glsl/common/light.glsl`), else 0 (pow).
     pub fn whole_shininess(&self) -> u32 {
-        let s = self.shininess;
-        match s.fract() == 0.0 && (1.0..=128.0).contains(&s) {
-            true => s as u32,
-            false => 0,
-        }
+        whole_exponent(self.shininess)
     }
 
     pub(crate) fn validate(&self) -> Result<()> {
@@ -156,5 +152,14 @@ impl Shading {
                 Some([(ce * sa) as f32, se as f32, (ce * ca) as f32])
             }
         }
+    }
+}
+
+/// `shininess` where it is a whole number from 1 to 128, else 0: the
+/// exponents a lit sample raises to by repeated squaring.
+pub fn whole_exponent(shininess: f32) -> u32 {
+    match shininess.fract() == 0.0 && (1.0..=128.0).contains(&shininess) {
+        true => shininess as u32,
+        false => 0,
     }
 }

@@ -206,10 +206,13 @@ impl Image3d {
         Ok(image)
     }
 
-    /// Writes `data` over every texel (as `with_data`; its size checked by
-    /// the caller) and waits. Compute-shader reads before are ordered first.
-    pub fn upload(&self, texel_bytes: u64, data: &[u8]) -> Result<()> {
+    /// Writes `data` over every texel (as `with_data`) and waits.
+    /// Compute-shader reads before are ordered first; none may be pending.
+    pub(crate) fn upload(&self, texel_bytes: u64, data: &[u8]) -> Result<()> {
         let [w, h, d] = self.extent;
+        if w as u64 * h as u64 * d as u64 * texel_bytes != data.len() as u64 {
+            return Err(Error::Interface(format!("{} bytes for image {w}x{h}x{d}", data.len())));
+        }
         let slice_bytes = (w as u64 * h as u64 * texel_bytes).max(1);
         let slices_per_chunk = (STAGING_CHUNK / slice_bytes).max(1) as u32;
         let mut z = 0u32;

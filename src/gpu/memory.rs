@@ -295,8 +295,9 @@ impl TexelBuffer {
         &self.buffer
     }
 
-    pub fn buffer_mut(&mut self) -> &mut Buffer {
-        &mut self.buffer
+    /// The mapped bytes of a host-visible buffer, to write in place.
+    pub fn host_mut(&mut self) -> Result<&mut [u8]> {
+        self.buffer.host_mut()
     }
 
     /// The view a `samplerBuffer` binding takes.

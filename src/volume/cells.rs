@@ -297,7 +297,7 @@ pub fn shared_cells(ctx: &Context, volume: &Volume) -> Result<TexelBuffer> {
 /// that was 27 of nbody:256's 42 ms).
 pub fn repack_shared(cells: &mut TexelBuffer, volume: &Volume) -> Result<()> {
     let bytes = cells_bytes(volume.dims, TexelKind::of(&volume.data)) as usize;
-    let out = cells.buffer_mut().host_mut()?;
+    let out = cells.host_mut()?;
     if out.len() < bytes {
         return Err(Error::Interface(format!(
             "cells copy of {} bytes for {bytes}",

@@ -14,11 +14,13 @@ impl GpuVolume {
     /// Puts `volume`, another step on this volume's grid (the same dims,
     /// channels and texel kind, dense storage), in place of the voxels this
     /// holds, with the cells copy, gradient and gradient cells copy it has
-    /// made for `volume`, and waits. Playing a series this way allocates
-    /// nothing: on a CPU device the host packs the copies into the memory
-    /// the last step's filled (new memory to fault in was two thirds of
-    /// nbody:256's upload on lavapipe). Returns false, changing nothing,
-    /// where `volume` does not fit; upload it anew then.
+    /// made for `volume`, and waits. The image keeps its memory (the voxels
+    /// pass through staging as in an upload), and on a CPU device the host
+    /// packs the copies into the memory the last step's filled: no new
+    /// memory to fault in, which was two thirds of nbody:256's upload on
+    /// lavapipe. On other devices the cells copies are made anew. Returns
+    /// false, changing nothing, where `volume` does not fit (other dims,
+    /// channels or texel kind, or bricked storage); upload it anew then.
     ///
     /// No submission reading this volume may still be pending (the host
     /// writes memory the device reads). After an error its contents are

@@ -82,7 +82,7 @@ pub fn upload_gradient_cells(ctx: &Context, gradient: &[[half::f16; 4]], dims: [
 pub fn repack_gradient_shared(cells: &mut TexelBuffer, gradient: &[[half::f16; 4]], dims: [u32; 3]) -> Result<()> {
     let [cw, ch, cd] = cell_dims(dims);
     let bytes = (cw * ch * cd * GRADIENT_CELL_BYTES) as usize;
-    let out = cells.buffer_mut().host_mut()?;
+    let out = cells.host_mut()?;
     if out.len() < bytes {
         return Err(Error::Interface(format!(
             "gradient cells copy of {} bytes for {bytes}",

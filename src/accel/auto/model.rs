@@ -12,7 +12,7 @@
 //! (`cache.rs`).
 
 use super::super::method::March;
-use crate::desc::KernelConstants;
+use crate::desc::{KernelConstants, SHININESS_CONSTANT_ID};
 use crate::error::{Error, Result};
 
 /// A kernel's cost per unit of work, in GPU nanoseconds.
@@ -70,7 +70,14 @@ pub struct CostKey {
 }
 
 impl CostKey {
-    pub fn new(march: March, frame: KernelConstants) -> Self {
+    pub fn new(march: March, mut frame: KernelConstants) -> Self {
+        // Whole Phong exponents cost alike (a few multiplies): one model
+        // for all of them, another for pow (0).
+        for (id, v) in &mut frame {
+            if *id == SHININESS_CONSTANT_ID {
+                *v = (*v).min(1);
+            }
+        }
         CostKey {
             shader: march.shader.name,
             constants: march.constants,

@@ -12,7 +12,7 @@ use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
 use lacuna::render::{Filter, FrameDesc, Mode, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
-use lacuna::volume::{GpuVolume, Storage};
+use lacuna::volume::{resolve_storage, GpuVolume, Storage};
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 
 pub struct Scene {
@@ -109,7 +109,8 @@ impl Scene {
     /// here); its ranges and structure are computed before the next frame.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
-        if !self.gpu_volume.replace(&volume)? {
+        let dense = resolve_storage(&self.ctx, &volume, self.storage) == Storage::Dense;
+        if !(dense && self.gpu_volume.replace(&volume)?) {
             self.gpu_volume = GpuVolume::upload_as(&self.ctx, &volume, self.storage)?;
         }
         self.gpu_volume.prepare(&volume, lit, self.filter)?;

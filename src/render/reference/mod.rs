@@ -524,10 +524,11 @@ fn render_look(tracer: &Tracer, limits: Option<&[f32]>) -> Frame {
 /// `nh` to the Phong exponent as `light.glsl`'s `specular_power`: by
 /// repeated squaring where it is whole, else `powf`.
 fn specular_power(nh: f32, shininess: f32) -> f32 {
-    if !(shininess.fract() == 0.0 && (1.0..=128.0).contains(&shininess)) {
+    let whole = crate::desc::whole_exponent(shininess);
+    if whole == 0 {
         return nh.powf(shininess);
     }
-    let (mut r, mut b, mut e) = (1.0f32, nh, shininess as u32);
+    let (mut r, mut b, mut e) = (1.0f32, nh, whole);
     while e != 0 {
         if e & 1 != 0 {
             r *= b;
