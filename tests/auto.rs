@@ -273,3 +273,105 @@ fn kernel_constants_are_measured_once_then_read_from_the_cache() {
         .starts_with("lacuna kernel cost model 1"));
     assert_clean(&ctx);
 }
+
+/// Naive's counts derived from another structure's counting frame (what
+/// auto prices naive by) are naive's own counting frame's, exactly: in
+/// every mode that ends rays early, with ERT on and off, clipped and
+/// jittered, in perspective, on a frame whose probe skips tiles, for every
+/// kind of walk (grid, cube and octant distance maps, the k-d tree).
+#[test]
+fn naive_counts_derived_from_a_structures_march_are_naives_own() {
+    let ctx = gpu();
+    let builder = common::builder(&ctx);
+    let clip = lacuna::desc::Clip::default().plane([0.3, 1.0, 0.2, -14.0]).unwrap();
+    let persp = lacuna::render::Projection::Perspective {
+        fov_deg: 50.0,
+        distance: None,
+    };
+    let ortho = lacuna::render::Projection::Orthographic;
+    let mut checked = 0;
+    for (spec, tf) in [
+        ("nbody:40", "ramp:0.3:1"),
+        ("menger:27", "ramp:0.2:0.9"),
+        ("vessels:36", "band:0.4:1"),
+        ("vessels:36+nbody:36", "ramp:0.1:0.6"),
+    ] {
+        let v = match spec.split_once('+') {
+            Some((a, b)) => Volume::join(vec![load(a), load(b)]).unwrap(),
+            None => load(spec),
+        };
+        let gv = GpuVolume::upload(&ctx, &v).unwrap();
+        let tf = TransferFunction::parse(tf).unwrap();
+        let lut = tf.upload(&ctx).unwrap();
+        let iso = Mode::Iso(lacuna::desc::Iso::new(&[0.5]).unwrap());
+        let descs = [
+            FrameDesc::builder(48, 40).orbit(30.0, 20.0, ortho).build().unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(30.0, 20.0, ortho)
+                .ert(None)
+                .build()
+                .unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(-60.0, 35.0, persp)
+                .ert(Some(0.5))
+                .build()
+                .unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(200.0, -10.0, ortho)
+                .clip(clip)
+                .jitter(true)
+                .build()
+                .unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(30.0, 20.0, ortho)
+                .mode(Mode::Mip)
+                .build()
+                .unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(30.0, 20.0, persp)
+                .mode(Mode::MinIp)
+                .build()
+                .unwrap(),
+            FrameDesc::builder(48, 40)
+                .orbit(80.0, 10.0, ortho)
+                .mode(iso)
+                .build()
+                .unwrap(),
+            // Probed in blocks of tiles, not whole.
+            FrameDesc::builder(256, 200).orbit(30.0, 20.0, ortho).build().unwrap(),
+        ];
+        // Several channels: composite, MIP and MinIP (no iso).
+        let descs: Vec<FrameDesc> = descs
+            .into_iter()
+            .filter(|d| v.channel_count() == 1 || !matches!(d.mode(), Mode::Iso(_)))
+            .collect();
+        for desc in descs {
+            // A probe of 16 tiles where a 48x40 frame has 30; 64 of 800.
+            let wanted = if desc.size().0 > 48 { 64 } else { 16 };
+            let probe = FrameProbe::new(&builder, &gv, &tf, &desc, wanted).unwrap();
+            assert!(probe.scale() > 1.0, "{spec} {desc:?}: probed whole");
+            let want = probe.count(&Structure::naive()).unwrap();
+            assert!(want.ray_samples > 0, "{spec} {desc:?}: no samples");
+            for name in ["grid", "distance", "distance-octant", "kd-gpu"] {
+                let accel = common::accel(name);
+                let params = accel.defaults();
+                let (ranges, _) = builder.ranges_for(&[(accel, &params)], &gv).unwrap();
+                let input = BuildInput {
+                    volume: &v,
+                    gpu_volume: &gv,
+                    tf: &tf,
+                    gpu_tf: &lut,
+                    mode: *desc.mode(),
+                    frame: Some(&desc),
+                };
+                let (s, _) = builder.build(accel, &input, &ranges, &params).unwrap();
+                let (_, derived) = probe.count_both(&s).unwrap();
+                let derived = derived.expect("the probe holds naive's half");
+                assert_eq!(derived, want, "{spec} {name} {desc:?}");
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, (3 * 8 + 7) * 4);
+    assert_clean(&ctx);
+}

@@ -67,13 +67,49 @@ uvec2 march_pixel_id() {
     return march_tile(gl_WorkGroupID.xy) * gl_WorkGroupSize.xy + in_tile;
 }
 
+// A counting frame's second half (after the image's pixels): what naive
+// marching would take on this pixel's ray, derived from this march
+// without running naive's (src/accel/probe.rs, `FrameProbe::count_both`):
+// its full samples, all its samples and the lane's SIMD group. Every exact
+// structure ends a ray that terminates (early ray termination, a MIP of
+// 1, a MinIP of 0, an iso hit) after the very sample naive ends it after,
+// so naive takes the samples from its first index k0 to there, or to
+// k_end. The host sums, per group, its most full samples and one more
+// iteration where any lane has its last sample left, as naive's loop runs.
+void count_naive(uvec2 px, bool marched, int k0, March m) {
+#ifndef FRAME_FORMAT
+    bool ended = false;
+    if (MARCH_MODE == MODE_COMPOSITE) {
+        ended = m.acc.a >= m.ert;
+    } else if (MARCH_MODE == MODE_ISO) {
+        ended = m.hit;
+    } else if (MARCH_MODE == MODE_MIP || MARCH_MODE == MODE_MINIP) {
+        ended = true;
+        for (uint c = 0u; c < VOLUME_CHANNELS; ++c) {
+            float b = VOLUME_CHANNELS > 1u ? m.best4[c] : m.best;
+            ended = ended && (MARCH_MODE == MODE_MIP ? b >= 1.0 : b <= 0.0);
+        }
+    }
+    int n = marched ? (ended ? m.k : m.k_end) - k0 : 0;
+    int full = marched ? min(n, max(m.k_end - 1 - k0, 0)) : 0;
+    uint at = params.image.x * params.image.y + px.y * params.image.x + px.x;
+    // A probe whose buffer holds one half (a frame near the device's
+    // storage range) counts naive by its own march instead.
+    if (at < uint(frame_pixels.length())) {
+        frame_pixels[at] = vec4(float(full), float(n), float(gl_SubgroupID), 1.0);
+    }
+#endif
+}
+
 void main() {
     uvec2 px = march_pixel_id();
     if (px.x >= params.image.x || px.y >= params.image.y) {
         return;
     }
     March m;
-    if (march_pixel(px, m)) {
+    bool marched = march_pixel(px, m);
+    int k0 = m.k;
+    if (marched) {
         march_ray(m);
         if (MARCH_MODE == MODE_ISO) {
             iso_refine(m);
@@ -81,6 +117,7 @@ void main() {
     }
     if (MARCH_COUNT != 0u) {
         frame_store(px, vec4(vec3(count_group), float(count_lane_samples)));
+        count_naive(px, marched, k0, m);
         return;
     }
     frame_store(px, march_result(m));

@@ -20,6 +20,7 @@ use crate::gpu::shaders::MarchCommon;
 use crate::gpu::{vk, Binding, Buffer, Context, MemoryLocation, TexelBuffer, Timer};
 use crate::tf::TransferFunction;
 use crate::volume::GpuVolume;
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Pixels per tile edge (the march kernels' workgroup).
@@ -108,7 +109,11 @@ impl<'a> FrameProbe<'a> {
         let (w, h) = desc.size();
         let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
         let mut stride = 1;
-        while probed_tiles(tiles[0], stride * 2).0 * probed_tiles(tiles[1], stride * 2).0 >= tiles_wanted {
+        // No wider than the frame: past that every stride probes one block
+        // (and a wish of a block or less would double it forever).
+        while BLOCK * stride < tiles[0].max(tiles[1])
+            && probed_tiles(tiles[0], stride * 2).0 * probed_tiles(tiles[1], stride * 2).0 >= tiles_wanted
+        {
             stride *= 2;
         }
         let mut params = desc.params(volume)?;
@@ -129,7 +134,13 @@ impl<'a> FrameProbe<'a> {
             vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
         )?;
         let lut = TexelBuffer::new(&ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
-        let bytes = w as u64 * h as u64 * 16;
+        // Two halves where the device's storage range allows: the frame's
+        // counts, then what naive would count (`count_both`).
+        let half = w as u64 * h as u64 * 16;
+        let bytes = match 2 * half <= ctx.info().max_storage_buffer_range {
+            true => 2 * half,
+            false => half,
+        };
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
@@ -224,6 +235,15 @@ impl<'a> FrameProbe<'a> {
 
     /// What `structure`'s kernel does on the probed tiles.
     pub fn count(&self, structure: &Structure) -> Result<Counts> {
+        Ok(self.count_both(structure)?.0)
+    }
+
+    /// As `count`, and what naive marching does on the same tiles, derived
+    /// from the same march where the probe holds it (None: count naive's own
+    /// march). Exact structures end every ray after naive's last sample,
+    /// so naive's counts are known from theirs (`count_naive` in
+    /// glsl/common/march.glsl); `tests/auto.rs` checks them against naive's.
+    pub fn count_both(&self, structure: &Structure) -> Result<(Counts, Option<Counts>)> {
         let device = self.ctx.device();
         self.ctx.submit_and_wait(|cmd| {
             record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
@@ -241,24 +261,49 @@ impl<'a> FrameProbe<'a> {
             Ok(())
         })?;
         let pixels: &[[f32; 4]] = bytemuck::cast_slice(&self.readback.host()?[..self.out.size() as usize]);
-        let mut c = Counts::default();
         let (w, h) = self.desc.size();
-        for (y, row) in pixels.chunks_exact(w as usize).enumerate().take(h as usize) {
-            if !probed(y as u32 / TILE, self.stride) {
-                continue;
-            }
-            for (x, p) in row.iter().enumerate() {
-                if !probed(x as u32 / TILE, self.stride) {
-                    continue;
-                }
-                c.rays += 1;
-                c.samples += p[0] as u64;
-                c.steps += p[1] as u64;
-                c.regions += p[2] as u64;
-                c.ray_samples += p[3] as u64;
-            }
+        let (own, naive) = pixels.split_at((w * h) as usize);
+        let mut c = Counts::default();
+        for (_, p) in self.probed_pixels(own) {
+            c.rays += 1;
+            c.samples += p[0] as u64;
+            c.steps += p[1] as u64;
+            c.regions += p[2] as u64;
+            c.ray_samples += p[3] as u64;
         }
-        Ok(c)
+        if naive.len() < own.len() {
+            return Ok((c, None));
+        }
+        // Naive's loop, per SIMD group of a tile's workgroup: its most full
+        // samples, and one iteration more where a lane has its last left.
+        let mut groups: HashMap<(u32, u32, u32), (u64, bool)> = HashMap::new();
+        let mut n = Counts::default();
+        for ((x, y), p) in self.probed_pixels(naive) {
+            let (full, all) = (p[0] as u64, p[1] as u64);
+            let g = groups.entry((x / TILE, y / TILE, p[2] as u32)).or_default();
+            *g = (g.0.max(full), g.1 || all > full);
+            n.rays += 1;
+            n.ray_samples += all;
+        }
+        n.samples = groups.values().map(|&(full, last)| full + last as u64).sum();
+        Ok((c, Some(n)))
+    }
+
+    /// The pixels of the probed tiles in `half` (a frame's worth, rows of
+    /// the frame's width), with their coordinates.
+    fn probed_pixels<'p>(&self, half: &'p [[f32; 4]]) -> impl Iterator<Item = ((u32, u32), &'p [f32; 4])> + 'p {
+        let (w, h) = self.desc.size();
+        let stride = self.stride;
+        half.chunks_exact(w as usize)
+            .enumerate()
+            .take(h as usize)
+            .filter(move |(y, _)| probed(*y as u32 / TILE, stride))
+            .flat_map(move |(y, row)| {
+                row.iter()
+                    .enumerate()
+                    .filter(move |(x, _)| probed(*x as u32 / TILE, stride))
+                    .map(move |(x, p)| ((x as u32, y as u32), p))
+            })
     }
 }
 

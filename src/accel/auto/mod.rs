@@ -24,7 +24,7 @@ use super::builder::{Builder, RangeKind, Ranges};
 use super::method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method, Structure};
 use super::naive::NAIVE;
 use super::params::{Param, Params};
-use super::probe::{time_interleaved, FrameProbe, Statistic, COUNT_TILES, TIME_TILES};
+use super::probe::{time_interleaved, Counts, FrameProbe, Statistic, COUNT_TILES, TIME_TILES};
 use super::stats::Stats;
 use crate::desc::FrameDesc;
 use crate::error::Result;
@@ -219,8 +219,28 @@ fn choose(
     if built.len() > 1 {
         let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, COUNT_TILES)?;
         let start = Instant::now();
-        probe.prepare(&built.iter().collect::<Vec<_>>(), true)?;
-        let counts = built.iter().map(|s| probe.count(s)).collect::<Result<Vec<_>>>()?;
+        // Naive's counts come with the other candidates' (their counting
+        // frames derive them): naive's own march is the dearest to count.
+        let naive = |s: &Structure| s.marched_as().is_naive();
+        let others = built.iter().any(|s| !naive(s));
+        let counted: Vec<&Structure> = built.iter().filter(|s| !(others && naive(s))).collect();
+        probe.prepare(&counted, true)?;
+        let mut counts: Vec<Option<Counts>> = vec![None; built.len()];
+        let mut derived = None;
+        for (i, s) in built.iter().enumerate().filter(|(_, s)| !naive(s)) {
+            let (own, from) = probe.count_both(s)?;
+            counts[i] = Some(own);
+            derived = derived.or(from);
+        }
+        let counts = built
+            .iter()
+            .zip(counts)
+            .map(|(s, c)| match (c, derived) {
+                (Some(c), _) => Ok(c),
+                (None, Some(n)) => Ok(n),
+                (None, None) => probe.count(s),
+            })
+            .collect::<Result<Vec<_>>>()?;
         timings.push("count", start.elapsed().as_secs_f64() * 1e3);
         let table = builder.shared::<CostTable>()?;
         let constants = frame.kernel_constants(input.gpu_volume);
