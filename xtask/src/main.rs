@@ -4,7 +4,8 @@
 //!   `cargo run --release -- ARGS` (the main job: `cargo xtask run -- bench --quick`);
 //! - `cargo xtask test [ARGS]`: those, the validation layer, the ch2 MRI,
 //!   and a virtual X server with the libraries the viewer's window needs,
-//!   then `cargo test ARGS`;
+//!   then `cargo test ARGS` with lavapipe's shader optimisation off (see
+//!   `test_env`);
 //! - `cargo xtask setup [test|mpi]`: only the packages (mpi: MPI and IceT
 //!   for the `mpi` feature; `test` includes them, and runs `cargo test
 //!   --features mpi`).
@@ -53,15 +54,15 @@ fn main() -> ExitCode {
         None => ("help", &args[..]),
     };
     let result = match task {
-        "run" => setup(RUN).and_then(|()| cargo(&["run", "--release", "--"], strip_dashes(rest))),
+        "run" => setup(RUN).and_then(|()| cargo(&["run", "--release", "--"], strip_dashes(rest), &[])),
         // Without dpkg there is no IceT to unpack: the tests without MPI.
         "test" if !quiet_ok("dpkg-query", &["--version"]) => {
             eprintln!("note: no dpkg, so no IceT to unpack: the tests run without the `mpi` feature");
-            setup(&[RUN, TEST].concat()).and_then(|()| cargo(&["test"], rest))
+            setup(&[RUN, TEST].concat()).and_then(|()| cargo(&["test"], rest, &test_env()))
         }
         "test" => setup(&[RUN, TEST, MPI].concat())
             .and_then(|()| icet())
-            .and_then(|()| cargo(&["test", "--features", "mpi"], rest)),
+            .and_then(|()| cargo(&["test", "--features", "mpi"], rest, &test_env())),
         "setup" if rest.first().map(String::as_str) == Some("test") => {
             setup(&[RUN, TEST, MPI].concat()).and_then(|()| icet())
         }
@@ -165,11 +166,33 @@ fn quiet_ok(program: &str, args: &[&str]) -> bool {
         .is_ok_and(|s| s.success())
 }
 
-/// Runs cargo (the one that runs this) with `fixed` then `args`; its exit
-/// code is ours.
-fn cargo(fixed: &[&str], args: &[String]) -> Result<(), u8> {
+/// The tests' environment: lavapipe's LLVM optimisation passes off
+/// (`GALLIVM_PERF=nopt`) unless the caller set `GALLIVM_PERF`. The suite
+/// compiles about 1300 pipeline variants, and on a machine whose Mesa
+/// shader cache is cold (a fresh CI machine) compiling them was most of
+/// its time: the tests took 34 minutes on 2 cores, 20 with the passes off
+/// (README, "Tests").
+/// The tests check what kernels compute, which the passes do not change
+/// (shaded, iso and hardware-filtered frames came out the same bit for bit
+/// with and without them), only how fast, which no test asserts. Mesa keys its disk cache on
+/// the flag, so these shaders never stand in for optimised ones. Other
+/// drivers ignore it.
+fn test_env() -> Vec<(&'static str, &'static str)> {
+    match std::env::var_os("GALLIVM_PERF") {
+        Some(_) => Vec::new(),
+        None => vec![("GALLIVM_PERF", "nopt")],
+    }
+}
+
+/// Runs cargo (the one that runs this) with `fixed` then `args`, and `env`
+/// added to the environment; its exit code is ours.
+fn cargo(fixed: &[&str], args: &[String], env: &[(&str, &str)]) -> Result<(), u8> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let status = Command::new(cargo).args(fixed).args(args).status();
+    let status = Command::new(cargo)
+        .args(fixed)
+        .args(args)
+        .envs(env.iter().copied())
+        .status();
     match status {
         Ok(s) if s.success() => Ok(()),
         Ok(s) => Err(s.code().and_then(|c| u8::try_from(c).ok()).unwrap_or(1)),
