@@ -27,7 +27,9 @@ const uint MODE_ISO = 4u;
 // steps), z the regions entered (march_region), each counted once per
 // group iteration by one elected lane (so a group's sum over its lanes is
 // what the group ran, its slowest lane included), and w the ray's own
-// samples. auto prices its candidates from these counts.
+// samples. auto prices its candidates from these counts. A second half of
+// the frame buffer, after the image's pixels, takes what naive would have
+// run on each pixel's ray (march.glsl `count_naive`).
 layout(constant_id = 22) const uint MARCH_COUNT = 0u;
 uvec3 count_group = uvec3(0u);
 uint count_lane_samples = 0u;

@@ -45,7 +45,7 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     vec4 shading;     // ambient, diffuse, specular, shininess
     vec3 spacing;     // physical size of a voxel
     float gradient_hi; // ...1 at this one
-    uint gradient_opacity; // 1: opacity times the gradient ramp
+    uint gradient_opacity; // 1: opacity times the gradient ramp (the CPU reference reads it; kernels take MARCH_SHADE == 2)
     // MIP (MinIP): values at or below (above) value_bound map to transparent;
     // a sample exceeds its footprint's value range by at most value_margin
     // (src/accel/mode.rs). Read by structures that skip per ray.

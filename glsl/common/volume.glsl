@@ -266,7 +266,7 @@ layout(set = 0, binding = GRADIENT_BINDING) uniform sampler3D gradient_tex;
 
 // 1: the manual filter reads the gradient's cells copy (GRADIENT_CELLS_BINDING):
 // per cell its eight corners' (x, y, z) halves, corner-major, two halves a
-// word, in three RGBA32UI texels (src/volume/cells.rs).
+// word, in three RGBA32UI texels (src/volume/gradient_cells.rs).
 layout(constant_id = 25) const uint GRADIENT_CELLS = 0u;
 #ifdef GRADIENT_CELLS_BINDING
 layout(set = 0, binding = GRADIENT_CELLS_BINDING) uniform usamplerBuffer gradient_cells;

@@ -8,7 +8,9 @@
 //! look, filter and the transfer function (LUT corrected for the step on
 //! the host), on every `stride`-th 8x8 tile along each axis
 //! (`MARCH_TILE_STRIDE`). Counting kernels (`MARCH_COUNT`) write per pixel
-//! the loop iterations its SIMD group ran (glsl/common/lattice.glsl).
+//! the loop iterations its SIMD group ran (glsl/common/lattice.glsl), and
+//! into a second half of the buffer what naive marching would have run on
+//! the same ray (`count_both`; glsl/common/march.glsl `count_naive`).
 
 use super::builder::{Builder, PerContext};
 use super::kernels::{MarchKernels, ProbeConstants};

@@ -59,7 +59,10 @@ impl GpuVolume {
                 if shared {
                     gradient_cells::repack_gradient_shared(copy, &gradient, self.dims)?;
                 } else {
-                    *copy = gradient_cells::upload_gradient_cells(&self.ctx, &gradient, self.dims)?;
+                    // The last step's copy (48 bytes a voxel) freed before
+                    // the new one is made, so the two never coexist.
+                    self.gradient_cells = None;
+                    self.gradient_cells = Some(gradient_cells::upload_gradient_cells(&self.ctx, &gradient, self.dims)?);
                 }
             }
         }
