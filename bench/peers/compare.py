@@ -232,9 +232,9 @@ def lacuna_png(args, raw, tf, ert, look, path):
     run(cmd)
 
 
-def vtk_peer(args, raw, tf, ert, look, png, expect):
+def vtk_peer(args, raw, tf, ert, look, png, expect, mapper="both"):
     out = run([sys.executable, os.path.join(HERE, "vtk.py"), raw, "--tf", tf, "--size", args.size,
-               "--step", str(args.step), "--frames", str(args.frames), "--mapper", "both",
+               "--step", str(args.step), "--frames", str(args.frames), "--mapper", mapper,
                "--ert", "on" if ert else "off", "--png", png, "--srgb",
                "--expect-coverage", f"{expect:.6f}"] + LOOKS[look][2])
     return json.loads(out)
@@ -404,17 +404,25 @@ def summary(md, sections, looks):
                 "the rows marked **no** are where it loses."), ""]
 
 
-def main(argv):
-    args = parse_args(argv)
+def prerequisites(lacuna):
+    """Whether VTK, numpy and an executable lacuna are there; an error line
+    naming what is missing otherwise."""
     try:
         import numpy  # noqa: F401
         import vtkmodules.vtkIOImage  # noqa: F401
     except ImportError as e:
         print(f"error: {e.name.split('.')[0]} is missing; install with: pip install vtk numpy; apt install libosmesa6",
               file=sys.stderr)
-        return 2
-    if not os.access(args.lacuna, os.X_OK):
-        print(f"error: {args.lacuna} is not an executable lacuna; run cargo build --release", file=sys.stderr)
+        return False
+    if not os.access(lacuna, os.X_OK):
+        print(f"error: {lacuna} is not an executable lacuna; run cargo build --release", file=sys.stderr)
+        return False
+    return True
+
+
+def main(argv):
+    args = parse_args(argv)
+    if not prerequisites(args.lacuna):
         return 2
     os.makedirs(args.work, exist_ok=True)
     images = os.path.join(os.path.dirname(args.out), "peers")
