@@ -288,14 +288,19 @@ fn without_a_display_the_viewer_says_so_in_one_line() {
 
 /// A series in the viewer: `.` steps forward, Space plays (a new step each
 /// frame, the next loading while this one renders); the screenshot equals
-/// `render --time` of the step shown.
+/// `render --time` of the step shown. Dense steps go into the last step's
+/// memory; bricked ones are uploaded anew, the last step freed first.
 #[test]
 fn the_viewer_steps_and_plays_a_series_and_matches_render() {
     let dir = tempfile::tempdir().unwrap();
-    let size = ["--size", "64x48", "--validate"];
-    for (keys, frames, step) in [(".,.", "2", "2"), ("Space", "4", "3")] {
-        let a = dir.path().join(format!("view-{frames}.exr"));
-        let b = dir.path().join(format!("render-{frames}.exr"));
+    for (keys, frames, step, storage) in [
+        (".,.", "2", "2", "dense"),
+        ("Space", "4", "3", "dense"),
+        ("Space", "3", "2", "bricks:8"),
+    ] {
+        let size = ["--size", "64x48", "--validate", "--storage", storage];
+        let a = dir.path().join(format!("view-{frames}-{storage}.exr"));
+        let b = dir.path().join(format!("render-{frames}-{storage}.exr"));
         let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
         let view = [
             &[

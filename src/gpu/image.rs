@@ -17,6 +17,8 @@ pub struct Image3d {
     allocation: Option<Allocation>,
     pub format: vk::Format,
     pub extent: [u32; 3],
+    /// Bytes a texel of `format` takes in the uploads' data.
+    texel_bytes: u64,
 }
 
 /// Checks a 3D image of `extent` texels of `texel_bytes` against
@@ -66,7 +68,7 @@ impl Image3d {
         data: &[u8],
     ) -> Result<Self> {
         let image = Self::create(ctx, name, format, extent, texel_bytes, data)?;
-        image.upload(texel_bytes, data)?;
+        image.upload(data)?;
         Ok(image)
     }
 
@@ -193,6 +195,7 @@ impl Image3d {
             allocation: Some(allocation),
             format,
             extent,
+            texel_bytes,
         };
         if let Some(a) = image.allocation.as_ref() {
             unsafe { device.bind_image_memory(raw, a.memory(), a.offset()) }.vk("vkBindImageMemory")?;
@@ -206,12 +209,17 @@ impl Image3d {
         Ok(image)
     }
 
-    /// Writes `data` over every texel (as `with_data`) and waits.
-    /// Compute-shader reads before are ordered first; none may be pending.
-    pub(crate) fn upload(&self, texel_bytes: u64, data: &[u8]) -> Result<()> {
+    /// Writes `data` (texels of the size the image was made with) over
+    /// every texel (as `with_data`) and waits. Compute-shader reads before
+    /// are ordered first; none may be pending.
+    pub(crate) fn upload(&self, data: &[u8]) -> Result<()> {
         let [w, h, d] = self.extent;
+        let texel_bytes = self.texel_bytes;
         if w as u64 * h as u64 * d as u64 * texel_bytes != data.len() as u64 {
-            return Err(Error::Interface(format!("{} bytes for image {w}x{h}x{d}", data.len())));
+            return Err(Error::Interface(format!(
+                "{} bytes for image {w}x{h}x{d} of {texel_bytes}-byte texels",
+                data.len()
+            )));
         }
         let slice_bytes = (w as u64 * h as u64 * texel_bytes).max(1);
         let slices_per_chunk = (STAGING_CHUNK / slice_bytes).max(1) as u32;

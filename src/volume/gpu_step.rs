@@ -3,7 +3,6 @@
 
 use super::filter::Filter;
 use super::gpu::{resolve_storage, texels};
-use super::gradient::GRADIENT_TEXEL_BYTES;
 use super::pool::Storage;
 use super::{cells, gradient_cells};
 use super::{channels, GpuVolume, Volume};
@@ -33,8 +32,8 @@ impl GpuVolume {
         if !fits {
             return Ok(false);
         }
-        let (_, texel, bytes) = texels(volume);
-        self.image.upload(texel, &bytes)?;
+        let (_, _, bytes) = texels(volume);
+        self.image.upload(&bytes)?;
         self.spacing = volume.spacing;
         self.norm = volume.norm;
         self.norms = std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm));
@@ -53,7 +52,7 @@ impl GpuVolume {
         if self.gradient.is_some() {
             let gradient = self.gradient_texels(volume)?;
             if let Some(image) = &self.gradient {
-                image.upload(GRADIENT_TEXEL_BYTES, bytemuck::cast_slice(&gradient))?;
+                image.upload(bytemuck::cast_slice(&gradient))?;
             }
             if let Some(copy) = &mut self.gradient_cells {
                 if shared {

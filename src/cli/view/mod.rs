@@ -205,7 +205,10 @@ impl App<'_> {
             *desc.mode(),
             (desc.filter(), self.args.volume.storage),
         )?;
-        let filter = desc.filter().unwrap_or_else(|| scene.default_filter());
+        let filter = match desc.filter() {
+            Some(filter) => filter,
+            None => scene.default_filter()?,
+        };
         let json = self.args.json.as_ref().map(|p| p.display().to_string());
         let mut controls = Controls::new(&desc, &tf.spec, self.args.accel, json);
         controls.steps = series.steps();

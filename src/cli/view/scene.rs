@@ -12,7 +12,7 @@ use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::{vk, Context, Timer};
 use lacuna::render::{Filter, FrameDesc, Mode, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
-use lacuna::volume::{resolve_storage, GpuVolume, Storage};
+use lacuna::volume::{GpuVolume, Storage};
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
 
 pub struct Scene {
@@ -20,7 +20,8 @@ pub struct Scene {
     renderer: Renderer,
     builder: Builder,
     pub volume: Volume,
-    gpu_volume: GpuVolume,
+    /// None only after a new step failed to upload (the viewer stops then).
+    gpu_volume: Option<GpuVolume>,
     pub tf: TransferFunction,
     lut: GpuTransferFunction,
     pub accel: Accel,
@@ -45,6 +46,11 @@ pub struct Scene {
     upload_ms: f64,
 }
 
+/// What a scene whose last time step failed to upload answers.
+fn no_step() -> Error {
+    Error::Device("the last time step failed to upload".into())
+}
+
 impl Scene {
     /// `filter`: the sample filter asked for (None: the default);
     /// `storage`: the voxel storage.
@@ -65,7 +71,7 @@ impl Scene {
             renderer: Renderer::sharing(&builder)?,
             builder,
             volume,
-            gpu_volume,
+            gpu_volume: Some(gpu_volume),
             tf,
             lut,
             accel,
@@ -91,8 +97,12 @@ impl Scene {
     }
 
     /// The sample filter `render` would use for this volume.
-    pub fn default_filter(&self) -> Filter {
-        self.gpu_volume.default_filter()
+    pub fn default_filter(&self) -> Result<Filter> {
+        Ok(self.gpu_volume()?.default_filter())
+    }
+
+    fn gpu_volume(&self) -> Result<&GpuVolume> {
+        self.gpu_volume.as_ref().ok_or_else(no_step)
     }
 
     /// A new transfer function: upload it; the structure is rebuilt for it.
@@ -105,19 +115,21 @@ impl Scene {
 
     /// A new time step on the same grid: upload it (with its gradient when
     /// frames are lit) in place of the last, into the last one's memory
-    /// where it fits (`GpuVolume::replace`; every frame has completed
+    /// where it fits (`GpuVolume::upload_step`; every frame has completed
     /// here); its ranges and structure are computed before the next frame.
+    /// The last step's ranges and structure are freed first, and where the
+    /// step does not fit (bricked storage: the large volumes) the last
+    /// step's memory too, so two steps never coexist on the device.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
-        let dense = resolve_storage(&self.ctx, &volume, self.storage) == Storage::Dense;
-        if !(dense && self.gpu_volume.replace(&volume)?) {
-            self.gpu_volume = GpuVolume::upload_as(&self.ctx, &volume, self.storage)?;
-        }
-        self.gpu_volume.prepare(&volume, lit, self.filter)?;
+        self.ranges = None;
+        self.structure = Structure::naive();
+        self.stale = true;
+        let last = self.gpu_volume.take();
+        let step = GpuVolume::upload_step(&self.ctx, last, &volume, self.storage, lit, self.filter)?;
+        self.gpu_volume = Some(step);
         self.upload_ms = t.elapsed().as_secs_f64() * 1000.0;
         self.volume = volume;
-        self.ranges = None;
-        self.stale = true;
         Ok(())
     }
 
@@ -128,7 +140,8 @@ impl Scene {
 
     /// Uploads the volume's gradient, once, before the first lit frame.
     pub fn ensure_gradient(&mut self) -> Result<()> {
-        self.gpu_volume.add_gradient(&self.volume)
+        let gpu_volume = self.gpu_volume.as_mut().ok_or_else(no_step)?;
+        gpu_volume.add_gradient(&self.volume)
     }
 
     /// Frames of a new mode: the structure is built for it.
@@ -160,7 +173,7 @@ impl Scene {
         if self.ranges.as_ref().map(|(w, _)| w) != Some(&which) {
             let (ranges, _) = self
                 .builder
-                .ranges_for(&[(self.accel, &self.params)], &self.gpu_volume)?;
+                .ranges_for(&[(self.accel, &self.params)], self.gpu_volume()?)?;
             self.ranges = Some((which, ranges));
         }
         let Some((_, ranges)) = &self.ranges else {
@@ -168,7 +181,7 @@ impl Scene {
         };
         let input = BuildInput {
             volume: &self.volume,
-            gpu_volume: &self.gpu_volume,
+            gpu_volume: self.gpu_volume.as_ref().ok_or_else(no_step)?,
             tf: &self.tf,
             gpu_tf: &self.lut,
             mode: self.mode,
@@ -195,7 +208,7 @@ impl Scene {
         self.timer.reset(cmd);
         let scene = lacuna::render::Scene {
             structure: &self.structure,
-            volume: &self.gpu_volume,
+            volume: self.gpu_volume.as_ref().ok_or_else(no_step)?,
             tf: &self.lut,
         };
         self.renderer
@@ -284,7 +297,7 @@ impl Scene {
     pub fn describe(&self, frame: &mut Frame, desc: &FrameDesc) -> Result<()> {
         let scene = lacuna::render::Scene {
             structure: &self.structure,
-            volume: &self.gpu_volume,
+            volume: self.gpu_volume()?,
             tf: &self.lut,
         };
         super::super::render::describe(frame, &self.volume, &self.tf, scene, desc, &self.ctx, &self.march)
