@@ -102,7 +102,8 @@ fn maps_match_the_brute_force_transform() {
     let ctx = gpu();
     let tf = TransferFunction::parse("ramp:0.5:1").unwrap();
     // The last volume's rows along x are 70 cells at cell 2: longer than
-    // distance_rows.comp keeps in private arrays, so they use the storage stack.
+    // distance_rows.comp and distance_octant_rows.comp keep in private
+    // arrays, so they use the storage stack (deque).
     for (dims, per_mille, seed) in [
         ([40, 36, 44], 1, 1),
         ([64, 24, 32], 4, 2),

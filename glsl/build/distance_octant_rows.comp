@@ -26,6 +26,29 @@ layout(std430, set = 0, binding = 0) readonly buffer Src { uint src[]; };
 layout(std430, set = 0, binding = 1) buffer Dst { uint dst[]; };
 // Per (row, word): the deque, one entry per cell of the row (position << 8 | g).
 layout(std430, set = 0, binding = 2) buffer Deque { uint deque[]; };
+// Specialization constant 0 (the host sets it for rows of at most
+// PRIVATE_ROW cells): the deque and the row's output words live in private
+// arrays instead, and each output word is written once. lavapipe reads and
+// writes a storage buffer one lane at a time with a bounds check each (as
+// distance_rows.comp's envelope). Reading each source word once into a
+// private array as well saved nothing measurable: the deque's loops are
+// the cost.
+layout(constant_id = 0) const uint PRIVATE_DEQUE = 0u;
+#define PRIVATE_ROW 64
+uint private_deque[PRIVATE_ROW];
+uint private_out[PRIVATE_ROW];
+
+uint deque_read(uint base, uint k) {
+    return PRIVATE_DEQUE != 0u ? private_deque[k] : deque[base + k];
+}
+
+void deque_write(uint base, uint k, uint entry) {
+    if (PRIVATE_DEQUE != 0u) {
+        private_deque[k] = entry;
+    } else {
+        deque[base + k] = entry;
+    }
+}
 // xyz: cells per axis, w: total; axis: 0, 1, 2; first: src holds the flags.
 layout(push_constant) uniform Push { uvec4 counts; uint axis; uint first; uint groups_x; uint rows; } pc;
 
@@ -78,14 +101,14 @@ void main() {
         for (int s = 0; s < n; ++s, x += step) {
             uint i = cell_index(row, uint(x));
             uint gx = g(i, ch);
-            while (front > back && (deque[base + front - 1u] & 255u) >= gx) {
+            while (front > back && (deque_read(base, front - 1u) & 255u) >= gx) {
                 front -= 1u;
             }
-            deque[base + front] = uint(x) << 8u | gx;
+            deque_write(base, front, uint(x) << 8u | gx);
             front += 1u;
-            uint best = value(deque[base + back], x);
+            uint best = value(deque_read(base, back), x);
             while (front - back >= 2u) {
-                uint next = value(deque[base + back + 1u], x);
+                uint next = value(deque_read(base, back + 1u), x);
                 if (next > best) {
                     break;
                 }
@@ -94,11 +117,24 @@ void main() {
             }
             uint d = min(best, DISTANCE_CAP);
             uint bytes = d << (8u * j) | (lanes == 2u ? d << (8u * (j + 2u)) : 0u);
+            if (PRIVATE_DEQUE != 0u) {
+                private_out[x] = j == 0u ? bytes : (private_out[x] | bytes);
+                continue;
+            }
             uint at = DISTANCE_WORDS * i + word;
             uint packed = j == 0u ? bytes : (dst[at] | bytes);
             dst[at] = packed;
             if (words == 2u) {
                 dst[at + 1u] = packed;
+            }
+        }
+    }
+    if (PRIVATE_DEQUE != 0u) {
+        for (int x = 0; x < n; ++x) {
+            uint at = DISTANCE_WORDS * cell_index(row, uint(x)) + word;
+            dst[at] = private_out[x];
+            if (words == 2u) {
+                dst[at + 1u] = private_out[x];
             }
         }
     }

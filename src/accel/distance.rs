@@ -36,8 +36,8 @@ const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
 /// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
 pub const CAP: u32 = 255;
 
-/// Longest row whose envelope `distance_rows.comp` keeps in private arrays
-/// (its PRIVATE_ROW).
+/// Longest row whose envelope (deque) `distance_rows.comp`
+/// (`distance_octant_rows.comp`) keeps in private arrays (their PRIVATE_ROW).
 const PRIVATE_ROW: u32 = 64;
 
 /// The linear-time distance-transform kernels (two-sided rows for cube
@@ -46,15 +46,20 @@ pub struct DistanceKernels {
     /// Cube-map rows with the envelope in a storage buffer, then in private
     /// arrays (rows of at most [`PRIVATE_ROW`] cells).
     rows: [Kernel; 2],
-    octant_rows: Kernel,
+    /// Octant-map rows with the deque in a storage buffer, then in private
+    /// arrays (rows of at most [`PRIVATE_ROW`] cells).
+    octant_rows: [Kernel; 2],
 }
 
 impl PerContext for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
         let rows = |p| Kernel::with_constants::<build_distance_rows::Push>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
+        let octant_rows = |p| {
+            Kernel::with_constants::<build_distance_octant_rows::Push>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS, &[p])
+        };
         Ok(DistanceKernels {
             rows: [rows(0)?, rows(1)?],
-            octant_rows: Kernel::new::<build_distance_octant_rows::Push>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS)?,
+            octant_rows: [octant_rows(0)?, octant_rows(1)?],
         })
     }
 }
@@ -160,10 +165,11 @@ pub fn record(
         let first = (axis == 0) as u32;
         // One invocation per row (cube maps) or per row and computed map
         // word (octant maps: two along x and y, four along z).
+        let private = usize::from(c[axis] <= PRIVATE_ROW);
         let (k, per_row) = if octants {
-            (&kernels.octant_rows, if axis == 2 { 4 } else { 2 })
+            (&kernels.octant_rows[private], if axis == 2 { 4 } else { 2 })
         } else {
-            (&kernels.rows[usize::from(c[axis] <= PRIVATE_ROW)], 1)
+            (&kernels.rows[private], 1)
         };
         let rows = cells.total / c[axis] as u64;
         let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
