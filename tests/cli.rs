@@ -588,6 +588,10 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     );
     fails(&["render", "menger:16", "--size", "20000x8"], &[], "1..=16384 pixels");
     fails(&["info", "blob:16"], &[], "not a generator");
+    // More transfer functions than channels: the error before any report.
+    let too_many = ["info", "menger:16", "--tf", "ramp:0.3:1", "--tf", "ramp:0.5:1"];
+    fails(&too_many, &[], "2 transfer functions for a volume of 1 channel");
+    assert_eq!(lacuna(&too_many, &[]).stdout, "", "no report before the error");
     fails(&["render", "menger:16", "--unknown-flag"], &[], "--unknown-flag");
     // A missing required argument is named on the one line.
     fails(

@@ -19,6 +19,8 @@ pub struct InfoArgs {
 pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     let series = args.volume.series()?;
     let v = series.load(args.volume.time, None)?;
+    // Checked before the report, so a bad --tf is one error line.
+    let tf = tf_for(&args.tf, &v)?;
     println!("volume   {}", v.name);
     if let Some(step) = args.volume.step_line(&series) {
         println!("time     {step}; every step normalised as step 0");
@@ -89,7 +91,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     for row in cells.chunks(5) {
         println!("  {}", row.join("  "));
     }
-    if let Some(tf) = tf_for(&args.tf, &v)? {
+    if let Some(tf) = tf {
         let visible = (0..v.data.len())
             .map(|i| v.normalize(v.data.texel(i)))
             .filter(|n| !n.is_nan() && tf.lookup(*n)[3] > 0.0)

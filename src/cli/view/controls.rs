@@ -150,8 +150,10 @@ pub struct Controls {
     /// orbit camera's own framing.
     pub zoom: f64,
     pub pan: DVec2,
-    /// The orbit to reset to, and the projection the `P` key switches to.
-    initial: (Orbit, Projection),
+    /// The orbit to reset to.
+    initial: Orbit,
+    /// The projection the `P` key switches to (and back from).
+    other_projection: Projection,
     /// Transfer-function presets; `T` cycles them, the arrows reshape the current one.
     pub presets: Vec<Shape>,
     pub preset: usize,
@@ -180,15 +182,18 @@ impl Controls {
             Camera::Orbit(o) => *o,
             _ => Orbit::default(),
         };
-        let projection = match orbit.projection {
+        // P switches between orthographic and perspective: 40 degrees when
+        // started orthographic, else back to orthographic.
+        let other_projection = match orbit.projection {
             Projection::Orthographic => Projection::Perspective {
                 fov_deg: 40.0,
                 distance: None,
             },
-            p => p,
+            Projection::Perspective { .. } => Projection::Orthographic,
         };
         Controls {
-            initial: (orbit, projection),
+            initial: orbit,
+            other_projection,
             orbit,
             size: frame.size(),
             step: frame.step(),
@@ -291,10 +296,10 @@ impl Controls {
                 self.step = STEPS[i];
             }
             "p" | "P" => {
-                std::mem::swap(&mut self.initial.1, &mut self.orbit.projection);
+                std::mem::swap(&mut self.other_projection, &mut self.orbit.projection);
             }
             "r" | "R" => {
-                let start = self.initial.0;
+                let start = self.initial;
                 self.orbit.azimuth_deg = start.azimuth_deg;
                 self.orbit.elevation_deg = start.elevation_deg;
                 self.zoom = 1.0;
@@ -395,6 +400,28 @@ mod tests {
         assert!(series.look.iso.values()[0] > iso);
         series.key("Space", false);
         assert!(series.playing);
+    }
+
+    #[test]
+    fn p_switches_projection_whichever_it_started_with() {
+        let mut ortho = controls("ramp:0.3:1");
+        ortho.key("p", false);
+        assert!(matches!(ortho.orbit.projection, Projection::Perspective { fov_deg, .. } if fov_deg == 40.0));
+        ortho.key("p", false);
+        assert_eq!(ortho.orbit.projection, Projection::Orthographic);
+        let perspective = Projection::Perspective {
+            fov_deg: 25.0,
+            distance: Some(3.0),
+        };
+        let frame = FrameDesc::builder(64, 64)
+            .orbit(0.0, 20.0, perspective)
+            .build()
+            .unwrap();
+        let mut p = Controls::new(&frame, "ramp:0.3:1", Accel::naive(), None);
+        p.key("p", false);
+        assert_eq!(p.orbit.projection, Projection::Orthographic);
+        p.key("p", false);
+        assert_eq!(p.orbit.projection, perspective, "back to --perspective's own");
     }
 
     #[test]
