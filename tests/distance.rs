@@ -101,14 +101,20 @@ fn check(what: &str, b: &Built, octants: bool) {
 fn maps_match_the_brute_force_transform() {
     let ctx = gpu();
     let tf = TransferFunction::parse("ramp:0.5:1").unwrap();
-    // The last volume's rows along x are 70 cells at cell 2: longer than
+    // The 140-voxel axes are rows of 70 cells at cell 2: longer than
     // distance_rows.comp and distance_octant_rows.comp keep in private
-    // arrays, so they use the storage stack (deque).
+    // arrays, so they use the storage stack (deque), along each axis in
+    // turn (the octant kernel computes 2, 2 and 4 map words along x, y and
+    // z). The 128-voxel axis is rows of exactly 64 cells at cell 2, the
+    // longest kept in private arrays.
     for (dims, per_mille, seed) in [
         ([40, 36, 44], 1, 1),
         ([64, 24, 32], 4, 2),
         ([33, 47, 20], 20, 3),
         ([140, 12, 10], 8, 4),
+        ([12, 140, 10], 8, 5),
+        ([10, 12, 140], 8, 6),
+        ([10, 128, 12], 8, 7),
     ] {
         let v = speckles(dims, per_mille, seed);
         for cell in [2, 4, 8] {
