@@ -128,7 +128,12 @@ pub fn record(
     let info = ctx.info();
     check_fits(info, cells.total, octants)?;
     let bytes = cells.total * 4 * words_per_cell(octants);
-    let stack_bytes = stack_bytes(cells.total, octants);
+    // Rows of at most PRIVATE_ROW cells keep their stacks in private arrays:
+    // where every axis's rows do, the binding gets a one-word placeholder.
+    let stack_bytes = match cells.counts.iter().any(|&n| n > PRIVATE_ROW) {
+        true => stack_bytes(cells.total, octants),
+        false => 4,
+    };
     let flags = Buffer::new(
         ctx,
         "distance cell flags",
