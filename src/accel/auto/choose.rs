@@ -10,6 +10,7 @@ use super::super::method::Accel;
 use super::super::naive::NAIVE;
 use super::super::params::Params;
 use super::super::probe::Counts;
+use super::super::probe::TIME_TILES;
 use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::DeviceInfo;
@@ -45,6 +46,15 @@ pub const NAIVE_GUARD: f64 = 0.5;
 /// be chosen over it: closer than that the trial is within its noise, and
 /// naive is never slower than itself.
 pub const NAIVE_MARGIN: f64 = 0.03;
+
+/// A close call whose fastest timed candidate is predicted to march the
+/// whole frame in less than this (GPU milliseconds) is timed on the whole
+/// frame rather than on [`TIME_TILES`] of its tiles. A probe's share of a
+/// frame that small is a few microseconds of latency on a large GPU, not
+/// the frame's throughput: on an H100 the grid beat naive marching on a
+/// quarter of turbulence:64's 256x256 tiles and then marched the whole
+/// frame 7 % slower. Whole frames that cheap cost the trial little.
+pub const WHOLE_FRAME_TRIAL_MS: f64 = 4.0;
 
 const DISTANCE: Accel = Accel(&DistanceMethod { octants: false });
 const OCTANT: Accel = Accel(&DistanceMethod { octants: true });
@@ -187,6 +197,17 @@ pub fn to_time(priced: &[Priced], always: bool) -> Vec<usize> {
     out
 }
 
+/// The tiles a trial of the candidates `timed` covers: every tile of the
+/// frame (`u32::MAX`) when the fastest of them is predicted under
+/// [`WHOLE_FRAME_TRIAL_MS`], else [`TIME_TILES`].
+pub fn trial_tiles(priced: &[Priced], timed: &[usize]) -> u32 {
+    let fastest = timed.iter().map(|&i| priced[i].predicted).fold(f64::INFINITY, f64::min);
+    match fastest < WHOLE_FRAME_TRIAL_MS {
+        true => u32::MAX,
+        false => TIME_TILES,
+    }
+}
+
 /// The candidate to march with: the fastest on the probe tiles when any
 /// was timed (naive, candidate 0, unless another beats it by
 /// [`NAIVE_MARGIN`]), else the cheapest prediction.
@@ -253,6 +274,18 @@ mod tests {
         assert!(to_time(&priced(&[50.0, 90.0, 200.0]), false).is_empty());
         // Always: everything.
         assert_eq!(to_time(&priced(&[50.0, 90.0]), true), vec![0, 1]);
+    }
+
+    #[test]
+    fn cheap_frames_are_timed_whole() {
+        let p = priced(&[1.0, 0.5, 0.6]);
+        assert_eq!(trial_tiles(&p, &[0, 1, 2]), u32::MAX);
+        let p = priced(&[40.0, 20.0, 25.0]);
+        assert_eq!(trial_tiles(&p, &[1, 2]), TIME_TILES);
+        // The fastest of those timed decides, not of every candidate.
+        let p = priced(&[40.0, 2.0, 25.0, 30.0]);
+        assert_eq!(trial_tiles(&p, &[2, 3]), TIME_TILES);
+        assert_eq!(trial_tiles(&p, &[1, 2]), u32::MAX);
     }
 
     #[test]

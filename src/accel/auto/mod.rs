@@ -7,8 +7,11 @@
 //! loop, traversal steps and regions, per SIMD group. The device's kernel
 //! constants (`model`, measured once per device, driver and kernel build:
 //! `calibrate`, `cache`) price each count; the cheapest wins, and a close
-//! call (within 15 %, or a skipping structure within 30 % of naive) is
-//! settled by timing the close ones on the same tiles (`choose::to_time`).
+//! call (a runner-up within `choose::CLOSE` of the best, or naive within
+//! `choose::NAIVE_GUARD` of a skipping best) is settled by timing the close
+//! ones on a quarter to an eighth of the frame's tiles, or on the whole
+//! frame where it is predicted to take only a few milliseconds
+//! (`choose::to_time`, `choose::trial_tiles`).
 //!
 //! The frame is the one the build is for (`BuildInput::frame`: camera,
 //! step, early termination, sample filter, size, mode), so the choice
@@ -24,7 +27,7 @@ use super::builder::{Builder, RangeKind, Ranges};
 use super::method::{Accel, BuildInput, Built, March, MarchedAs, MarchedKind, Method, Structure};
 use super::naive::NAIVE;
 use super::params::{Param, Params};
-use super::probe::{time_interleaved, Counts, FrameProbe, Statistic, COUNT_TILES, TIME_TILES};
+use super::probe::{time_interleaved, Counts, FrameProbe, Statistic, COUNT_TILES};
 use super::stats::Stats;
 use crate::desc::FrameDesc;
 use crate::error::Result;
@@ -56,6 +59,8 @@ pub struct Choice {
     pub priced: Vec<Priced>,
     /// Whether a close call was settled by timing.
     pub timed: bool,
+    /// Whether that trial timed whole frames (else a sample of the tiles).
+    pub timed_whole_frames: bool,
     /// Where the kernel constants came from (one per distinct source).
     pub model: Vec<String>,
     /// Candidates left out, and why.
@@ -82,22 +87,36 @@ impl Choice {
         let predicted: Vec<String> = self
             .priced
             .iter()
-            .map(|p| format!("{} {:.1}", p.label, p.predicted))
+            .map(|p| format!("{} {}", p.label, ms(p.predicted)))
             .collect();
         let mut line = format!("predicted ms: {}", predicted.join(", "));
         if self.timed {
             let timed: Vec<String> = self
                 .priced
                 .iter()
-                .filter_map(|p| p.trial.map(|t| format!("{} {:.2}", p.label, t)))
+                .filter_map(|p| p.trial.map(|t| format!("{} {}", p.label, ms(t))))
                 .collect();
-            line.push_str(&format!("; close, timed on the probe tiles: {}", timed.join(", ")));
+            let on = match self.timed_whole_frames {
+                true => "whole frames",
+                false => "the probe tiles",
+            };
+            line.push_str(&format!("; close, timed on {on}: {}", timed.join(", ")));
         }
         line.push_str(&format!("; model {}", self.model.join(", ")));
         if !self.notes.is_empty() {
             line.push_str(&format!("; {}", self.notes.join("; ")));
         }
         line
+    }
+}
+
+/// Milliseconds to three significant places at GPU speeds (0.0512), one
+/// decimal above 10.
+fn ms(v: f64) -> String {
+    match v {
+        v if v >= 10.0 => format!("{v:.1}"),
+        v if v >= 1.0 => format!("{v:.2}"),
+        v => format!("{v:.3}"),
     }
 }
 
@@ -216,6 +235,7 @@ fn choose(
     }
     let mut priced: Vec<Priced> = Vec::new();
     let mut model = Vec::new();
+    let mut whole_frames = false;
     if built.len() > 1 {
         let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, COUNT_TILES)?;
         let start = Instant::now();
@@ -277,7 +297,9 @@ fn choose(
         };
         if !timed.is_empty() {
             let start = Instant::now();
-            let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, TIME_TILES)?;
+            let tiles = choose::trial_tiles(&priced, &timed);
+            whole_frames = tiles == u32::MAX;
+            let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, tiles)?;
             let pairs: Vec<(&FrameProbe, &Structure)> = timed.iter().map(|&i| (&probe, &built[i])).collect();
             probe.prepare(&pairs.iter().map(|p| p.1).collect::<Vec<_>>(), false)?;
             let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Least)?;
@@ -308,6 +330,7 @@ fn choose(
         label,
         priced,
         timed,
+        timed_whole_frames: whole_frames,
         model,
         notes,
     };
