@@ -198,14 +198,18 @@ fn a_pool_past_the_device_limits_is_an_error_naming_the_limit() {
     }
 }
 
-/// The naive frames of `views` of `v` uploaded dense, with the manual filter.
-fn dense_naive(v: &Volume, tf: &TransferFunction, views: &[FrameDesc]) -> Vec<Frame> {
-    let fx = Fixture::new();
+/// The naive frames of `views` of `v` uploaded dense on `fx`'s context,
+/// with the manual filter.
+fn dense_naive(fx: &mut Fixture, v: &Volume, tf: &TransferFunction, views: &[FrameDesc]) -> Vec<Frame> {
+    let bricks = fx.bricks.take();
     let p = fx.prepare(v, tf, DEFAULTS);
-    views
+    let frames = views
         .iter()
         .map(|view| fx.frame(&Structure::naive(), &p, view, Filter::Manual))
-        .collect()
+        .collect();
+    drop(p);
+    fx.bricks = bricks;
+    frames
 }
 
 fn assert_same(what: &str, a: &[Frame], b: &[Frame]) {
@@ -220,6 +224,10 @@ fn assert_same(what: &str, a: &[Frame], b: &[Frame]) {
 fn check_every_look(what: &str, v: &Volume, edges: &[u32]) {
     let t = tf_of(v);
     let views = &standard_views()[..3];
+    // One context for every look and edge, so the kernels every look shares
+    // (ranges, builds, the LUT) are created once.
+    let mut fx = Fixture::new();
+    let limits = PoolLimits::of(fx.ctx.info());
     for (mode, shading) in every_look() {
         // Lit looks read one channel (tests/channels.rs).
         if (shading.is_some() || matches!(mode, Mode::Iso(_))) && v.channel_count() > 1 {
@@ -229,9 +237,9 @@ fn check_every_look(what: &str, v: &Volume, edges: &[u32]) {
             .iter()
             .map(|d| d.to_builder().mode(mode).shading(shading).build().unwrap())
             .collect();
-        let dense = dense_naive(v, &t, &views);
+        let dense = dense_naive(&mut fx, v, &t, &views);
         for &edge in edges {
-            let fx = Fixture::with_bricks(edge);
+            fx.bricks = Some((edge, limits));
             let what = format!("{what} {} bricks of {edge}", mode.name());
             let bricked = fx.check_with(&what, v, &t, &views, &[DEFAULTS], Kernels::Reported);
             assert_same(&what, &dense, &bricked);
@@ -251,7 +259,7 @@ fn a_pool_split_over_four_images_equals_dense() {
     // 200 bricks of 5^3, so every one of the four images holds some.
     let v = load("vessels:30x27x33");
     let t = tf_of(&v);
-    let fx = Fixture::new();
+    let mut fx = Fixture::new();
     let gv = GpuVolume::upload_bricks_within(&fx.ctx, &v, 5, limits(4096, 64 * 216)).unwrap();
     assert_eq!(gv.pool_image_count(), 4, "{:?}", gv.pool);
     let views = &standard_views()[..3];
@@ -263,7 +271,7 @@ fn a_pool_split_over_four_images_equals_dense() {
             .collect();
         let what = format!("four images {}", mode.name());
         let frames = bricked.check_with(&what, &v, &t, &views, &[DEFAULTS], Kernels::Reported);
-        assert_same(&what, &dense_naive(&v, &t, &views), &frames);
+        assert_same(&what, &dense_naive(&mut fx, &v, &t, &views), &frames);
     }
     assert_clean(&fx.ctx);
 }
@@ -365,7 +373,7 @@ fn a_volume_of_one_value_is_one_texel() {
     // One value normalises to 0.
     let t = TransferFunction::parse("band:0:0.5:0.5").unwrap();
     let views = &standard_views()[..3];
-    let fx = Fixture::with_bricks(4);
+    let mut fx = Fixture::with_bricks(4);
     let p = fx.prepare(&v, &t, DEFAULTS);
     let bricked: Vec<Frame> = views
         .iter()
@@ -375,7 +383,8 @@ fn a_volume_of_one_value_is_one_texel() {
         bricked.iter().all(|f| f.pixels.iter().any(|p| p[3] > 0.5)),
         "the value shows"
     );
-    assert_same("flat", &dense_naive(&v, &t, views), &bricked);
+    drop(p);
+    assert_same("flat", &dense_naive(&mut fx, &v, &t, views), &bricked);
     assert_clean(&ctx);
     assert_clean(&fx.ctx);
 }

@@ -69,9 +69,11 @@ pub struct Prepared<'a> {
 impl Fixture {
     pub fn new() -> Self {
         let ctx = super::gpu();
+        // One set of march kernels for auto's probes and the frames.
+        let builder = super::builder(&ctx);
         Fixture {
-            renderer: Renderer::new(&ctx).unwrap(),
-            builder: super::builder(&ctx),
+            renderer: Renderer::sharing(&builder).unwrap(),
+            builder,
             ctx,
             bricks: None,
         }

@@ -81,7 +81,8 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
     // structure auto marches does not change that, so its candidates are
     // priced with nominal constants rather than measured ones.
     builder.set_kernel_costs(Some(crate::accel::auto::KernelCost::NOMINAL))?;
-    let renderer = Renderer::new(ctx)?;
+    // Frames share the march kernels auto's probes created.
+    let renderer = Renderer::sharing(&builder)?;
     let mut out = Vec::new();
     ctx.take_validation_messages();
     let variants = structures()?;
