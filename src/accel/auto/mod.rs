@@ -110,8 +110,8 @@ impl Choice {
     }
 }
 
-/// Milliseconds to three significant places at GPU speeds (0.0512), one
-/// decimal above 10.
+/// Milliseconds for the reason line: three decimals below 1 ms (a GPU's
+/// 0.051), two below 10, one above.
 fn ms(v: f64) -> String {
     match v {
         v if v >= 10.0 => format!("{v:.1}"),
