@@ -207,7 +207,6 @@ fn dense_naive(fx: &mut Fixture, v: &Volume, tf: &TransferFunction, views: &[Fra
         .iter()
         .map(|view| fx.frame(&Structure::naive(), &p, view, Filter::Manual))
         .collect();
-    drop(p);
     fx.bricks = bricks;
     frames
 }
@@ -383,7 +382,6 @@ fn a_volume_of_one_value_is_one_texel() {
         bricked.iter().all(|f| f.pixels.iter().any(|p| p[3] > 0.5)),
         "the value shows"
     );
-    drop(p);
     assert_same("flat", &dense_naive(&mut fx, &v, &t, views), &bricked);
     assert_clean(&ctx);
     assert_clean(&fx.ctx);

@@ -167,6 +167,11 @@ impl<'a> FrameProbe<'a> {
         })
     }
 
+    /// Whether it marches every tile of the frame.
+    pub fn whole_frame(&self) -> bool {
+        self.stride == 1
+    }
+
     /// The whole frame's counts over the probed ones' (tiles).
     pub fn scale(&self) -> f64 {
         let (w, h) = self.desc.size();

@@ -298,8 +298,9 @@ fn choose(
         if !timed.is_empty() {
             let start = Instant::now();
             let tiles = choose::trial_tiles(&priced, &timed);
-            whole_frames = tiles == u32::MAX;
             let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, tiles)?;
+            // Small frames are whole at any wish.
+            whole_frames = probe.whole_frame();
             let pairs: Vec<(&FrameProbe, &Structure)> = timed.iter().map(|&i| (&probe, &built[i])).collect();
             probe.prepare(&pairs.iter().map(|p| p.1).collect::<Vec<_>>(), false)?;
             let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Least)?;
