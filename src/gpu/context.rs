@@ -4,6 +4,7 @@
 
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
+use super::kernel_cache::KernelCache;
 use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 use super::validation::{Messenger, ValidationMessage};
 use crate::error::{Error, Result, VkContext};
@@ -49,6 +50,8 @@ pub(crate) struct Inner {
     command_pool: Mutex<vk::CommandPool>,
     messenger: Option<Messenger>,
     pub(crate) info: DeviceInfo,
+    /// Every kernel made on this context (`Kernel` borrows their objects).
+    pub(crate) kernels: KernelCache,
     owned: bool,
 }
 
@@ -242,6 +245,7 @@ impl Context {
                 command_pool: Mutex::new(pool),
                 messenger,
                 info,
+                kernels: KernelCache::default(),
                 owned,
             }),
         })
@@ -249,6 +253,12 @@ impl Context {
 
     pub fn device(&self) -> &ash::Device {
         &self.inner.device
+    }
+
+    /// How many distinct kernels (SPIR-V and specialization) this context
+    /// has created: each is created once and kept until the context goes.
+    pub fn kernels_created(&self) -> usize {
+        self.inner.kernels.len()
     }
 
     /// Names a GPU object for validation messages and capture tools (a no-op
@@ -378,6 +388,7 @@ impl Drop for Inner {
             if self.owned {
                 let _ = self.device.device_wait_idle();
             }
+            self.kernels.destroy_all(&self.device);
             ManuallyDrop::drop(&mut self.allocator);
             self.device
                 .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);

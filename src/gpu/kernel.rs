@@ -5,16 +5,19 @@
 //! lists them), never by position.
 
 use super::binding::{Binding, Bound};
+use super::kernel_cache::{KernelKey, KernelObjects};
 use super::shaders::{Shader, Slot};
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 
+/// A compute pipeline with its layout. Its Vulkan objects belong to the
+/// context, which creates each (SPIR-V, specialization) once and destroys
+/// them when it goes (`kernel_cache.rs`): dropping a kernel frees nothing,
+/// and a second kernel of the same specialization costs no compile.
 pub struct Kernel {
     ctx: Context,
     pub name: &'static str,
-    module: vk::ShaderModule,
-    set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pub pipeline: vk::Pipeline,
     bindings: &'static [Slot],
@@ -68,80 +71,23 @@ impl Kernel {
             threads,
             info.max_compute_work_group_invocations as u64,
         )?;
-        let device = ctx.device();
-        let module =
-            unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
-                .vk("vkCreateShaderModule")?;
-        let mut kernel = Kernel {
+        let key = KernelKey::new(shader.words, constants);
+        let objects = match ctx.inner.kernels.get(&key) {
+            Some(objects) => objects,
+            None => {
+                let made = make(ctx, shader, constants)?;
+                ctx.inner.kernels.keep(ctx.device(), key, made)
+            }
+        };
+        Ok(Kernel {
             ctx: ctx.clone(),
             name,
-            module,
-            set_layout: vk::DescriptorSetLayout::null(),
-            layout: vk::PipelineLayout::null(),
-            pipeline: vk::Pipeline::null(),
+            layout: objects.layout,
+            pipeline: objects.pipeline,
             bindings: shader.bindings,
             push_size: shader.push_size,
             local_size,
-        };
-        ctx.name_object(module, name);
-        let slots: Vec<_> = shader
-            .bindings
-            .iter()
-            .enumerate()
-            .map(|(i, slot)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(slot.ty)
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
-            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
-            .bindings(&slots);
-        kernel.set_layout =
-            unsafe { device.create_descriptor_set_layout(&set_info, None) }.vk("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange {
-            stage_flags: vk::ShaderStageFlags::COMPUTE,
-            offset: 0,
-            size: shader.push_size,
-        }];
-        let set_layouts = [kernel.set_layout];
-        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if shader.push_size > 0 {
-            layout_info = layout_info.push_constant_ranges(&ranges);
-        }
-        kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
-        let entries: Vec<vk::SpecializationMapEntry> = (0..)
-            .zip(constants)
-            .map(|(i, &(id, _))| vk::SpecializationMapEntry {
-                constant_id: id,
-                offset: i * 4,
-                size: 4,
-            })
-            .collect();
-        let values: Vec<u32> = constants.iter().map(|&(_, v)| v).collect();
-        let spec = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(bytemuck::cast_slice(&values));
-        let mut stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main");
-        if !constants.is_empty() {
-            stage = stage.specialization_info(&spec);
-        }
-        // DISPATCH_BASE: large frames are dispatched in bands of rows.
-        let create = [vk::ComputePipelineCreateInfo::default()
-            .flags(vk::PipelineCreateFlags::DISPATCH_BASE)
-            .stage(stage)
-            .layout(kernel.layout)];
-        kernel.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
-            .map_err(|(_, r)| r)
-            .vk("vkCreateComputePipelines")?[0];
-        ctx.name_object(kernel.pipeline, name);
-        ctx.name_object(kernel.layout, name);
-        Ok(kernel)
+        })
     }
 
     /// Threads per workgroup, after specialization.
@@ -298,14 +244,87 @@ impl Kernel {
     }
 }
 
-impl Drop for Kernel {
-    fn drop(&mut self) {
-        let device = self.ctx.device();
-        unsafe {
-            device.destroy_pipeline(self.pipeline, None);
-            device.destroy_pipeline_layout(self.layout, None);
-            device.destroy_descriptor_set_layout(self.set_layout, None);
-            device.destroy_shader_module(self.module, None);
+/// Creates `shader`'s module, layouts and pipeline specialized with
+/// `constants`; on failure destroys what it made.
+fn make(ctx: &Context, shader: &Shader, constants: &[(u32, u32)]) -> Result<KernelObjects> {
+    let name = shader.name;
+    let device = ctx.device();
+    let mut objects = KernelObjects {
+        module: vk::ShaderModule::null(),
+        set_layout: vk::DescriptorSetLayout::null(),
+        layout: vk::PipelineLayout::null(),
+        pipeline: vk::Pipeline::null(),
+    };
+    let made = (|| {
+        objects.module =
+            unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
+                .vk("vkCreateShaderModule")?;
+        ctx.name_object(objects.module, name);
+        let slots: Vec<_> = shader
+            .bindings
+            .iter()
+            .enumerate()
+            .map(|(i, slot)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(slot.ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&slots);
+        objects.set_layout =
+            unsafe { device.create_descriptor_set_layout(&set_info, None) }.vk("vkCreateDescriptorSetLayout")?;
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::COMPUTE,
+            offset: 0,
+            size: shader.push_size,
+        }];
+        let set_layouts = [objects.set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if shader.push_size > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        objects.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
+        let entries: Vec<vk::SpecializationMapEntry> = (0..)
+            .zip(constants)
+            .map(|(i, &(id, _))| vk::SpecializationMapEntry {
+                constant_id: id,
+                offset: i * 4,
+                size: 4,
+            })
+            .collect();
+        let values: Vec<u32> = constants.iter().map(|&(_, v)| v).collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(&values));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(objects.module)
+            .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&spec);
+        }
+        // DISPATCH_BASE: large frames are dispatched in bands of rows.
+        let create = [vk::ComputePipelineCreateInfo::default()
+            .flags(vk::PipelineCreateFlags::DISPATCH_BASE)
+            .stage(stage)
+            .layout(objects.layout)];
+        objects.pipeline = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &create, None) }
+            .map_err(|(_, r)| r)
+            .vk("vkCreateComputePipelines")?[0];
+        ctx.name_object(objects.pipeline, name);
+        ctx.name_object(objects.layout, name);
+        Ok(())
+    })();
+    match made {
+        Ok(()) => Ok(objects),
+        Err(e) => {
+            // SAFETY: nothing recorded them; null handles are ignored.
+            unsafe { objects.destroy(device) };
+            Err(e)
         }
     }
 }

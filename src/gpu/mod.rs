@@ -9,6 +9,7 @@ mod device;
 mod image;
 mod instance;
 mod kernel;
+mod kernel_cache;
 mod memory;
 pub mod record;
 mod requirements;

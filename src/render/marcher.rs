@@ -52,13 +52,14 @@ struct Destination<'a> {
 }
 
 impl Renderer {
-    /// A renderer with march kernels of its own.
+    /// A renderer. Its kernels come from the context, which creates each
+    /// once: a second renderer on it compiles nothing it made before.
     pub fn new(ctx: &Context) -> Result<Self> {
         Self::with_kernels(ctx, Arc::new(MarchKernels::new(ctx)))
     }
 
-    /// A renderer sharing `builder`'s march kernels (the ones `auto`
-    /// created while choosing are then not compiled again).
+    /// A renderer sharing `builder`'s table of march kernels (the ones
+    /// `auto` looked up while choosing are not looked up again).
     pub fn sharing(builder: &Builder) -> Result<Self> {
         Self::with_kernels(builder.context(), builder.shared::<MarchKernels>()?)
     }
