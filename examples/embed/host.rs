@@ -1,6 +1,6 @@
 //! The host engine's own Vulkan objects (not lacuna's): 2D images with their
 //! memory and views, layout transitions, and image readback. Raw `ash`, as an
-//! engine has it; `tests/embed.rs` and `tests/host_render.rs` use it too.
+//! engine has it; `tests/integration/embed.rs` and `tests/integration/host_render.rs` use it too.
 #![allow(dead_code)]
 
 use ash::vk;

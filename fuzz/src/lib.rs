@@ -1,6 +1,6 @@
 //! The fuzz targets' bodies: each feeds one parser bytes from libFuzzer and
 //! checks that bad input is a one-line error; each returns whether the
-//! input parsed. `tests/fuzz_inputs.rs` in the
+//! input parsed. `tests/integration/fuzz_inputs.rs` in the
 //! main package includes this file and runs the seeds and every crash found
 //! through the same functions on stable.
 

@@ -249,7 +249,7 @@ impl<'a> FrameProbe<'a> {
     /// from the same march where the probe holds it (None: count naive's own
     /// march). Exact structures end every ray after naive's last sample,
     /// so naive's counts are known from theirs (`count_naive` in
-    /// glsl/common/march.glsl); `tests/auto.rs` checks them against naive's.
+    /// glsl/common/march.glsl); `tests/integration/auto.rs` checks them against naive's.
     pub fn count_both(&self, structure: &Structure) -> Result<(Counts, Option<Counts>)> {
         let device = self.ctx.device();
         self.ctx.submit_and_wait(|cmd| {

@@ -309,7 +309,7 @@ pub fn repack_shared(cells: &mut TexelBuffer, volume: &Volume) -> Result<()> {
 }
 
 /// The words of `volume`'s cells copy packed on the host: what
-/// `record_pack_cells` makes on the device, bit for bit (tests/cells.rs).
+/// `record_pack_cells` makes on the device, bit for bit (tests/integration/cells.rs).
 pub fn cells_words(volume: &Volume) -> Vec<u32> {
     pack_layers(volume, 0..cell_dims(volume.dims)[2])
 }

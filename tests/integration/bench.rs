@@ -1,0 +1,467 @@
+//! `lacuna bench` end to end on a tiny config: every output exists and is
+//! consistent (the JSON holds every data set x structure), every exact
+//! structure matches naive, the hard-case suite passes, bad input fails.
+
+use crate::common;
+use lacuna::bench::{BenchConfig, ErrorPoint, Record};
+use std::path::Path;
+use std::process::Command;
+
+fn lacuna(args: &[&str]) -> (i32, String, String) {
+    // auto's kernel constants in the tests' shared cache (tests/common).
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("xdg-cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args(args)
+        .env("XDG_CACHE_HOME", cache)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+const TINY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/tiny-bench.toml");
+
+#[test]
+fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        TINY,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--validate",
+        "--frames-out",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    for needle in [
+        "Table 2",
+        "Table 1",
+        "Image error against naive",
+        "skipped optional data set /no/such/volume.nii.gz",
+        "Time to the first exact frame of a new time step",
+    ] {
+        assert!(stdout.contains(needle), "'{needle}' missing:\n{stdout}");
+    }
+    let config = BenchConfig::load(Path::new(TINY)).unwrap();
+    let records: Vec<Record> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    // The series' new steps: every structure, each step exact (but the
+    // paper's classification, which need not be).
+    let steps: Vec<lacuna::bench::series::StepRecord> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("steps.json")).unwrap()).unwrap();
+    assert_eq!(steps.len(), config.structures.len());
+    for r in &steps {
+        assert_eq!(
+            (r.dataset.as_str(), r.steps.as_slice()),
+            ("nbody:32", &[3, 4][..]),
+            "{r:?}"
+        );
+        if !r.structure.contains("paper classification") {
+            assert_eq!(r.differing_pixels, 0, "{r:?}");
+        }
+        let parts = r.upload_ms + r.ranges_ms + r.build_ms + r.frame_ms;
+        assert!(r.new_step_ms > 0.0 && r.load_ms > 0.0, "{r:?}");
+        // Medians of sums are not sums of medians, but they bound each other.
+        assert!(r.new_step_ms <= 4.0 * parts && parts <= 4.0 * r.new_step_ms, "{r:?}");
+    }
+    let datasets = ["nbody:32", "menger:27"];
+    assert_eq!(records.len(), datasets.len() * config.structures.len());
+    for d in datasets {
+        for s in &config.structures {
+            let r = records
+                .iter()
+                .find(|r| r.dataset == d && r.structure == s.label)
+                .unwrap_or_else(|| panic!("{d} x {} missing", s.label));
+            assert_eq!((r.setup.width, r.setup.height, r.setup.frames), (32, 32, 2));
+            assert!(!r.setup.device.is_empty() && !r.setup.driver.is_empty());
+            assert!(
+                r.fps > 0.0 && r.frame.min_ms <= r.frame.median_ms && r.frame.median_ms <= r.frame.max_ms,
+                "{d} {}: {:?}",
+                s.label,
+                r.frame
+            );
+            // Every view timed in every round; warm-up within its bounds.
+            assert_eq!(r.setup.rounds, 2);
+            assert_eq!(r.frame.samples, r.setup.frames * r.setup.rounds, "{d} {}", s.label);
+            assert!(
+                (2..=config.warmup_cap).contains(&r.warmed_up.frames)
+                    && (2..=config.warmup_cap).contains(&r.warmed_up.builds),
+                "{d} {}: {:?}",
+                s.label,
+                r.warmed_up
+            );
+            assert!(
+                r.build_min_ms <= r.build_ms && r.build_ms <= r.build_max_ms,
+                "{d} {}",
+                s.label
+            );
+            // The noise flag follows the spreads it is defined by.
+            assert!(r.frame_spread >= 1.0 && r.build_spread >= 1.0);
+            assert_eq!(
+                r.unstable,
+                r.frame_spread > 1.5 || r.build_spread > 1.5,
+                "{d} {}",
+                s.label
+            );
+            assert!(
+                r.frame_spread <= r.frame.max_ms / r.frame.min_ms + 1e-9,
+                "a view's spread cannot exceed the record's"
+            );
+            // Speed-up over naive from the same rounds: naive's own is 1.
+            assert!(r.speedup.is_finite() && r.speedup > 0.0, "{d} {}", s.label);
+            if s.accel == "naive" {
+                assert_eq!(r.speedup, 1.0);
+            } else {
+                // The median of paired ratios lies between the extreme ratios.
+                let naive = records.iter().find(|n| n.dataset == d && n.accel == "naive").unwrap();
+                assert!(
+                    r.speedup <= naive.frame.max_ms / r.frame.min_ms + 1e-9
+                        && r.speedup >= naive.frame.min_ms / r.frame.max_ms - 1e-9,
+                    "{d} {}: speed-up {} outside what the times allow",
+                    s.label,
+                    r.speedup
+                );
+            }
+            assert!(r.visible_percent > 0.0 && r.active_brick_percent > 0.0);
+            if s.accel == "naive" {
+                assert_eq!(r.nodes, 0);
+            } else {
+                assert!(
+                    r.build_ms > 0.0 && r.nodes > 0 && r.tree_height > 0 && !r.build_phases_ms.is_empty(),
+                    "{d} {}",
+                    s.label
+                );
+            }
+            if !s.label.contains("paper") {
+                assert_eq!(r.error_vs_naive.differing, 0, "{d} {} differs from naive", s.label);
+            }
+        }
+    }
+    assert_eq!(
+        records.iter().find(|r| r.dataset == "menger:27").unwrap().tf,
+        "ramp:0.3:1:0.3"
+    );
+    // CSV: a header and a row per record, with the speed-up and the flag.
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), records.len() + 1);
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    for column in [
+        "frame_min_ms",
+        "frame_median_ms",
+        "frame_max_ms",
+        "speedup",
+        "unstable",
+        "warmup_capped",
+    ] {
+        assert!(header.contains(&column), "CSV lacks {column}");
+    }
+    // Tables: speed-ups in Table 2 and the frame table; a dagger exactly
+    // when a record is unstable.
+    let table2 = std::fs::read_to_string(out.join("table2.md")).unwrap();
+    let frames_md = std::fs::read_to_string(out.join("frames.md")).unwrap();
+    assert!(table2.contains("(1.00x)"), "{table2}");
+    assert!(frames_md.contains(" 1.00x"), "{frames_md}");
+    let marked = |t: &str| {
+        t.lines()
+            .filter(|l| l.starts_with('|'))
+            .map(|l| l.matches(" †").count())
+            .sum::<usize>()
+    };
+    let unstable = records.iter().filter(|r| r.unstable).count();
+    assert_eq!(marked(&table2), unstable, "{table2}");
+    assert_eq!(marked(&frames_md), unstable, "{frames_md}");
+    assert!(stdout.contains("fastest on nbody:32: "), "{stdout}");
+    // Only an exact structure can be the fastest: a faster one whose image
+    // differs from naive's (the paper's classification can) is passed over.
+    let mut fast = records.clone();
+    fast[1].frame.median_ms = 1e-6;
+    let fastest = |rs: &[Record]| -> Vec<(String, String)> {
+        let pick = lacuna::bench::tables::fastest(rs);
+        pick.iter().map(|r| (r.dataset.clone(), r.structure.clone())).collect()
+    };
+    let it = (fast[1].dataset.clone(), fast[1].structure.clone());
+    assert!(fastest(&fast).contains(&it));
+    fast[1].error_vs_naive.differing = 3;
+    assert!(!fastest(&fast).contains(&it));
+
+    // The run compared with itself passes; with one median doubled it fails.
+    let results = out.join("results.json");
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        "--compare",
+        results.to_str().unwrap(),
+        results.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(stdout.contains("largest change of a median 0.0 %"), "{stdout}");
+    let mut slower = records.clone();
+    let last = slower.len() - 1;
+    slower[last].frame.median_ms *= 2.0;
+    let slower_path = dir.path().join("slower.json");
+    std::fs::write(&slower_path, serde_json::to_string(&slower).unwrap()).unwrap();
+    let (code, stdout, _) = lacuna(&[
+        "bench",
+        "--compare",
+        results.to_str().unwrap(),
+        slower_path.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{stdout}");
+    assert!(
+        stdout.contains("largest change of a median 100.0 %") && stdout.contains("FAIL"),
+        "{stdout}"
+    );
+    // Speed against error: 2 filters x 2 steps x 2 thresholds, errors shrink
+    // with the step under each filter.
+    let points: Vec<ErrorPoint> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("error.json")).unwrap()).unwrap();
+    assert_eq!(points.len(), 8);
+    for filter in ["manual", "hardware"] {
+        let rmse = |step: f32| {
+            points
+                .iter()
+                .find(|p| p.sweep_step == step && p.ert.is_none() && p.filter == filter)
+                .unwrap()
+                .error
+                .rmse
+        };
+        assert!(
+            rmse(0.25) < rmse(1.0),
+            "{filter}: a finer step should be closer to the reference"
+        );
+    }
+    // The timed frames use the device's faster filter for 8-bit volumes:
+    // manual from the cells copy on a CPU device, else hardware.
+    let cpu = common::gpu().info().device_type == lacuna::gpu::vk::PhysicalDeviceType::CPU;
+    let faster = if cpu { "manual" } else { "hardware" };
+    assert!(
+        records.iter().all(|r| r.filter == faster),
+        "timed filter is not {faster}"
+    );
+    for f in [
+        "table1.md",
+        "table2.md",
+        "exactness.md",
+        "frames.md",
+        "error.md",
+        "error.csv",
+        "notes.txt",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    for f in ["fig3-fps", "fig4-build-rate", "error"] {
+        let svg = std::fs::read_to_string(out.join(format!("{f}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") || svg.contains("<svg"), "{f}.svg");
+        let png = std::fs::read(out.join(format!("{f}.png"))).unwrap();
+        assert_eq!(&png[1..4], b"PNG", "{f}.png");
+    }
+    let frames = std::fs::read_dir(out.join("frames")).unwrap().count();
+    assert_eq!(frames, records.len());
+}
+
+/// Runs `bench --suite hard` in `looks`; asserts every run passed, every
+/// case and structure ran in each look, and the table shows them.
+fn hard_suite_passes(looks: &[&str]) {
+    let mut args = vec!["bench", "--suite", "hard", "--quiet"];
+    for l in looks {
+        args.extend(["--look", l]);
+    }
+    let (code, stdout, stderr) = lacuna(&args);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("| hard case | look | filter | lbvh | lbvh collapsed | grid |"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("FAIL"), "{stdout}");
+    let cases = lacuna::bench::hard::cases().unwrap();
+    let structures = lacuna::bench::hard::structures().unwrap().len();
+    let line = stdout.lines().find(|l| l.starts_with("hard cases: ")).unwrap();
+    let numbers: Vec<usize> = line
+        .split(|c: char| !c.is_ascii_digit())
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    // passed, of total, marched naively; at least one filter per case and look.
+    assert_eq!(numbers[0], numbers[1], "{line}");
+    // Several channels are not rendered lit (README, "Channels").
+    let lit = |look: &str| look.starts_with("shaded") || look.starts_with("iso");
+    let applies = |case: &lacuna::bench::hard::HardCase, look: &str| case.volume.channel_count() == 1 || !lit(look);
+    let runs: usize = cases
+        .iter()
+        .map(|c| looks.iter().filter(|l| applies(c, l)).count())
+        .sum();
+    assert!(numbers[1] >= runs * structures, "{line}");
+    assert!(cases.iter().any(|c| c.volume.channel_count() > 1));
+    for case in &cases {
+        for look in looks.iter().filter(|l| applies(case, l)) {
+            assert!(
+                stdout.contains(&format!("| {} | {look} | manual |", case.name)),
+                "{} {look}",
+                case.name
+            );
+        }
+    }
+    // Average is marched naively by every structure; the others skip.
+    let naive = structures * cases.len() * usize::from(looks.contains(&"average"));
+    assert_eq!(numbers[2], naive, "{line}");
+}
+
+// The suite in two halves, which the test harness runs side by side.
+#[test]
+fn the_hard_case_suite_passes_in_composite_shaded_and_mip() {
+    hard_suite_passes(&["composite", "shaded, jittered", "mip"]);
+}
+
+#[test]
+fn the_hard_case_suite_passes_in_minip_average_and_iso() {
+    hard_suite_passes(&["minip", "average", "iso, jittered"]);
+}
+
+#[test]
+fn an_unknown_hard_suite_look_is_refused() {
+    let (code, _, stderr) = lacuna(&["bench", "--suite", "hard", "--look", "glow"]);
+    assert_ne!(code, 0);
+    assert!(
+        stderr.contains("invalid look 'glow': expected one of: composite;"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn built_in_configs_parse_and_cover_every_structure() {
+    for (text, name) in [
+        (lacuna::bench::config::QUICK, "quick"),
+        (lacuna::bench::config::PAPER, "paper"),
+    ] {
+        let c = BenchConfig::parse(text, name).unwrap();
+        for accel in lacuna::accel::TABLE {
+            assert!(
+                c.structures.iter().any(|s| s.accel == accel.name()),
+                "{name} lacks {accel}"
+            );
+        }
+        assert!(
+            c.error.as_ref().unwrap().datasets.as_ref().unwrap().len() >= 3,
+            "{name}: speed against error needs three data sets"
+        );
+    }
+}
+
+#[test]
+fn protocol_fields_have_documented_defaults_and_data_sets_their_own_ert() {
+    // Only data sets and structures: every protocol field takes its default
+    // (README, "Benchmark"), and the file's stem names the run.
+    let c = BenchConfig::parse(
+        "[[dataset]]\nvolume = \"nbody:8\"\n[[dataset]]\nvolume = \"nbody:8\"\nert = 0.99\n\
+         [[structure]]\nlabel = \"n\"\naccel = \"naive\"\n",
+        "/some/where/mine.toml",
+    )
+    .unwrap();
+    assert_eq!(c.name, "mine");
+    assert_eq!(c.size, [512, 512]);
+    assert_eq!((c.frames, c.warmup, c.builds, c.rounds, c.warmup_cap), (6, 2, 3, 3, 30));
+    assert_eq!((c.step, c.elevation, c.ert, c.stable), (0.5, 20.0, None, 0.05));
+    assert_eq!(c.datasets[1].ert, Some(0.99));
+    assert_eq!(c.datasets[1].label(&c).unwrap(), "nbody:8 [ert 0.99]");
+    assert_eq!(c.datasets[0].label(&c).unwrap(), "nbody:8");
+    // The built-in auto suite times every data set with ERT off and on.
+    let auto = BenchConfig::parse(lacuna::bench::config::AUTO, "auto").unwrap();
+    let on = auto.datasets.iter().filter(|d| d.ert.is_some()).count();
+    assert_eq!(2 * on, auto.datasets.len());
+    assert!(auto.structures.iter().any(|s| s.accel == "auto"));
+}
+
+#[test]
+fn bad_bench_input_is_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(
+        &bad,
+        "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\nbogus = 1\n",
+    )
+    .unwrap();
+    let dup = dir.path().join("dup.toml");
+    std::fs::write(
+        &dup,
+        "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"lbvh\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n",
+    )
+    .unwrap();
+    let filter = dir.path().join("filter.toml");
+    std::fs::write(
+        &filter,
+        "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n[error]\nsteps = [1.0]\nert = [0.0]\nfilters = [\"manual\", \"linear\"]\nreference_step = 0.5\nframes = 1\naccel = \"grid\"\n",
+    )
+    .unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["bench", filter.to_str().unwrap()], "expected manual or hardware"),
+        (
+            vec!["bench", "--quick", "--filter", "linear"],
+            "expected manual or hardware",
+        ),
+        (vec!["bench"], "give exactly one of"),
+        (vec!["bench", "--quick", "--paper"], "give exactly one of"),
+        (vec!["bench", "--suite", "soft"], "expected hard or auto"),
+        (vec!["bench", "/no/such.toml"], "/no/such.toml"),
+        (vec!["bench", bad.to_str().unwrap()], "unknown field"),
+        (vec!["bench", dup.to_str().unwrap()], "appears twice"),
+        (
+            vec!["bench", "--quick", "--frames", "0"],
+            "frames and builds must be at least 1",
+        ),
+        (vec!["bench", "--quick", "--rounds", "1"], "rounds must be at least 2"),
+        (vec!["bench", "--quick", "--ert", "1.5"], "ert must be in (0, 1]"),
+        (vec!["bench", "--compare", "/no/a.json", "/no/b.json"], "/no/a.json"),
+        (vec!["bench", "--quick", "--compare", "a", "b"], "give exactly one of"),
+        (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
+        (vec!["bench", "--quick", "--size", "100000x100000"], "1..=16384 pixels"),
+    ];
+    for (args, needle) in cases {
+        let (code, _, stderr) = lacuna(&args);
+        assert_ne!(code, 0, "{args:?}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn interleaving_visits_every_structure_in_every_round_naive_first() {
+    let (views, rounds, structures) = (3, 4, 5);
+    let slots: Vec<_> = lacuna::bench::schedule(views, rounds, structures).collect();
+    assert_eq!(slots.len(), (views * rounds) as usize * structures);
+    for (i, chunk) in slots.chunks(structures).enumerate() {
+        // One round: the same view and round, every structure once, in order.
+        let (view, round) = (chunk[0].view, chunk[0].round);
+        assert_eq!((view, round), (i as u32 / rounds, i as u32 % rounds));
+        let order: Vec<usize> = chunk.iter().map(|s| s.structure).collect();
+        assert_eq!(order, (0..structures).collect::<Vec<_>>());
+        assert!(chunk.iter().all(|s| s.view == view && s.round == round));
+    }
+}
+
+#[test]
+fn warm_up_runs_until_two_consecutive_times_agree_and_reports_the_cap() {
+    use lacuna::bench::{warm_up, WarmedUp};
+    let run = |times: &[f64], least, cap| {
+        let mut seen = 0;
+        let w = warm_up(least, cap, 0.05, |i| {
+            seen += 1;
+            Ok(times[i as usize % times.len()])
+        })
+        .unwrap();
+        assert_eq!(seen, w.runs, "one call per run");
+        w
+    };
+    // A cold cache: slow first frames, then stable.
+    let cold = [120.0, 90.0, 40.0, 33.0, 32.0, 32.5];
+    assert_eq!(run(&cold, 1, 30), WarmedUp { runs: 5, capped: false });
+    // Never two alike: stops at the cap and says so.
+    assert_eq!(run(&[10.0, 20.0], 1, 7), WarmedUp { runs: 7, capped: true });
+    // Stable at once still runs the least number asked for (never fewer than 2).
+    assert_eq!(run(&[5.0], 0, 30), WarmedUp { runs: 2, capped: false });
+    assert_eq!(run(&[5.0], 4, 30), WarmedUp { runs: 4, capped: false });
+    // An error in a run stops the warm-up with it.
+    assert!(warm_up(1, 5, 0.05, |_| Err(lacuna::Error::invalid("x", "y", "z"))).is_err());
+}

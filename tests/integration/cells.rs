@@ -1,0 +1,282 @@
+//! The cells copies (src/volume/cells.rs): the manual filter reading one
+//! texel per sample from the volume's, and three per lit sample from the
+//! gradient's, gives the frames it gives from eight texel fetches each, bit
+//! for bit, for every texel kind (unorm8, unorm16, float32 with NaN), odd
+//! dimensions, cameras along axes and inside the volume, and every mode
+//! (shaded composite and iso read the gradient); and a copy the device
+//! cannot hold is refused by the limit.
+
+use crate::common::{assert_clean, gpu};
+use lacuna::accel::{Accel, BuildInput, Builder};
+use lacuna::desc::Iso;
+use lacuna::frame::Frame;
+use lacuna::gpu::Context;
+use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
+use lacuna::volume::{
+    cells_words, check_cells, check_gradient_cells, record_pack_cells, GpuVolume, TexelKind, VoxelData, VoxelType,
+};
+use lacuna::{TransferFunction, Volume};
+
+/// A lumpy field on odd dims in each texel kind, values over the whole range.
+fn volumes() -> Vec<Volume> {
+    let dims = [13u32, 9, 7];
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let field: Vec<f32> = (0..n)
+        .map(|i| {
+            let (x, y, z) = (i % 13, i / 13 % 9, i / 117);
+            (((x * 7 + y * 5 + z * 11) % 17) as f32 / 16.0 * 0.8 + 0.1 * (x % 3) as f32).min(1.0)
+        })
+        .collect();
+    let u8s = field.iter().map(|v| (v * 255.0) as u8).collect();
+    let u16s = field.iter().map(|v| (v * 65535.0) as u16).collect();
+    // Float data with no-data holes: some beside others, one on a face.
+    let mut f32s = field.clone();
+    for i in [0, 14, 15, 200, 201, 330, n - 1] {
+        f32s[i] = f32::NAN;
+    }
+    vec![
+        Volume::new("cells u8", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(u8s)).unwrap(),
+        Volume::new("cells u16", dims, [1.0, 0.5, 2.0], VoxelType::U16, VoxelData::U16(u16s)).unwrap(),
+        Volume::new("cells f32", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(f32s)).unwrap(),
+    ]
+}
+
+fn frame(
+    ctx: &Context,
+    renderer: &Renderer,
+    gv: &GpuVolume,
+    v: &Volume,
+    tf: &TransferFunction,
+    desc: &FrameDesc,
+) -> Frame {
+    let lut = tf.upload(ctx).unwrap();
+    let builder = Builder::new(ctx).unwrap();
+    let accel = Accel::naive();
+    let (ranges, _) = builder.ranges_for(&[(accel, &accel.defaults())], gv).unwrap();
+    let input = BuildInput {
+        volume: v,
+        gpu_volume: gv,
+        tf,
+        gpu_tf: &lut,
+        mode: *desc.mode(),
+        frame: None,
+    };
+    let (structure, _) = builder.build(accel, &input, &ranges, &accel.defaults()).unwrap();
+    let scene = Scene {
+        structure: &structure,
+        volume: gv,
+        tf: &lut,
+    };
+    renderer.render(scene, desc).unwrap().0
+}
+
+#[test]
+fn cells_give_the_manual_filters_samples_bit_for_bit() {
+    let ctx = gpu();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:0.9").unwrap();
+    let views = [
+        (30.0, 20.0, Projection::Orthographic),
+        (0.0, 0.0, Projection::Orthographic),
+        (90.0, 90.0, Projection::Orthographic),
+        (
+            45.0,
+            30.0,
+            Projection::Perspective {
+                fov_deg: 60.0,
+                distance: Some(0.3),
+            },
+        ),
+    ];
+    // (mode, shaded)
+    let modes = [
+        (Mode::Composite, false),
+        (Mode::Composite, true),
+        (Mode::Mip, false),
+        (Mode::Iso(Iso::new(&[0.45]).unwrap()), false),
+    ];
+    for v in volumes() {
+        let mut plain = GpuVolume::upload(&ctx, &v).unwrap();
+        plain.add_gradient(&v).unwrap();
+        let mut cells = GpuVolume::upload(&ctx, &v).unwrap();
+        cells.prepare(&v, true, Some(Filter::Manual)).unwrap();
+        assert!(cells.cells().is_some(), "{}: no cells copy", v.name);
+        assert!(cells.gradient_cells().is_some(), "{}: no gradient cells copy", v.name);
+        assert!(plain.gradient_cells().is_none());
+        assert_eq!(cells.default_filter(), Filter::Manual);
+        for (mode, shaded) in &modes {
+            for &(az, el, projection) in &views {
+                let desc = FrameDesc::builder(40, 32)
+                    .orbit(az, el, projection)
+                    .filter(Filter::Manual)
+                    .mode(*mode)
+                    .shading(shaded.then(Shading::default))
+                    .build()
+                    .unwrap();
+                let a = frame(&ctx, &renderer, &plain, &v, &tf, &desc);
+                let b = frame(&ctx, &renderer, &cells, &v, &tf, &desc);
+                let visible = a.pixels.iter().filter(|p| p[3] > 0.0).count();
+                assert!(
+                    visible > 50,
+                    "{} {mode:?} {az},{el}: only {visible} visible pixels",
+                    v.name
+                );
+                for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
+                    let bits = |c: &[f32; 4]| c.map(f32::to_bits);
+                    assert_eq!(
+                        bits(p),
+                        bits(q),
+                        "{} {mode:?} view {az},{el}: pixel {i} differs with the cells copy",
+                        v.name
+                    );
+                }
+            }
+        }
+    }
+    assert_clean(&ctx);
+}
+
+#[test]
+fn a_cells_copy_past_the_devices_limits_is_refused_by_name() {
+    let ctx = gpu();
+    let info = ctx.info();
+    let err = check_cells(info, [4000, 4000, 4000], TexelKind::Unorm8)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("maxTexelBufferElements") && err.contains("cells copy of volume 4000x4000x4000"),
+        "{err}"
+    );
+    assert!(check_cells(info, [64, 64, 64], TexelKind::Float32).is_ok());
+    let err = check_gradient_cells(info, [2000, 2000, 2000]).unwrap_err().to_string();
+    assert!(
+        err.contains("maxTexelBufferElements") && err.contains("gradient cells copy of volume 2000x2000x2000"),
+        "{err}"
+    );
+    assert_eq!(TexelKind::Float32.bytes_per_voxel(), 32);
+}
+
+/// The copy the device makes from the volume image (`record_pack_cells`,
+/// the path of devices whose memory is not the host's) and the one the
+/// host packs in shared memory (`add_cells` on this CPU device) are the
+/// host's words, bit for bit, for every kind (NaN included), also when the
+/// copy is made in several dispatches of a few rows each.
+#[test]
+fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
+    let ctx = gpu();
+    for v in volumes() {
+        let want: Vec<u8> = bytemuck::cast_slice(&cells_words(&v)).to_vec();
+        let kind = TexelKind::of(&v.data);
+        let mut gv = GpuVolume::upload(&ctx, &v).unwrap();
+        // One binding for the whole copy, and one of about three rows.
+        let row = (v.dims[0] as u64 + 1) * kind.bytes_per_voxel();
+        for range in [u64::MAX, 3 * row + 1] {
+            let image = (gv.image.view, gv.sampler);
+            let mut timer = lacuna::gpu::Timer::new(&ctx, 1).unwrap();
+            let got = ctx
+                .submit_and_wait(|cmd| {
+                    timer.reset(cmd);
+                    record_pack_cells(&ctx, cmd, Some(&mut timer), image, v.dims, kind, range)
+                })
+                .unwrap()
+                .0;
+            // The pass is timed.
+            assert!(timer.results().unwrap().phase("cells").unwrap() >= 0.0);
+            let got = got.buffer().download(0, want.len() as u64).unwrap();
+            assert!(
+                got == want,
+                "{}: the device's copy differs (binding of {range} bytes)",
+                v.name
+            );
+        }
+        gv.add_cells(&v).unwrap();
+        let shared = gv.cells().unwrap().buffer().download(0, want.len() as u64).unwrap();
+        assert!(shared == want, "{}: add_cells's copy differs", v.name);
+    }
+    assert_clean(&ctx);
+}
+
+/// Another step of `v`'s series: its voxels in reverse order, floats
+/// doubled (another normalisation) and without NaN, on another spacing,
+/// so every texel, copy and flag changes.
+fn step_before(v: &Volume) -> Volume {
+    let data = match &v.data {
+        VoxelData::U8(d) => VoxelData::U8(d.iter().rev().copied().collect()),
+        VoxelData::U16(d) => VoxelData::U16(d.iter().rev().copied().collect()),
+        VoxelData::F32(d) => VoxelData::F32(d.iter().rev().map(|x| if x.is_nan() { 0.5 } else { 2.0 * x }).collect()),
+        VoxelData::Bricks(_) => unreachable!("volumes() are dense"),
+    };
+    let spacing = v.spacing.map(|s| 1.5 * s);
+    Volume::new("step before", v.dims, spacing, v.source_type, data).unwrap()
+}
+
+/// A step put in place of the one before (`GpuVolume::replace`, as `view`
+/// and `bench` play a series) renders as a fresh upload of it, bit for
+/// bit, cells and gradient copies included, in every kind and mode; a
+/// volume on another grid, of another kind or bricked is not put in place.
+#[test]
+fn a_step_put_in_place_renders_as_its_fresh_upload() {
+    let ctx = gpu();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:0.9").unwrap();
+    let modes = [
+        (Mode::Composite, false),
+        (Mode::Composite, true),
+        (Mode::Mip, false),
+        (Mode::Iso(Iso::new(&[0.45]).unwrap()), false),
+    ];
+    let volumes = volumes();
+    for v in &volumes {
+        let before = step_before(v);
+        let mut placed = GpuVolume::upload(&ctx, &before).unwrap();
+        placed.prepare(&before, true, Some(Filter::Manual)).unwrap();
+        let desc = FrameDesc::builder(40, 32).filter(Filter::Manual).build().unwrap();
+        let old = frame(&ctx, &renderer, &placed, &before, &tf, &desc);
+        assert!(placed.replace(v).unwrap(), "{}: not put in place", v.name);
+        placed.prepare(v, true, Some(Filter::Manual)).unwrap();
+        let mut fresh = GpuVolume::upload(&ctx, v).unwrap();
+        fresh.prepare(v, true, Some(Filter::Manual)).unwrap();
+        assert_eq!((placed.norm, placed.has_nan), (fresh.norm, fresh.has_nan), "{}", v.name);
+        assert_eq!(
+            (placed.spacing, placed.has_nan),
+            (v.spacing, v.no_data_total() > 0),
+            "{}",
+            v.name
+        );
+        let words = |g: &GpuVolume| {
+            g.cells()
+                .unwrap()
+                .buffer()
+                .download(0, g.cells().unwrap().buffer().size())
+        };
+        assert!(
+            words(&placed).unwrap() == words(&fresh).unwrap(),
+            "{}: cells copies differ",
+            v.name
+        );
+        for (mode, shaded) in &modes {
+            let desc = FrameDesc::builder(40, 32)
+                .orbit(30.0, 20.0, Projection::Orthographic)
+                .filter(Filter::Manual)
+                .mode(*mode)
+                .shading(shaded.then(Shading::default))
+                .build()
+                .unwrap();
+            let a = frame(&ctx, &renderer, &placed, v, &tf, &desc);
+            let b = frame(&ctx, &renderer, &fresh, v, &tf, &desc);
+            let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+            assert!(bits(&a) == bits(&b), "{} {mode:?} shaded {shaded}: differs", v.name);
+            if matches!(mode, Mode::Composite) && !shaded {
+                assert!(bits(&a) != bits(&old), "{}: the step before looks the same", v.name);
+            }
+        }
+    }
+    // Not in place: other dims, another kind, bricked storage.
+    let mut u8s = GpuVolume::upload(&ctx, &volumes[0]).unwrap();
+    let smaller = lacuna::Volume::load("nbody:13x9x6", &Default::default()).unwrap();
+    assert!(!u8s.replace(&smaller).unwrap());
+    assert!(!u8s.replace(&volumes[1]).unwrap());
+    let mut bricked = GpuVolume::upload_bricks(&ctx, &volumes[0], 4).unwrap();
+    assert!(!bricked.replace(&volumes[0]).unwrap());
+    assert_clean(&ctx);
+}

@@ -1,0 +1,172 @@
+//! The GPU distance maps (cube and octant) against a brute-force CPU
+//! transform, and the extremes: no active cell, every cell active, one
+//! active cell.
+
+use crate::common::{assert_clean, gpu};
+use lacuna::accel::distance::{self, DistanceMap};
+use lacuna::accel::{BuildInput, Builder, RangeKind};
+use lacuna::gpu::{Context, Timer};
+use lacuna::render::Mode;
+use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
+use lacuna::{TransferFunction, Volume};
+
+fn rng(seed: u64) -> impl FnMut() -> u32 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 33) as u32
+    }
+}
+
+/// A volume with a bright voxel at random positions (`per_mille` of voxels).
+fn speckles(dims: [u32; 3], per_mille: u32, seed: u64) -> Volume {
+    let mut r = rng(seed);
+    let data: Vec<u8> = (0..dims.iter().product::<u32>())
+        .map(|_| if r() % 1000 < per_mille { 255 } else { 0 })
+        .collect();
+    Volume::new("speckles", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap()
+}
+
+struct Built {
+    map: DistanceMap,
+    flags: Vec<bool>,
+    distances: Vec<u32>,
+    /// Active cells, and cells.
+    active: usize,
+    cells: usize,
+    phases: Vec<String>,
+}
+
+fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool) -> Built {
+    let builder = Builder::new(ctx).unwrap();
+    let gv = GpuVolume::upload(ctx, v).unwrap();
+    let lut = tf.upload(ctx).unwrap();
+    let (ranges, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
+    let mut timer = Timer::new(ctx, 8).unwrap();
+    let input = BuildInput {
+        volume: v,
+        gpu_volume: &gv,
+        tf,
+        gpu_tf: &lut,
+        mode: Mode::Composite,
+        frame: None,
+    };
+    let map = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            distance::record(&builder, cmd, Some(&mut timer), &input, ranges.cells(cell)?, octants)
+        })
+        .unwrap();
+    let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.download(0, map.flags.size()).unwrap());
+    let total = map.counts.iter().product::<u32>() as usize;
+    let flags: Vec<bool> = flags[..total].iter().map(|&f| f != 0).collect();
+    let distances = map.download().unwrap();
+    let timings = timer.results().unwrap();
+    let phases = ["classify", "distance x", "distance y", "distance z"]
+        .into_iter()
+        .filter(|p| timings.get(p).is_some())
+        .map(String::from)
+        .collect();
+    assert_clean(ctx);
+    Built {
+        map,
+        distances,
+        active: flags.iter().filter(|&&f| f).count(),
+        cells: flags.len(),
+        flags,
+        phases,
+    }
+}
+
+fn check(what: &str, b: &Built, octants: bool) {
+    let reference = distance::reference(b.map.counts, &b.flags, octants);
+    assert_eq!(b.distances.len(), reference.len(), "{what}: map size");
+    if let Some(i) = (0..reference.len()).find(|&i| b.distances[i] != reference[i]) {
+        let per = distance::channels(octants);
+        panic!(
+            "{what}: cell {} channel {}: GPU {} CPU {}",
+            i / per,
+            i % per,
+            b.distances[i],
+            reference[i]
+        );
+    }
+    for phase in ["classify", "distance x", "distance y", "distance z"] {
+        assert!(b.phases.iter().any(|p| p == phase), "{what}: phase {phase} not timed");
+    }
+}
+
+#[test]
+fn maps_match_the_brute_force_transform() {
+    let ctx = gpu();
+    let tf = TransferFunction::parse("ramp:0.5:1").unwrap();
+    // The 140-voxel axes are rows of 70 cells at cell 2: longer than
+    // distance_rows.comp and distance_octant_rows.comp keep in private
+    // arrays, so they use the storage stack (deque), along each axis in
+    // turn (the octant kernel computes 2, 2 and 4 map words along x, y and
+    // z). The 128-voxel axis is rows of exactly 64 cells at cell 2, the
+    // longest kept in private arrays.
+    for (dims, per_mille, seed) in [
+        ([40, 36, 44], 1, 1),
+        ([64, 24, 32], 4, 2),
+        ([33, 47, 20], 20, 3),
+        ([140, 12, 10], 8, 4),
+        ([12, 140, 10], 8, 5),
+        ([10, 12, 140], 8, 6),
+        ([10, 128, 12], 8, 7),
+    ] {
+        let v = speckles(dims, per_mille, seed);
+        for cell in [2, 4, 8] {
+            for octants in [false, true] {
+                let b = build(&ctx, &v, &tf, cell, octants);
+                assert!(b.active > 0, "{dims:?} cell {cell}: some cells active");
+                if cell < 8 {
+                    assert!(b.active < b.cells, "{dims:?} cell {cell}: some cells empty");
+                }
+                check(&format!("{dims:?} cell {cell} octants {octants}"), &b, octants);
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_full_and_single_cell_maps() {
+    let ctx = gpu();
+    let dims = [32, 32, 32];
+    let zeros = Volume::new(
+        "zeros",
+        dims,
+        [1.0; 3],
+        VoxelType::U8,
+        VoxelData::U8(vec![0; 32 * 32 * 32]),
+    )
+    .unwrap();
+    let visible = TransferFunction::parse("ramp:0:1").unwrap();
+    let invisible = TransferFunction::parse("ramp:0.5:1").unwrap();
+    let mut one = vec![0u8; 32 * 32 * 32];
+    one[17 + 32 * (9 + 32 * 25)] = 255;
+    let one = Volume::new("one", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(one)).unwrap();
+    for octants in [false, true] {
+        // No active cell: every distance is the cap (a cap only shortens jumps).
+        let b = build(&ctx, &zeros, &invisible, 4, octants);
+        assert_eq!(b.active, 0);
+        let half = distance::channels(octants) / 2;
+        assert!(b
+            .distances
+            .chunks(2 * half)
+            .all(|c| c[..half].iter().all(|&d| d == distance::CAP)));
+        check("empty", &b, octants);
+        // Every cell active: a TF visible at the volume's one value.
+        let b = build(
+            &ctx,
+            &zeros,
+            &TransferFunction::parse("band:0:0.1").unwrap(),
+            4,
+            octants,
+        );
+        assert_eq!(b.active, b.cells, "all active");
+        check("full", &b, octants);
+        let b = build(&ctx, &one, &visible, 8, octants);
+        check("one voxel", &b, octants);
+    }
+}

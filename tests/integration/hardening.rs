@@ -1,0 +1,228 @@
+//! Hardening: inputs that ask for too much memory, too much GPU work, or are
+//! hostile files give one `error:` line and a non-zero exit, with no panic,
+//! no backtrace and no output file; the error names the check that refused
+//! the input, so nothing was allocated or marched first.
+
+use crate::common;
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+/// Runs `lacuna args` with RUST_BACKTRACE=1 (a panic would show one);
+/// returns (exit code, stderr). That it refused before allocating is shown
+/// by the error naming the size check, not by a clock.
+fn run(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .output()
+        .unwrap();
+    (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// `args` (plus `--out DIR/out.exr` when `out`) fail with exactly one
+/// `error:` line containing every needle, and `dir` stays empty.
+fn fails(dir: &Path, args: &[&str], out: bool, needles: &[&str]) {
+    let target = dir.join("out.exr");
+    let target = target.to_str().unwrap();
+    let mut all = args.to_vec();
+    if out {
+        all.extend(["--out", target]);
+    }
+    let (code, stderr) = run(&all);
+    assert!(code.is_some_and(|c| c != 0), "{all:?}: exit {code:?}\n{stderr}");
+    let lines: Vec<&str> = stderr.trim_end().lines().collect();
+    assert_eq!(lines.len(), 1, "{all:?}: expected one line:\n{stderr}");
+    assert!(lines[0].starts_with("error: "), "{all:?}: {}", lines[0]);
+    for n in needles {
+        assert!(lines[0].contains(n), "{all:?}: '{}' lacks '{n}'", lines[0]);
+    }
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("backtrace"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_dir(dir).unwrap().count(), 0, "{all:?} left a file");
+}
+
+#[test]
+fn sizes_are_checked_before_allocation() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 10^15 voxels: the host check, from the spec alone.
+    fails(
+        d,
+        &["render", "nbody:100000", "--validate"],
+        true,
+        &[
+            "volume nbody:100000x100000x100000",
+            "bytes of host memory",
+            "MemAvailable",
+        ],
+    );
+    fails(d, &["info", "menger:100000"], false, &["bytes of host memory"]);
+    fails(
+        d,
+        &["export", "turbulence:60000", d.join("x.raw").to_str().unwrap()],
+        false,
+        &["bytes of host memory"],
+    );
+    // A frame side over the bound, before any memory is sought for it.
+    fails(
+        d,
+        &["render", "menger:16", "--size", "100000x100000", "--validate"],
+        true,
+        &["invalid size '100000x100000'", "1..=16384 pixels"],
+    );
+    let bench_out = d.join("bench");
+    fails(
+        d,
+        &[
+            "bench",
+            "--quick",
+            "--frames",
+            "4000000000",
+            "--out",
+            bench_out.to_str().unwrap(),
+            "--quiet",
+        ],
+        false,
+        &["4000000000 frames", "bytes of host memory"],
+    );
+    // The device's limits, from the spec, before the volume is generated:
+    // a volume of one image dimension's maximum squared, deep enough to
+    // pass maxMemoryAllocationSize, stored dense (auto would store it in
+    // bricks and render it).
+    let ctx = common::gpu();
+    let info = ctx.info().clone();
+    drop(ctx);
+    let side = info.max_image_dimension_3d as u64;
+    let depth = (info.max_memory_allocation_size / (side * side) + 1).min(side);
+    let spec = format!("menger:{side}x{side}x{depth}");
+    if side * side * depth > info.max_memory_allocation_size {
+        let (code, stderr) = run(&["render", &spec, "--storage", "dense", "--validate"]);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(
+            stderr.contains("exceeds the device limit") || stderr.contains("bytes of host memory"),
+            "{stderr}"
+        );
+    }
+    // Headers: a NRRD and a NIfTI of 10^15 voxels hold a few bytes.
+    let nrrd = d.join("huge.nrrd");
+    std::fs::write(
+        &nrrd,
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 100000 100000 100000\nencoding: gzip\n\n",
+    )
+    .unwrap();
+    let nrrd_s = nrrd.to_str().unwrap().to_string();
+    let nii = d.join("huge.nii");
+    std::fs::write(&nii, nifti_header([32767, 32767, 32767])).unwrap();
+    let nii_s = nii.to_str().unwrap().to_string();
+    let files = tempfile::tempdir().unwrap();
+    for input in [&nrrd_s, &nii_s] {
+        fails(files.path(), &["info", input], false, &["bytes of host memory"]);
+    }
+}
+
+/// A NIfTI-1 header of `dims` uint8 voxels and no data.
+fn nifti_header(dims: [i16; 3]) -> Vec<u8> {
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    for (i, d) in [3, dims[0], dims[1], dims[2], 1, 1, 1, 1].iter().enumerate() {
+        h[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&2i16.to_le_bytes());
+    h[72..74].copy_from_slice(&8i16.to_le_bytes());
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    h[344..348].copy_from_slice(b"n+1\0");
+    h
+}
+
+#[test]
+fn samples_per_ray_are_capped_before_any_dispatch() {
+    let dir = tempfile::tempdir().unwrap();
+    fails(
+        dir.path(),
+        &["render", "menger:16", "--size", "8x8", "--step", "1e-9", "--validate"],
+        true,
+        &["invalid step", "cap of 1048576 samples per ray"],
+    );
+    // The bench's error sweep renders with its steps too.
+    let config = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny-bench.toml"))
+        .unwrap()
+        .replace("step = 0.5", "step = 0.0000001");
+    assert!(
+        config.contains("step = 0.0000001"),
+        "tiny-bench.toml has no 'step = 0.5'"
+    );
+    let cfg_dir = tempfile::tempdir().unwrap();
+    let cfg = cfg_dir.path().join("tiny.toml");
+    std::fs::write(&cfg, config).unwrap();
+    let out = dir.path().join("bench");
+    fails(
+        dir.path(),
+        &[
+            "bench",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--validate",
+        ],
+        false,
+        &["samples per ray"],
+    );
+}
+
+#[test]
+fn hostile_files_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let inputs = tempfile::tempdir().unwrap();
+    let p = |name: &str| inputs.path().join(name).to_str().unwrap().to_string();
+    // A NRRD whose gzip data inflates far past what its header describes.
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    std::io::Write::write_all(&mut gz, &vec![0u8; 1 << 24]).unwrap();
+    let mut nrrd = b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: gzip\n\n".to_vec();
+    nrrd.extend(gz.finish().unwrap());
+    std::fs::write(p("bomb.nrrd"), nrrd).unwrap();
+    fails(dir.path(), &["render", &p("bomb.nrrd"), "--validate"], true, &["holds"]);
+    // A NIfTI header of 1000^3 voxels with no data behind it (the old
+    // loader allocated the volume before reading).
+    std::fs::write(p("empty.nii"), nifti_header([1000, 1000, 1000])).unwrap();
+    fails(dir.path(), &["info", &p("empty.nii")], false, &["bytes of voxel data"]);
+    // A NRRD naming /dev/zero as its detached data.
+    std::fs::write(
+        p("zero.nhdr"),
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: /dev/zero\n\n",
+    )
+    .unwrap();
+    fails(
+        dir.path(),
+        &["info", &p("zero.nhdr")],
+        false,
+        &["holds more than the 64 bytes"],
+    );
+    // diff of a file that is not an EXR.
+    std::fs::write(p("junk.exr"), b"v/1\x01junk").unwrap();
+    let (code, stderr) = run(&["diff", &p("junk.exr"), &p("junk.exr")]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("EXR") && !stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_closed_pipe_ends_output_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args(["info", "menger:16"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the reading end before lacuna has loaded the volume and printed.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.is_empty(), "{stderr}");
+    assert!(!out.status.success(), "lacuna wrote to a closed pipe and succeeded");
+}

@@ -1,0 +1,518 @@
+//! The host-facing render API: cameras from view and projection matrices
+//! (bit for bit the orbit cameras' images), frames written to host storage
+//! images of each format (against the frame buffer), and rays ended at a
+//! host depth image (against the CPU reference, and bit-identical across
+//! structures). Every test runs with validation and fails on any message.
+
+use crate::host;
+
+use crate::common::{accel, assert_clean, gpu, max_abs};
+use glam::dcamera::rh::{proj::vulkan, view::look_at_mat4};
+use glam::{DMat4, DVec3, DVec4};
+use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
+use lacuna::frame::Frame;
+use lacuna::gpu::{vk, Context};
+use lacuna::render::Mode;
+use lacuna::render::{
+    reference, Camera, CameraMatrices, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection,
+    RenderTarget, Renderer, Scene,
+};
+use lacuna::tf::GpuTransferFunction;
+use lacuna::volume::{GpuVolume, LoadOptions};
+use lacuna::{TransferFunction, Volume};
+
+const SIZE: u32 = 48;
+
+struct Fixture {
+    volume: Volume,
+    tf: TransferFunction,
+    gv: GpuVolume,
+    lut: GpuTransferFunction,
+    renderer: Renderer,
+    structures: Vec<Structure>,
+    /// Last: given back to the pool after what it made is dropped.
+    ctx: crate::common::Gpu,
+}
+
+/// nbody on a non-cubic grid with anisotropic spacing; naive first, then
+/// skipping structures of every traversal style.
+fn fixture(names: &[&str]) -> Fixture {
+    let ctx = gpu();
+    let mut volume = Volume::load("nbody:40x32x24", &LoadOptions::default()).unwrap();
+    volume.spacing = [1.0, 1.25, 1.5];
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let gv = GpuVolume::upload(&ctx, &volume).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let builder = Builder::new(&ctx).unwrap();
+    let wanted: Vec<(Accel, Params)> = names.iter().map(|n| (accel(n), accel(n).defaults())).collect();
+    let reads: Vec<(Accel, &Params)> = wanted.iter().map(|(a, p)| (*a, p)).collect();
+    let (ranges, _) = builder.ranges_for(&reads, &gv).unwrap();
+    let input = BuildInput {
+        volume: &volume,
+        gpu_volume: &gv,
+        tf: &tf,
+        gpu_tf: &lut,
+        mode: Mode::Composite,
+        frame: None,
+    };
+    let structures = wanted
+        .iter()
+        .map(|(a, p)| builder.build(*a, &input, &ranges, p).unwrap().0)
+        .collect();
+    let renderer = Renderer::new(&ctx).unwrap();
+    Fixture {
+        ctx,
+        volume,
+        tf,
+        gv,
+        lut,
+        renderer,
+        structures,
+    }
+}
+
+impl Fixture {
+    fn scene(&self, i: usize) -> Scene<'_> {
+        Scene {
+            structure: &self.structures[i],
+            volume: &self.gv,
+            tf: &self.lut,
+        }
+    }
+
+    /// Records `view` into a fresh target's frame buffer and reads it back.
+    fn frame(&self, i: usize, view: &FrameDesc) -> Frame {
+        let target = RenderTarget::new(&self.ctx, SIZE, SIZE).unwrap();
+        self.ctx
+            .submit_and_wait(|cmd| {
+                self.renderer
+                    .record(cmd, None, &target, self.scene(i), view, Output::Buffer)?;
+                self.renderer.record_readback(cmd, &target)
+            })
+            .unwrap();
+        assert_clean(&self.ctx);
+        target.read().unwrap()
+    }
+}
+
+/// A SIZE x SIZE frame of `camera`.
+fn view(camera: Camera) -> FrameDesc {
+    FrameDesc::builder(SIZE, SIZE).camera(camera).build().unwrap()
+}
+
+fn cameras() -> Vec<Orbit> {
+    let persp = |fov_deg, distance| Projection::Perspective { fov_deg, distance };
+    [
+        (30.0, 20.0, Projection::Orthographic),
+        (0.0, 0.0, Projection::Orthographic),
+        (90.0, 0.0, persp(40.0, None)),
+        (45.0, 30.0, persp(40.0, Some(2.0))),
+        (-120.0, 60.0, persp(60.0, Some(0.5))),
+    ]
+    .into_iter()
+    .map(|(azimuth_deg, elevation_deg, projection)| Orbit {
+        azimuth_deg,
+        elevation_deg,
+        projection,
+    })
+    .collect()
+}
+
+fn same_bits(a: &Frame, b: &Frame) -> bool {
+    a.pixels
+        .iter()
+        .flatten()
+        .map(|v| v.to_bits())
+        .eq(b.pixels.iter().flatten().map(|v| v.to_bits()))
+}
+
+#[test]
+fn matrices_render_the_orbit_cameras_images_bit_for_bit() {
+    let f = fixture(&["naive"]);
+    for camera in cameras() {
+        let (orbit, _) = f.renderer.render(f.scene(0), &view(Camera::Orbit(camera))).unwrap();
+        let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+        let (host, _) = f.renderer.render(f.scene(0), &view(Camera::Matrices(m))).unwrap();
+        assert!(
+            orbit.pixels.iter().any(|p| p[3] > 0.1),
+            "{camera:?}: the volume is in view"
+        );
+        assert!(
+            same_bits(&orbit, &host),
+            "{camera:?}: max abs {}",
+            max_abs(&orbit, &host)
+        );
+    }
+    assert_clean(&f.ctx);
+}
+
+#[test]
+fn glam_matrices_of_an_engine_render_the_orbit_image() {
+    // The orbit camera at azimuth 0, elevation 0, as an engine would write
+    // it with glam's right-handed look_at and Vulkan projections.
+    let f = fixture(&["naive"]);
+    let extent = DVec3::new(40.0, 32.0 * 1.25, 24.0 * 1.5);
+    let centre = extent * 0.5;
+    let radius = centre.length();
+    let pixel = (2.0 * centre.x / SIZE as f64).max(2.0 * centre.y / SIZE as f64);
+    let half = pixel * SIZE as f64 / 2.0;
+    let eye = centre + DVec3::Z * (radius + 1.0);
+    let ortho = CameraMatrices::new(
+        look_at_mat4(eye, centre, DVec3::Y),
+        vulkan::orthographic(-half, half, -half, half, 0.0, 2.0 * (radius + 1.0)),
+    );
+    let fov = 40f64.to_radians();
+    let dist = radius / (fov / 2.0).sin();
+    let eye = centre + DVec3::Z * dist;
+    let persp = CameraMatrices::new(
+        look_at_mat4(eye, centre, DVec3::Y),
+        vulkan::perspective(fov, 1.0, 0.05, 1000.0),
+    );
+    for (m, projection) in [
+        (ortho, Projection::Orthographic),
+        (
+            persp,
+            Projection::Perspective {
+                fov_deg: 40.0,
+                distance: None,
+            },
+        ),
+    ] {
+        let camera = Orbit {
+            azimuth_deg: 0.0,
+            elevation_deg: 0.0,
+            projection,
+        };
+        let (orbit, _) = f.renderer.render(f.scene(0), &view(Camera::Orbit(camera))).unwrap();
+        let (host, _) = f.renderer.render(f.scene(0), &view(Camera::Matrices(m))).unwrap();
+        assert!(
+            same_bits(&orbit, &host),
+            "{projection:?}: max abs {}",
+            max_abs(&orbit, &host)
+        );
+    }
+    assert_clean(&f.ctx);
+}
+
+/// Renders `view` into a host storage image of `format` and reads it back as
+/// raw bytes.
+fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, texel: u64) -> Vec<u8> {
+    let (instance, pd, device) = (f.ctx.instance(), f.ctx.physical_device(), f.ctx.device());
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let image = host::Image2d::new(
+        instance,
+        pd,
+        device,
+        format,
+        usage,
+        vk::ImageAspectFlags::COLOR,
+        SIZE,
+        SIZE,
+    );
+    let out = host::HostBuffer::new(
+        instance,
+        pd,
+        device,
+        SIZE as u64 * SIZE as u64 * texel,
+        vk::BufferUsageFlags::TRANSFER_DST,
+    );
+    let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
+    let host_image = HostImage {
+        view: image.view,
+        format,
+        layout: vk::ImageLayout::GENERAL,
+        width: SIZE,
+        height: SIZE,
+    };
+    let compute_write = (
+        vk::PipelineStageFlags2::COMPUTE_SHADER,
+        vk::AccessFlags2::SHADER_STORAGE_WRITE,
+    );
+    f.ctx
+        .submit_and_wait(|cmd| {
+            image.transition(
+                device,
+                cmd,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::GENERAL,
+                (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+                compute_write,
+            );
+            f.renderer
+                .record(cmd, None, &target, f.scene(i), view, Output::Image(host_image))?;
+            image.transition(
+                device,
+                cmd,
+                vk::ImageLayout::GENERAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                compute_write,
+                (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_READ),
+            );
+            image.record_copy_out(device, cmd, out.buffer);
+            Ok(())
+        })
+        .unwrap();
+    assert_clean(&f.ctx);
+    let bytes = out.bytes().to_vec();
+    out.destroy(device);
+    image.destroy(device);
+    bytes
+}
+
+#[test]
+fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
+    let f = fixture(&["naive", "grid", "lbvh"]);
+    let camera = cameras()[3];
+    let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let view = view(Camera::Matrices(m)).to_builder().step(0.7).build().unwrap();
+    let frame = f.frame(0, &view);
+    let values: Vec<f32> = frame.pixels.iter().flatten().copied().collect();
+    assert!(values.iter().any(|&v| v > 0.1));
+    for i in 0..f.structures.len() {
+        let f32s: Vec<f32> =
+            bytemuck::pod_collect_to_vec(&render_to_image(&f, i, &view, vk::Format::R32G32B32A32_SFLOAT, 16));
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&f32s), bits(&values), "rgba32f, structure {i}");
+    }
+    let halves: Vec<u16> =
+        bytemuck::pod_collect_to_vec(&render_to_image(&f, 0, &view, vk::Format::R16G16B16A16_SFLOAT, 8));
+    for (&h, &v) in halves.iter().zip(&values) {
+        let h = half::f16::from_bits(h);
+        // Vulkan allows either rounding of f32 to f16: one f16 step apart at most.
+        let want = half::f16::from_f32(v);
+        assert!(
+            (h.to_bits() as i32 - want.to_bits() as i32).abs() <= 1,
+            "rgba16f: {h} for {v}"
+        );
+    }
+    let bytes = render_to_image(&f, 0, &view, vk::Format::R8G8B8A8_UNORM, 4);
+    for (&b, &v) in bytes.iter().zip(&values) {
+        let want = (v.clamp(0.0, 1.0) * 255.0).round();
+        assert!((b as f32 - want).abs() <= 1.0, "rgba8: {b} for {v}");
+    }
+}
+
+#[test]
+fn a_host_image_of_another_format_or_size_is_refused_by_name() {
+    let f = fixture(&["naive"]);
+    let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let view = view(Camera::Matrices(m));
+    let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
+    let image = |format, width| HostImage {
+        view: vk::ImageView::null(),
+        format,
+        layout: vk::ImageLayout::GENERAL,
+        width,
+        height: SIZE,
+    };
+    for (img, needle) in [
+        (image(vk::Format::B8G8R8A8_UNORM, SIZE), "B8G8R8A8_UNORM"),
+        (image(vk::Format::R8G8B8A8_UNORM, SIZE + 1), "49x48"),
+    ] {
+        let err = f
+            .ctx
+            .submit_and_wait(|cmd| {
+                f.renderer
+                    .record(cmd, None, &target, f.scene(0), &view, Output::Image(img))
+            })
+            .unwrap_err();
+        assert!(err.to_string().contains(needle), "{err}");
+    }
+    // A target for images has no frame buffer to write or read back.
+    let err = f
+        .ctx
+        .submit_and_wait(|cmd| f.renderer.record(cmd, None, &target, f.scene(0), &view, Output::Buffer))
+        .unwrap_err();
+    assert!(err.to_string().contains("no frame buffer"), "{err}");
+    assert!(target.read().is_err());
+    assert_clean(&f.ctx);
+}
+
+/// A host depth image cleared to `depth` everywhere, in DEPTH_READ_ONLY_OPTIMAL.
+fn depth_plane(ctx: &Context, depth: f32) -> host::Image2d {
+    let (instance, pd, device) = (ctx.instance(), ctx.physical_device(), ctx.device());
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    let image = host::Image2d::new(
+        instance,
+        pd,
+        device,
+        vk::Format::D32_SFLOAT,
+        usage,
+        vk::ImageAspectFlags::DEPTH,
+        SIZE,
+        SIZE,
+    );
+    let transfer = (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+    ctx.submit_and_wait(|cmd| {
+        image.transition(
+            device,
+            cmd,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+            transfer,
+        );
+        let value = vk::ClearDepthStencilValue { depth, stencil: 0 };
+        let range = [host::range(vk::ImageAspectFlags::DEPTH)];
+        unsafe {
+            device.cmd_clear_depth_stencil_image(
+                cmd,
+                image.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &value,
+                &range,
+            )
+        };
+        image.transition(
+            device,
+            cmd,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+            transfer,
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_SAMPLED_READ,
+            ),
+        );
+        Ok(())
+    })
+    .unwrap();
+    image
+}
+
+#[test]
+fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
+    let names = ["naive", "grid", "lbvh", "distance", "kd-cpu", "octree-rev"];
+    let f = fixture(&names);
+    // Reverse-Z: clip z' = w - z.
+    let reverse = DMat4::from_cols(
+        DVec4::X,
+        DVec4::Y,
+        DVec4::new(0.0, 0.0, -1.0, 0.0),
+        DVec4::new(0.0, 0.0, 1.0, 1.0),
+    );
+    for (camera, reverse_z, depth) in [(cameras()[0], false, 0.5f32), (cameras()[3], true, 0.9985)] {
+        let mut m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+        if reverse_z {
+            m.projection = reverse * m.projection;
+            m = m.with_reverse_z(true);
+        }
+        // The CPU reference's arithmetic: the manual filter.
+        let view = FrameDesc::builder(SIZE, SIZE)
+            .camera(Camera::Matrices(m))
+            .filter(Filter::Manual)
+            .build()
+            .unwrap();
+        let plane = depth_plane(&f.ctx, depth);
+        let host_depth = HostDepth {
+            view: plane.view,
+            layout: vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+            width: SIZE,
+            height: SIZE,
+        };
+        let with = |d: HostDepth| view.to_builder().depth(Some(d)).build().unwrap();
+        let ended = f.frame(0, &with(host_depth));
+        let full = f.frame(0, &view);
+        // The plane cuts the volume: some pixels lose much of their opacity.
+        let cut = full.pixels.iter().zip(&ended.pixels).any(|(a, b)| a[3] - b[3] > 0.2);
+        assert!(cut, "{camera:?}: the depth plane ends rays inside the volume");
+        let params = with(host_depth).params(&f.gv).unwrap();
+        let limits = reference::depth_limits(&params, &vec![depth; (SIZE * SIZE) as usize]);
+        let cpu = reference::render_to(&f.volume, &f.tf, &params, Some(&limits));
+        let err = max_abs(&cpu, &ended);
+        assert!(
+            err <= 1e-4,
+            "{camera:?}: GPU vs CPU reference with a depth plane: {err}"
+        );
+        for (i, name) in names.iter().enumerate().skip(1) {
+            let other = f.frame(i, &with(host_depth));
+            assert!(
+                same_bits(&ended, &other),
+                "{name} vs naive with depth: {}",
+                max_abs(&ended, &other)
+            );
+        }
+        plane.destroy(f.ctx.device());
+        // Nothing drawn (the far plane's depth everywhere) ends no ray.
+        let far = depth_plane(&f.ctx, if reverse_z { 0.0 } else { 1.0 });
+        let open = HostDepth {
+            view: far.view,
+            ..host_depth
+        };
+        assert!(same_bits(&full, &f.frame(0, &with(open))));
+        far.destroy(f.ctx.device());
+    }
+    assert_clean(&f.ctx);
+}
+
+#[test]
+fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
+    let f = fixture(&["naive"]);
+    let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let frame = || FrameDesc::builder(SIZE, SIZE).camera(Camera::Matrices(m));
+    let refused = |b: lacuna::render::FrameBuilder, needle: &str| {
+        let err = b.build().unwrap_err().to_string();
+        assert!(err.contains(needle), "{needle}: {err}");
+    };
+    refused(frame().step(0.0), "step");
+    refused(frame().step(f32::NAN), "step");
+    refused(frame().ert(Some(1.5)), "ert");
+    refused(frame().size(0, SIZE), "size");
+    refused(
+        frame().camera(Camera::Matrices(CameraMatrices::new(DMat4::ZERO, m.projection))),
+        "view matrix",
+    );
+    refused(
+        frame().orbit(f64::INFINITY, 0.0, Projection::Orthographic),
+        "azimuth must be in [-360, 360]",
+    );
+    refused(
+        frame().orbit(
+            0.0,
+            0.0,
+            Projection::Perspective {
+                fov_deg: 180.0,
+                distance: None,
+            },
+        ),
+        "field of view",
+    );
+    let depth = HostDepth {
+        view: vk::ImageView::null(),
+        layout: vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+        width: SIZE + 1,
+        height: SIZE,
+    };
+    refused(frame().depth(Some(depth)), "host depth");
+    refused(
+        frame().depth(Some(HostDepth {
+            width: SIZE,
+            layout: vk::ImageLayout::UNDEFINED,
+            ..depth
+        })),
+        "host depth layout",
+    );
+    // Each field lands where the shader reads it; defaults are the one set.
+    let p = frame()
+        .step(0.25)
+        .ert(Some(0.9))
+        .build()
+        .unwrap()
+        .params(&f.gv)
+        .unwrap();
+    assert_eq!((p.step, p.ert, p.image, p.dims), (0.25, 0.9, [SIZE, SIZE], f.gv.dims));
+    assert_eq!(
+        (p.norm, p.lut_size, p.depth_limits),
+        (f.gv.norm, lacuna::tf::LUT_SIZE as u32, 0)
+    );
+    let d = frame().build().unwrap();
+    assert_eq!(
+        (d.step(), d.ert(), d.filter()),
+        (lacuna::render::DEFAULT_STEP, None, None)
+    );
+    assert_eq!(d.filter_for(&f.gv), f.gv.default_filter());
+    assert_eq!(d.params(&f.gv).unwrap().ert, lacuna::render::ERT_OFF);
+    // A step over the samples-per-ray cap is refused for the volume it meets.
+    let fine = frame().step(1e-6).build().unwrap();
+    assert!(fine.params(&f.gv).unwrap_err().to_string().contains("samples per ray"));
+}

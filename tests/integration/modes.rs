@@ -1,0 +1,280 @@
+//! Each frame mode, shading, clip planes, the crop box and jitter: naive
+//! marching on the GPU against the CPU reference (`render::reference`) of
+//! the same frame, within 1e-4, on frames that show something.
+
+use crate::common::{gpu, max_abs, render};
+use lacuna::accel::Accel;
+use lacuna::frame::Frame;
+use lacuna::render::reference;
+use lacuna::render::{Clip, Filter, FrameBuilder, FrameDesc, Iso, Light, Mode, Projection, Shading};
+use lacuna::{TransferFunction, Volume};
+
+const PERSP: Projection = Projection::Perspective {
+    fov_deg: 40.0,
+    distance: None,
+};
+
+fn base(size: u32, az: f64, el: f64, projection: Projection) -> FrameBuilder {
+    FrameDesc::builder(size, size)
+        .orbit(az, el, projection)
+        .filter(Filter::Manual)
+}
+
+fn load(spec: &str) -> (Volume, TransferFunction) {
+    let v = Volume::load(spec, &Default::default()).unwrap();
+    let tf = TransferFunction::parse(v.default_tf.as_ref().unwrap()).unwrap();
+    (v, tf)
+}
+
+/// Renders `s` with naive marching and on the CPU, asserts they agree, and
+/// returns the GPU frame.
+fn check(volume: &Volume, tf: &TransferFunction, s: FrameBuilder) -> Frame {
+    let ctx = gpu();
+    let desc = s.build().unwrap();
+    let cpu = reference::render_frame(volume, tf, &desc).unwrap();
+    let frame = render(&ctx, volume, tf, &desc, Accel::naive());
+    let err = max_abs(&frame, &cpu);
+    assert!(
+        err <= 1e-4,
+        "{} {} {}: GPU vs CPU max abs {err}",
+        volume.name,
+        desc.mode().name(),
+        desc.camera().describe()
+    );
+    // Iso frames carry their surfaces' depth (distances here), others none.
+    assert_eq!(frame.depth.is_some(), matches!(desc.mode(), Mode::Iso(_)));
+    if let (Some(gpu), Some(cpu)) = (&frame.depth, &cpu.depth) {
+        for (i, (g, c)) in gpu.iter().zip(cpu).enumerate() {
+            let hit = frame.pixels[i][3] > 0.0;
+            assert_eq!(
+                g.is_finite(),
+                hit,
+                "pixel {i}: depth {g} but alpha {}",
+                frame.pixels[i][3]
+            );
+            assert!(
+                g == c || (g - c).abs() <= 1e-4 * c.abs().max(1.0),
+                "pixel {i}: depth {g} vs {c}"
+            );
+        }
+    }
+    frame
+}
+
+fn visible(f: &Frame) -> usize {
+    f.pixels.iter().filter(|p| p[3] > 0.01).count()
+}
+
+#[test]
+fn blend_modes_match_the_cpu_reference() {
+    for spec in ["nbody:48", "turbulence:32", "shells:36"] {
+        let (v, tf) = load(spec);
+        for mode in [Mode::Mip, Mode::MinIp, Mode::Average] {
+            for (az, el, proj) in [(30.0, 20.0, Projection::Orthographic), (-115.0, 35.0, PERSP)] {
+                let f = check(&v, &tf, base(40, az, el, proj).mode(mode));
+                // The minimum and the mean of sparse data map to transparent.
+                assert!(visible(&f) > 0 || mode != Mode::Mip, "{spec} {mode:?}: empty frame");
+            }
+        }
+    }
+}
+
+#[test]
+fn mip_is_the_brightest_sample_through_the_tf() {
+    // A single bright voxel seen head on: the MIP pixel through it is the
+    // TF's colour at the largest sample, however far behind the voxel lies.
+    let (v, tf) = load("shells:36");
+    let composite = check(&v, &tf, base(32, 0.0, 0.0, Projection::Orthographic));
+    let mip = check(&v, &tf, base(32, 0.0, 0.0, Projection::Orthographic).mode(Mode::Mip));
+    // MIP is not composite, and it shows at least the pixels composite does.
+    assert!(max_abs(&composite, &mip) > 0.01);
+    assert!(visible(&mip) >= visible(&composite) / 2);
+}
+
+#[test]
+fn shaded_composite_matches_the_cpu_reference() {
+    for spec in ["menger:27", "vessels:40", "turbulence:32"] {
+        let (v, tf) = load(spec);
+        let unshaded = check(&v, &tf, base(40, 30.0, 20.0, Projection::Orthographic));
+        let lights = [
+            Shading::default(),
+            Shading {
+                light: Light::Fixed {
+                    azimuth_deg: 60.0,
+                    elevation_deg: -30.0,
+                },
+                gradient_opacity: Some([0.0, 0.05]),
+                ..Shading::default()
+            },
+            // Whole exponents are raised by repeated squaring, others by
+            // pow: both as the reference does.
+            Shading {
+                specular: 1.0,
+                shininess: 128.0,
+                ..Shading::default()
+            },
+            Shading {
+                specular: 1.0,
+                shininess: 7.5,
+                ..Shading::default()
+            },
+        ];
+        for shading in lights {
+            for (az, el, proj) in [(30.0, 20.0, Projection::Orthographic), (-115.0, 35.0, PERSP)] {
+                let f = check(&v, &tf, base(40, az, el, proj).shading(Some(shading)));
+                assert!(visible(&f) > 0, "{spec}: empty shaded frame");
+            }
+        }
+        let shaded = check(
+            &v,
+            &tf,
+            base(40, 30.0, 20.0, Projection::Orthographic).shading(Some(Shading::default())),
+        );
+        assert!(max_abs(&shaded, &unshaded) > 0.01, "{spec}: shading changed nothing");
+    }
+}
+
+#[test]
+fn shading_reads_gradients_across_brick_faces_and_anisotropic_spacing() {
+    // Odd dims (bricks of 8 end mid-volume), anisotropic spacing, and axis
+    // views whose samples lie on voxel faces: the gradient's ±1 voxel reads
+    // cross brick faces and the clamped volume edge.
+    let mut v = Volume::load("turbulence:37x29x41", &Default::default()).unwrap();
+    v.spacing = [1.0, 1.5, 0.75];
+    let tf = TransferFunction::parse("ramp:0.4:1:0.3").unwrap();
+    for (az, el) in [(0.0, 0.0), (90.0, 0.0), (0.0, 90.0), (45.0, 30.0)] {
+        check(
+            &v,
+            &tf,
+            base(37, az, el, Projection::Orthographic).shading(Some(Shading::default())),
+        );
+    }
+}
+
+#[test]
+fn isosurfaces_match_the_cpu_reference() {
+    for spec in ["shells:36", "turbulence:32", "nbody:48"] {
+        let (v, tf) = load(spec);
+        for values in [&[0.5][..], &[0.3, 0.7]] {
+            let iso = Iso::new(values).unwrap();
+            for (az, el, proj) in [(30.0, 20.0, Projection::Orthographic), (-115.0, 35.0, PERSP)] {
+                let f = check(&v, &tf, base(40, az, el, proj).mode(Mode::Iso(iso)));
+                assert!(visible(&f) > 0, "{spec} iso {values:?}: no surface");
+                // Iso pixels are opaque or empty.
+                assert!(f.pixels.iter().all(|p| p[3] == 0.0 || p[3] == 1.0));
+            }
+        }
+        let colored = Iso::new(&[0.5]).unwrap().with_color([1.0, 0.5, 0.0]).unwrap();
+        check(
+            &v,
+            &tf,
+            base(40, 30.0, 20.0, Projection::Orthographic).mode(Mode::Iso(colored)),
+        );
+    }
+}
+
+#[test]
+fn an_iso_value_outside_the_data_is_transparent() {
+    let (v, tf) = load("shells:36");
+    let f = check(
+        &v,
+        &tf,
+        base(32, 30.0, 20.0, Projection::Orthographic).mode(Mode::Iso(Iso::new(&[1.5]).unwrap())),
+    );
+    assert_eq!(visible(&f), 0);
+}
+
+#[test]
+fn clip_planes_and_crop_boxes_match_the_cpu_reference() {
+    let (v, tf) = load("turbulence:32");
+    let full = check(&v, &tf, base(40, 30.0, 20.0, Projection::Orthographic));
+    let cases = [
+        Clip::default().plane([1.0, 0.0, 0.0, -16.0]).unwrap(),
+        Clip::default()
+            .plane([1.0, 1.0, 0.0, -20.0])
+            .unwrap()
+            .plane([0.0, -1.0, 0.5, 20.0])
+            .unwrap(),
+        Clip::default().crop([4.0, 8.0, 0.0], [28.0, 20.0, 30.0]).unwrap(),
+        Clip::default()
+            .crop([0.0, 0.0, 0.0], [32.0, 32.0, 32.0])
+            .unwrap()
+            .plane([0.0, 0.0, 1.0, -10.5])
+            .unwrap(),
+    ];
+    for clip in cases {
+        for (az, el, proj) in [(30.0, 20.0, Projection::Orthographic), (-115.0, 35.0, PERSP)] {
+            let f = check(&v, &tf, base(40, az, el, proj).clip(clip));
+            assert!(visible(&f) > 0, "{clip:?}: nothing kept");
+        }
+        let f = check(&v, &tf, base(40, 30.0, 20.0, Projection::Orthographic).clip(clip));
+        assert!(max_abs(&f, &full) > 0.01, "{clip:?}: cut nothing");
+    }
+}
+
+#[test]
+fn clipping_hard_cases_match_the_cpu_reference() {
+    let (v, tf) = load("shells:36");
+    // A plane through the perspective eye, a plane parallel to axis-aligned
+    // rays, a crop box of zero thickness, a plane that removes everything.
+    let eye_plane = Clip::default().plane([0.3, 0.2, 1.0, -18.0]).unwrap();
+    let f = check(&v, &tf, base(32, 0.0, 0.0, PERSP).clip(eye_plane));
+    assert!(visible(&f) > 0);
+    let parallel = Clip::default().plane([1.0, 0.0, 0.0, -18.0]).unwrap();
+    let f = check(&v, &tf, base(32, 0.0, 0.0, Projection::Orthographic).clip(parallel));
+    let visible_half = visible(&f);
+    assert!(visible_half > 0);
+    let thin = Clip::default().crop([0.0, 0.0, 18.0], [36.0, 36.0, 18.0]).unwrap();
+    let f = check(&v, &tf, base(32, 0.0, 0.0, Projection::Orthographic).clip(thin));
+    assert_eq!(visible(&f), 0, "a zero-thickness crop keeps no sample");
+    let none = Clip::default().plane([0.0, 1.0, 0.0, -100.0]).unwrap();
+    let f = check(&v, &tf, base(32, 30.0, 20.0, PERSP).clip(none));
+    assert_eq!(visible(&f), 0, "a plane that keeps nothing");
+    // Every mode honours the clip.
+    for mode in [Mode::Mip, Mode::Average, Mode::Iso(Iso::new(&[0.5]).unwrap())] {
+        check(&v, &tf, base(32, 30.0, 20.0, PERSP).clip(parallel).mode(mode));
+    }
+}
+
+#[test]
+fn jitter_matches_the_cpu_reference_and_is_fixed_per_pixel() {
+    let (v, tf) = load("turbulence:32");
+    let plain = check(&v, &tf, base(40, 30.0, 20.0, Projection::Orthographic).step(2.0));
+    let s = base(40, 30.0, 20.0, Projection::Orthographic).step(2.0).jitter(true);
+    let a = check(&v, &tf, s);
+    let b = check(&v, &tf, s);
+    assert_eq!(a.pixels, b.pixels, "jitter is stable across runs");
+    assert!(max_abs(&a, &plain) > 1e-3, "jitter moved no sample");
+    for mode in [Mode::Mip, Mode::Iso(Iso::new(&[0.5]).unwrap())] {
+        check(&v, &tf, s.mode(mode));
+    }
+    // The hash is a fixed function of the pixel.
+    assert_eq!(reference::pixel_jitter(0, 0), reference::pixel_jitter(0, 0));
+    assert_ne!(reference::pixel_jitter(0, 0), reference::pixel_jitter(1, 0));
+    assert!((0..64).all(|x| (0.0..1.0).contains(&reference::pixel_jitter(x, 7))));
+}
+
+#[test]
+fn shaded_isosurfaces_and_clips_combine() {
+    let (v, tf) = load("vessels:40");
+    let iso = Mode::Iso(Iso::new(&[0.4]).unwrap());
+    let clip = Clip::default()
+        .plane([0.0, 1.0, 0.0, -12.0])
+        .unwrap()
+        .crop([2.0, 2.0, 2.0], [38.0, 38.0, 30.0])
+        .unwrap();
+    check(&v, &tf, base(40, 60.0, 10.0, PERSP).mode(iso).clip(clip).jitter(true));
+    let lit = Shading {
+        light: Light::Fixed {
+            azimuth_deg: -40.0,
+            elevation_deg: 50.0,
+        },
+        ..Shading::default()
+    };
+    check(&v, &tf, base(40, 60.0, 10.0, PERSP).mode(iso).shading(Some(lit)));
+    check(
+        &v,
+        &tf,
+        base(40, 60.0, 10.0, PERSP).shading(Some(lit)).clip(clip).jitter(true),
+    );
+}

@@ -1,0 +1,271 @@
+//! Time series: generator animations, file patterns and NIfTI time axes
+//! load step by step, normalised as step 0; every structure equals naive
+//! on every step; and every bad series is a one-line error.
+
+use crate::common;
+use crate::common::identity::{cam, Fixture};
+use crate::common::{fails, gzip, lacuna, nifti_bytes};
+use lacuna::frame::Frame;
+use lacuna::render::Projection;
+use lacuna::volume::{procedural, LoadOptions, Series, VoxelData};
+use lacuna::{Error, TransferFunction, Volume};
+use std::path::Path;
+
+fn open(spec: &str) -> Series {
+    Series::open(spec, &LoadOptions::default()).unwrap()
+}
+
+fn u8s(v: &Volume) -> &[u8] {
+    match &v.data {
+        VoxelData::U8(d) => d,
+        other => panic!("{}: not u8: {other:?}", v.name),
+    }
+}
+
+#[test]
+fn generators_animate_from_their_still_volume() {
+    for spec in ["menger:27", "nbody:32", "vessels:32", "turbulence:24", "shells:24"] {
+        let series = open(spec);
+        assert_eq!(series.steps(), procedural::STEPS, "{spec}");
+        let still = Volume::load(spec, &LoadOptions::default()).unwrap();
+        let step0 = series.load(0, None).unwrap();
+        assert!(u8s(&step0) == u8s(&still), "{spec}: step 0 is the still volume");
+        let later = series.load(9, None).unwrap();
+        assert!(u8s(&later) != u8s(&step0), "{spec}: step 9 moved");
+        // Every step is normalised as step 0.
+        assert_eq!(later.norm, step0.norm, "{spec}");
+        let err = series.load(procedural::STEPS, None).unwrap_err().to_string();
+        assert!(err.contains("has 64 steps, 0 to 63"), "{err}");
+    }
+}
+
+/// Writes `values` as raw u8 files numbered `numbers` in `dir`.
+fn write_u8_steps(dir: &Path, numbers: &[u32], dims: [u32; 3], values: impl Fn(u32, usize) -> u8) {
+    let n = dims.iter().product::<u32>() as usize;
+    for &k in numbers {
+        let name = format!("run_{k:03}_{}x{}x{}_uint8.raw", dims[0], dims[1], dims[2]);
+        let bytes: Vec<u8> = (0..n).map(|i| values(k, i)).collect();
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+}
+
+#[test]
+fn a_pattern_of_files_is_a_series_in_number_order() {
+    let dir = tempfile::tempdir().unwrap();
+    // Steps 7, 8, 9 (and 10 and 100, which a %03d pattern does not print
+    // as "10"/"0100"): each a ramp scaled by its number.
+    write_u8_steps(dir.path(), &[9, 7, 8], [4, 3, 2], |k, i| (i as u32 * (k - 6)) as u8);
+    std::fs::write(dir.path().join("run_0100_4x3x2_uint8.raw"), [0u8; 24]).unwrap();
+    std::fs::write(dir.path().join("run_10_4x3x2_uint8.raw"), [0u8; 24]).unwrap();
+    let spec = dir.path().join("run_%03d_4x3x2_uint8.raw");
+    let series = open(spec.to_str().unwrap());
+    assert_eq!(series.steps(), 3);
+    assert!(
+        series.step_name(1).ends_with("run_008_4x3x2_uint8.raw"),
+        "{}",
+        series.step_name(1)
+    );
+    let step0 = series.load(0, None).unwrap();
+    let step2 = series.load(2, None).unwrap();
+    assert_eq!(u8s(&step0)[5], 5);
+    assert_eq!(u8s(&step2)[5], 15);
+    // Step 0 spans 0..23; step 2's 69 maps past 1 and clamps, as the
+    // sampler clamps.
+    assert_eq!(step2.norm, step0.norm);
+    assert_eq!(step2.normalize(step2.data.texel(23)), 1.0);
+    assert!((step2.normalize(step2.data.texel(5)) - 15.0 / 23.0).abs() < 1e-6);
+    let err = series.load(3, None).unwrap_err().to_string();
+    assert!(err.contains("has 3 steps, 0 to 2"), "{err}");
+}
+
+#[test]
+fn float_steps_are_mapped_onto_the_first_steps_range() {
+    let dir = tempfile::tempdir().unwrap();
+    // Step 0 spans -2..2, step 1 spans 0..4 (stored normalised to its own
+    // range): its value 2 is step 0's maximum.
+    for (k, offset) in [(0, -2.0f32), (1, 0.0)] {
+        let values: Vec<u8> = (0..8)
+            .flat_map(|i| (offset + i as f32 * 4.0 / 7.0).to_le_bytes())
+            .collect();
+        std::fs::write(dir.path().join(format!("f{k}_2x2x2_float32.raw")), values).unwrap();
+    }
+    let series = open(dir.path().join("f%d_2x2x2_float32.raw").to_str().unwrap());
+    let [s0, s1] = [0, 1].map(|k| series.load(k, None).unwrap());
+    let value = |v: &Volume, i: usize| v.normalize(v.data.texel(i));
+    assert!((value(&s0, 7) - 1.0).abs() < 1e-6);
+    assert!((value(&s1, 0) - 0.5).abs() < 1e-6, "{}", value(&s1, 0));
+    assert!((value(&s1, 3) - (12.0 / 7.0 + 2.0) / 4.0).abs() < 1e-5);
+    assert_eq!(value(&s1, 7), 1.0);
+}
+
+#[test]
+fn bad_patterns_and_steps_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let none = dir.path().join("none_%04d_4x4x4_uint8.raw");
+    let err = Series::open(none.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("the pattern matches no file"), "{err}");
+
+    write_u8_steps(dir.path(), &[1, 2, 4], [4, 4, 4], |_, i| i as u8);
+    let gap = dir.path().join("run_%03d_4x4x4_uint8.raw");
+    let err = Series::open(gap.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string()
+            .contains("run_003_4x4x4_uint8.raw is missing between 1 and 4"),
+        "{err}"
+    );
+
+    // A step shorter than the layout given for every step.
+    let other = dir.path().join("grid_%d.raw");
+    std::fs::write(dir.path().join("grid_0.raw"), [0u8; 64]).unwrap();
+    std::fs::write(dir.path().join("grid_1.raw"), [0u8; 8]).unwrap();
+    let layout = LoadOptions {
+        raw: Some(lacuna::volume::RawLayout {
+            dims: [4, 4, 4],
+            ty: lacuna::volume::VoxelType::U8,
+        }),
+    };
+    let series = Series::open(other.to_str().unwrap(), &layout).unwrap();
+    assert_eq!(series.steps(), 2);
+    let err = series.load(1, None).unwrap_err();
+    assert!(matches!(err, Error::Format { .. }), "{err}");
+
+    // A still volume has step 0 only.
+    let err = open("nbody:16").load(64, None).unwrap_err().to_string();
+    assert!(err.contains("has 64 steps"), "{err}");
+    let still = dir.path().join("grid_0.raw");
+    let err = Series::open(still.to_str().unwrap(), &layout)
+        .unwrap()
+        .load(1, None)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("is one volume, not a time series"), "{err}");
+}
+
+#[test]
+fn steps_on_different_grids_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    // A NIfTI pattern carries its grid in each header.
+    let a = nifti_bytes(&[4, 4, 4], 2, 8, [1.0; 3], &[1u8; 64]);
+    let b = nifti_bytes(&[4, 4, 2], 2, 8, [1.0; 3], &[1u8; 32]);
+    std::fs::write(dir.path().join("n0.nii"), a).unwrap();
+    std::fs::write(dir.path().join("n1.nii"), b).unwrap();
+    let series = open(dir.path().join("n%d.nii").to_str().unwrap());
+    let err = series.load(1, None).unwrap_err().to_string();
+    assert!(
+        err.contains("n1.nii': is 4x4x2 uint8, where step 0 is 4x4x4 uint8"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_nifti_time_axis_loads_one_step_at_a_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let dims = [3u32, 2, 2];
+    let data: Vec<u8> = (0..36).map(|i| (i * 7) as u8).collect();
+    let bytes = nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data);
+    for name in ["t.nii", "t.nii.gz"] {
+        let p = dir.path().join(name);
+        let written = if name.ends_with(".gz") {
+            gzip(&bytes)
+        } else {
+            bytes.clone()
+        };
+        std::fs::write(&p, written).unwrap();
+        let series = open(p.to_str().unwrap());
+        assert_eq!(series.steps(), 3, "{name}");
+        for k in 0..3u32 {
+            let step = series.load(k, None).unwrap();
+            assert_eq!(step.dims, dims);
+            assert_eq!(
+                u8s(&step),
+                &data[12 * k as usize..12 * (k as usize + 1)],
+                "{name} step {k}"
+            );
+        }
+        let err = series.load(3, None).unwrap_err().to_string();
+        assert!(err.contains("has 3 steps, 0 to 2"), "{err}");
+        // Loading the file as one volume gives step 0.
+        let still = Volume::load(p.to_str().unwrap(), &LoadOptions::default()).unwrap();
+        assert_eq!(u8s(&still), &data[..12]);
+    }
+    // Beyond time and components (a 6th dimension) is refused, as is a
+    // truncated step (dim[5], components, are channels: tests/channels.rs).
+    let p = dir.path().join("six.nii");
+    std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
+    let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("beyond x, y, z, time and components"), "{err}");
+    let p = dir.path().join("short.nii");
+    std::fs::write(&p, nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data[..30])).unwrap();
+    let series = open(p.to_str().unwrap());
+    assert!(series.load(1, None).is_ok());
+    let err = series.load(2, None).unwrap_err();
+    assert!(matches!(err, Error::Format { .. }), "{err}");
+}
+
+/// Every structure equals naive on steps where the visible set moved.
+#[test]
+fn every_structure_equals_naive_on_every_step() {
+    let fx = Fixture::new();
+    let views = [
+        cam(40, 30.0, 20.0, Projection::Orthographic, 0.5),
+        cam(40, 200.0, -15.0, Projection::Orthographic, 0.37),
+    ];
+    // The sponge is dense: a tree may be one leaf (marched naively, saying so).
+    for (spec, steps, dense) in [("nbody:40", [0u32, 31, 63], false), ("menger:27", [0, 4, 13], true)] {
+        let series = open(spec);
+        let mut previous: Option<Frame> = None;
+        for k in steps {
+            let v = series.load(k, None).unwrap();
+            let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
+            let what = format!("{spec} step {k}");
+            let frames = match dense {
+                true => fx.check_dense(&what, &v, &tf, &views),
+                false => fx.check(&what, &v, &tf, &views),
+            };
+            if let Some(p) = &previous {
+                assert!(common::max_abs(p, &frames[0]) > 0.01, "{spec} step {k} looks as before");
+            }
+            previous = Some(frames[0].clone());
+        }
+    }
+}
+
+#[test]
+fn render_takes_a_time_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.exr");
+    let o = out.to_str().unwrap();
+    let r = lacuna(
+        &[
+            "render",
+            "vessels:24",
+            "--time",
+            "12",
+            "--size",
+            "32x24",
+            "--out",
+            o,
+            "--validate",
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stdout.contains("time    step 12 of 64 (vessels:24 step 12)"),
+        "{}",
+        r.stdout
+    );
+    let frame = Frame::read_exr(&out).unwrap();
+    assert_eq!(frame.metadata["time"], "12");
+    fails(
+        &["render", "vessels:24", "--time", "64"],
+        &[],
+        "error: invalid time '64': vessels:24 has 64 steps, 0 to 63",
+    );
+}

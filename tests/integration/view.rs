@@ -1,0 +1,331 @@
+//! `lacuna view` end to end: a real window (on $DISPLAY, else a virtual X
+//! server through `xvfb-run`), the viewer's own Vulkan host adopting its
+//! device into lacuna, validation on, and its screenshot equal to `lacuna
+//! render`'s frame bit for bit. Bad input fails before any window opens.
+
+use crate::common::{lacuna, Run};
+use lacuna::frame::Frame;
+use std::process::Command;
+use std::sync::Mutex;
+
+/// Runs `lacuna ARGS` where a window can open: on $DISPLAY when it is set,
+/// else under `xvfb-run -a`. Neither is a failure, not a skip.
+fn lacuna_windowed(args: &[&str]) -> Run {
+    // One at a time: concurrent `xvfb-run -a` can pick the same display number.
+    static ONE_WINDOW: Mutex<()> = Mutex::new(());
+    let _one = ONE_WINDOW.lock().unwrap_or_else(|p| p.into_inner());
+    let exe = env!("CARGO_BIN_EXE_lacuna");
+    let display = std::env::var("DISPLAY").is_ok_and(|d| !d.is_empty());
+    let mut cmd = if display {
+        Command::new(exe)
+    } else {
+        let mut c = Command::new("xvfb-run");
+        // 24-bit colour: the default 8-bit screen has no visual Vulkan presents to.
+        c.args(["-a", "-s", "-screen 0 640x480x24", exe]);
+        c
+    };
+    let out = cmd.args(args).output().unwrap_or_else(|e| {
+        panic!("DISPLAY is not set and xvfb-run cannot run ({e}): install the Debian package xvfb (.ci/run does)")
+    });
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into(),
+        stderr: String::from_utf8_lossy(&out.stderr).into(),
+    }
+}
+
+fn ok(r: &Run, what: &str) {
+    assert_eq!(r.code, 0, "{what}\nstdout: {}\nstderr: {}", r.stdout, r.stderr);
+    // --validate prints every validation message to stderr.
+    assert!(r.stderr.is_empty(), "{what}: {}", r.stderr);
+}
+
+#[test]
+fn the_viewers_screenshot_is_renders_frame_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [&[&str]; 2] = [
+        // The Must-show case: defaults (auto, the generator's TF, orbit 30,20).
+        &["nbody:64"],
+        // Another structure, TF, camera, projection and step.
+        &[
+            "menger:27",
+            "--accel",
+            "lbvh",
+            "--tf",
+            "ramp:0.2:1:0.3",
+            "--camera",
+            "-40,25",
+            "--perspective",
+            "35",
+            "--step",
+            "0.75",
+        ],
+    ];
+    for (i, case) in cases.iter().enumerate() {
+        let a = dir.path().join(format!("view{i}.exr"));
+        let b = dir.path().join(format!("render{i}.exr"));
+        let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+        let size = ["--size", "96x80", "--validate"];
+        let view = [&["view"], *case, &size, &["--frames", "5", "--screenshot", a_str]].concat();
+        let r = lacuna_windowed(&view);
+        ok(&r, &format!("{view:?}"));
+        assert!(r.stdout.contains(&format!("wrote {a_str}")), "{}", r.stdout);
+        // The title's figures, printed once at the end: GPU-timed march and rebuild.
+        let summary = r
+            .stdout
+            .lines()
+            .find(|l| l.starts_with("frames 5: "))
+            .unwrap_or_else(|| panic!("{}", r.stdout));
+        assert!(
+            summary.contains(" fps, march ") && summary.contains(" ms, rebuild "),
+            "{summary}"
+        );
+        let render = [&["render"], *case, &size, &["--out", b_str]].concat();
+        ok(&lacuna(&render, &[]), &format!("{render:?}"));
+
+        let frame = Frame::read_exr(&a).unwrap();
+        assert_eq!((frame.width, frame.height), (96, 80), "the window's frame size");
+        assert!(
+            frame.pixels.iter().any(|p| p[3] > 0.05),
+            "case {i}: an empty frame proves nothing"
+        );
+        assert_eq!(
+            frame.metadata["volume"],
+            Frame::read_exr(&b).unwrap().metadata["volume"]
+        );
+        let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+        assert_eq!(diff.code, 0, "case {i}: {}{}", diff.stdout, diff.stderr);
+        assert!(diff.stdout.contains("differing 0 of 7680"), "{}", diff.stdout);
+    }
+}
+
+#[test]
+fn keys_rebuild_for_the_new_tf_and_structure_and_match_render() {
+    // T: the next preset (ramp:0.3:1 after the generator's TF); Right: move it
+    // by 0.02; Tab twice: two structures down the table from naive; E: ERT on.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("keys.exr"), dir.path().join("render.exr"));
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let common = ["menger:27", "--size", "64x48", "--camera", "10,30", "--validate"];
+    let keys = "t,ArrowRight,Tab,Tab,e";
+    let view = [
+        &["view"],
+        &common[..],
+        &[
+            "--accel",
+            "naive",
+            "--keys",
+            keys,
+            "--frames",
+            "2",
+            "--screenshot",
+            a_str,
+        ],
+    ]
+    .concat();
+    let r = lacuna_windowed(&view);
+    ok(&r, &format!("{view:?}"));
+    let accel = lacuna::accel::TABLE[2].name();
+    let summary = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("frames 2: "))
+        .unwrap_or_default();
+    // A generator is a time series: the summary ends with the step shown.
+    assert!(
+        summary.contains(&format!("({accel}), time step 0 of 64")),
+        "{}",
+        r.stdout
+    );
+    let frame = Frame::read_exr(&a).unwrap();
+    assert_eq!(frame.metadata["tf"], "ramp:0.32:1.02");
+    assert_eq!(frame.metadata["accel"], accel);
+    assert_eq!(frame.metadata["ert"], "0.99");
+    let render = [
+        &["render"],
+        &common[..],
+        &[
+            "--tf",
+            "ramp:0.32:1.02",
+            "--accel",
+            accel,
+            "--ert",
+            "0.99",
+            "--out",
+            b_str,
+        ],
+    ]
+    .concat();
+    ok(&lacuna(&render, &[]), &format!("{render:?}"));
+    let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
+}
+
+#[test]
+fn look_keys_and_flags_match_render() {
+    // Starts shaded; M four times: mip, minip, average, iso 0.5; '.': iso
+    // 0.52; C: a clip plane facing the camera, PageUp moves it; X: jitter.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("look.exr"), dir.path().join("render.exr"));
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let common = [
+        "shells:32",
+        "--size",
+        "64x48",
+        "--camera",
+        "20,15",
+        "--accel",
+        "grid",
+        "--validate",
+    ];
+    let view = [
+        &["view"],
+        &common[..],
+        &[
+            "--shade",
+            "on",
+            "--keys",
+            "m,m,m,m,>,c,PageUp,x",
+            "--frames",
+            "2",
+            "--screenshot",
+            a_str,
+        ],
+    ]
+    .concat();
+    let r = lacuna_windowed(&view);
+    ok(&r, &format!("{view:?}"));
+    let frame = Frame::read_exr(&a).unwrap();
+    assert_eq!(frame.metadata["mode"], "iso");
+    assert_eq!(frame.metadata["iso"], "0.52");
+    assert_eq!(frame.metadata["jitter"], "on");
+    assert!(frame.depth.is_none(), "the viewer presents colour only");
+    let clip = &frame.metadata["clip0"];
+    let render = [
+        &["render"],
+        &common[..],
+        &[
+            "--mode", "iso", "--iso", "0.52", "--clip", clip, "--jitter", "on", "--out", b_str,
+        ],
+    ]
+    .concat();
+    ok(&lacuna(&render, &[]), &format!("{render:?}"));
+    let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
+    assert!(Frame::read_exr(&b).unwrap().pixels.iter().any(|p| p[3] > 0.5));
+}
+
+#[test]
+fn bad_view_input_is_one_line_before_any_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot.tiff");
+    let missing = dir.path().join("no/such/dir/shot.exr");
+    let json = dir.path().join("missing.json");
+    let cases: [(Vec<&str>, &str); 7] = [
+        (
+            vec!["view", "nbody:16", "--keys", "t,Teleport"],
+            "invalid key 'Teleport'",
+        ),
+        (
+            vec![
+                "view",
+                "nbody:16",
+                "--frames",
+                "1",
+                "--screenshot",
+                shot.to_str().unwrap(),
+            ],
+            "invalid frame output",
+        ),
+        (
+            vec!["view", "nbody:16", "--screenshot", missing.to_str().unwrap()],
+            "no/such/dir",
+        ),
+        (vec!["view", "nbody:16", "--frames", "0"], "invalid frames '0'"),
+        (
+            vec!["view", "nbody:16", "--json", json.to_str().unwrap()],
+            "missing.json",
+        ),
+        (
+            vec!["view", "/no/such/volume_8x8x8_uint8.raw"],
+            "/no/such/volume_8x8x8_uint8.raw",
+        ),
+        // Good input, no display: said so, with no build path in it.
+        (vec!["view", "nbody:8"], "set DISPLAY, or run under xvfb-run"),
+    ];
+    for (args, message) in cases {
+        // No display at all: the input is refused before a window is tried.
+        let r = lacuna(&args, &[("DISPLAY", ""), ("WAYLAND_DISPLAY", "")]);
+        assert_eq!(r.code, 2, "{args:?}: {}{}", r.stdout, r.stderr);
+        let lines: Vec<&str> = r.stderr.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: {}", r.stderr);
+        assert!(
+            lines[0].starts_with("error: ") && lines[0].contains(message),
+            "{args:?}: {}",
+            lines[0]
+        );
+        assert!(
+            !lines[0].contains(".cargo") && !lines[0].contains(".rs:"),
+            "{args:?}: a build path: {}",
+            lines[0]
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn without_a_display_the_viewer_says_so_in_one_line() {
+    let r = lacuna(
+        &["view", "nbody:16", "--frames", "1"],
+        &[("DISPLAY", ""), ("WAYLAND_DISPLAY", "")],
+    );
+    assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
+    let lines: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", r.stderr);
+    assert!(lines[0].starts_with("error: cannot open a window"), "{}", lines[0]);
+}
+
+/// A series in the viewer: `.` steps forward, Space plays (a new step each
+/// frame, the next loading while this one renders); the screenshot equals
+/// `render --time` of the step shown. Dense steps go into the last step's
+/// memory; bricked ones are uploaded anew, the last step freed first.
+#[test]
+fn the_viewer_steps_and_plays_a_series_and_matches_render() {
+    let dir = tempfile::tempdir().unwrap();
+    for (keys, frames, step, storage) in [
+        (".,.", "2", "2", "dense"),
+        ("Space", "4", "3", "dense"),
+        ("Space", "3", "2", "bricks:8"),
+    ] {
+        let size = ["--size", "64x48", "--validate", "--storage", storage];
+        let a = dir.path().join(format!("view-{frames}-{storage}.exr"));
+        let b = dir.path().join(format!("render-{frames}-{storage}.exr"));
+        let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+        let view = [
+            &[
+                "view",
+                "vessels:32",
+                "--keys",
+                keys,
+                "--frames",
+                frames,
+                "--screenshot",
+                a_str,
+            ][..],
+            &size,
+        ]
+        .concat();
+        let r = lacuna_windowed(&view);
+        ok(&r, &format!("{view:?}"));
+        let summary = r.stdout.lines().find(|l| l.starts_with("frames ")).unwrap_or_default();
+        assert!(
+            summary.contains(&format!("time step {step} of 64 (load ")) && summary.contains(" ms, upload "),
+            "{view:?}: {summary}"
+        );
+        let render = [&["render", "vessels:32", "--time", step, "--out", b_str][..], &size].concat();
+        ok(&lacuna(&render, &[]), &format!("{render:?}"));
+        let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+        assert_eq!(diff.code, 0, "{keys}: {}{}", diff.stdout, diff.stderr);
+        assert!(diff.stdout.contains("differing 0 of 3072"), "{}", diff.stdout);
+    }
+}
