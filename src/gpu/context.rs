@@ -261,6 +261,13 @@ impl Context {
         self.inner.kernels.len()
     }
 
+    /// How many handles to this context exist (this one included): every
+    /// object made on it holds one.
+    #[doc(hidden)]
+    pub fn handle_count(&self) -> usize {
+        Arc::strong_count(&self.inner)
+    }
+
     /// Names a GPU object for validation messages and capture tools (a no-op
     /// without `VK_EXT_debug_utils`).
     pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {

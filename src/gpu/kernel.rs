@@ -71,7 +71,7 @@ impl Kernel {
             threads,
             info.max_compute_work_group_invocations as u64,
         )?;
-        let key = KernelKey::new(shader.words, constants);
+        let key = KernelKey::new(shader, constants);
         let objects = match ctx.inner.kernels.get(&key) {
             Some(objects) => objects,
             None => {

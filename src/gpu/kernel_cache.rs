@@ -4,6 +4,7 @@
 //! lavapipe it costs 0.2 to 0.7 s a march kernel, even with Mesa's shader
 //! cache warm (its NIR passes run before the cache is consulted).
 
+use super::shaders::Shader;
 use ash::vk;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -28,19 +29,23 @@ impl KernelObjects {
     }
 }
 
-/// What makes two kernels the same: the SPIR-V (its `'static` words, by
-/// address) and the specialization, in the order given.
+/// What makes two kernels the same: the shader (its `'static` SPIR-V words
+/// and binding table, by address) and the specialization, by constant id.
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub(crate) struct KernelKey {
     words: (usize, usize),
+    bindings: usize,
     constants: Vec<(u32, u32)>,
 }
 
 impl KernelKey {
-    pub fn new(words: &'static [u32], constants: &[(u32, u32)]) -> Self {
+    pub fn new(shader: &Shader, constants: &[(u32, u32)]) -> Self {
+        let mut constants = constants.to_vec();
+        constants.sort_unstable();
         KernelKey {
-            words: (words.as_ptr() as usize, words.len()),
-            constants: constants.to_vec(),
+            words: (shader.words.as_ptr() as usize, shader.words.len()),
+            bindings: shader.bindings.as_ptr() as usize,
+            constants,
         }
     }
 }
@@ -86,5 +91,20 @@ impl KernelCache {
         // A panic elsewhere never leaves the map half-written: it is only
         // read or inserted into whole.
         self.made.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::KernelKey;
+    use crate::gpu::shaders;
+
+    #[test]
+    fn keys_name_the_shader_and_its_constants_in_any_order() {
+        let copy = &shaders::PRIMS_COPY;
+        let key = |c: &[(u32, u32)]| KernelKey::new(copy, c);
+        assert!(key(&[(1, 2), (0, 3)]) == key(&[(0, 3), (1, 2)]));
+        assert!(key(&[(0, 3)]) != key(&[(0, 4)]));
+        assert!(KernelKey::new(&shaders::PRIMS_COMPACT, &[]) != key(&[]));
     }
 }

@@ -227,7 +227,7 @@ fn check_every_look(what: &str, v: &Volume, edges: &[u32]) {
     let mut fx = Fixture::new();
     let limits = PoolLimits::of(fx.ctx.info());
     for (mode, shading) in every_look() {
-        // Lit looks read one channel (tests/channels.rs).
+        // Lit looks read one channel (tests/integration/channels.rs).
         if (shading.is_some() || matches!(mode, Mode::Iso(_))) && v.channel_count() > 1 {
             continue;
         }

@@ -526,7 +526,7 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:0"], &[], "zero dimension");
     fails(&["render", "menger:4x0x4"], &[], "dimensions");
     // Dense storage is refused past the 3D image limit (auto takes bricks
-    // there: tests/volumes.rs).
+    // there: tests/integration/volumes.rs).
     fails(&["render", &too_long, "--storage", "dense"], &[], "maxImageDimension3D");
     fails(&["render", "menger:16", "--tf", "ramp:1"], &[], "expected ramp:LO:HI");
     fails(

@@ -30,7 +30,7 @@ struct Fixture {
     lut: GpuTransferFunction,
     renderer: Renderer,
     structures: Vec<Structure>,
-    /// Last: given back to the pool after what it made is dropped.
+    /// Last: given back to the pool after what was made on it is freed.
     ctx: crate::common::Gpu,
 }
 

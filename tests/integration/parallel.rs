@@ -4,7 +4,7 @@
 //! structure exactly as naive marching renders it; the parts blended
 //! front to back are the one-process frame within 1e-5 (the blend
 //! reassociates the float sums), and MIP/MinIP parts picked by their ray
-//! values are it bit for bit. tests/mpi.rs does the same through `mpirun`,
+//! values are it bit for bit. tests/integration/mpi.rs does the same through `mpirun`,
 //! IceT and MPI reductions.
 
 use crate::common;

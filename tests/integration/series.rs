@@ -193,7 +193,7 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
         assert_eq!(u8s(&still), &data[..12]);
     }
     // Beyond time and components (a 6th dimension) is refused, as is a
-    // truncated step (dim[5], components, are channels: tests/channels.rs).
+    // truncated step (dim[5], components, are channels: tests/integration/channels.rs).
     let p = dir.path().join("six.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
     let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())

@@ -128,7 +128,7 @@ fn raw_errors_name_what_is_wrong() {
     let missing = dir.path().join("missing_4x4x4_uint8.raw");
     assert!(matches!(load(&missing), Err(Error::Io { .. })));
     // A float volume with a NaN loads it as no data, normalising only the
-    // finite values (tests/nan.rs renders such volumes).
+    // finite values (tests/integration/nan.rs renders such volumes).
     let nan = dir.path().join("nan_3x1x1_float32.raw");
     let mut bytes = 1.0f32.to_le_bytes().to_vec();
     bytes.extend(f32::NAN.to_le_bytes());

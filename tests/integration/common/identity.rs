@@ -51,7 +51,8 @@ pub struct Fixture {
     /// Volumes go up in bricks of this edge (bricked storage), each pool
     /// image within these limits; None: dense.
     pub bricks: Option<(u32, lacuna::volume::PoolLimits)>,
-    /// Last: given back to the pool after the kernels above are dropped.
+    /// Last: given back to the pool after the renderer's and builder's
+    /// buffers are freed, so their messages are this test's.
     pub ctx: super::Gpu,
 }
 
@@ -105,7 +106,7 @@ impl Fixture {
             None => GpuVolume::upload(&self.ctx, volume).unwrap(),
         };
         // Shaded and iso views read the gradient; the manual filter reads
-        // the cells copy (tests/cells.rs: the same samples as without).
+        // the cells copy (tests/integration/cells.rs: the same samples as without).
         gv.prepare(volume, volume.channel_count() == 1, Some(Filter::Manual))
             .unwrap();
         let lut = tf.upload(&self.ctx).unwrap();
