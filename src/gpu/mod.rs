@@ -1,7 +1,8 @@
 //! The thin `ash` layer: loader and instance, device selection and
 //! requirements, the context (own or adopted), memory, kernels from the
-//! reflected shaders, recording and barriers, timestamp timer and timings,
-//! validation messenger. Imports nothing of lacuna but `error`.
+//! reflected shaders (each made once per context), recording and barriers,
+//! timestamp timer and timings, validation messenger. Imports nothing of
+//! lacuna but `error`.
 
 mod binding;
 mod context;
