@@ -9,8 +9,7 @@ use super::method::March;
 use crate::desc::KernelConstants;
 use crate::error::{Error, Result};
 use crate::gpu::{shaders, Context, Kernel};
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// `constant_id` of `MARCH_COUNT` (glsl/common/lattice.glsl): 1 writes the
 /// loop iterations each pixel's SIMD group ran instead of its colour.
@@ -35,20 +34,15 @@ impl ProbeConstants {
     };
 }
 
-type Key = (&'static str, &'static [u32], KernelConstants, ProbeConstants);
-
-/// The march kernels of one context, created on first use.
+/// The march kernels of one context, created on first use (the context
+/// keeps each one it made: `gpu/kernel_cache.rs`).
 pub struct MarchKernels {
     ctx: Context,
-    kernels: Mutex<HashMap<Key, Arc<Kernel>>>,
 }
 
 impl MarchKernels {
     pub fn new(ctx: &Context) -> Self {
-        MarchKernels {
-            ctx: ctx.clone(),
-            kernels: Mutex::new(HashMap::new()),
-        }
+        MarchKernels { ctx: ctx.clone() }
     }
 
     /// `march`'s kernel (its output `variant`, or the frame buffer's) for
@@ -61,20 +55,12 @@ impl MarchKernels {
         probe: ProbeConstants,
     ) -> Result<Arc<Kernel>> {
         let march = with_variant(march, variant)?;
-        let key = (march.shader.name, march.constants, frame, probe);
-        if let Some(k) = self.kernels.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
-            return Ok(k.clone());
-        }
-        // Created without the lock: creating a pipeline compiles it (on
-        // lavapipe about a fifth of a second), and `prepare` creates several
-        // at once.
-        let k = Arc::new(self.create(march, frame, probe)?);
-        let mut map = self.kernels.lock().unwrap_or_else(|p| p.into_inner());
-        Ok(map.entry(key).or_insert(k).clone())
+        Ok(Arc::new(self.create(march, frame, probe)?))
     }
 
-    /// Creates the kernels of `wanted` not yet made, in parallel (one thread
-    /// each): what a probe will dispatch, compiled at once.
+    /// Creates the kernels of `wanted` the context has not made yet, in
+    /// parallel (one thread each; creating a pipeline compiles it, on
+    /// lavapipe in about a fifth of a second): what a probe will dispatch.
     pub fn prepare(&self, wanted: &[(March, KernelConstants, ProbeConstants)]) -> Result<()> {
         std::thread::scope(|scope| {
             let jobs: Vec<_> = wanted

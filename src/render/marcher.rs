@@ -58,10 +58,11 @@ impl Renderer {
         Self::with_kernels(ctx, Arc::new(MarchKernels::new(ctx)))
     }
 
-    /// A renderer sharing `builder`'s table of march kernels (the ones
-    /// `auto` looked up while choosing are not looked up again).
+    /// A renderer on `builder`'s context: `Renderer::new` of it. The
+    /// kernels auto created while choosing are the context's, so the
+    /// frames compile none of them again.
     pub fn sharing(builder: &Builder) -> Result<Self> {
-        Self::with_kernels(builder.context(), builder.shared::<MarchKernels>()?)
+        Self::new(builder.context())
     }
 
     fn with_kernels(ctx: &Context, kernels: Arc<MarchKernels>) -> Result<Self> {

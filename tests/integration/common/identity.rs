@@ -70,9 +70,9 @@ pub struct Prepared<'a> {
 impl Fixture {
     pub fn new() -> Self {
         let ctx = super::gpu();
-        // One set of march kernels for auto's probes and the frames.
         let builder = super::builder(&ctx);
         Fixture {
+            // auto's probe kernels are the context's: the frames reuse them.
             renderer: Renderer::sharing(&builder).unwrap(),
             builder,
             ctx,
