@@ -13,6 +13,7 @@
 #ifndef LACUNA_MARCH_GLSL
 #define LACUNA_MARCH_GLSL
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
 
 #define PARAMS_BINDING 0
 #define VOLUME_BINDING 1

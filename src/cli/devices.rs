@@ -21,7 +21,7 @@ pub fn run() -> Result<ExitCode> {
             if d.usable {
                 ""
             } else {
-                " [unusable: needs Vulkan 1.3, compute, VK_KHR_push_descriptor]"
+                " [unusable: needs Vulkan 1.3, compute, VK_KHR_push_descriptor, subgroup vote]"
             }
         );
     }

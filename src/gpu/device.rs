@@ -3,6 +3,7 @@
 //! the first usable discrete GPU, integrated, virtual, CPU).
 
 use super::instance::{create_instance, load_entry, INSTALL_HINT};
+use super::requirements::has_subgroup_vote;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 
@@ -175,6 +176,7 @@ fn usable(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     p.api_version >= vk::API_VERSION_1_3
         && compute_family(instance, pd).is_some()
         && supports_push_descriptor(instance, pd)
+        && has_subgroup_vote(instance, pd)
 }
 
 fn summaries(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, DeviceSummary)>> {
@@ -235,7 +237,7 @@ pub(crate) fn select(instance: &ash::Instance, selector: Option<&str>) -> Result
             .ok_or_else(|| Error::NoDevice(format!("LACUNA_DEVICE '{sel}' matches no device (have {})", listing())))?;
         if !s.usable {
             return Err(Error::NoDevice(format!(
-                "device '{}' lacks Vulkan 1.3, a compute queue or VK_KHR_push_descriptor",
+                "device '{}' lacks Vulkan 1.3, a compute queue, VK_KHR_push_descriptor or subgroup vote",
                 s.name
             )));
         }
@@ -254,7 +256,7 @@ pub(crate) fn select(instance: &ash::Instance, selector: Option<&str>) -> Result
         .map(|(pd, _)| *pd)
         .ok_or_else(|| {
             Error::NoDevice(format!(
-                "no Vulkan 1.3 device with compute and VK_KHR_push_descriptor (have {}); {INSTALL_HINT}",
+                "no Vulkan 1.3 device with compute, VK_KHR_push_descriptor and subgroup vote (have {}); {INSTALL_HINT}",
                 listing()
             ))
         })

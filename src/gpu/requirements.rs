@@ -45,6 +45,18 @@ pub fn required_features() -> (
     )
 }
 
+/// Whether the device's compute kernels can vote across a subgroup
+/// (`subgroupAny`: the march kernels light a group's samples only once one
+/// of its lanes has a visible one). Not core in Vulkan 1.3, but every
+/// desktop driver and lavapipe have it.
+pub(crate) fn has_subgroup_vote(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+        && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::VOTE)
+}
+
 /// What a host created its device with, as `Context::adopt` checks it: the
 /// instance's `apiVersion`, the enabled device extensions and the enabled
 /// Vulkan 1.2 / 1.3 features (copies of the structs chained into
@@ -68,6 +80,9 @@ pub(crate) fn missing_requirement(
     let device_version = unsafe { instance.get_physical_device_properties(pd) }.api_version;
     if device_version < vk::API_VERSION_1_3 {
         return Some(format!("Vulkan 1.3 (the device supports {})", version(device_version)));
+    }
+    if !has_subgroup_vote(instance, pd) {
+        return Some("subgroup vote operations in compute shaders".to_string());
     }
     if enabled.api_version < vk::API_VERSION_1_3 {
         return Some(format!(
