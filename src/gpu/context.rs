@@ -129,8 +129,9 @@ impl Context {
     ///
     /// Checks first that the device has what lacuna needs (Vulkan 1.3,
     /// [`REQUIRED_EXTENSIONS`], the features of [`required_features`] as
-    /// `host.enabled` states them; the extension is also probed on the
-    /// device), and returns an error naming the first thing missing.
+    /// `host.enabled` states them, subgroup vote in compute shaders; the
+    /// extension is also probed on the device), and returns an error naming
+    /// the first thing missing.
     ///
     /// # Safety
     /// The host guarantees that:

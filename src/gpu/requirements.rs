@@ -5,7 +5,8 @@ use ash::vk;
 
 /// The handles a host engine lends to lacuna. The device must have been
 /// created with Vulkan 1.3, the extensions of [`REQUIRED_EXTENSIONS`] and the
-/// features [`required_features`] sets, and `enabled` must say what it was
+/// features [`required_features`] sets, on a device with subgroup vote
+/// operations in compute shaders, and `enabled` must say what it was
 /// created with (Vulkan cannot be asked afterwards); `queue` must belong to
 /// `queue_family` and support compute. Drop the `Context` (and everything made
 /// with it) before destroying the device.
@@ -81,14 +82,15 @@ pub(crate) fn missing_requirement(
     if device_version < vk::API_VERSION_1_3 {
         return Some(format!("Vulkan 1.3 (the device supports {})", version(device_version)));
     }
-    if !has_subgroup_vote(instance, pd) {
-        return Some("subgroup vote operations in compute shaders".to_string());
-    }
     if enabled.api_version < vk::API_VERSION_1_3 {
         return Some(format!(
             "Vulkan 1.3 (the instance asked for {})",
             version(enabled.api_version)
         ));
+    }
+    // After the instance's version: the query is Vulkan 1.1's.
+    if !has_subgroup_vote(instance, pd) {
+        return Some("subgroup vote operations in compute shaders".to_string());
     }
     for ext in REQUIRED_EXTENSIONS {
         let listed = enabled.extensions.iter().any(|e| e.as_c_str() == ext);
