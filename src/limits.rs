@@ -89,6 +89,52 @@ pub fn check_samples_per_ray(dims: [u32; 3], step: f32) -> Result<u64> {
     Ok(samples as u64)
 }
 
+/// Loop passes a SIMD group's march may run on rays of `samples` samples
+/// through a box whose diagonal is `diagonal` voxels, at most: one per
+/// sample, a second per sample of a lit frame (its group leaves the sample
+/// loop to light a visible one), and for a structure's traversal a few
+/// small loops per region entered, bounded by 8 per voxel of the ray
+/// (regions are at least 2 voxels wide), plus the ray's set-up.
+pub fn march_loop_passes(samples: u64, diagonal: f64, lit: bool) -> u64 {
+    let per_sample = 1 + lit as u64;
+    samples
+        .saturating_mul(per_sample)
+        .saturating_add(8 * diagonal.ceil() as u64)
+        .saturating_add(256)
+}
+
+/// Checks that a march through a `dims` box every `step` voxels fits
+/// `limit` loop passes (`DeviceInfo::loop_pass_limit`, on a device that
+/// caps them; `device` names it): past it the device would end the march
+/// early and the frame would be wrong without a word.
+pub fn check_loop_passes(device: &str, limit: Option<u64>, dims: [u32; 3], step: f32, lit: bool) -> Result<()> {
+    let Some(limit) = limit else {
+        return Ok(());
+    };
+    let samples = check_samples_per_ray(dims, step)?;
+    let diagonal = dims.iter().map(|&d| (d as f64).powi(2)).sum::<f64>().sqrt();
+    if march_loop_passes(samples, diagonal, lit) <= limit {
+        return Ok(());
+    }
+    // The least step that fits, rounded up to three significant digits.
+    let fixed = march_loop_passes(0, diagonal, lit);
+    let most = (limit.saturating_sub(fixed) / (1 + lit as u64)).max(1);
+    let least = diagonal / most as f64;
+    let scale = 10f64.powi(2 - least.log10().floor() as i32);
+    Err(Error::invalid(
+        "step",
+        step.to_string(),
+        format!(
+            "the longest ray through the {}x{}x{} box would take {samples} samples; {device} ends a SIMD group's loops after {limit} passes in all, so a{} frame of this volume needs a step of at least {} here",
+            dims[0],
+            dims[1],
+            dims[2],
+            if lit { " lit" } else { "n unlit" },
+            (least * scale).ceil() / scale
+        ),
+    ))
+}
+
 /// Channels a volume can have (one texel of up to four components per
 /// voxel on the GPU), and so transfer functions per frame.
 pub const MAX_CHANNELS: usize = 4;
@@ -110,6 +156,29 @@ mod tests {
             .to_string()
             .contains("more than"));
         assert_eq!(zeroed::<u32>("v", 3).unwrap(), vec![0; 3]);
+    }
+
+    #[test]
+    fn loop_passes_bound_lit_frames_twice_and_name_the_least_step() {
+        let dims = [32, 32, 32];
+        assert!(check_loop_passes("x", None, dims, 1e-4, true).is_ok());
+        assert!(check_loop_passes("x", Some(65535), dims, 0.5, true).is_ok());
+        // 55.4 voxels of diagonal: about 110852 samples at 0.0005.
+        let e = check_loop_passes("llvmpipe", Some(65535), dims, 0.0005, false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("llvmpipe ends a SIMD group's loops after 65535"), "{e}");
+        assert!(e.contains("step of at least 0.000855"), "{e}");
+        let lit = check_loop_passes("llvmpipe", Some(65535), dims, 0.0015, true)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            lit.contains("lit frame") && lit.contains("step of at least 0.00171"),
+            "{lit}"
+        );
+        assert!(check_loop_passes("llvmpipe", Some(65535), dims, 0.0015, false).is_ok());
+        // The step it names fits.
+        assert!(check_loop_passes("llvmpipe", Some(65535), dims, 0.00171, true).is_ok());
     }
 
     #[test]

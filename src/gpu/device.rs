@@ -7,6 +7,9 @@ use super::requirements::has_subgroup_vote;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 
+/// lavapipe's cap on a shader's loop passes (`DeviceInfo::loop_pass_limit`).
+const LLVMPIPE_LOOP_PASSES: u64 = 65535;
+
 /// Facts about the device that lacuna checks before using it.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
@@ -37,6 +40,12 @@ pub struct DeviceInfo {
     pub sub_texel_precision_bits: u32,
     /// Storage buffer descriptors' offsets are multiples of this.
     pub min_storage_buffer_offset_alignment: u64,
+    /// Loop passes one SIMD group may run in a dispatch, all of a kernel's
+    /// loops together, where the driver caps them: lavapipe (llvmpipe)
+    /// silently ends every loop of a shader once they have run 65535 passes
+    /// between them (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`), so a longer
+    /// march would stop short (`limits::check_loop_passes`).
+    pub loop_pass_limit: Option<u64>,
 }
 
 impl DeviceInfo {
@@ -168,6 +177,7 @@ pub(crate) fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice, time
         device_local_bytes,
         sub_texel_precision_bits: l.sub_texel_precision_bits,
         min_storage_buffer_offset_alignment: l.min_storage_buffer_offset_alignment,
+        loop_pass_limit: (driver.driver_id == vk::DriverId::MESA_LLVMPIPE).then_some(LLVMPIPE_LOOP_PASSES),
     }
 }
 

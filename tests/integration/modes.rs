@@ -2,7 +2,7 @@
 //! marching on the GPU against the CPU reference (`render::reference`) of
 //! the same frame, within 1e-4, on frames that show something.
 
-use crate::common::{gpu, max_abs, render};
+use crate::common::{accel, builder, fails, gpu, max_abs, render, render_with};
 use lacuna::accel::Accel;
 use lacuna::frame::Frame;
 use lacuna::render::reference;
@@ -276,5 +276,79 @@ fn shaded_isosurfaces_and_clips_combine() {
         &v,
         &tf,
         base(40, 60.0, 10.0, PERSP).shading(Some(lit)).clip(clip).jitter(true),
+    );
+}
+
+/// lavapipe ends every loop of a SIMD group once they have run 65535 passes
+/// between them (a march past it stopped short: vessels:32 unlit at step
+/// 0.0005 differed from step 0.002 by up to 0.34). A lit march at the least
+/// step `limits::check_loop_passes` allows there runs whole: naive equals
+/// the CPU reference and a grid of 2-voxel cells equals naive. A finer
+/// step is one error, in the library and from the command line.
+#[test]
+fn a_march_at_the_loop_pass_limit_is_whole_and_a_finer_one_is_refused() {
+    let ctx = gpu();
+    let (v, tf) = load("vessels:32");
+    assert_eq!(v.dims, [32, 32, 32]);
+    let limit = ctx.info().loop_pass_limit;
+    // On a 32^3 box a lit frame needs 0.00171 on lavapipe (limits.rs).
+    let least = if limit.is_some() { 0.00171 } else { 0.001 };
+    let lit = |step: f32| {
+        base(10, 30.0, 20.0, Projection::Orthographic)
+            .step(step)
+            .shading(Some(Shading::default()))
+    };
+    let naive = check(&v, &tf, lit(least));
+    assert!(visible(&naive) > 10, "an empty frame proves nothing");
+    let grid = accel("grid");
+    let cells = grid.params(&[("cell", "2")]).unwrap();
+    let gridded = render_with(&ctx, &v, &tf, &lit(least).build().unwrap(), grid, &cells);
+    assert_eq!(max_abs(&gridded, &naive), 0.0, "the grid's frame differs from naive's");
+    if limit.is_none() {
+        return;
+    }
+    let finer = lit(0.0015).build().unwrap();
+    let renderer = lacuna::render::Renderer::new(&ctx).unwrap();
+    let mut gv = lacuna::volume::GpuVolume::upload(&ctx, &v).unwrap();
+    gv.prepare(&v, true, finer.filter()).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let b = builder(&ctx);
+    let naive_accel = Accel::naive();
+    let (ranges, _) = b.ranges_for(&[(naive_accel, &naive_accel.defaults())], &gv).unwrap();
+    let input = lacuna::accel::BuildInput {
+        volume: &v,
+        gpu_volume: &gv,
+        tf: &tf,
+        gpu_tf: &lut,
+        mode: *finer.mode(),
+        frame: None,
+    };
+    let (structure, _) = b.build(naive_accel, &input, &ranges, &naive_accel.defaults()).unwrap();
+    let scene = lacuna::render::Scene {
+        structure: &structure,
+        volume: &gv,
+        tf: &lut,
+    };
+    let Err(e) = renderer.render(scene, &finer) else {
+        panic!("a march past the limit rendered");
+    };
+    assert!(
+        e.to_string().contains("ends a SIMD group's loops after 65535 passes")
+            && e.to_string().contains("a step of at least 0.00171"),
+        "{e}"
+    );
+    fails(
+        &[
+            "render",
+            "vessels:32",
+            "--accel",
+            "naive",
+            "--size",
+            "8x8",
+            "--step",
+            "0.0005",
+        ],
+        &[],
+        "a step of at least 0.000855",
     );
 }
