@@ -12,7 +12,7 @@
 //! into a second half of the buffer what naive marching would have run on
 //! the same ray (`count_both`; glsl/common/march.glsl `count_naive`).
 
-use super::builder::{Builder, PerContext};
+use super::builder::Builder;
 use super::kernels::{MarchKernels, ProbeConstants};
 use super::method::Structure;
 use crate::desc::FrameDesc;
@@ -23,7 +23,6 @@ use crate::gpu::{vk, Binding, Buffer, Context, MemoryLocation, TexelBuffer, Time
 use crate::tf::TransferFunction;
 use crate::volume::GpuVolume;
 use std::collections::HashMap;
-use std::sync::Arc;
 
 /// Pixels per tile edge (the march kernels' workgroup).
 const TILE: u32 = 8;
@@ -74,17 +73,11 @@ impl Counts {
     }
 }
 
-impl PerContext for MarchKernels {
-    fn new(ctx: &Context) -> Result<Self> {
-        Ok(MarchKernels::new(ctx))
-    }
-}
-
 /// One frame's probe: its parameters, LUT and output, ready for any
 /// structure built over `volume`.
 pub struct FrameProbe<'a> {
     ctx: Context,
-    kernels: Arc<MarchKernels>,
+    kernels: MarchKernels,
     volume: &'a GpuVolume,
     desc: FrameDesc,
     stride: u32,
@@ -147,7 +140,7 @@ impl<'a> FrameProbe<'a> {
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         Ok(FrameProbe {
-            kernels: builder.shared::<MarchKernels>()?,
+            kernels: MarchKernels::new(&ctx),
             volume,
             desc: *desc,
             stride,

@@ -226,7 +226,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
     if options.recalibrate {
         builder.recalibrate()?;
     }
-    let renderer = Renderer::sharing(&builder)?;
+    let renderer = Renderer::new(builder.context())?;
     let info = ctx.info();
     let mut setup = Setup {
         config: config.name.clone(),

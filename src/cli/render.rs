@@ -126,7 +126,7 @@ pub(super) fn build_and_render(
     upload: impl FnOnce() -> Result<GpuVolume>,
 ) -> Result<Rendered> {
     let builder = args.model.builder(ctx)?;
-    let renderer = Renderer::sharing(&builder)?;
+    let renderer = Renderer::new(builder.context())?;
     let clock = std::time::Instant::now();
     let mut gpu_volume = upload()?;
     gpu_volume.prepare(volume, desc.lighting().is_some(), desc.filter())?;

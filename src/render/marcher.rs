@@ -3,7 +3,7 @@
 
 use super::target::{Output, RenderTarget};
 use crate::accel::kernels::{MarchKernels, ProbeConstants};
-use crate::accel::{Builder, March, Structure};
+use crate::accel::{March, Structure};
 use crate::desc::FrameDesc;
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
@@ -29,7 +29,7 @@ pub struct Scene<'a> {
 /// the kernels that write each frame's LUT and depth limits.
 pub struct Renderer {
     ctx: Context,
-    kernels: Arc<MarchKernels>,
+    kernels: MarchKernels,
     opacity: Kernel,
     depth_limit: Kernel,
     /// Reads host depth images (texelFetch: its filter is irrelevant).
@@ -55,17 +55,6 @@ impl Renderer {
     /// A renderer. Its kernels come from the context, which creates each
     /// once: a second renderer on it compiles nothing it made before.
     pub fn new(ctx: &Context) -> Result<Self> {
-        Self::with_kernels(ctx, Arc::new(MarchKernels::new(ctx)))
-    }
-
-    /// A renderer on `builder`'s context: `Renderer::new` of it. The
-    /// kernels auto created while choosing are the context's, so the
-    /// frames compile none of them again.
-    pub fn sharing(builder: &Builder) -> Result<Self> {
-        Self::new(builder.context())
-    }
-
-    fn with_kernels(ctx: &Context, kernels: Arc<MarchKernels>) -> Result<Self> {
         let opacity = Kernel::new::<build_opacity_lut::Push>(ctx, &shaders::BUILD_OPACITY_LUT)?;
         let depth_limit = Kernel::new::<()>(ctx, &shaders::RENDER_DEPTH_LIMIT)?;
         let info = vk::SamplerCreateInfo::default()
@@ -75,7 +64,7 @@ impl Renderer {
         let no_cells = crate::volume::no_cells(ctx)?;
         Ok(Renderer {
             ctx: ctx.clone(),
-            kernels,
+            kernels: MarchKernels::new(ctx),
             opacity,
             depth_limit,
             depth_sampler,
@@ -200,7 +189,8 @@ impl Renderer {
             info.loop_pass_limit,
             volume.dims,
             desc.step(),
-            desc.lighting().is_some(),
+            // Lit composite frames pass twice per visible sample (lattice.glsl, march_lit_run).
+            desc.lighting().is_some() && *desc.mode() == crate::desc::Mode::Composite,
         )?;
         let mut params = desc.params(volume)?;
         params.tf_channel_step = tf.channel_step();

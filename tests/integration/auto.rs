@@ -152,7 +152,7 @@ fn probe_counts_are_the_lattices_samples() {
 fn auto_marches_what_it_chose_and_equals_naive() {
     let ctx = gpu();
     let builder = common::builder(&ctx);
-    let renderer = Renderer::sharing(&builder).unwrap();
+    let renderer = Renderer::new(builder.context()).unwrap();
     let v = load("nbody:64");
     let gv = GpuVolume::upload(&ctx, &v).unwrap();
     let sparse = TransferFunction::parse("ramp:0.3:1").unwrap();

@@ -2,7 +2,7 @@
 //! marching on the GPU against the CPU reference (`render::reference`) of
 //! the same frame, within 1e-4, on frames that show something.
 
-use crate::common::{accel, builder, fails, gpu, max_abs, render, render_with};
+use crate::common::{accel, fails, gpu, max_abs, render, render_with, try_render_with};
 use lacuna::accel::Accel;
 use lacuna::frame::Frame;
 use lacuna::render::reference;
@@ -308,28 +308,8 @@ fn a_march_at_the_loop_pass_limit_is_whole_and_a_finer_one_is_refused() {
         return;
     }
     let finer = lit(0.0015).build().unwrap();
-    let renderer = lacuna::render::Renderer::new(&ctx).unwrap();
-    let mut gv = lacuna::volume::GpuVolume::upload(&ctx, &v).unwrap();
-    gv.prepare(&v, true, finer.filter()).unwrap();
-    let lut = tf.upload(&ctx).unwrap();
-    let b = builder(&ctx);
     let naive_accel = Accel::naive();
-    let (ranges, _) = b.ranges_for(&[(naive_accel, &naive_accel.defaults())], &gv).unwrap();
-    let input = lacuna::accel::BuildInput {
-        volume: &v,
-        gpu_volume: &gv,
-        tf: &tf,
-        gpu_tf: &lut,
-        mode: *finer.mode(),
-        frame: None,
-    };
-    let (structure, _) = b.build(naive_accel, &input, &ranges, &naive_accel.defaults()).unwrap();
-    let scene = lacuna::render::Scene {
-        structure: &structure,
-        volume: &gv,
-        tf: &lut,
-    };
-    let Err(e) = renderer.render(scene, &finer) else {
+    let Err(e) = try_render_with(&ctx, &v, &tf, &finer, naive_accel, &naive_accel.defaults()) else {
         panic!("a march past the limit rendered");
     };
     assert!(

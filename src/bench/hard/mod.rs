@@ -82,7 +82,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
     // priced with nominal constants rather than measured ones.
     builder.set_kernel_costs(Some(crate::accel::auto::KernelCost::NOMINAL))?;
     // Frames share the march kernels auto's probes created.
-    let renderer = Renderer::sharing(&builder)?;
+    let renderer = Renderer::new(builder.context())?;
     let mut out = Vec::new();
     ctx.take_validation_messages();
     let variants = structures()?;

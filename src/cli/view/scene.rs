@@ -68,7 +68,7 @@ impl Scene {
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
             ctx: ctx.clone(),
-            renderer: Renderer::sharing(&builder)?,
+            renderer: Renderer::new(builder.context())?,
             builder,
             volume,
             gpu_volume: Some(gpu_volume),

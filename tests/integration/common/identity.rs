@@ -73,7 +73,7 @@ impl Fixture {
         let builder = super::builder(&ctx);
         Fixture {
             // auto's probe kernels are the context's: the frames reuse them.
-            renderer: Renderer::sharing(&builder).unwrap(),
+            renderer: Renderer::new(builder.context()).unwrap(),
             builder,
             ctx,
             bricks: None,

@@ -86,6 +86,21 @@ pub fn render_with(
     accel: Accel,
     params: &Params,
 ) -> Frame {
+    let frame = try_render_with(ctx, volume, tf, desc, accel, params).unwrap();
+    assert_clean(ctx);
+    frame
+}
+
+/// As `render_with`, the frame's error returned (a frame the renderer
+/// refuses); only setting the scene up may panic.
+pub fn try_render_with(
+    ctx: &Context,
+    volume: &Volume,
+    tf: &TransferFunction,
+    desc: &FrameDesc,
+    accel: Accel,
+    params: &Params,
+) -> lacuna::Result<Frame> {
     let renderer = Renderer::new(ctx).unwrap();
     let mut gv = GpuVolume::upload(ctx, volume).unwrap();
     gv.prepare(volume, desc.lighting().is_some(), desc.filter()).unwrap();
@@ -106,9 +121,7 @@ pub fn render_with(
         volume: &gv,
         tf: &lut,
     };
-    let (frame, _) = renderer.render(scene, desc).unwrap();
-    assert_clean(ctx);
-    frame
+    renderer.render(scene, desc).map(|(frame, _)| frame)
 }
 
 /// Renders `structure` (built for `lut` over `gv`) with `desc`.
