@@ -80,7 +80,7 @@ const SHARED_STRUCTS: [&str; 5] = ["RenderParams", "BvhNode", "OctNode", "Prim",
 
 /// The bindings every march kernel has (`glsl/common/march.glsl`); the
 /// renderer binds them, the structure the rest.
-const MARCH_COMMON: [&str; 12] = [
+const MARCH_COMMON: [&str; 13] = [
     "params",
     "volume_tex",
     "tf_lut",
@@ -93,6 +93,7 @@ const MARCH_COMMON: [&str; 12] = [
     "pool_1",
     "pool_2",
     "pool_3",
+    "march_status",
 ];
 
 /// Rust keywords a GLSL name may collide with.

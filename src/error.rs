@@ -66,6 +66,15 @@ pub enum Error {
     /// GPU memory allocation failed.
     #[error("GPU memory allocation for {what} failed: {message}")]
     Memory { what: String, message: String },
+    /// A frame's march ran into the device's cap on a shader's loop passes
+    /// (`DeviceInfo::loop_pass_limit`), so some rays may have stopped early.
+    #[error("the {structure} march ran into {device}'s cap of {limit} loop passes per SIMD group in {groups} of the frame's groups, so their rays may have stopped early and the frame is not the exact one: use a coarser step, or --accel naive, whose march this step fits")]
+    LoopCap {
+        structure: String,
+        device: String,
+        limit: u64,
+        groups: u32,
+    },
 }
 
 impl Error {

@@ -97,9 +97,8 @@ pub fn check_samples_per_ray(dims: [u32; 3], step: f32) -> Result<u64> {
 /// and the ray's set-up. A bound for naive marching, whose lanes march one
 /// span each. Not for every structure: where a group's lanes march spans
 /// of different lengths, each pass of the sample loop waits for the longest
-/// one, so a group can run more sample passes than any one ray has samples
-/// (up to the group's lanes times as many; the LBVH on vessels:32 at a step
-/// of 0.0025, lit, went past the cap where naive did not).
+/// one, so a group can run more sample passes than any one ray has samples;
+/// such a march finds out itself (`Renderer::check_whole`, `Error::LoopCap`).
 pub fn march_loop_passes(samples: u64, diagonal: f64, lit: bool) -> u64 {
     let per_sample = 1 + lit as u64;
     samples

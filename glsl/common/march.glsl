@@ -24,8 +24,9 @@
 #define CELLS_BINDING 6
 #define GRADIENT_CELLS_BINDING 7
 #define BRICK_TABLE_BINDING 8
-#define POOL_BINDING 9
-#define OWN_BINDING 12
+#define POOL_BINDING 9 // and 10, 11
+#define STATUS_BINDING 12
+#define OWN_BINDING 13
 
 // 8x8: march_pixel_id's Morton order assumes it.
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -51,6 +52,36 @@ uvec2 march_tile(uvec2 wg) {
 #include "tf.glsl"
 #include "lattice.glsl"
 #include "frame_out.glsl"
+
+// lavapipe (gallivm) ends a SIMD group's loops after LP_MAX_TGSI_LOOP_ITERATIONS
+// passes of all its loops together, without a word: a march past that ends
+// its rays early. 1 (on such a device, src/accel/kernels.rs) counts, after the
+// march, the groups that may have been cut short in march_status.
+layout(constant_id = 24) const uint MARCH_LOOP_CHECK = 0u;
+
+layout(std430, set = 0, binding = STATUS_BINDING) buffer MarchStatus {
+    uint cut_groups;
+} march_status;
+
+// The budget is one counter per group for every loop of the kernel, and a
+// loop whose group has used it up ends after one pass. So a loop of two
+// passes run after the march runs only one exactly when the march used the
+// budget up, and so may have been cut (a march that used it up to the last
+// pass counts too: a false alarm, never a missed cut). Its trip count is
+// read from memory so that no compiler can unroll it away.
+void check_loop_cap() {
+    if (MARCH_LOOP_CHECK == 0u) {
+        return;
+    }
+    uint passes = 0u;
+    uint want = 2u + (params.image.x >> 31u);
+    for (uint i = 0u; i < want; ++i) {
+        passes++;
+    }
+    if (passes < want && subgroupElect()) {
+        atomicAdd(march_status.cut_groups, 1u);
+    }
+}
 
 void march_ray(inout March m);
 
@@ -116,6 +147,7 @@ void main() {
             iso_refine(m);
         }
     }
+    check_loop_cap();
     if (MARCH_COUNT != 0u) {
         frame_store(px, vec4(vec3(count_group), float(count_lane_samples)));
         count_naive(px, marched, k0, m);

@@ -254,6 +254,9 @@ struct Probe {
     no_cells: TexelBuffer,
     params: Vec<Buffer>,
     frame: Buffer,
+    /// The march status binding (never written: the kernel is unspecialized,
+    /// so it checks no loop cap).
+    status: Buffer,
 }
 
 impl Probe {
@@ -297,6 +300,13 @@ impl Probe {
             no_cells: crate::volume::no_cells(ctx)?,
             params,
             frame,
+            status: Buffer::new(
+                ctx,
+                "cost probe status",
+                16,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?,
         })
     }
 
@@ -306,8 +316,14 @@ impl Probe {
 
     fn record(&self, cmd: vk::CommandBuffer, tree: &GpuTree, step: f32) -> Result<()> {
         let params = &self.params[usize::from(step != STEP)];
-        // Dispatches write the same frame: order them.
-        record::barrier(self.ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_WRITE);
+        // Dispatches write the same frame (and may write the same status):
+        // order them.
+        record::barrier(
+            self.ctx.device(),
+            cmd,
+            Access::COMPUTE_READ_WRITE,
+            Access::COMPUTE_READ_WRITE,
+        );
         let groups = self.kernel.groups("cost probe", [RAYS, RAYS, 1])?;
         let mut bindings = MarchCommon {
             params: Binding::Storage(params),
@@ -323,6 +339,7 @@ impl Probe {
             pool_1: Binding::Sampled(self.volume.pool_views()[0], self.volume.sampler),
             pool_2: Binding::Sampled(self.volume.pool_views()[1], self.volume.sampler),
             pool_3: Binding::Sampled(self.volume.pool_views()[2], self.volume.sampler),
+            march_status: Binding::Storage(&self.status),
         }
         .list();
         bindings.extend(

@@ -17,6 +17,9 @@ pub const COUNT_CONSTANT_ID: u32 = 22;
 /// `constant_id` of `MARCH_TILE_STRIDE` (glsl/common/march.glsl): workgroup
 /// (x, y) marches tile (x, y) times this.
 pub const TILE_STRIDE_CONSTANT_ID: u32 = 23;
+/// `constant_id` of `MARCH_LOOP_CHECK` (glsl/common/march.glsl): 1 on a
+/// device that caps a shader's loop passes (`DeviceInfo::loop_pass_limit`).
+pub const LOOP_CHECK_CONSTANT_ID: u32 = 24;
 
 /// How a probe frame departs from a plain one: counting instead of colour,
 /// and every `tile_stride`-th 8x8 tile along each axis.
@@ -79,6 +82,7 @@ impl MarchKernels {
         constants.extend(frame);
         constants.push((COUNT_CONSTANT_ID, probe.count as u32));
         constants.push((TILE_STRIDE_CONSTANT_ID, probe.tile_stride));
+        constants.push((LOOP_CHECK_CONSTANT_ID, self.ctx.info().loop_pass_limit.is_some() as u32));
         let shader = march.shader;
         Kernel::specialized(&self.ctx, &shader, shader.push_size as usize, &constants)
     }

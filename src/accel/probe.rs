@@ -86,6 +86,10 @@ pub struct FrameProbe<'a> {
     no_cells: TexelBuffer,
     out: Buffer,
     depth: Buffer,
+    /// The march status (groups cut by a loop cap): written, never read, as
+    /// a cut probe frame only misprices a candidate, and the frame rendered
+    /// with the choice is checked (`Renderer::render`).
+    status: Buffer,
     readback: Buffer,
 }
 
@@ -149,6 +153,7 @@ impl<'a> FrameProbe<'a> {
             no_cells: crate::volume::no_cells(&ctx)?,
             out: Buffer::new(&ctx, "probe frame", bytes, usage, MemoryLocation::GpuOnly)?,
             depth: Buffer::new(&ctx, "probe depth", 16, usage, MemoryLocation::GpuOnly)?,
+            status: Buffer::new(&ctx, "probe status", 16, usage, MemoryLocation::GpuOnly)?,
             readback: Buffer::new(
                 &ctx,
                 "probe readback",
@@ -220,6 +225,7 @@ impl<'a> FrameProbe<'a> {
             pool_1: Binding::Sampled(self.volume.pool_views()[0], self.volume.sampler),
             pool_2: Binding::Sampled(self.volume.pool_views()[1], self.volume.sampler),
             pool_3: Binding::Sampled(self.volume.pool_views()[2], self.volume.sampler),
+            march_status: Binding::Storage(&self.status),
         }
         .list();
         bindings.extend(structure.built.bindings());
@@ -332,8 +338,9 @@ pub fn time_interleaved(
         ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
             for (i, (probe, s)) in pairs.iter().enumerate() {
-                // Dispatches may write the same buffer: order them.
-                record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
+                // Dispatches may write the same buffers (the frame, the
+                // march status, which they also read): order them.
+                record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 let pass = timer.begin(cmd, &i.to_string())?;
                 probe.record(cmd, s, false)?;
                 timer.end(cmd, pass);

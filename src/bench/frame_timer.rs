@@ -34,6 +34,7 @@ impl<'a> FrameTimer<'a> {
             }
             Ok(())
         })?;
+        self.renderer.check_whole(&self.target, scene.structure)?;
         let ms = self.timer.results()?.phase("march")?;
         let frame = if read { Some(self.target.read()?) } else { None };
         Ok((ms, frame))

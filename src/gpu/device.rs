@@ -44,7 +44,9 @@ pub struct DeviceInfo {
     /// loops together, where the driver caps them: lavapipe (llvmpipe)
     /// silently ends every loop of a shader once they have run 65535 passes
     /// between them (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`), so a longer
-    /// march would stop short (`limits::check_loop_passes`).
+    /// march would stop short: bounded before a frame is recorded
+    /// (`limits::check_loop_passes`) and checked by the march itself after
+    /// (`Renderer::check_whole`).
     pub loop_pass_limit: Option<u64>,
 }
 

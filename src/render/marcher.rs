@@ -103,10 +103,14 @@ impl Renderer {
     /// After: the frame (buffer or host image) is written in COMPUTE_SHADER
     /// with SHADER_WRITE; the host orders its own use after a barrier from
     /// `Access::COMPUTE_WRITE` (`record_readback` records one for the
-    /// buffer). State left bound: the compute pipeline, pipeline layout, push
-    /// descriptors and push constants of the last lacuna kernel; graphics
-    /// state and the host's descriptor sets are untouched, but a host
-    /// compute pipeline must be bound again.
+    /// buffer). A last barrier makes the target's march status visible to
+    /// the host: once the submission completes, `target.cut_groups()` is 0
+    /// unless a device that caps a shader's loop passes (lavapipe) cut the
+    /// march short, and a frame with cut groups is not the exact one. State
+    /// left bound: the compute pipeline, pipeline layout, push descriptors
+    /// and push constants of the last lacuna kernel; graphics state and the
+    /// host's descriptor sets are untouched, but a host compute pipeline
+    /// must be bound again.
     ///
     /// One dispatch: split frames of many samples into submissions of your
     /// own (`render` marches in bands of rows).
@@ -240,6 +244,8 @@ impl Renderer {
         record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
         record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
+        let status = target.status_buffer();
+        unsafe { device.cmd_fill_buffer(cmd, status.raw, 0, vk::WHOLE_SIZE, 0) };
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         // The bindings every march kernel has, then the structure's own.
         let mut bindings: Vec<Bound> = MarchCommon {
@@ -255,6 +261,7 @@ impl Renderer {
             pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
             pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
             pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
+            march_status: Binding::Storage(status),
         }
         .list();
         bindings.extend(structure.built.bindings());
@@ -290,6 +297,8 @@ impl Renderer {
         let rows = count.min(groups[1].saturating_sub(first));
         kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1])?;
         timer.end(cmd, pass);
+        // The march status (`RenderTarget::cut_groups`) is read by the host.
+        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
         Ok(())
     }
 
@@ -313,6 +322,24 @@ impl Renderer {
         copy(&target.depth, frame.size());
         record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
+    }
+
+    /// After the submission of a frame `record`ed on `target` with
+    /// `structure` completed: an error (`Error::LoopCap`) when the device's
+    /// cap on a shader's loop passes cut some of its rays short, so that the
+    /// frame may not be the exact one.
+    pub fn check_whole(&self, target: &RenderTarget, structure: &Structure) -> Result<()> {
+        let groups = target.cut_groups()?;
+        if groups == 0 {
+            return Ok(());
+        }
+        let info = self.ctx.info();
+        Err(Error::LoopCap {
+            structure: structure.marched_as().to_string(),
+            device: info.name.clone(),
+            limit: info.loop_pass_limit.unwrap_or(0),
+            groups,
+        })
     }
 
     /// Renders one frame: records, submits, waits, reads back. Returns the
@@ -367,6 +394,7 @@ impl Renderer {
                 }
                 Ok(())
             })?;
+            self.check_whole(&target, scene.structure)?;
             for (name, ms) in timer.results()?.phases {
                 match timings.phases.iter_mut().find(|(n, _)| *n == name) {
                     Some((_, sum)) => *sum += ms,

@@ -21,6 +21,9 @@ pub struct RenderTarget {
     pub depth: Buffer,
     pub params: Buffer,
     pub lut: TexelBuffer,
+    /// The SIMD groups of the last frame whose march a driver's loop cap
+    /// may have cut short (`cut_groups`); host-visible.
+    status: Buffer,
     readback: Option<Buffer>,
 }
 
@@ -192,6 +195,12 @@ impl RenderTarget {
             MemoryLocation::GpuOnly,
         )?;
         let lut = TexelBuffer::new(ctx, lut, vk::Format::R32G32B32A32_SFLOAT)?;
+        let status = buffer(
+            "march status",
+            16,
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
         let readback = match readback {
             true => Some(buffer(
                 "frame readback",
@@ -208,8 +217,24 @@ impl RenderTarget {
             depth,
             params,
             lut,
+            status,
             readback,
         })
+    }
+
+    pub(crate) fn status_buffer(&self) -> &Buffer {
+        &self.status
+    }
+
+    /// How many SIMD groups of the last frame recorded on this target ran
+    /// into the device's cap on a shader's loop passes, after its
+    /// submission completed: 0 on a device without one
+    /// (`DeviceInfo::loop_pass_limit`). More than 0 means those groups' rays
+    /// may have stopped early, so the frame may not be the exact one:
+    /// `Renderer::render` refuses it (`Error::LoopCap`).
+    pub fn cut_groups(&self) -> Result<u32> {
+        let bytes = self.status.host()?;
+        Ok(bytemuck::pod_read_unaligned(&bytes[..4]))
     }
 
     pub(crate) fn frame_buffer(&self) -> Result<&Buffer> {

@@ -393,6 +393,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("pool_1", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("pool_2", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("pool_3", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            ("march_status", d),
             ("cells", d)
         ]
     );
@@ -404,12 +405,18 @@ fn interfaces_are_read_from_the_spirv() {
     );
     // The render parameters are a fixed-size storage block (see
     // render_params.glsl for why not a uniform block), generated from the
-    // SPIR-V; the structure's arrays have no fixed size.
+    // SPIR-V; the march status is one word; the structure's arrays have no
+    // fixed size.
     assert_eq!(
         g.bindings[0].block_size as usize,
         std::mem::size_of::<lacuna::render::RenderParams>()
     );
-    assert!(g.bindings[2..].iter().all(|s| s.block_size == 0));
+    let status = g.slot("march_status").unwrap().1;
+    assert_eq!(status.block_size, 4);
+    assert!(g.bindings[2..]
+        .iter()
+        .filter(|s| s.name != "march_status")
+        .all(|s| s.block_size == 0));
     // Every march kernel's parameter block is the one generated struct.
     for s in shaders::ALL.iter().filter(|s| s.name.starts_with("march/")) {
         let (_, params) = s.slot("params").unwrap();
