@@ -168,6 +168,7 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
         build,
         mut frame,
         timings,
+        fallback,
     } = build_and_render(&ctx, args, &params, (&volume, &tf), &block_desc, || {
         GpuVolume::upload_bricks_kept(&ctx, &volume, edge, keep)
     })?;
@@ -203,6 +204,9 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
     ];
     if let Some(m) = structure.marched_as_reason() {
         report.push(format!("{} -> {} on rank 0", args.accel, m.label));
+    }
+    if let Some(fallback) = fallback {
+        report.push(format!("note: on rank 0, {fallback}"));
     }
     report.extend(look_notes(&desc).into_iter().map(|n| format!("note: {n}")));
     if let Some(ert) = desc.ert() {

@@ -3,7 +3,7 @@
 use super::args::{AccelParser, FrameArgs, ModelArgs, StructureArgs};
 use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
-use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
+use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::render::{self, FrameDesc, Mode, Renderer, Scene};
@@ -112,6 +112,8 @@ pub(super) struct Rendered {
     /// The last frame, and the medians of the timed ones.
     pub frame: Frame,
     pub timings: Timings,
+    /// Why auto's choice gave way to naive marching, when it did.
+    pub fallback: Option<String>,
 }
 
 /// What `render` and each rank do with a loaded volume: `upload` it and
@@ -141,13 +143,28 @@ pub(super) fn build_and_render(
         mode: *desc.mode(),
         frame: Some(desc),
     };
-    let (structure, build) = build(&builder, args, &input, params)?;
+    let (mut structure, build) = build(&builder, args, &input, params)?;
     let scene = Scene {
         structure: &structure,
         volume: &gpu_volume,
         tf: &lut,
     };
-    let (frame, timings) = frames(&renderer, scene, desc, args)?;
+    let mut fallback = None;
+    let (frame, timings) = match frames(&renderer, scene, desc, args) {
+        // auto's choice ran into the device's loop cap (lavapipe) where
+        // naive marching, which the frame was checked to fit, does not.
+        Err(e @ Error::LoopCap { .. }) if chose(&structure) => {
+            fallback = Some(format!("{e}; auto marched this frame naively instead"));
+            structure = Structure::naive();
+            let scene = Scene {
+                structure: &structure,
+                volume: &gpu_volume,
+                tf: &lut,
+            };
+            frames(&renderer, scene, desc, args)?
+        }
+        result => result?,
+    };
     Ok(Rendered {
         gpu_volume,
         upload_ms,
@@ -156,7 +173,15 @@ pub(super) fn build_and_render(
         build,
         frame,
         timings,
+        fallback,
     })
+}
+
+/// `structure` is auto's choice.
+fn chose(structure: &Structure) -> bool {
+    structure
+        .marched_as_reason()
+        .is_some_and(|m| m.kind == MarchedKind::Choice)
 }
 
 /// Renders `warmup + repeat` frames; the last, and the medians of the timed ones.
@@ -208,6 +233,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         build,
         mut frame,
         timings,
+        fallback,
     } = build_and_render(&ctx, args, &params, (&volume, &tf), &desc, || {
         GpuVolume::upload_as(&ctx, &volume, args.volume.storage)
     })?;
@@ -278,6 +304,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     if let Some(m) = structure.marched_as_reason() {
         println!("{} -> {}", args.accel, m.label);
         println!("  {}", m.reason);
+    }
+    if let Some(fallback) = fallback {
+        println!("note: {fallback}");
     }
     if let Some(stats) = structure.stats()? {
         println!("structure {stats}");

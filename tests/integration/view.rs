@@ -329,3 +329,41 @@ fn the_viewer_steps_and_plays_a_series_and_matches_render() {
         assert!(diff.stdout.contains("differing 0 of 3072"), "{}", diff.stdout);
     }
 }
+
+/// A frame lavapipe's loop cap cut short (the grid on vessels:32 at the
+/// least step naive marching fits: `modes::at_the_loop_pass_limit_...`)
+/// says so in the title and the `--frames` summary; naive's frame at the
+/// same step is whole and says nothing.
+#[test]
+fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
+    let run = |accel: &str| {
+        let args = [
+            "view",
+            "vessels:32",
+            "--accel",
+            accel,
+            "--size",
+            "16x16",
+            "--step",
+            "0.00086",
+            "--frames",
+            "1",
+            "--validate",
+        ];
+        let r = lacuna_windowed(&args);
+        ok(&r, &format!("{args:?}"));
+        r.stdout
+            .lines()
+            .find(|l| l.starts_with("frames 1: "))
+            .unwrap_or_default()
+            .to_string()
+    };
+    let capped = crate::common::gpu().info().loop_pass_limit.is_some();
+    let grid = run("grid");
+    assert_eq!(grid.contains("NOT EXACT: the device's loop cap cut"), capped, "{grid}");
+    let naive = run("naive");
+    assert!(
+        naive.starts_with("frames 1: ") && !naive.contains("NOT EXACT"),
+        "{naive}"
+    );
+}

@@ -490,14 +490,24 @@ impl Viewer {
     fn summary(&self) -> String {
         let step = self.step_text();
         format!(
-            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}){}{step}",
+            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}){}{step}{}",
             self.drawn,
             self.fps,
             self.scene.march_ms(),
             self.scene.rebuild_ms(),
             self.scene.accel,
             if step.is_empty() { "" } else { ", " },
+            self.cut_text(),
         )
+    }
+
+    /// What a frame the device's loop cap cut short adds to the title
+    /// (`Renderer::check_whole`): that it is not the exact frame.
+    fn cut_text(&self) -> String {
+        match self.scene.cut_groups {
+            0 => String::new(),
+            n => format!(" · NOT EXACT: the device's loop cap cut {n} SIMD groups short, take a coarser step"),
+        }
     }
 
     fn title(&self) -> String {
@@ -508,8 +518,9 @@ impl Viewer {
         };
         let c = &self.controls;
         let step = self.step_text();
+        let cut = self.cut_text();
         format!(
-            "lacuna view · {}{}{step} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}",
+            "lacuna view · {}{}{step} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
             scene.volume.name,
             if step.is_empty() { "" } else { " · " },
             scene.tf.spec,

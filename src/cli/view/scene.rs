@@ -38,6 +38,9 @@ pub struct Scene {
     /// The last build's phases (empty for naive) and frame's passes.
     build: Timings,
     march: Timings,
+    /// SIMD groups of the last frame the device's loop cap cut short
+    /// (`RenderTarget::cut_groups`): that frame is not the exact one.
+    pub cut_groups: u32,
     /// The sample filter asked for (None: the default), for new steps.
     filter: Option<Filter>,
     /// The voxel storage asked for, for new steps.
@@ -84,6 +87,7 @@ impl Scene {
             timer: Timer::new(ctx, 1)?,
             build: Timings::default(),
             march: Timings::default(),
+            cut_groups: 0,
             filter,
             storage,
             upload_ms: 0.0,
@@ -285,6 +289,10 @@ impl Scene {
     /// After the recorded frame completed: its GPU pass times.
     pub fn finish(&mut self) -> Result<()> {
         self.march = self.timer.results()?;
+        self.cut_groups = match &self.target {
+            Some(target) => target.cut_groups()?,
+            None => 0,
+        };
         Ok(())
     }
 
