@@ -68,12 +68,15 @@ pub enum Error {
     Memory { what: String, message: String },
     /// A frame's march ran into the device's cap on a shader's loop passes
     /// (`DeviceInfo::loop_pass_limit`), so some rays may have stopped early.
-    #[error("the {structure} march ran into {device}'s cap of {limit} loop passes per SIMD group in {groups} of the frame's groups, so their rays may have stopped early and the frame is not the exact one: use a coarser step, or --accel naive, whose march this step fits")]
+    #[error("the {structure} march ran into {device}'s cap of {limit} loop passes in {groups} SIMD group(s), so their rays may have stopped early and the frame may not be the exact one: {advice}")]
     LoopCap {
         structure: String,
         device: String,
         limit: u64,
         groups: u32,
+        /// What to do: a coarser step, or (for a structure) naive marching,
+        /// whose march was checked to fit.
+        advice: &'static str,
     },
 }
 

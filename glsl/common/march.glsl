@@ -64,11 +64,11 @@ layout(std430, set = 0, binding = STATUS_BINDING) buffer MarchStatus {
 } march_status;
 
 // The budget is one counter per group for every loop of the kernel, and a
-// loop whose group has used it up ends after one pass. So a loop of two
-// passes run after the march runs only one exactly when the march used the
-// budget up, and so may have been cut (a march that used it up to the last
-// pass counts too: a false alarm, never a missed cut). Its trip count is
-// read from memory so that no compiler can unroll it away.
+// loop ends after a pass that leaves it at 0 or below. So a loop of two
+// passes run last runs only one when at most one pass was left: every cut
+// is counted, and so is a march that stopped a pass short of the cap (a
+// false alarm, never a missed cut). Its trip count is read from memory so
+// that no compiler can unroll it away.
 void check_loop_cap() {
     if (MARCH_LOOP_CHECK == 0u) {
         return;
@@ -147,17 +147,18 @@ void main() {
             iso_refine(m);
         }
     }
-    check_loop_cap();
     if (MARCH_COUNT != 0u) {
         frame_store(px, vec4(vec3(count_group), float(count_lane_samples)));
         count_naive(px, marched, k0, m);
-        return;
+    } else {
+        frame_store(px, march_result(m));
+        // Only iso frames hit a surface; the others write the far depth.
+        if (params.depth_out != 0u) {
+            depth_store(px, march_depth(m));
+        }
     }
-    frame_store(px, march_result(m));
-    // Only iso frames hit a surface; the others write the far depth.
-    if (params.depth_out != 0u) {
-        depth_store(px, march_depth(m));
-    }
+    // Last: a loop the pixel's result runs (lighting an iso hit) may be cut too.
+    check_loop_cap();
 }
 
 #endif

@@ -153,8 +153,15 @@ pub(super) fn build_and_render(
     let (frame, timings) = match frames(&renderer, scene, desc, args) {
         // auto's choice ran into the device's loop cap (lavapipe) where
         // naive marching, which the frame was checked to fit, does not.
-        Err(e @ Error::LoopCap { .. }) if chose(&structure) => {
-            fallback = Some(format!("{e}; auto marched this frame naively instead"));
+        Err(Error::LoopCap {
+            structure: chosen,
+            device,
+            groups,
+            ..
+        }) if chose(&structure) => {
+            fallback = Some(format!(
+                "auto's choice ({chosen}) ran into {device}'s loop cap in {groups} SIMD group(s), so this frame was marched naively"
+            ));
             structure = Structure::naive();
             let scene = Scene {
                 structure: &structure,

@@ -105,8 +105,9 @@ impl Renderer {
     /// `Access::COMPUTE_WRITE` (`record_readback` records one for the
     /// buffer). A last barrier makes the target's march status visible to
     /// the host: once the submission completes, `target.cut_groups()` is 0
-    /// unless a device that caps a shader's loop passes (lavapipe) cut the
-    /// march short, and a frame with cut groups is not the exact one. State
+    /// unless a device that caps a shader's loop passes (lavapipe) may have
+    /// cut the march short (`check_whole`); it covers the last frame
+    /// recorded on the target. State
     /// left bound: the compute pipeline, pipeline layout, push descriptors
     /// and push constants of the last lacuna kernel; graphics state and the
     /// host's descriptor sets are untouched, but a host compute pipeline
@@ -324,21 +325,28 @@ impl Renderer {
         Ok(())
     }
 
-    /// After the submission of a frame `record`ed on `target` with
-    /// `structure` completed: an error (`Error::LoopCap`) when the device's
-    /// cap on a shader's loop passes cut some of its rays short, so that the
-    /// frame may not be the exact one.
+    /// After the submission of the last frame `record`ed on `target` (with
+    /// `structure`) completed: an error (`Error::LoopCap`) when the device's
+    /// cap on a shader's loop passes may have cut some of its rays short, so
+    /// that the frame may not be the exact one. Each `record` resets the
+    /// target's count: check after each frame's submission.
     pub fn check_whole(&self, target: &RenderTarget, structure: &Structure) -> Result<()> {
         let groups = target.cut_groups()?;
         if groups == 0 {
             return Ok(());
         }
         let info = self.ctx.info();
+        let accel = structure.marched_as();
         Err(Error::LoopCap {
-            structure: structure.marched_as().to_string(),
+            structure: accel.to_string(),
             device: info.name.clone(),
             limit: info.loop_pass_limit.unwrap_or(0),
             groups,
+            advice: match accel.is_naive() {
+                // Naive's passes were bounded before: a march at the bound.
+                true => "take a coarser step",
+                false => "take a coarser step, or march naively (checked to fit this step)",
+            },
         })
     }
 

@@ -285,10 +285,12 @@ fn shaded_isosurfaces_and_clips_combine() {
 /// (the grid and the octree there differed from naive in 8 and 15 of 256
 /// pixels before the march checked the cap). Every structure, auto
 /// included, either equals naive there or refuses the frame with
-/// `Error::LoopCap`; none returns a different frame. On lavapipe some
-/// structure is refused, so the check is what decides. From the command
-/// line, auto gives way to naive marching with a note where its choice
-/// is refused, and the frame is naive's.
+/// `Error::LoopCap`; none returns a different frame. On lavapipe (8-lane
+/// groups) some structure is refused, so the check is what decides. From
+/// the command line, auto's frame there is naive's: auto chose naive, or a
+/// structure that ran whole, or one that was refused and gave way to naive
+/// with a note (which of the three depends on auto's timing of this
+/// machine; vessels:64 at 16x16 gave way on the machine this was written on).
 #[test]
 fn at_the_loop_pass_limit_every_structure_equals_naive_or_is_refused() {
     let ctx = gpu();
@@ -307,7 +309,7 @@ fn at_the_loop_pass_limit_every_structure_equals_naive_or_is_refused() {
         match try_render_with(&ctx, &v, &tf, &desc, a, &a.defaults()) {
             Ok(frame) => assert_eq!(max_abs(&frame, &naive), 0.0, "{a}'s frame differs from naive's"),
             Err(e @ lacuna::Error::LoopCap { .. }) => {
-                assert!(e.to_string().contains("is not the exact one"), "{e}");
+                assert!(e.to_string().contains("may not be the exact one"), "{e}");
                 refused.push(a.to_string());
             }
             Err(e) => panic!("{a}: {e}"),
@@ -353,9 +355,9 @@ fn at_the_loop_pass_limit_every_structure_equals_naive_or_is_refused() {
         "auto's frame differs from naive's:\n{}",
         auto_run.stdout
     );
-    if let Some(note) = auto_run.stdout.lines().find(|l| l.contains("loop passes")) {
+    if let Some(note) = auto_run.stdout.lines().find(|l| l.contains("loop cap")) {
         assert!(
-            note.starts_with("note: ") && note.ends_with("auto marched this frame naively instead"),
+            note.starts_with("note: auto's choice (") && note.ends_with("so this frame was marched naively"),
             "{note}"
         );
     }

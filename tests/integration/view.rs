@@ -332,8 +332,8 @@ fn the_viewer_steps_and_plays_a_series_and_matches_render() {
 
 /// A frame lavapipe's loop cap cut short (the grid on vessels:32 at the
 /// least step naive marching fits: `modes::at_the_loop_pass_limit_...`)
-/// says so in the title and the `--frames` summary; naive's frame at the
-/// same step is whole and says nothing.
+/// says so in the title and the `--frames` summary and is not written as a
+/// screenshot; naive's frame at the same step is whole and says nothing.
 #[test]
 fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
     let run = |accel: &str| {
@@ -366,4 +366,31 @@ fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
         naive.starts_with("frames 1: ") && !naive.contains("NOT EXACT"),
         "{naive}"
     );
+    if capped {
+        // Such a frame is not written as a screenshot: one error line, no file.
+        let dir = tempfile::tempdir().unwrap();
+        let shot = dir.path().join("shot.exr");
+        let r = lacuna_windowed(&[
+            "view",
+            "vessels:32",
+            "--accel",
+            "grid",
+            "--size",
+            "16x16",
+            "--step",
+            "0.00086",
+            "--frames",
+            "1",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ]);
+        assert_ne!(r.code, 0, "{}", r.stdout);
+        let lines: Vec<&str> = r.stderr.trim().lines().collect();
+        assert!(
+            lines.len() == 1 && lines[0].starts_with("error: ") && lines[0].contains("may not be the exact one"),
+            "{}",
+            r.stderr
+        );
+        assert!(!shot.exists(), "a cut frame was written");
+    }
 }

@@ -447,6 +447,8 @@ impl Viewer {
         let Some(mut frame): Option<Frame> = self.scene.frame()? else {
             return Ok(());
         };
+        // A frame the device's loop cap cut short is not written, as `render` refuses it.
+        self.scene.check_whole()?;
         let volume = &self.scene.volume;
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
         self.scene.describe(&mut frame, &desc)?;
@@ -506,7 +508,7 @@ impl Viewer {
     fn cut_text(&self) -> String {
         match self.scene.cut_groups {
             0 => String::new(),
-            n => format!(" · NOT EXACT: the device's loop cap cut {n} SIMD groups short, take a coarser step"),
+            n => format!(" · NOT EXACT: the device's loop cap cut {n} SIMD group(s) short, take a coarser step"),
         }
     }
 

@@ -296,6 +296,15 @@ impl Scene {
         Ok(())
     }
 
+    /// The last frame as an error where the device's loop cap may have cut
+    /// it short (`Renderer::check_whole`).
+    pub fn check_whole(&self) -> Result<()> {
+        match &self.target {
+            Some(target) => self.renderer.check_whole(target, &self.structure),
+            None => Ok(()),
+        }
+    }
+
     /// The frame a `record` with `readback` produced, as the renderer wrote it.
     pub fn frame(&self) -> Result<Option<Frame>> {
         self.target.as_ref().map(RenderTarget::read).transpose()
