@@ -289,6 +289,24 @@ impl Structure {
         self.built.marched_as()
     }
 
+    /// The error for a frame of this structure that a device's cap on a
+    /// shader's loop passes (`DeviceInfo::loop_pass_limit`) may have cut
+    /// short in `groups` SIMD groups.
+    pub fn cut_error(&self, info: &DeviceInfo, groups: u32) -> Error {
+        let accel = self.marched_as();
+        Error::LoopCap {
+            structure: accel.to_string(),
+            device: info.name.clone(),
+            limit: info.loop_pass_limit.unwrap_or(0),
+            groups,
+            advice: match accel.is_naive() {
+                // Naive's passes were bounded before: a march at the bound.
+                true => "take a coarser step",
+                false => "take a coarser step, or march naively (checked to fit this step)",
+            },
+        }
+    }
+
     /// The march kernel its frames use.
     pub fn march(&self) -> March {
         self.marched_as().method().march()

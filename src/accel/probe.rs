@@ -86,9 +86,10 @@ pub struct FrameProbe<'a> {
     no_cells: TexelBuffer,
     out: Buffer,
     depth: Buffer,
-    /// The march status (groups cut by a loop cap): written, never read, as
-    /// a cut probe frame only misprices a candidate, and the frame rendered
-    /// with the choice is checked (`Renderer::render`).
+    /// The march status of a counting frame (groups a device's loop cap
+    /// may have cut short), host-visible: `count_both` refuses a cut frame,
+    /// whose counts would misprice its structure. Trial frames write it
+    /// too, unread: their times are only compared.
     status: Buffer,
     readback: Buffer,
 }
@@ -153,7 +154,7 @@ impl<'a> FrameProbe<'a> {
             no_cells: crate::volume::no_cells(&ctx)?,
             out: Buffer::new(&ctx, "probe frame", bytes, usage, MemoryLocation::GpuOnly)?,
             depth: Buffer::new(&ctx, "probe depth", 16, usage, MemoryLocation::GpuOnly)?,
-            status: Buffer::new(&ctx, "probe status", 16, usage, MemoryLocation::GpuOnly)?,
+            status: Buffer::new(&ctx, "probe status", 16, usage, MemoryLocation::GpuToCpu)?,
             readback: Buffer::new(
                 &ctx,
                 "probe readback",
@@ -254,8 +255,10 @@ impl<'a> FrameProbe<'a> {
         self.ctx.submit_and_wait(|cmd| {
             record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
             unsafe { device.cmd_fill_buffer(cmd, self.out.raw, 0, vk::WHOLE_SIZE, 0) };
+            unsafe { device.cmd_fill_buffer(cmd, self.status.raw, 0, vk::WHOLE_SIZE, 0) };
             record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
             self.record(cmd, structure, true)?;
+            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
             record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
             let region = [vk::BufferCopy {
                 src_offset: 0,
@@ -266,6 +269,10 @@ impl<'a> FrameProbe<'a> {
             record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
             Ok(())
         })?;
+        let cut: u32 = bytemuck::pod_read_unaligned(&self.status.host()?[..4]);
+        if cut > 0 {
+            return Err(structure.cut_error(self.ctx.info(), cut));
+        }
         let pixels: &[[f32; 4]] = bytemuck::cast_slice(&self.readback.host()?[..self.out.size() as usize]);
         let (w, h) = self.desc.size();
         let (own, naive) = pixels.split_at((w * h) as usize);

@@ -335,19 +335,7 @@ impl Renderer {
         if groups == 0 {
             return Ok(());
         }
-        let info = self.ctx.info();
-        let accel = structure.marched_as();
-        Err(Error::LoopCap {
-            structure: accel.to_string(),
-            device: info.name.clone(),
-            limit: info.loop_pass_limit.unwrap_or(0),
-            groups,
-            advice: match accel.is_naive() {
-                // Naive's passes were bounded before: a march at the bound.
-                true => "take a coarser step",
-                false => "take a coarser step, or march naively (checked to fit this step)",
-            },
-        })
+        Err(structure.cut_error(self.ctx.info(), groups))
     }
 
     /// Renders one frame: records, submits, waits, reads back. Returns the

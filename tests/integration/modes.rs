@@ -285,12 +285,13 @@ fn shaded_isosurfaces_and_clips_combine() {
 /// (the grid and the octree there differed from naive in 8 and 15 of 256
 /// pixels before the march checked the cap). Every structure, auto
 /// included, either equals naive there or refuses the frame with
-/// `Error::LoopCap`; none returns a different frame. On lavapipe (8-lane
-/// groups) some structure is refused, so the check is what decides. From
-/// the command line, auto's frame there is naive's: auto chose naive, or a
-/// structure that ran whole, or one that was refused and gave way to naive
-/// with a note (which of the three depends on auto's timing of this
-/// machine; vessels:64 at 16x16 gave way on the machine this was written on).
+/// `Error::LoopCap`; none returns a different frame (auto, built here
+/// without the frame, probes another one, so its choice may be refused). On
+/// lavapipe (8-lane groups) some structure is refused, so the check decides. From
+/// the command line, auto's frame there is naive's: auto chose naive (its
+/// counting frames left cut candidates out), or a structure that ran
+/// whole, or one cut on tiles it did not probe, which gives way to naive
+/// with a note (which depends on auto's timing of this machine).
 #[test]
 fn at_the_loop_pass_limit_every_structure_equals_naive_or_is_refused() {
     let ctx = gpu();
@@ -355,11 +356,8 @@ fn at_the_loop_pass_limit_every_structure_equals_naive_or_is_refused() {
         "auto's frame differs from naive's:\n{}",
         auto_run.stdout
     );
-    if let Some(note) = auto_run.stdout.lines().find(|l| l.contains("loop cap")) {
-        assert!(
-            note.starts_with("note: auto's choice (") && note.ends_with("so this frame was marched naively"),
-            "{note}"
-        );
+    if let Some(note) = auto_run.stdout.lines().find(|l| l.starts_with("note: auto's choice")) {
+        assert!(note.ends_with("so this frame was marched naively"), "{note}");
     }
 }
 

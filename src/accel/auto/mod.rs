@@ -30,7 +30,7 @@ use super::params::{Param, Params};
 use super::probe::{time_interleaved, Counts, FrameProbe, Statistic, COUNT_TILES};
 use super::stats::Stats;
 use crate::desc::FrameDesc;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{Bound, DeviceInfo, Timings};
 use crate::volume::GpuVolume;
 pub use cache::{CostTable, Source};
@@ -247,11 +247,33 @@ fn choose(
         probe.prepare(&counted, true)?;
         let mut counts: Vec<Option<Counts>> = vec![None; built.len()];
         let mut derived = None;
+        let mut cut = vec![false; built.len()];
         for (i, s) in built.iter().enumerate().filter(|(_, s)| !naive(s)) {
-            let (own, from) = probe.count_both(s)?;
-            counts[i] = Some(own);
-            derived = derived.or(from);
+            match probe.count_both(s) {
+                Ok((own, from)) => {
+                    counts[i] = Some(own);
+                    derived = derived.or(from);
+                }
+                // A device's loop cap cut its march on the probed tiles:
+                // its frame would be refused, so it is no candidate.
+                Err(Error::LoopCap { groups, .. }) => {
+                    cut[i] = true;
+                    notes.push(format!(
+                        "{}: its counting frame ran into the device's loop cap in {groups} SIMD group(s), so it is left out",
+                        candidates[i].label
+                    ));
+                }
+                Err(e) => return Err(e),
+            }
         }
+        let kept = |i: &mut usize| {
+            *i += 1;
+            !cut[*i - 1]
+        };
+        let (mut a, mut b, mut c) = (0, 0, 0);
+        candidates.retain(|_| kept(&mut a));
+        built.retain(|_| kept(&mut b));
+        let counts: Vec<Option<Counts>> = counts.into_iter().filter(|_| kept(&mut c)).collect();
         let counts = built
             .iter()
             .zip(counts)
