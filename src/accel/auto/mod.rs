@@ -207,6 +207,16 @@ impl Method for AutoMethod {
     }
 }
 
+/// `items` without those whose `cut` is true (the two run in step).
+fn without_cut<T>(items: Vec<T>, cut: &[bool]) -> Vec<T> {
+    items
+        .into_iter()
+        .zip(cut)
+        .filter(|(_, &c)| !c)
+        .map(|(x, _)| x)
+        .collect()
+}
+
 /// Builds, counts and prices the candidates; returns the choice, the
 /// chosen structure's built data and the phases (each candidate's build,
 /// "count", "calibrate" when constants were measured, "trial" when timed).
@@ -266,14 +276,9 @@ fn choose(
                 Err(e) => return Err(e),
             }
         }
-        let kept = |i: &mut usize| {
-            *i += 1;
-            !cut[*i - 1]
-        };
-        let (mut a, mut b, mut c) = (0, 0, 0);
-        candidates.retain(|_| kept(&mut a));
-        built.retain(|_| kept(&mut b));
-        let counts: Vec<Option<Counts>> = counts.into_iter().filter(|_| kept(&mut c)).collect();
+        candidates = without_cut(std::mem::take(&mut candidates), &cut);
+        built = without_cut(std::mem::take(&mut built), &cut);
+        let counts = without_cut(counts, &cut);
         let counts = built
             .iter()
             .zip(counts)
