@@ -2,18 +2,21 @@
 //! probe frames take (against the lattice), its choice under given kernel
 //! constants (skipping on sparse data, naive on dense data and in average
 //! frames, every candidate timed with `trial always`), the frame of every
-//! choice equal to naive's, and the kernel constants measured once and
-//! read back from the cache (again with `recalibrate`).
+//! choice equal to naive's (in every look, over bricks, NaN-masked floats
+//! and two channels: the other structures' identity matrices leave auto
+//! out), and the kernel constants measured once and read back from the
+//! cache (again with `recalibrate`).
 
 use crate::common;
-use crate::common::{assert_clean, gpu};
+use crate::common::identity::{check_kernel, every_look, standard_views, Fixture, Kernels, DEFAULTS};
+use crate::common::{assert_clean, gpu, masked};
 use lacuna::accel::auto::{self, choose, Chosen, KernelCost};
 use lacuna::accel::probe::FrameProbe;
 use lacuna::accel::{BuildInput, Builder, Structure};
 use lacuna::bench::hard::lattice;
 use lacuna::frame::diff;
-use lacuna::render::{FrameDesc, Mode, Renderer};
-use lacuna::volume::{GpuVolume, LoadOptions};
+use lacuna::render::{Filter, FrameDesc, Mode, Renderer};
+use lacuna::volume::{GpuVolume, LoadOptions, POOL_BRICK};
 use lacuna::{TransferFunction, Volume};
 
 fn load(spec: &str) -> Volume {
@@ -217,6 +220,68 @@ fn auto_marches_what_it_chose_and_equals_naive() {
         );
     }
     assert_clean(&ctx);
+}
+
+/// auto in every look, on dense and bricked storage, NaN-masked floats and
+/// two channels, each priced on the frame it renders: its frame equals
+/// naive's, marched with the kernel of the structure it chose (or naive's,
+/// saying why). The identity matrices of the other structures leave auto
+/// out (`Fixture::check_with`).
+#[test]
+fn auto_equals_naive_in_every_look_storage_and_channel_count() {
+    let cases = [
+        ("sparse", load("nbody:40"), None, "ramp:0.3:1"),
+        ("bricked", load("nbody:45x37x51"), Some(POOL_BRICK), "ramp:0.3:1"),
+        ("masked float", masked("nbody:36"), None, "ramp:0.3:1"),
+        // A transfer function per channel; vessels shows only its brightest voxels.
+        (
+            "two channels",
+            load("nbody:40+vessels:40"),
+            None,
+            "ramp:0.3:1 | ramp:0.97:1",
+        ),
+    ];
+    let auto = common::accel("auto");
+    for (what, v, bricks, tf) in &cases {
+        let fx = match bricks {
+            Some(edge) => Fixture::with_bricks(*edge),
+            None => Fixture::new(),
+        };
+        let tf = TransferFunction::parse_channels(tf).unwrap();
+        let p = fx.prepare(v, &tf, DEFAULTS);
+        let mut skipped = 0;
+        for (mode, shading) in every_look() {
+            // Lit looks read one channel (tests/integration/channels.rs).
+            if (shading.is_some() || matches!(mode, Mode::Iso(_))) && v.channel_count() > 1 {
+                continue;
+            }
+            let view = standard_views()[0]
+                .to_builder()
+                .mode(mode)
+                .shading(shading)
+                .build()
+                .unwrap();
+            let input = BuildInput {
+                volume: v,
+                gpu_volume: &p.gv,
+                tf: &tf,
+                gpu_tf: &p.lut,
+                mode,
+                frame: Some(&view),
+            };
+            let s = fx.builder.build(auto, &input, &p.ranges, &auto.defaults()).unwrap().0;
+            let what = format!("{what} {}", mode.name());
+            check_kernel(&what, &s, &mode, Kernels::Reported);
+            skipped += usize::from(!s.marched_as().is_naive());
+            let naive = fx.frame(&Structure::naive(), &p, &view, Filter::Manual);
+            let frame = fx.frame(&s, &p, &view, Filter::Manual);
+            let d = diff(&naive, &frame).unwrap();
+            assert_eq!(d.differing, 0, "{what}: auto ({}) against naive: {d}", s.marched_as());
+        }
+        // Equality with naive proves something only where auto skipped.
+        assert!(skipped > 0, "{what}: auto marched every look naively");
+        assert_clean(&fx.ctx);
+    }
 }
 
 #[test]
