@@ -3,11 +3,14 @@
 //! timed apart), then its upload (with the cells copy and gradient the
 //! frames read; once a step, the same for every structure), the ranges the
 //! structure reads, its build and one frame, each timed, interleaved
-//! across the structures step by step. Every frame is
-//! compared with naive's on the same step.
+//! across the structures step by step. Each step is built as `view` builds
+//! it (`Builder::build_step`: auto keeps its choice from step to step while
+//! the choice's active share holds). Every frame is compared with naive's
+//! on the same step.
 
 use super::config::StructureSpec;
 use super::progress::Progress;
+use crate::accel::auto::{self, Choice};
 use crate::accel::{BuildInput, Builder};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
@@ -82,6 +85,8 @@ impl StepBench<'_> {
         let mut times: Vec<[Vec<f64>; 5]> = vec![Default::default(); n];
         let mut loads = Vec::new();
         let mut differing = vec![0u64; n];
+        // auto's choice on the last step, per structure.
+        let mut choices: Vec<Option<Choice>> = vec![None; n];
         let mut last_gv: Option<GpuVolume> = None;
         for k in first..=last {
             progress.at(&format!("{label} - new step {k}"));
@@ -104,8 +109,11 @@ impl StepBench<'_> {
                     mode: *self.desc.mode(),
                     frame: Some(self.desc),
                 };
-                let (ranges, ranges_t) = self.builder.ranges_for(&[(s.accel, &s.params)], &gv)?;
-                let (structure, build_t) = self.builder.build(s.accel, &input, &ranges, &s.params)?;
+                let step = self
+                    .builder
+                    .build_step(s.accel, &s.params, choices[i].as_ref(), &input)?;
+                let (structure, ranges_t, build_t) = (step.structure, step.ranges_timings, step.build_timings);
+                choices[i] = auto::choice_of(&structure).cloned();
                 let scene = Scene {
                     structure: &structure,
                     volume: &gv,

@@ -3,11 +3,13 @@
 //! on every step; and every bad series is a one-line error.
 
 use crate::common;
-use crate::common::identity::{cam, Fixture};
+use crate::common::identity::{cam, Fixture, DEFAULTS};
 use crate::common::{fails, gzip, lacuna, nifti_bytes};
-use lacuna::frame::Frame;
-use lacuna::render::Projection;
-use lacuna::volume::{procedural, LoadOptions, Series, VoxelData};
+use lacuna::accel::auto::{self, Choice, KEEP_SHARE};
+use lacuna::accel::{BuildInput, Structure};
+use lacuna::frame::{diff, Frame};
+use lacuna::render::{Filter, Mode, Projection};
+use lacuna::volume::{procedural, LoadOptions, Series, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
 use std::path::Path;
 
@@ -234,6 +236,102 @@ fn every_structure_equals_naive_on_every_step() {
             previous = Some(frames[0].clone());
         }
     }
+}
+
+/// A new step with auto keeps the structure auto chose on an earlier step
+/// (built alone from the new step's data) while its share of active
+/// regions stays within `KEEP_SHARE` of the share at the choice, and its
+/// frames equal naive's; a share moved further, or a step with nothing
+/// visible, is priced anew. Other structures build as on a first step.
+#[test]
+fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
+    let fx = Fixture::new();
+    let series = open("nbody:40");
+    let view = cam(40, 30.0, 20.0, Projection::Orthographic, 0.5);
+    let auto = common::accel("auto");
+    // Priced by the test's given constants alone: no timing moves the choice.
+    let params = auto.params(&[("trial", "off")]).unwrap();
+    let step_of = |v: &Volume, last: Option<&Choice>| {
+        let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
+        let p = fx.prepare(v, &tf, DEFAULTS);
+        let input = BuildInput {
+            volume: v,
+            gpu_volume: &p.gv,
+            tf: &tf,
+            gpu_tf: &p.lut,
+            mode: Mode::Composite,
+            frame: Some(&view),
+        };
+        let step = fx.builder.build_step(auto, &params, last, &input).unwrap();
+        let naive = fx.frame(&Structure::naive(), &p, &view, Filter::Manual);
+        let frame = fx.frame(&step.structure, &p, &view, Filter::Manual);
+        let d = diff(&naive, &frame).unwrap();
+        assert_eq!(d.differing, 0, "{}: {d}", step.structure.marched_as());
+        let choice = auto::choice_of(&step.structure).expect("auto's build").clone();
+        (step, choice, naive)
+    };
+    let mut last: Option<Choice> = None;
+    for k in 0..3 {
+        let v = series.load(k, None).unwrap();
+        let (step, choice, _) = step_of(&v, last.as_ref());
+        assert_eq!(choice.kept, k, "step {k}: {}", choice.reason());
+        assert_eq!(
+            step.ranges.is_none(),
+            k > 0,
+            "a kept step computes only its structure's ranges"
+        );
+        assert!(
+            !step.structure.marched_as().is_naive(),
+            "nbody skips: {}",
+            choice.reason()
+        );
+        if let Some(first) = &last {
+            assert_eq!(choice.candidate.label, first.candidate.label);
+            assert!(choice.reason().contains("kept for"), "{}", choice.reason());
+            let (now, then) = (choice.share_now.unwrap(), choice.share.unwrap());
+            assert!((now / then).max(then / now) <= KEEP_SHARE);
+        }
+        last = Some(choice);
+    }
+    let v = series.load(3, None).unwrap();
+    // A share moved further than KEEP_SHARE: priced anew, the kept try's
+    // build timed too.
+    let mut moved = last.clone().unwrap();
+    moved.share = moved.share.map(|s| s * KEEP_SHARE * 1.05);
+    let (step, choice, _) = step_of(&v, Some(&moved));
+    assert_eq!(choice.kept, 0, "{}", choice.reason());
+    assert!(step.ranges.is_some());
+    assert!(step
+        .build_timings
+        .phases
+        .iter()
+        .any(|(name, _)| name.starts_with("kept ")));
+    // Nothing visible on the new step: priced anew, transparent.
+    let n = v.voxel_count() as usize;
+    let mut empty = Volume::new("empty", v.dims, v.spacing, VoxelType::U8, VoxelData::U8(vec![0; n])).unwrap();
+    empty.default_tf = v.default_tf.clone();
+    empty.norm = v.norm;
+    let (_, choice, naive) = step_of(&empty, last.as_ref());
+    assert_eq!(choice.kept, 0, "{}", choice.reason());
+    assert!(naive.pixels.iter().all(|p| *p == [0.0; 4]));
+    // Another structure builds as on a first step, whatever auto chose.
+    let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
+    let p = fx.prepare(&v, &tf, DEFAULTS);
+    let input = BuildInput {
+        volume: &v,
+        gpu_volume: &p.gv,
+        tf: &tf,
+        gpu_tf: &p.lut,
+        mode: Mode::Composite,
+        frame: Some(&view),
+    };
+    let grid = common::accel("grid");
+    let step = fx
+        .builder
+        .build_step(grid, &grid.defaults(), last.as_ref(), &input)
+        .unwrap();
+    assert!(step.ranges.is_some() && auto::choice_of(&step.structure).is_none());
+    common::assert_clean(&fx.ctx);
 }
 
 #[test]

@@ -21,6 +21,7 @@
 pub mod cache;
 pub mod calibrate;
 pub mod choose;
+pub mod keep;
 pub mod model;
 
 use super::builder::{Builder, RangeKind, Ranges};
@@ -35,6 +36,7 @@ use crate::gpu::{Bound, DeviceInfo, Timings};
 use crate::volume::GpuVolume;
 pub use cache::{CostTable, Source};
 pub use choose::{Candidate, Priced, OCTANT_CELLS};
+pub use keep::{StepBuild, KEEP_SHARE};
 pub use model::{CostKey, KernelCost};
 use std::time::Instant;
 
@@ -65,6 +67,17 @@ pub struct Choice {
     pub model: Vec<String>,
     /// Candidates left out, and why.
     pub notes: Vec<String>,
+    /// The chosen candidate: its structure and parameters (what a later
+    /// time step keeps, `Builder::build_step`).
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub candidate: Candidate,
+    /// The share of the chosen structure's regions that were active when
+    /// it was chosen (None: naive, or a structure without regions).
+    pub share: Option<f64>,
+    /// Time steps this choice has been kept for without pricing (0: priced
+    /// for this build), and the share of active regions on the last.
+    pub kept: u32,
+    pub share_now: Option<f64>,
 }
 
 impl Choice {
@@ -103,6 +116,14 @@ impl Choice {
             line.push_str(&format!("; close, timed on {on}: {}", timed.join(", ")));
         }
         line.push_str(&format!("; model {}", self.model.join(", ")));
+        if let (true, Some(then), Some(now)) = (self.kept > 0, self.share, self.share_now) {
+            line.push_str(&format!(
+                "; kept for {} new time step(s) without pricing: active regions {:.2} % (at the choice {:.2} %)",
+                self.kept,
+                100.0 * now,
+                100.0 * then
+            ));
+        }
         if !self.notes.is_empty() {
             line.push_str(&format!("; {}", self.notes.join("; ")));
         }
@@ -149,6 +170,9 @@ impl Built for Chosen {
 
 /// `--accel auto`.
 pub struct AutoMethod;
+
+/// `--accel auto`, as registered.
+pub const AUTO: Accel = Accel(&AutoMethod);
 
 const TRIAL: Param = Param::choice(
     "trial",
@@ -205,6 +229,11 @@ impl Method for AutoMethod {
         let (choice, inner, timings) = choose(builder, input, ranges, &frame, p.choice("trial")?)?;
         Ok((Box::new(Chosen { choice, inner }), timings))
     }
+}
+
+/// auto's choice, where `s` is auto's build.
+pub fn choice_of(s: &Structure) -> Option<&Choice> {
+    s.built_as::<Chosen>().map(|c| &c.choice)
 }
 
 /// `items` without those whose `cut` is true (the two run in step).
@@ -348,6 +377,7 @@ fn choose(
     let timed = priced.iter().any(|p| p.trial.is_some());
     let pick = choose::pick(&priced);
     let structure = built.swap_remove(pick);
+    let share = keep::share_at_choice(&structure)?;
     let accel = structure.marched_as();
     let label = match accel == NAIVE {
         true => NAIVE.name().to_string(),
@@ -361,6 +391,10 @@ fn choose(
         timed_whole_frames: whole_frames,
         model,
         notes,
+        candidate: candidates.swap_remove(pick),
+        share,
+        kept: 0,
+        share_now: share,
     };
     Ok((choice, structure.built, timings))
 }

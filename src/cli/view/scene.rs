@@ -1,11 +1,13 @@
 //! The viewer's one use of lacuna's renderer: the volume on the GPU, the
-//! transfer function, the structure (rebuilt only when the TF, the mode or
-//! the structure changes, before the next frame, for that frame: auto
-//! prices its candidates on it), and a frame recorded into the host's
-//! command buffer and copied into the host's canvas image. Everything else
-//! in the viewer is the host.
+//! transfer function, the structure (rebuilt only when the TF, the mode,
+//! the structure or the time step changes, before the next frame, for that
+//! frame: auto prices its candidates on it, and a new time step keeps
+//! auto's choice while its active share holds, `Builder::build_step`), and
+//! a frame recorded into the host's command buffer and copied into the
+//! host's canvas image. Everything else in the viewer is the host.
 
 use super::host::Canvas;
+use lacuna::accel::auto::{self, Choice};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::record::{self, Access};
@@ -31,6 +33,9 @@ pub struct Scene {
     /// The per-volume ranges the structure reads, and for which structure.
     ranges: Option<((Accel, Params), Ranges)>,
     pub structure: Structure,
+    /// auto's choice on the last time step, for the next one to keep
+    /// (None after a TF, mode or structure change: those price anew).
+    step_choice: Option<Choice>,
     /// The structure is to be built before the next frame.
     stale: bool,
     target: Option<RenderTarget>,
@@ -82,6 +87,7 @@ impl Scene {
             mode,
             ranges: None,
             structure: Structure::naive(),
+            step_choice: None,
             stale: true,
             target: None,
             timer: Timer::new(ctx, 1)?,
@@ -114,6 +120,7 @@ impl Scene {
         self.lut = tf.upload(&self.ctx)?;
         self.tf = tf;
         self.stale = true;
+        self.step_choice = None;
         Ok(())
     }
 
@@ -126,6 +133,9 @@ impl Scene {
     /// step's memory too, so two steps never coexist on the device.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
+        if let Some(choice) = auto::choice_of(&self.structure).filter(|_| !self.stale) {
+            self.step_choice = Some(choice.clone());
+        }
         self.ranges = None;
         self.structure = Structure::naive();
         self.stale = true;
@@ -152,6 +162,7 @@ impl Scene {
     pub fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
         self.stale = true;
+        self.step_choice = None;
     }
 
     /// A new structure, with `render`'s defaults for its parameters.
@@ -159,10 +170,13 @@ impl Scene {
         self.accel = accel;
         self.params = accel.defaults();
         self.stale = true;
+        self.step_choice = None;
     }
 
     /// Builds the structure, if a change asked for it, for frames like
-    /// `desc`; ranges only when the structure changed (they are per volume).
+    /// `desc`; ranges only when the structure or the step changed (they are
+    /// per volume). A new step's build keeps auto's last choice where it
+    /// may (`Builder::build_step`).
     pub fn prepare(&mut self, desc: &FrameDesc) -> Result<()> {
         if !self.stale {
             return Ok(());
@@ -174,15 +188,6 @@ impl Scene {
             return Ok(());
         }
         let which = (self.accel, self.params.clone());
-        if self.ranges.as_ref().map(|(w, _)| w) != Some(&which) {
-            let (ranges, _) = self
-                .builder
-                .ranges_for(&[(self.accel, &self.params)], self.gpu_volume()?)?;
-            self.ranges = Some((which, ranges));
-        }
-        let Some((_, ranges)) = &self.ranges else {
-            unreachable!("ranges were just computed")
-        };
         let input = BuildInput {
             volume: &self.volume,
             gpu_volume: self.gpu_volume.as_ref().ok_or_else(no_step)?,
@@ -191,9 +196,21 @@ impl Scene {
             mode: self.mode,
             frame: Some(desc),
         };
-        let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.params)?;
-        self.structure = structure;
-        self.build = build;
+        match &self.ranges {
+            Some((w, ranges)) if *w == which => {
+                let (structure, build) = self.builder.build(self.accel, &input, ranges, &self.params)?;
+                self.structure = structure;
+                self.build = build;
+            }
+            _ => {
+                let step =
+                    self.builder
+                        .build_step(self.accel, &self.params, self.step_choice.take().as_ref(), &input)?;
+                self.structure = step.structure;
+                self.build = step.build_timings;
+                self.ranges = step.ranges.map(|r| (which, r));
+            }
+        }
         Ok(())
     }
 

@@ -1,0 +1,148 @@
+//! A new time step of a series: `Builder::build_step`. For `auto` it keeps
+//! the structure chosen on an earlier step and builds only that one from
+//! the new step's data, while the share of its regions that are active
+//! stays within `KEEP_SHARE` of the share it had when chosen; otherwise,
+//! and where naive was chosen (naive has no regions to compare), auto
+//! prices its candidates anew. A playing series then pays one build a
+//! step, not auto's five builds, counting frames and trial. Every
+//! candidate is exact, so keeping one changes speed, never the frame.
+
+use super::{Choice, Chosen, AUTO};
+use crate::accel::builder::{Builder, Ranges};
+use crate::accel::method::{Accel, BuildInput, Structure};
+use crate::accel::params::Params;
+use crate::error::Result;
+use crate::gpu::Timings;
+
+/// How far the share of the kept structure's active regions may move, as
+/// a ratio either way, before a step is priced anew: a data set whose
+/// visible part grows or shrinks by more than a quarter may favour another
+/// cell size or structure.
+pub const KEEP_SHARE: f64 = 1.25;
+
+/// A structure built for a new time step, and what it took.
+pub struct StepBuild {
+    pub structure: Structure,
+    /// The ranges the asked-for structure reads, where they were computed
+    /// (a kept choice computes only its own: None).
+    pub ranges: Option<Ranges>,
+    pub ranges_timings: Timings,
+    pub build_timings: Timings,
+}
+
+/// `t`'s phases, each name after `prefix`.
+fn prefixed(prefix: &str, t: Timings) -> Timings {
+    let mut out = Timings::default();
+    for (name, ms) in t.phases {
+        out.push(format!("{prefix}{name}"), ms);
+    }
+    out
+}
+
+/// `a`'s phases, then `b`'s.
+fn joined(mut a: Timings, b: Timings) -> Timings {
+    a.phases.extend(b.phases);
+    a
+}
+
+/// The share of `s`'s regions that are active, where it has regions.
+fn active_share(s: &Structure) -> Result<Option<f64>> {
+    Ok(s.built
+        .stats()?
+        .filter(|st| st.total_bricks > 0)
+        .map(|st| st.active_bricks as f64 / st.total_bricks as f64))
+}
+
+/// Whether `now` is within `KEEP_SHARE` of `then` (both empty counts).
+fn near(now: f64, then: f64) -> bool {
+    match (now > 0.0, then > 0.0) {
+        (false, false) => true,
+        (true, true) => (now / then).max(then / now) <= KEEP_SHARE,
+        _ => false,
+    }
+}
+
+/// The share of the chosen structure's active regions at the choice, for
+/// `Choice::share` (None: naive, or a structure without regions).
+pub(super) fn share_at_choice(s: &Structure) -> Result<Option<f64>> {
+    match s.marched_as().is_naive() {
+        true => Ok(None),
+        false => active_share(s),
+    }
+}
+
+impl Builder {
+    /// Builds `accel` with `params` for a new time step of a series (the
+    /// same grid, transfer function, mode and frame as the step `last`
+    /// was chosen for), computing the ranges it reads first. For `auto`
+    /// with `last`, auto's choice on an earlier step, the chosen structure
+    /// is built alone and kept while its share of active regions stays
+    /// near the choice's (`KEEP_SHARE`; `Choice::kept` counts the steps);
+    /// otherwise auto chooses anew, and the kept structure's ranges and
+    /// build count toward this step's timings. Other structures build as
+    /// `ranges_for` then `build` would.
+    pub fn build_step(
+        &self,
+        accel: Accel,
+        params: &Params,
+        last: Option<&Choice>,
+        input: &BuildInput,
+    ) -> Result<StepBuild> {
+        let kept = last.filter(|c| accel == AUTO && c.share.is_some());
+        let mut spent = (Timings::default(), Timings::default());
+        if let Some(choice) = kept {
+            let c = &choice.candidate;
+            let (ranges, ranges_t) = self.ranges_for(&[(c.accel, &c.params)], input.gpu_volume)?;
+            let (structure, build_t) = self.build(c.accel, input, &ranges, &c.params)?;
+            let now = share_at_choice(&structure)?;
+            if let (Some(now), Some(then)) = (now, choice.share) {
+                if near(now, then) {
+                    let choice = Choice {
+                        kept: choice.kept + 1,
+                        share_now: Some(now),
+                        ..choice.clone()
+                    };
+                    let chosen = Chosen {
+                        choice,
+                        inner: structure.built,
+                    };
+                    return Ok(StepBuild {
+                        structure: Structure {
+                            accel,
+                            params: params.clone(),
+                            mode: Some(input.mode),
+                            built: Box::new(chosen),
+                            _keep: None,
+                        },
+                        ranges: None,
+                        ranges_timings: ranges_t,
+                        build_timings: build_t,
+                    });
+                }
+            }
+            spent = (prefixed("kept ", ranges_t), prefixed("kept ", build_t));
+        }
+        let (ranges, ranges_t) = self.ranges_for(&[(accel, params)], input.gpu_volume)?;
+        let (structure, build_t) = self.build(accel, input, &ranges, params)?;
+        Ok(StepBuild {
+            structure,
+            ranges: Some(ranges),
+            ranges_timings: joined(spent.0, ranges_t),
+            build_timings: joined(spent.1, build_t),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_are_near_within_a_quarter_either_way_and_empty_only_to_empty() {
+        assert!(near(0.1, 0.1));
+        assert!(near(0.125, 0.1) && near(0.08, 0.1));
+        assert!(!near(0.126, 0.1) && !near(0.079, 0.1));
+        assert!(near(0.0, 0.0));
+        assert!(!near(0.0, 0.1) && !near(0.1, 0.0));
+    }
+}
