@@ -222,9 +222,10 @@ fn auto_marches_what_it_chose_and_equals_naive() {
     assert_clean(&ctx);
 }
 
-/// auto in every look on sparse data, and in composite and MIP frames (the
-/// two rules its candidates classify by, `bricks.rs`) over bricked storage,
-/// NaN-masked floats and two channels, each priced on the frame it renders:
+/// auto in every look on sparse data, and in composite and MIP frames (by
+/// the transfer function's opacity and by the running maximum) over bricked
+/// storage, NaN-masked floats and two channels (lit looks and iso read one
+/// channel), each priced on the frame it renders:
 /// its frame equals naive's, marched with the kernel of the structure it
 /// chose (or naive's, saying why). The identity matrices of the other
 /// structures leave auto out (`Fixture::check_with`).

@@ -314,6 +314,36 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
     let (_, choice, naive) = step_of(&empty, last.as_ref());
     assert_eq!(choice.kept, 0, "{}", choice.reason());
     assert!(naive.pixels.iter().all(|p| *p == [0.0; 4]));
+    // A MIP series keeps the choice of MIP frames (and a composite choice
+    // does not carry over to them).
+    let mip = cam(40, 30.0, 20.0, Projection::Orthographic, 0.5)
+        .to_builder()
+        .mode(Mode::Mip)
+        .build()
+        .unwrap();
+    let mut mip_last: Option<Choice> = None;
+    for k in 0..2 {
+        let v = series.load(k, None).unwrap();
+        let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
+        let p = fx.prepare(&v, &tf, DEFAULTS);
+        let input = BuildInput {
+            volume: &v,
+            gpu_volume: &p.gv,
+            tf: &tf,
+            gpu_tf: &p.lut,
+            mode: Mode::Mip,
+            frame: Some(&mip),
+        };
+        let carried = if k == 0 { last.as_ref() } else { mip_last.as_ref() };
+        let step = fx.builder.build_step(auto, &params, carried, &input).unwrap();
+        let choice = auto::choice_of(&step.structure).unwrap().clone();
+        assert_eq!(choice.kept, k, "MIP step {k}: {}", choice.reason());
+        assert!(!step.structure.marched_as().is_naive(), "{}", choice.reason());
+        let naive = fx.frame(&Structure::naive(), &p, &mip, Filter::Manual);
+        let frame = fx.frame(&step.structure, &p, &mip, Filter::Manual);
+        assert_eq!(diff(&naive, &frame).unwrap().differing, 0, "MIP step {k}");
+        mip_last = Some(choice);
+    }
     // Another structure builds as on a first step, whatever auto chose.
     let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
     let p = fx.prepare(&v, &tf, DEFAULTS);

@@ -1,9 +1,11 @@
 //! A new time step of a series: `Builder::build_step`. For `auto` it keeps
-//! the structure chosen on an earlier step and builds only that one from
-//! the new step's data, while the share of its regions that are active
-//! stays within `KEEP_SHARE` of the share it had when chosen; otherwise,
-//! and where naive was chosen (naive has no regions to compare), auto
-//! prices its candidates anew. A playing series then pays one build a
+//! the structure chosen on an earlier step for the same transfer function
+//! and mode, and builds only that one from the new step's data, while the
+//! share of its regions that are active stays within `KEEP_SHARE` of the
+//! share it had when chosen; otherwise, and where the choice has no share
+//! to compare (naive; a structure whose every region is active, as the
+//! grid of MIP frames, which decides per ray), auto prices its candidates
+//! anew. A playing series then pays one build a
 //! step, not auto's five builds, counting frames and trial. Every
 //! candidate is exact, so keeping one changes speed, never the frame.
 
@@ -45,11 +47,13 @@ fn joined(mut a: Timings, b: Timings) -> Timings {
     a
 }
 
-/// The share of `s`'s regions that are active, where it has regions.
+/// The share of `s`'s regions that are active, where some but not all
+/// are (every region active says nothing of how the data moved: the grid
+/// of MIP and MinIP frames keeps every cell and decides per ray).
 fn active_share(s: &Structure) -> Result<Option<f64>> {
     Ok(s.built
         .stats()?
-        .filter(|st| st.total_bricks > 0)
+        .filter(|st| st.active_bricks < st.total_bricks)
         .map(|st| st.active_bricks as f64 / st.total_bricks as f64))
 }
 
@@ -62,25 +66,32 @@ fn near(now: f64, then: f64) -> bool {
     }
 }
 
-/// The share of the chosen structure's active regions at the choice, for
-/// `Choice::share` (None: naive, or a structure without regions).
-pub(super) fn share_at_choice(s: &Structure) -> Result<Option<f64>> {
-    match s.marched_as().is_naive() {
-        true => Ok(None),
-        false => active_share(s),
+/// The share of the chosen structure's active regions, for `Choice::share`
+/// (None: naive, or no share to compare), its readback's time pushed to
+/// `t` as `share`.
+pub(super) fn share_of(s: &Structure, t: &mut Timings) -> Result<Option<f64>> {
+    if s.marched_as().is_naive() {
+        return Ok(None);
     }
+    let start = std::time::Instant::now();
+    let share = active_share(s)?;
+    t.push("share", start.elapsed().as_secs_f64() * 1e3);
+    Ok(share)
 }
 
 impl Builder {
-    /// Builds `accel` with `params` for a new time step of a series (the
-    /// same grid, transfer function, mode and frame as the step `last`
-    /// was chosen for), computing the ranges it reads first. For `auto`
-    /// with `last`, auto's choice on an earlier step, the chosen structure
-    /// is built alone and kept while its share of active regions stays
-    /// near the choice's (`KEEP_SHARE`; `Choice::kept` counts the steps);
-    /// otherwise auto chooses anew, and the kept structure's ranges and
-    /// build count toward this step's timings. Other structures build as
-    /// `ranges_for` then `build` would.
+    /// Builds `accel` with `params` for a new time step of a series (a
+    /// volume on the same grid), computing the ranges it reads first. For
+    /// `auto` with `last`, auto's choice on an earlier step for the same
+    /// transfer function and mode, the chosen structure is built alone and
+    /// kept while its share of active regions stays near the choice's
+    /// (`KEEP_SHARE`; `Choice::kept` counts the steps); otherwise auto
+    /// chooses anew, and a kept try's ranges and build count toward this
+    /// step's timings. A kept choice was priced for the frame of its step:
+    /// a host whose camera moved since, and wants the choice priced for the
+    /// new frame, passes None (`view` keeps it, as it keeps a choice while
+    /// the camera moves). Other structures build as `ranges_for` then
+    /// `build` would.
     pub fn build_step(
         &self,
         accel: Accel,
@@ -88,13 +99,13 @@ impl Builder {
         last: Option<&Choice>,
         input: &BuildInput,
     ) -> Result<StepBuild> {
-        let kept = last.filter(|c| accel == AUTO && c.share.is_some());
+        let kept = last.filter(|c| accel == AUTO && c.share.is_some() && c.mode == input.mode && c.tf == input.tf.spec);
         let mut spent = (Timings::default(), Timings::default());
         if let Some(choice) = kept {
             let c = &choice.candidate;
             let (ranges, ranges_t) = self.ranges_for(&[(c.accel, &c.params)], input.gpu_volume)?;
-            let (structure, build_t) = self.build(c.accel, input, &ranges, &c.params)?;
-            let now = share_at_choice(&structure)?;
+            let (structure, mut build_t) = self.build(c.accel, input, &ranges, &c.params)?;
+            let now = share_of(&structure, &mut build_t)?;
             if let (Some(now), Some(then)) = (now, choice.share) {
                 if near(now, then) {
                     let choice = Choice {
@@ -140,8 +151,8 @@ mod tests {
     #[test]
     fn shares_are_near_within_a_quarter_either_way_and_empty_only_to_empty() {
         assert!(near(0.1, 0.1));
-        assert!(near(0.125, 0.1) && near(0.08, 0.1));
-        assert!(!near(0.126, 0.1) && !near(0.079, 0.1));
+        assert!(near(0.12, 0.1) && near(0.1, 0.12));
+        assert!(!near(0.13, 0.1) && !near(0.1, 0.13));
         assert!(near(0.0, 0.0));
         assert!(!near(0.0, 0.1) && !near(0.1, 0.0));
     }

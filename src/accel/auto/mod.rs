@@ -16,7 +16,8 @@
 //! The frame is the one the build is for (`BuildInput::frame`: camera,
 //! step, early termination, sample filter, size, mode), so the choice
 //! accounts for all of them. Re-made on every build, i.e. every transfer
-//! function change. See `docs/structures.md`, "auto".
+//! function change; a new time step keeps it while it holds (`keep.rs`,
+//! `Builder::build_step`). See `docs/structures.md`, "auto".
 
 pub mod cache;
 pub mod calibrate;
@@ -72,8 +73,13 @@ pub struct Choice {
     #[cfg_attr(feature = "serde", serde(skip))]
     pub candidate: Candidate,
     /// The share of the chosen structure's regions that were active when
-    /// it was chosen (None: naive, or a structure without regions).
+    /// it was chosen (None: naive, or a structure with no share to compare).
     pub share: Option<f64>,
+    /// The mode and transfer function (its spec) it was chosen for: a
+    /// later step keeps it only for the same.
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub mode: crate::desc::Mode,
+    pub tf: String,
     /// Time steps this choice has been kept for without pricing (0: priced
     /// for this build), and the share of active regions on the last.
     pub kept: u32,
@@ -377,7 +383,7 @@ fn choose(
     let timed = priced.iter().any(|p| p.trial.is_some());
     let pick = choose::pick(&priced);
     let structure = built.swap_remove(pick);
-    let share = keep::share_at_choice(&structure)?;
+    let share = keep::share_of(&structure, &mut timings)?;
     let accel = structure.marched_as();
     let label = match accel == NAIVE {
         true => NAIVE.name().to_string(),
@@ -393,6 +399,8 @@ fn choose(
         notes,
         candidate: candidates.swap_remove(pick),
         share,
+        mode: input.mode,
+        tf: input.tf.spec.clone(),
         kept: 0,
         share_now: share,
     };

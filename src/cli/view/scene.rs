@@ -133,7 +133,9 @@ impl Scene {
     /// step's memory too, so two steps never coexist on the device.
     pub fn set_volume(&mut self, volume: Volume, lit: bool) -> Result<()> {
         let t = std::time::Instant::now();
-        if let Some(choice) = auto::choice_of(&self.structure).filter(|_| !self.stale) {
+        // A frame the loop cap cut prices anew: auto leaves cut candidates out.
+        let whole = self.cut_groups == 0;
+        if let Some(choice) = auto::choice_of(&self.structure).filter(|_| !self.stale && whole) {
             self.step_choice = Some(choice.clone());
         }
         self.ranges = None;

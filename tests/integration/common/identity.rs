@@ -158,7 +158,8 @@ impl Fixture {
     /// this matrix; its own pricing (a counting kernel per candidate, look
     /// and volume kind) would add about a fifth to these checks.
     /// `auto::auto_equals_naive_in_every_look_storage_and_channel_count`
-    /// checks auto's frames across the same looks and volume kinds.
+    /// checks auto's frames in every look on sparse data, and in composite
+    /// and MIP frames over bricks, NaN-masked floats and two channels.
     pub fn check_with(
         &self,
         what: &str,
