@@ -45,6 +45,10 @@ pub struct StepRecord {
     pub new_step_ms: f64,
     /// Pixels of its frames that differ from naive's on the same step.
     pub differing_pixels: u64,
+    /// auto's choice on the last step, and on how many of the timed steps
+    /// it was kept without pricing (None for the other structures).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chosen: Option<String>,
 }
 
 /// What `steps` measures with.
@@ -85,8 +89,10 @@ impl StepBench<'_> {
         let mut times: Vec<[Vec<f64>; 5]> = vec![Default::default(); n];
         let mut loads = Vec::new();
         let mut differing = vec![0u64; n];
-        // auto's choice on the last step, per structure.
+        // auto's choice on the last step, and the timed steps that kept
+        // one, per structure.
         let mut choices: Vec<Option<Choice>> = vec![None; n];
+        let mut kept = vec![0u32; n];
         let mut last_gv: Option<GpuVolume> = None;
         for k in first..=last {
             progress.at(&format!("{label} - new step {k}"));
@@ -114,6 +120,9 @@ impl StepBench<'_> {
                     .build_step(s.accel, &s.params, choices[i].as_ref(), &input)?;
                 let (structure, ranges_t, build_t) = (step.structure, step.ranges_timings, step.build_timings);
                 choices[i] = auto::choice_of(&structure).cloned();
+                if k > first {
+                    kept[i] += choices[i].as_ref().is_some_and(|c| c.kept > 0) as u32;
+                }
                 let scene = Scene {
                     structure: &structure,
                     volume: &gv,
@@ -146,13 +155,23 @@ impl StepBench<'_> {
                 s.label
             ));
         }
+        let timed = last - first;
+        let chosen: Vec<Option<String>> = choices
+            .iter()
+            .zip(&kept)
+            .map(|(c, kept)| {
+                c.as_ref()
+                    .map(|c| format!("{}, kept on {kept} of the {timed} timed steps", c.describe()))
+            })
+            .collect();
         Ok(self
             .structures
             .iter()
             .zip(times)
             .zip(differing)
+            .zip(chosen)
             .map(
-                |((s, [upload, ranges, build, frame, total]), differing_pixels)| StepRecord {
+                |(((s, [upload, ranges, build, frame, total]), differing_pixels), chosen)| StepRecord {
                     dataset: label.to_string(),
                     structure: s.label.clone(),
                     steps: (first + 1..=last).collect(),
@@ -163,6 +182,7 @@ impl StepBench<'_> {
                     frame_ms: median(frame),
                     new_step_ms: median(total),
                     differing_pixels,
+                    chosen,
                 },
             )
             .collect())
@@ -209,5 +229,53 @@ pub fn steps_md(records: &[StepRecord], frame_of: impl Fn(&str, &str) -> Option<
             r.differing_pixels
         );
     }
+    for r in records {
+        if let Some(chosen) = &r.chosen {
+            out += &format!("\n{} on {}: {chosen}.\n", r.structure, r.dataset);
+        }
+    }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(structure: &str, chosen: Option<&str>) -> StepRecord {
+        StepRecord {
+            dataset: "nbody:256".into(),
+            structure: structure.into(),
+            steps: vec![1, 2],
+            load_ms: 300.0,
+            upload_ms: 40.0,
+            ranges_ms: 60.0,
+            build_ms: 100.0,
+            frame_ms: 60.0,
+            new_step_ms: 260.0,
+            differing_pixels: 0,
+            chosen: chosen.map(String::from),
+        }
+    }
+
+    #[test]
+    fn the_steps_table_says_what_auto_chose_and_kept_and_its_ratio_to_a_frame() {
+        let records = [
+            record("grid", None),
+            record("auto", Some("distance-octant (cell 4), kept on 2 of the 2 timed steps")),
+        ];
+        let md = steps_md(&records, |_, s| (s == "auto").then_some(65.0));
+        assert!(
+            md.contains("| nbody:256 | auto | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | 4.00 | 0 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| nbody:256 | grid | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | - | 0 |"),
+            "{md}"
+        );
+        assert!(
+            md.ends_with("\nauto on nbody:256: distance-octant (cell 4), kept on 2 of the 2 timed steps.\n"),
+            "{md}"
+        );
+        assert_eq!(md.matches(" on nbody:256: ").count(), 1, "{md}");
+    }
 }
