@@ -6,9 +6,9 @@ use crate::common;
 use crate::common::identity::{cam, Fixture, DEFAULTS};
 use crate::common::{fails, gzip, lacuna, nifti_bytes};
 use lacuna::accel::auto::{self, Choice, KEEP_SHARE};
-use lacuna::accel::{BuildInput, Structure};
+use lacuna::accel::{Accel, BuildInput, Params, Structure};
 use lacuna::frame::{diff, Frame};
-use lacuna::render::{Filter, Mode, Projection};
+use lacuna::render::{Filter, FrameDesc, Mode, Projection};
 use lacuna::volume::{procedural, LoadOptions, Series, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
 use std::path::Path;
@@ -251,7 +251,9 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
     let auto = common::accel("auto");
     // Priced by the test's given constants alone: no timing moves the choice.
     let params = auto.params(&[("trial", "off")]).unwrap();
-    let step_of = |v: &Volume, last: Option<&Choice>| {
+    // Step `v` built by `accel` with `last`, for frames like `view`: the
+    // build and naive's frame, which its frame equals.
+    let build = |v: &Volume, accel: Accel, params: &Params, last: Option<&Choice>, view: &FrameDesc| {
         let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
         let p = fx.prepare(v, &tf, DEFAULTS);
         let input = BuildInput {
@@ -259,21 +261,26 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
             gpu_volume: &p.gv,
             tf: &tf,
             gpu_tf: &p.lut,
-            mode: Mode::Composite,
-            frame: Some(&view),
+            mode: *view.mode(),
+            frame: Some(view),
         };
-        let step = fx.builder.build_step(auto, &params, last, &input).unwrap();
-        let naive = fx.frame(&Structure::naive(), &p, &view, Filter::Manual);
-        let frame = fx.frame(&step.structure, &p, &view, Filter::Manual);
+        let step = fx.builder.build_step(accel, params, last, &input).unwrap();
+        let naive = fx.frame(&Structure::naive(), &p, view, Filter::Manual);
+        let frame = fx.frame(&step.structure, &p, view, Filter::Manual);
         let d = diff(&naive, &frame).unwrap();
         assert_eq!(d.differing, 0, "{}: {d}", step.structure.marched_as());
+        (step, naive)
+    };
+    // As `build`, with auto, and its choice.
+    let step_of = |v: &Volume, last: Option<&Choice>, view: &FrameDesc| {
+        let (step, naive) = build(v, auto, &params, last, view);
         let choice = auto::choice_of(&step.structure).expect("auto's build").clone();
         (step, choice, naive)
     };
     let mut last: Option<Choice> = None;
     for k in 0..3 {
         let v = series.load(k, None).unwrap();
-        let (step, choice, _) = step_of(&v, last.as_ref());
+        let (step, choice, _) = step_of(&v, last.as_ref(), &view);
         assert_eq!(choice.kept, k, "step {k}: {}", choice.reason());
         assert_eq!(
             step.ranges.is_none(),
@@ -298,7 +305,7 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
     // build timed too.
     let mut moved = last.clone().unwrap();
     moved.share = moved.share.map(|s| s * KEEP_SHARE * 1.05);
-    let (step, choice, _) = step_of(&v, Some(&moved));
+    let (step, choice, _) = step_of(&v, Some(&moved), &view);
     assert_eq!(choice.kept, 0, "{}", choice.reason());
     assert!(step.ranges.is_some());
     assert!(step
@@ -311,7 +318,7 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
     let mut empty = Volume::new("empty", v.dims, v.spacing, VoxelType::U8, VoxelData::U8(vec![0; n])).unwrap();
     empty.default_tf = v.default_tf.clone();
     empty.norm = v.norm;
-    let (_, choice, naive) = step_of(&empty, last.as_ref());
+    let (_, choice, naive) = step_of(&empty, last.as_ref(), &view);
     assert_eq!(choice.kept, 0, "{}", choice.reason());
     assert!(naive.pixels.iter().all(|p| *p == [0.0; 4]));
     // A MIP series keeps the choice of MIP frames (and a composite choice
@@ -324,42 +331,15 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
     let mut mip_last: Option<Choice> = None;
     for k in 0..2 {
         let v = series.load(k, None).unwrap();
-        let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
-        let p = fx.prepare(&v, &tf, DEFAULTS);
-        let input = BuildInput {
-            volume: &v,
-            gpu_volume: &p.gv,
-            tf: &tf,
-            gpu_tf: &p.lut,
-            mode: Mode::Mip,
-            frame: Some(&mip),
-        };
         let carried = if k == 0 { last.as_ref() } else { mip_last.as_ref() };
-        let step = fx.builder.build_step(auto, &params, carried, &input).unwrap();
-        let choice = auto::choice_of(&step.structure).unwrap().clone();
+        let (step, choice, _) = step_of(&v, carried, &mip);
         assert_eq!(choice.kept, k, "MIP step {k}: {}", choice.reason());
         assert!(!step.structure.marched_as().is_naive(), "{}", choice.reason());
-        let naive = fx.frame(&Structure::naive(), &p, &mip, Filter::Manual);
-        let frame = fx.frame(&step.structure, &p, &mip, Filter::Manual);
-        assert_eq!(diff(&naive, &frame).unwrap().differing, 0, "MIP step {k}");
         mip_last = Some(choice);
     }
     // Another structure builds as on a first step, whatever auto chose.
-    let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
-    let p = fx.prepare(&v, &tf, DEFAULTS);
-    let input = BuildInput {
-        volume: &v,
-        gpu_volume: &p.gv,
-        tf: &tf,
-        gpu_tf: &p.lut,
-        mode: Mode::Composite,
-        frame: Some(&view),
-    };
     let grid = common::accel("grid");
-    let step = fx
-        .builder
-        .build_step(grid, &grid.defaults(), last.as_ref(), &input)
-        .unwrap();
+    let (step, _) = build(&v, grid, &grid.defaults(), last.as_ref(), &view);
     assert!(step.ranges.is_some() && auto::choice_of(&step.structure).is_none());
     common::assert_clean(&fx.ctx);
 }

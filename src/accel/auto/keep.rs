@@ -34,17 +34,13 @@ pub struct StepBuild {
 
 /// `t`'s phases, each name after `prefix`.
 fn prefixed(prefix: &str, t: Timings) -> Timings {
-    let mut out = Timings::default();
-    for (name, ms) in t.phases {
-        out.push(format!("{prefix}{name}"), ms);
+    Timings {
+        phases: t
+            .phases
+            .into_iter()
+            .map(|(name, ms)| (format!("{prefix}{name}"), ms))
+            .collect(),
     }
-    out
-}
-
-/// `a`'s phases, then `b`'s.
-fn joined(mut a: Timings, b: Timings) -> Timings {
-    a.phases.extend(b.phases);
-    a
 }
 
 /// The share of `s`'s regions that are active, where some but not all
@@ -73,10 +69,7 @@ pub(super) fn share_of(s: &Structure, t: &mut Timings) -> Result<Option<f64>> {
     if s.marched_as().is_naive() {
         return Ok(None);
     }
-    let start = std::time::Instant::now();
-    let share = active_share(s)?;
-    t.push("share", start.elapsed().as_secs_f64() * 1e3);
-    Ok(share)
+    t.cpu("share", || active_share(s))
 }
 
 impl Builder {
@@ -135,11 +128,14 @@ impl Builder {
         }
         let (ranges, ranges_t) = self.ranges_for(&[(accel, params)], input.gpu_volume)?;
         let (structure, build_t) = self.build(accel, input, &ranges, params)?;
+        let (mut ranges_timings, mut build_timings) = spent;
+        ranges_timings.extend(ranges_t);
+        build_timings.extend(build_t);
         Ok(StepBuild {
             structure,
             ranges: Some(ranges),
-            ranges_timings: joined(spent.0, ranges_t),
-            build_timings: joined(spent.1, build_t),
+            ranges_timings,
+            build_timings,
         })
     }
 }
