@@ -49,21 +49,37 @@ void deque_write(uint base, uint k, uint entry) {
         deque[base + k] = entry;
     }
 }
-// xyz: cells per axis, w: total; axis: 0, 1, 2; first: src holds the flags.
-layout(push_constant) uniform Push { uvec4 counts; uint axis; uint first; uint groups_x; uint rows; } pc;
+// xyz: cells per axis, w: total; axis: 0, 1, 2.
+layout(push_constant) uniform Push { uvec4 counts; uint axis; uint groups_x; uint rows; } pc;
+// Specialization constant 1: the pass reads the active flags (the first
+// pass, along x) rather than map words. A constant, as lavapipe would
+// otherwise read both at every cell (it runs every side of an `if`).
+layout(constant_id = 1) const uint FIRST = 0u;
 
-uint cell_index(uint row, uint x) {
+// A row's cells are origin + x * stride: the divisions (scalarised on a
+// CPU device, about a third of the pass) run once per row, not per cell.
+struct Row {
+    uint origin;
+    uint stride;
+};
+
+Row row_cells(uint row) {
     uvec3 c;
     uint a1 = (pc.axis + 1u) % 3u;
     uint a2 = (pc.axis + 2u) % 3u;
-    c[pc.axis] = x;
+    c[pc.axis] = 0u;
     c[a1] = row % pc.counts[a1];
     c[a2] = row / pc.counts[a1];
-    return c.x + pc.counts.x * (c.y + pc.counts.y * c.z);
+    uint stride = pc.axis == 0u ? 1u : (pc.axis == 1u ? pc.counts.x : pc.counts.x * pc.counts.y);
+    return Row(c.x + pc.counts.x * (c.y + pc.counts.y * c.z), stride);
+}
+
+uint cell_index(Row r, uint x) {
+    return r.origin + x * r.stride;
 }
 
 uint g(uint i, uint channel) {
-    if (pc.first != 0u) {
+    if (FIRST != 0u) {
         bool is_active = src[i] != 0u;
         bool seeks_active = channel < DISTANCE_CHANNELS / 2u;
         return is_active == seeks_active ? 0u : DISTANCE_CAP;
@@ -84,6 +100,7 @@ void main() {
         return;
     }
     uint row = id / words;
+    Row cells = row_cells(row);
     uint word = pc.axis == 2u ? id % words : 2u * (id % words);
     // Within a word, channels 2 and 3 differ from 0 and 1 only in the y sign.
     uint lanes = pc.axis == 0u ? 2u : 4u;
@@ -99,7 +116,7 @@ void main() {
         uint back = 0u;
         uint front = 0u; // one past the front entry
         for (int s = 0; s < n; ++s, x += step) {
-            uint i = cell_index(row, uint(x));
+            uint i = cell_index(cells, uint(x));
             uint gx = g(i, ch);
             while (front > back && (deque_read(base, front - 1u) & 255u) >= gx) {
                 front -= 1u;
@@ -131,7 +148,7 @@ void main() {
     }
     if (PRIVATE_DEQUE != 0u) {
         for (int x = 0; x < n; ++x) {
-            uint at = DISTANCE_WORDS * cell_index(row, uint(x)) + word;
+            uint at = DISTANCE_WORDS * cell_index(cells, uint(x)) + word;
             dst[at] = private_out[x];
             if (words == 2u) {
                 dst[at + 1u] = private_out[x];

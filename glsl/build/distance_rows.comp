@@ -50,22 +50,38 @@ ivec3 stack_read(uint base, int q) {
     uint e = base + 3u * uint(q);
     return ivec3(stack[e], stack[e + 1u], stack[e + 2u]);
 }
-// xyz: cells per axis, w: total; axis: 0, 1, 2; first: src holds the flags.
-layout(push_constant) uniform Push { uvec4 counts; uint axis; uint first; uint groups_x; uint rows; } pc;
+// xyz: cells per axis, w: total; axis: 0, 1, 2.
+layout(push_constant) uniform Push { uvec4 counts; uint axis; uint groups_x; uint rows; } pc;
+// Specialization constant 1: the pass reads the active flags (the first
+// pass, along x) rather than map words. A constant, as lavapipe would
+// otherwise read both at every cell (it runs every side of an `if`).
+layout(constant_id = 1) const uint FIRST = 0u;
 
-uint cell_index(uint row, uint x) {
+// A row's cells are origin + x * stride: the divisions (scalarised on a
+// CPU device, about a third of the pass) run once per row, not per cell.
+struct Row {
+    uint origin;
+    uint stride;
+};
+
+Row row_cells(uint row) {
     uvec3 c;
     uint a1 = (pc.axis + 1u) % 3u;
     uint a2 = (pc.axis + 2u) % 3u;
-    c[pc.axis] = x;
+    c[pc.axis] = 0u;
     c[a1] = row % pc.counts[a1];
     c[a2] = row / pc.counts[a1];
-    return c.x + pc.counts.x * (c.y + pc.counts.y * c.z);
+    uint stride = pc.axis == 0u ? 1u : (pc.axis == 1u ? pc.counts.x : pc.counts.x * pc.counts.y);
+    return Row(c.x + pc.counts.x * (c.y + pc.counts.y * c.z), stride);
 }
 
-int g(uint row, uint x, uint channel) {
-    uint i = cell_index(row, x);
-    if (pc.first != 0u) {
+uint cell_index(Row r, uint x) {
+    return r.origin + x * r.stride;
+}
+
+int g(Row cells, uint x, uint channel) {
+    uint i = cell_index(cells, x);
+    if (FIRST != 0u) {
         bool is_active = src[i] != 0u;
         return is_active == (channel == 0u) ? 0 : int(DISTANCE_CAP);
     }
@@ -87,16 +103,17 @@ void main() {
     if (row >= pc.rows) {
         return;
     }
+    Row cells = row_cells(row);
     int n = int(pc.counts[pc.axis]);
     uint base = 3u * row * uint(n);
     for (uint ch = 0u; ch < 2u; ++ch) {
         // Envelope entry q: apex s, its g, and the start t of its interval.
         int q = 0;
         int s = 0;
-        int gs = g(row, 0u, ch);
+        int gs = g(cells, 0u, ch);
         int t = 0;
         for (int u = 1; u < n; ++u) {
-            int gu = g(row, uint(u), ch);
+            int gu = g(cells, uint(u), ch);
             while (q >= 0 && f(t, s, gs) > f(t, u, gu)) {
                 q -= 1;
                 if (q >= 0) {
@@ -120,7 +137,7 @@ void main() {
         // The top entry lives in (s, gs, t); the ones below it on the stack.
         for (int x = n - 1; x >= 0; --x) {
             uint d = uint(min(f(x, s, gs), int(DISTANCE_CAP)));
-            uint i = cell_index(row, uint(x));
+            uint i = cell_index(cells, uint(x));
             dst[i] = ch == 0u ? d : (dst[i] | d << 8u);
             if (x == t && q > 0) {
                 q -= 1;

@@ -21,11 +21,19 @@ layout(push_constant) uniform Push {
     vec4 scale;
     uint apron;
     uint groups_x;
-    uint channels;
-    uint pool_brick; // bricked storage: the pool's brick edge (0: dense)
-    uint cells;      // 1: read the volume's cells copy, of texels of `kind`
-    uint kind;       // VOLUME_KIND: 0 float, 1 unorm8, 2 unorm16
+    uint pool_brick; // bricked storage: the pool's brick edge
 } pc;
+
+// Where the voxels come from, their kind and the channels are constants,
+// not push values: lavapipe runs every side of an `if` (no lane need take
+// it), so branching on them at run time paid for the other sources' and
+// kinds' fetches too (cell-4 ranges of nbody:256 took 2 to 3 times as long).
+layout(constant_id = 0) const uint SOURCE = 0u; // SOURCE_*
+layout(constant_id = 1) const uint KIND = 0u;   // SOURCE_CELLS: VOLUME_KIND, 0 float, 1 unorm8, 2 unorm16
+layout(constant_id = 2) const uint CHANNELS = 1u;
+const uint SOURCE_IMAGE = 0u; // the dense volume image
+const uint SOURCE_CELLS = 1u; // its cells copy (one channel)
+const uint SOURCE_POOL = 2u;  // bricked storage: the brick table and pools
 
 // The volume's cells copy (src/volume/cells.rs), where it has one: each
 // cell's eight voxels in one texel (two for floats), stored values.
@@ -33,7 +41,7 @@ layout(set = 0, binding = 6) uniform usamplerBuffer cells;
 
 // Widens the ranges by texel t's channels, NaN ignored.
 void take(vec4 t, inout vec4 mn, inout vec4 mx) {
-    if (pc.channels == 1u) {
+    if (CHANNELS == 1u) {
         if (!is_nan(t.x)) {
             mn.x = min(mn.x, t.x);
             mx.x = max(mx.x, t.x);
@@ -52,7 +60,7 @@ void take(vec4 t, inout vec4 mn, inout vec4 mx) {
 // channel in scalars (lavapipe ran the loop through take 1.4x slower, and a
 // loop over four channels 7x).
 void take_box(sampler3D tex, ivec3 t, ivec3 n, inout vec4 mn, inout vec4 mx) {
-    if (pc.channels == 1u) {
+    if (CHANNELS == 1u) {
         float lo1 = mn.x;
         float hi1 = mx.x;
         for (int z = 0; z <= n.z; ++z) {
@@ -104,7 +112,7 @@ void take_cells(ivec3 lo, ivec3 hi, inout vec4 mn, inout vec4 mx) {
             for (int x = lo.x; x <= hi.x; x += 2) {
                 ivec3 j = ivec3(cell_at(x, lo.x, hi.x), cell_at(y, lo.y, hi.y), cell_at(z, lo.z, hi.z)) + 1;
                 int at = j.x + n.x * (j.y + n.y * j.z);
-                if (pc.kind == 1u) {
+                if (KIND == 1u) {
                     uvec2 w = texelFetch(cells, at).xy;
                     for (uint s = 0u; s < 32u; s += 8u) {
                         uint v0 = (w.x >> s) & 255u;
@@ -112,7 +120,7 @@ void take_cells(ivec3 lo, ivec3 hi, inout vec4 mn, inout vec4 mx) {
                         a = min(a, min(v0, v1));
                         b = max(b, max(v0, v1));
                     }
-                } else if (pc.kind == 2u) {
+                } else if (KIND == 2u) {
                     uvec4 w = texelFetch(cells, at);
                     uvec4 l = w & 65535u;
                     uvec4 u = w >> 16u;
@@ -135,9 +143,9 @@ void take_cells(ivec3 lo, ivec3 hi, inout vec4 mn, inout vec4 mx) {
             }
         }
     }
-    if (pc.kind != 0u) {
+    if (KIND != 0u) {
         // Constant reciprocals, as volume.glsl's (no division at run time).
-        float inv = pc.kind == 1u ? (1.0 / 255.0) : (1.0 / 65535.0);
+        float inv = KIND == 1u ? (1.0 / 255.0) : (1.0 / 65535.0);
         precise float lo_v = float(a) * inv;
         precise float hi_v = float(b) * inv;
         lo1 = min(lo1, lo_v);
@@ -158,12 +166,12 @@ void main() {
     ivec3 hi_voxel = ivec3(pc.dims.xyz) - 1;
     vec4 mn = vec4(3.4e38);
     vec4 mx = vec4(-3.4e38);
-    int edge = int(pc.pool_brick);
-    if (pc.cells != 0u) {
+    if (SOURCE == SOURCE_CELLS) {
         take_cells(lo, hi, mn, mx);
-    } else if (edge == 0) {
+    } else if (SOURCE == SOURCE_IMAGE) {
         take_box(volume_tex, lo, hi - lo, mn, mx);
     } else {
+        int edge = int(pc.pool_brick);
         // Bricked: pool brick by pool brick, each overlap with the box one
         // table read; a constant brick is one value, read once.
         ivec3 b_hi = hi / edge;
@@ -192,9 +200,9 @@ void main() {
     }
     // Normalise the extremes exactly as sample_volume (sample_channels)
     // normalises a sample.
-    for (uint c = 0u; c < pc.channels; ++c) {
+    for (uint c = 0u; c < CHANNELS; ++c) {
         precise float a = (mn[c] - pc.lo[c]) * pc.scale[c];
         precise float d = (mx[c] - pc.lo[c]) * pc.scale[c];
-        ranges[b * pc.channels + c] = vec2(clamp(a, 0.0, 1.0), clamp(d, 0.0, 1.0));
+        ranges[b * CHANNELS + c] = vec2(clamp(a, 0.0, 1.0), clamp(d, 0.0, 1.0));
     }
 }

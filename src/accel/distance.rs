@@ -41,26 +41,34 @@ pub const CAP: u32 = 255;
 const PRIVATE_ROW: u32 = 64;
 
 /// The linear-time distance-transform kernels (two-sided rows for cube
-/// maps, one-sided rows for octant maps).
+/// maps, one-sided rows for octant maps), specialized per pass: with the
+/// envelope (deque) in private arrays for rows of at most [`PRIVATE_ROW`]
+/// cells, else in a storage buffer; reading the active flags (the first
+/// pass) or map words. Each variant compiles on its first use (the
+/// context keeps it).
 pub struct DistanceKernels {
-    /// Cube-map rows with the envelope in a storage buffer, then in private
-    /// arrays (rows of at most [`PRIVATE_ROW`] cells).
-    rows: [Kernel; 2],
-    /// Octant-map rows with the deque in a storage buffer, then in private
-    /// arrays (rows of at most [`PRIVATE_ROW`] cells).
-    octant_rows: [Kernel; 2],
+    ctx: Context,
+}
+
+impl DistanceKernels {
+    fn rows(&self, octants: bool, private: bool, first: bool) -> Result<Kernel> {
+        let shader = match octants {
+            true => &shaders::BUILD_DISTANCE_OCTANT_ROWS,
+            false => &shaders::BUILD_DISTANCE_ROWS,
+        };
+        let constants = [(0, private as u32), (1, first as u32)];
+        Kernel::specialized(
+            &self.ctx,
+            shader,
+            std::mem::size_of::<build_distance_rows::Push>(),
+            &constants,
+        )
+    }
 }
 
 impl PerContext for DistanceKernels {
     fn new(ctx: &Context) -> Result<Self> {
-        let rows = |p| Kernel::with_constants::<build_distance_rows::Push>(ctx, &shaders::BUILD_DISTANCE_ROWS, &[p]);
-        let octant_rows = |p| {
-            Kernel::with_constants::<build_distance_octant_rows::Push>(ctx, &shaders::BUILD_DISTANCE_OCTANT_ROWS, &[p])
-        };
-        Ok(DistanceKernels {
-            rows: [rows(0)?, rows(1)?],
-            octant_rows: [octant_rows(0)?, octant_rows(1)?],
-        })
+        Ok(DistanceKernels { ctx: ctx.clone() })
     }
 }
 
@@ -167,14 +175,13 @@ pub fn record(
         } else {
             record::compute_to_compute(ctx.device(), cmd);
         }
-        let first = (axis == 0) as u32;
         // One invocation per row (cube maps) or per row and computed map
         // word (octant maps: two along x and y, four along z).
-        let private = usize::from(c[axis] <= PRIVATE_ROW);
-        let (k, per_row) = if octants {
-            (&kernels.octant_rows[private], if axis == 2 { 4 } else { 2 })
-        } else {
-            (&kernels.rows[private], 1)
+        let k = kernels.rows(octants, c[axis] <= PRIVATE_ROW, axis == 0)?;
+        let per_row = match octants {
+            true if axis == 2 => 4,
+            true => 2,
+            false => 1,
         };
         let rows = cells.total / c[axis] as u64;
         let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
@@ -182,7 +189,6 @@ pub fn record(
         let push = build_distance_rows::Push {
             counts,
             axis: axis as u32,
-            first,
             groups_x: groups[0],
             rows: rows as u32,
         };

@@ -13,9 +13,15 @@ use crate::volume::GpuVolume;
 
 pub struct BrickMinMax {
     ctx: Context,
-    kernel: Kernel,
     coarsen: Kernel,
 }
+
+/// The ranges kernel's constants (`brick_minmax.comp`): where the voxels
+/// come from, their kind and the channels, so each variant compiles only
+/// its own path.
+const SOURCE_IMAGE: u32 = 0;
+const SOURCE_CELLS: u32 = 1;
+const SOURCE_POOL: u32 = 2;
 
 /// Bricks per axis for a volume.
 pub fn brick_counts(dims: [u32; 3], brick: u32) -> [u32; 3] {
@@ -26,7 +32,6 @@ impl BrickMinMax {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(BrickMinMax {
             ctx: ctx.clone(),
-            kernel: Kernel::new::<k::Push>(ctx, &shaders::PRIMS_BRICK_MINMAX)?,
             coarsen: Kernel::new::<coarsen::Push>(ctx, &shaders::PRIMS_RANGES_COARSEN)?,
         })
     }
@@ -45,11 +50,22 @@ impl BrickMinMax {
         let counts = brick_counts(volume.dims, brick);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
-        entry_barrier(self.ctx.device(), cmd);
-        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.kernel.local_size()[0])?;
         // The cells copy serves every box but a one-voxel one inside the
         // volume (brick 1 without apron): its cells pair voxels.
         let cells = volume.cells().filter(|_| brick + apron >= 2);
+        let (source, kind) = match (cells, volume.brick_edge()) {
+            (Some(_), _) => (SOURCE_CELLS, volume.kind.constant()),
+            (None, 0) => (SOURCE_IMAGE, 0),
+            (None, _) => (SOURCE_POOL, 0),
+        };
+        let kernel = Kernel::specialized(
+            &self.ctx,
+            &shaders::PRIMS_BRICK_MINMAX,
+            std::mem::size_of::<k::Push>(),
+            &[(0, source), (1, kind), (2, volume.channels)],
+        )?;
+        entry_barrier(self.ctx.device(), cmd);
+        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, kernel.local_size()[0])?;
         // dims.w: brick edge; counts.w: total bricks.
         let push = k::Push {
             dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
@@ -58,12 +74,9 @@ impl BrickMinMax {
             scale: volume.norms.map(|n| n[1]),
             apron,
             groups_x: groups[0],
-            channels: volume.channels,
             pool_brick: volume.brick_edge(),
-            cells: cells.is_some() as u32,
-            kind: volume.kind.constant(),
         };
-        self.kernel.dispatch(
+        kernel.dispatch(
             cmd,
             &k::Bindings {
                 volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
