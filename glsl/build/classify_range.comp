@@ -12,9 +12,12 @@ layout(push_constant) uniform Push {
     uint bricks;
     uint groups_x;
     uint lut_size;
-    uint channels;
     uint tf_stride; // entries between channels' max tables (0: one for all)
 } pc;
+
+// The channel count is a constant: lavapipe runs a loop's body at least
+// once and branches no lane takes, so a run-time count cost every brick.
+layout(constant_id = 0) const uint CHANNELS = 1u;
 
 #define TF_MAX_BINDING 1
 #define TF_SIZE pc.lut_size
@@ -26,8 +29,8 @@ void main() {
         return;
     }
     bool on = false;
-    for (uint c = 0u; c < pc.channels; ++c) {
-        vec2 r = ranges[b * pc.channels + c];
+    for (uint c = 0u; c < CHANNELS; ++c) {
+        vec2 r = ranges[b * CHANNELS + c];
         on = on || tf_max_alpha_at(c * pc.tf_stride, r.x, r.y) > 0.0;
     }
     flags[b] = on ? 1u : 0u;

@@ -60,7 +60,6 @@ impl Classify {
 /// The classification kernels (`Builder::shared`).
 pub struct Classifier {
     ctx: Context,
-    range: Kernel,
     voxel: Kernel,
 }
 
@@ -68,7 +67,6 @@ impl Classifier {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Classifier {
             ctx: ctx.clone(),
-            range: Kernel::new::<build_classify_range::Push>(ctx, &shaders::BUILD_CLASSIFY_RANGE)?,
             voxel: Kernel::new::<build_classify_voxel::Push>(ctx, &shaders::BUILD_CLASSIFY_VOXEL)?,
         })
     }
@@ -86,17 +84,23 @@ impl Classifier {
     ) -> Result<()> {
         entry_barrier(self.ctx.device(), cmd);
         tf.check_channels(volume.channels)?;
-        let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.range.local_size()[0])?;
+        let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.voxel.local_size()[0])?;
         match mode {
             Classify::Range => {
+                // One kernel per channel count (made on first use).
+                let range = Kernel::specialized(
+                    &self.ctx,
+                    &shaders::BUILD_CLASSIFY_RANGE,
+                    std::mem::size_of::<build_classify_range::Push>(),
+                    &[(0, bricks.channels)],
+                )?;
                 let push = build_classify_range::Push {
                     bricks: bricks.total as u32,
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
-                    channels: bricks.channels,
                     tf_stride: tf.channel_step() * tf.max_stride,
                 };
-                self.range.dispatch(
+                range.dispatch(
                     cmd,
                     &build_classify_range::Bindings {
                         ranges: Binding::Storage(&bricks.ranges),
