@@ -464,7 +464,14 @@ pub(crate) mod tests {
         // and one.
         let narrow = [[1, 2, 3], [2, 3, 1]].map(|dims| {
             let n = dims.iter().product::<u32>() as u8;
-            Volume::new("narrow", dims, [1.0; 3], VoxelType::U8, VoxelData::U8((1..=n).collect())).unwrap()
+            Volume::new(
+                "narrow",
+                dims,
+                [1.0; 3],
+                VoxelType::U8,
+                VoxelData::U8((1..=n).collect()),
+            )
+            .unwrap()
         });
         for v in odd_volumes([1.0; 3]).into_iter().chain(narrow) {
             let words = cells_words(&v);

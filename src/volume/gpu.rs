@@ -56,6 +56,9 @@ pub struct GpuVolume {
     brick_table: TexelBuffer,
     /// The pool's images past the first (`image`), where it spans several.
     pool_images: Vec<Image3d>,
+    /// The staging buffer `replace` writes a series' steps through, kept
+    /// from step to step (no new memory to fault in per step).
+    pub(super) step_staging: Option<Buffer>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
 }
@@ -319,6 +322,7 @@ impl GpuVolume {
             gradient_cells: None,
             brick_table,
             pool_images: images,
+            step_staging: None,
             pool: pool.map(PoolLayout::stats),
         };
         // Bricked storage samples with the manual filter only: the

@@ -33,7 +33,7 @@ impl GpuVolume {
             return Ok(false);
         }
         let (_, _, bytes) = texels(volume);
-        self.image.upload(&bytes)?;
+        self.image.upload_through(&bytes, &mut self.step_staging)?;
         self.spacing = volume.spacing;
         self.norm = volume.norm;
         self.norms = std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm));
@@ -52,7 +52,7 @@ impl GpuVolume {
         if self.gradient.is_some() {
             let gradient = self.gradient_texels(volume)?;
             if let Some(image) = &self.gradient {
-                image.upload(bytemuck::cast_slice(&gradient))?;
+                image.upload_through(bytemuck::cast_slice(&gradient), &mut self.step_staging)?;
             }
             if let Some(copy) = &mut self.gradient_cells {
                 if shared {

@@ -270,6 +270,18 @@ fn a_step_put_in_place_renders_as_its_fresh_upload() {
                 assert!(bits(&a) != bits(&old), "{}: the step before looks the same", v.name);
             }
         }
+        // The image alone (no cells copy: the manual filter's eight fetches
+        // read it), put in place three times through the staging buffer
+        // `replace` keeps from step to step.
+        let mut plain = GpuVolume::upload(&ctx, &before).unwrap();
+        for step in [v, &before, v] {
+            assert!(plain.replace(step).unwrap(), "{}: not put in place", v.name);
+        }
+        assert!(plain.cells().is_none());
+        let a = frame(&ctx, &renderer, &plain, v, &tf, &desc);
+        let b = frame(&ctx, &renderer, &fresh, v, &tf, &desc);
+        let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&a) == bits(&b), "{}: the image put in place differs", v.name);
     }
     // Not in place: other dims, another kind, bricked storage.
     let mut u8s = GpuVolume::upload(&ctx, &volumes[0]).unwrap();
