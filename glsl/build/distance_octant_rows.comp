@@ -92,6 +92,26 @@ uint value(uint entry, int x) {
     return max(uint(abs(int(entry >> 8u) - x)), entry & 255u);
 }
 
+// Adds cell x (value gx) to the deque [back, front) and returns the
+// minimum seen from x.
+uint deque_step(uint base, int x, uint gx, inout uint front, inout uint back) {
+    while (front > back && (deque_read(base, front - 1u) & 255u) >= gx) {
+        front -= 1u;
+    }
+    deque_write(base, front, uint(x) << 8u | gx);
+    front += 1u;
+    uint best = value(deque_read(base, back), x);
+    while (front - back >= 2u) {
+        uint next = value(deque_read(base, back + 1u), x);
+        if (next > best) {
+            break;
+        }
+        back += 1u;
+        best = next;
+    }
+    return best;
+}
+
 void main() {
     // Words 1 and 3 differ from words 0 and 2 only in the z sign.
     uint words = pc.axis == 2u ? 4u : 2u;
@@ -115,22 +135,18 @@ void main() {
         int x = negative ? 0 : n - 1;
         uint back = 0u;
         uint front = 0u; // one past the front entry
+        // The first pass's g is 0 or CAP: the distance is to the last cell
+        // sought, counted from the far end and capped, with no deque.
+        uint run = DISTANCE_CAP;
         for (int s = 0; s < n; ++s, x += step) {
             uint i = cell_index(cells, uint(x));
             uint gx = g(i, ch);
-            while (front > back && (deque_read(base, front - 1u) & 255u) >= gx) {
-                front -= 1u;
-            }
-            deque_write(base, front, uint(x) << 8u | gx);
-            front += 1u;
-            uint best = value(deque_read(base, back), x);
-            while (front - back >= 2u) {
-                uint next = value(deque_read(base, back + 1u), x);
-                if (next > best) {
-                    break;
-                }
-                back += 1u;
-                best = next;
+            uint best;
+            if (FIRST != 0u) {
+                run = gx == 0u ? 0u : min(run + 1u, DISTANCE_CAP);
+                best = run;
+            } else {
+                best = deque_step(base, x, gx, front, back);
             }
             uint d = min(best, DISTANCE_CAP);
             uint bytes = d << (8u * j) | (lanes == 2u ? d << (8u * (j + 2u)) : 0u);
