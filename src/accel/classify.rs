@@ -84,7 +84,6 @@ impl Classifier {
     ) -> Result<()> {
         entry_barrier(self.ctx.device(), cmd);
         tf.check_channels(volume.channels)?;
-        let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, self.voxel.local_size()[0])?;
         match mode {
             Classify::Range => {
                 // One kernel per channel count (made on first use).
@@ -94,6 +93,7 @@ impl Classifier {
                     std::mem::size_of::<build_classify_range::Push>(),
                     &[(0, bricks.channels)],
                 )?;
+                let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, range.local_size()[0])?;
                 let push = build_classify_range::Push {
                     bricks: bricks.total as u32,
                     groups_x: groups[0],
@@ -113,6 +113,8 @@ impl Classifier {
                 )
             }
             Classify::Voxel { apron } => {
+                let groups =
+                    record::groups_linear(self.ctx.info(), "classify", bricks.total, self.voxel.local_size()[0])?;
                 let c = bricks.counts;
                 // dims.w: brick edge; counts.w: total bricks.
                 let push = build_classify_voxel::Push {

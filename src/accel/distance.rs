@@ -52,17 +52,18 @@ pub struct DistanceKernels {
 
 impl DistanceKernels {
     fn rows(&self, octants: bool, private: bool, first: bool) -> Result<Kernel> {
-        let shader = match octants {
-            true => &shaders::BUILD_DISTANCE_OCTANT_ROWS,
-            false => &shaders::BUILD_DISTANCE_ROWS,
+        let (shader, push_size) = match octants {
+            true => (
+                &shaders::BUILD_DISTANCE_OCTANT_ROWS,
+                std::mem::size_of::<build_distance_octant_rows::Push>(),
+            ),
+            false => (
+                &shaders::BUILD_DISTANCE_ROWS,
+                std::mem::size_of::<build_distance_rows::Push>(),
+            ),
         };
         let constants = [(0, private as u32), (1, first as u32)];
-        Kernel::specialized(
-            &self.ctx,
-            shader,
-            std::mem::size_of::<build_distance_rows::Push>(),
-            &constants,
-        )
+        Kernel::specialized(&self.ctx, shader, push_size, &constants)
     }
 }
 

@@ -52,7 +52,8 @@ impl BrickMinMax {
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
         // The cells copy serves every box but a one-voxel one inside the
         // volume (brick 1 without apron): its cells pair voxels.
-        let cells = volume.cells().filter(|_| brick + apron >= 2);
+        // (A one-channel copy: the kernel reads it for one channel only.)
+        let cells = volume.cells().filter(|_| brick + apron >= 2 && volume.channels == 1);
         let (source, kind) = match (cells, volume.brick_edge()) {
             (Some(_), _) => (SOURCE_CELLS, volume.kind.constant()),
             (None, 0) => (SOURCE_IMAGE, 0),

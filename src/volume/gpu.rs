@@ -57,7 +57,10 @@ pub struct GpuVolume {
     /// The pool's images past the first (`image`), where it spans several.
     pool_images: Vec<Image3d>,
     /// The staging buffer `replace` writes a series' steps through, kept
-    /// from step to step (no new memory to fault in per step).
+    /// from step to step (no new memory to fault in per step): as large as
+    /// the largest upload chunk so far, at most 64 MiB (`STAGING_CHUNK`)
+    /// or one z-slice where a slice is larger; a lit series' gradient
+    /// (8 bytes a voxel) takes it there for volumes past 2^23 voxels.
     pub(super) step_staging: Option<Buffer>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
