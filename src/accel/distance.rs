@@ -15,7 +15,7 @@
 //! up to d-1 ahead of the ray, so jumps are longer, for 16 bytes a cell).
 
 use super::bricks::GpuBricks;
-use super::builder::{Builder, PerContext, RangeKind, Ranges};
+use super::builder::{Builder, RangeKind, Ranges};
 use super::classify::{Classifier, Classify};
 use super::method::{BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
@@ -40,37 +40,25 @@ pub const CAP: u32 = 255;
 /// (`distance_octant_rows.comp`) keeps in private arrays (their PRIVATE_ROW).
 const PRIVATE_ROW: u32 = 64;
 
-/// The linear-time distance-transform kernels (two-sided rows for cube
-/// maps, one-sided rows for octant maps), specialized per pass: with the
+/// The linear-time distance-transform kernel of one pass (two-sided rows
+/// for cube maps, one-sided rows for octant maps), specialized: with the
 /// envelope (deque) in private arrays for rows of at most [`PRIVATE_ROW`]
 /// cells, else in a storage buffer; reading the active flags (the first
 /// pass) or map words. Each variant compiles on its first use (the
 /// context keeps it).
-pub struct DistanceKernels {
-    ctx: Context,
-}
-
-impl DistanceKernels {
-    fn rows(&self, octants: bool, private: bool, first: bool) -> Result<Kernel> {
-        let (shader, push_size) = match octants {
-            true => (
-                &shaders::BUILD_DISTANCE_OCTANT_ROWS,
-                std::mem::size_of::<build_distance_octant_rows::Push>(),
-            ),
-            false => (
-                &shaders::BUILD_DISTANCE_ROWS,
-                std::mem::size_of::<build_distance_rows::Push>(),
-            ),
-        };
-        let constants = [(0, private as u32), (1, first as u32)];
-        Kernel::specialized(&self.ctx, shader, push_size, &constants)
-    }
-}
-
-impl PerContext for DistanceKernels {
-    fn new(ctx: &Context) -> Result<Self> {
-        Ok(DistanceKernels { ctx: ctx.clone() })
-    }
+fn rows_kernel(ctx: &Context, octants: bool, private: bool, first: bool) -> Result<Kernel> {
+    let (shader, push_size) = match octants {
+        true => (
+            &shaders::BUILD_DISTANCE_OCTANT_ROWS,
+            std::mem::size_of::<build_distance_octant_rows::Push>(),
+        ),
+        false => (
+            &shaders::BUILD_DISTANCE_ROWS,
+            std::mem::size_of::<build_distance_rows::Push>(),
+        ),
+    };
+    let constants = [(0, private as u32), (1, first as u32)];
+    Kernel::specialized(ctx, shader, push_size, &constants)
 }
 
 /// A built distance map.
@@ -132,7 +120,6 @@ pub fn record(
     octants: bool,
 ) -> Result<DistanceMap> {
     let ctx = builder.context();
-    let kernels = builder.shared::<DistanceKernels>()?;
     let classifier = builder.shared::<Classifier>()?;
     let info = ctx.info();
     check_fits(info, cells.total, octants)?;
@@ -178,7 +165,7 @@ pub fn record(
         }
         // One invocation per row (cube maps) or per row and computed map
         // word (octant maps: two along x and y, four along z).
-        let k = kernels.rows(octants, c[axis] <= PRIVATE_ROW, axis == 0)?;
+        let k = rows_kernel(ctx, octants, c[axis] <= PRIVATE_ROW, axis == 0)?;
         let per_row = match octants {
             true if axis == 2 => 4,
             true => 2,
