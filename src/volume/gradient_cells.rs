@@ -47,6 +47,7 @@ fn pack_gradient_layers(gradient: &[[half::f16; 4]], dims: [u32; 3], first: u64,
                 }
             }
         },
+        None,
     );
 }
 
