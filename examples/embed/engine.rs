@@ -14,6 +14,7 @@ use lacuna::gpu::{
     record, required_features, AdoptInfo, Context, EnabledFeatures, Staging, Timer, REQUIRED_EXTENSIONS,
 };
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::render::{
     Camera, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection, RenderTarget, Renderer, Scene,
 };
@@ -471,6 +472,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             gpu_tf: &lut,
             mode: Mode::Composite,
             frame: None,
+            octants: Octants::ALL,
         };
         let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &params)?;
         record::barrier(device, cmd, record::Access::COMPUTE_WRITE, record::Access::COMPUTE_READ);

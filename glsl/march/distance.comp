@@ -19,20 +19,28 @@ layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Distances { uint 
 layout(push_constant) uniform Grid {
     uvec3 counts; // cells per axis
     uint cell;    // cell edge in voxels
+    // The octants the map holds distances for (bit o; an octant map may
+    // hold fewer than eight), and one of them.
+    uint built;
+    uint probe;
 } grid;
 
-// The distance from `cell` to the nearest cell of the other kind, for a ray of `octant`.
+// The distance from `cell` to the nearest cell of the other kind, for a ray
+// of `octant`; 1 (this cell alone) for an octant the map does not hold, so
+// such a ray walks cell by cell, exactly.
 uint distance_at(ivec3 cell, bool is_active, uint octant) {
     ivec3 n = ivec3(grid.counts);
     uint i = uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z));
     uint ch = distance_channel(is_active, octant);
-    return distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+    uint d = distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+    return ((grid.built >> octant) & 1u) != 0u ? d : 1u;
 }
 
 bool active_at(ivec3 cell) {
     ivec3 n = ivec3(grid.counts);
-    // Channel 0 (distance to an active cell) is 0 exactly in active cells.
-    return (distances[DISTANCE_WORDS * (uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z)))] & 255u) == 0u;
+    // A held octant's distance to an active cell is 0 exactly in active cells.
+    uint i = uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z));
+    return distance_byte(distances[DISTANCE_WORDS * i + (grid.probe >> 2u)], grid.probe) == 0u;
 }
 
 // The traversal: the current cell, and whether any cell is left.

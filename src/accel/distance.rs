@@ -21,6 +21,7 @@ use super::method::{BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
+use crate::desc::Octants;
 use crate::error::Result;
 use crate::gpu::record;
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
@@ -61,11 +62,48 @@ fn rows_kernel(ctx: &Context, octants: bool, private: bool, first: bool) -> Resu
     Kernel::specialized(ctx, shader, push_size, &constants)
 }
 
+/// The tasks of an octant map's pass along `axis` for the octants `built`
+/// (`distance_octant_rows.comp`'s `task`, each sweeping both kinds of
+/// distance): per z sign read, the byte channels that depend on the signs
+/// swept so far and that some built octant needs, and the words written.
+fn octant_tasks(axis: usize, built: Octants) -> Vec<u32> {
+    let task = |z: u32, js: &[u32], writes: u32| {
+        let list = js.iter().enumerate().fold(0, |l, (k, j)| l | j << (8 + 2 * k));
+        z | (js.len() as u32) << 2 | list | writes << 16
+    };
+    let classes = |mask: u32, z: Option<u32>| {
+        let mut js: Vec<u32> = built
+            .iter()
+            .filter(|&o| z.is_none_or(|z| o >> 2 == z))
+            .map(|o| o & mask)
+            .collect();
+        js.sort_unstable();
+        js.dedup();
+        js
+    };
+    let has_z = |z: u32| built.iter().any(|o| o >> 2 == z);
+    match axis {
+        // Along x: the x sign; pass y reads the z-positive words.
+        0 => vec![task(0, &classes(1, None), 1)],
+        // Along y: the x and y signs, copied to the z signs needed.
+        1 => vec![task(0, &classes(3, None), has_z(0) as u32 | (has_z(1) as u32) << 1)],
+        // Along z: each octant.
+        _ => (0..2u32)
+            .map(|z| (z, classes(3, Some(z))))
+            .filter(|(_, js)| !js.is_empty())
+            .map(|(z, js)| task(z, &js, 1))
+            .collect(),
+    }
+}
+
 /// A built distance map.
 pub struct DistanceMap {
     pub cell: u32,
     pub counts: [u32; 3],
     pub octants: bool,
+    /// The octants whose distances an octant map holds (all for a cube map):
+    /// the march walks other octants cell by cell.
+    pub built: Octants,
     /// u32 per cell, 1 = active (the classification).
     pub flags: Buffer,
     /// Per cell: [`channels`] byte distances packed in words.
@@ -90,8 +128,9 @@ fn words_per_cell(octants: bool) -> u64 {
     channels(octants).div_ceil(4) as u64
 }
 
-/// The rows' envelope stacks: three words per cell (cube maps), or a deque
-/// word per cell and map word (octant maps).
+/// The rows' envelope stacks: three words per cell (cube maps), or two
+/// deques (one per kind) of a word per cell for each of up to two tasks
+/// of a pass (octant maps).
 fn stack_bytes(cells: u64, octants: bool) -> u64 {
     cells * if octants { 4 * words_per_cell(true) } else { 12 }
 }
@@ -147,6 +186,11 @@ pub fn record(
         MemoryLocation::GpuOnly,
     )?;
 
+    // An octant map computes the octants its frames need (none named: all).
+    let built = match input.octants {
+        o if !octants || o.is_empty() => Octants::ALL,
+        o => o,
+    };
     let pass = timer.begin(cmd, "classify")?;
     classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
     timer.end(cmd, pass);
@@ -163,45 +207,54 @@ pub fn record(
         } else {
             record::compute_to_compute(ctx.device(), cmd);
         }
-        // One invocation per row (cube maps) or per row and computed map
-        // word (octant maps: two along x and y, four along z).
+        // One invocation per row (cube maps) or per row and task (octant
+        // maps: a map word and the channels of it to compute).
         let k = rows_kernel(ctx, octants, c[axis] <= PRIVATE_ROW, axis == 0)?;
-        let per_row = match octants {
-            true if axis == 2 => 4,
-            true => 2,
-            false => 1,
-        };
+        let tasks = octant_tasks(axis, built);
+        let per_row = if octants { tasks.len() as u64 } else { 1 };
         let rows = cells.total / c[axis] as u64;
         let groups = record::groups_linear(info, "distance rows", rows * per_row, k.local_size()[0])?;
-        // One block for both kernels (the cube rows' is the octant rows').
-        let push = build_distance_rows::Push {
-            counts,
-            axis: axis as u32,
-            groups_x: groups[0],
-            rows: rows as u32,
-        };
-        let bindings = if octants {
-            build_distance_octant_rows::Bindings {
+        let (push, bindings) = if octants {
+            let mut task = [0; 4];
+            task[..tasks.len()].copy_from_slice(&tasks);
+            let push = build_distance_octant_rows::Push {
+                counts,
+                axis: axis as u32,
+                groups_x: groups[0],
+                rows: rows as u32,
+                tasks: tasks.len() as u32,
+                task,
+            };
+            let bindings = build_distance_octant_rows::Bindings {
                 src: Binding::Storage(src),
                 dst: Binding::Storage(dst),
                 deque: Binding::Storage(&stack),
             }
-            .list()
+            .list();
+            (bytemuck::bytes_of(&push).to_vec(), bindings)
         } else {
-            build_distance_rows::Bindings {
+            let push = build_distance_rows::Push {
+                counts,
+                axis: axis as u32,
+                groups_x: groups[0],
+                rows: rows as u32,
+            };
+            let bindings = build_distance_rows::Bindings {
                 src: Binding::Storage(src),
                 dst: Binding::Storage(dst),
                 stack: Binding::Storage(&stack),
             }
-            .list()
+            .list();
+            (bytemuck::bytes_of(&push).to_vec(), bindings)
         };
-        k.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+        k.dispatch(cmd, &bindings, &push, groups)?;
         timer.end(cmd, pass);
     }
     Ok(DistanceMap {
         cell: cells.brick,
         counts: cells.counts,
         octants,
+        built,
         flags,
         distances,
         _scratch: [scratch, stack],
@@ -216,10 +269,18 @@ impl DistanceMap {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.distances.download(0, self.distances.size())?);
         let per = words_per_cell(self.octants) as usize;
         let n = channels(self.octants);
+        let built = self.built;
+        // An octant the map does not hold reads as 1, as the march reads it.
+        let held = move |ch: usize| !self.octants || built.has((ch % 8) as u32);
         Ok(words
             .chunks(per)
             .take(self.total as usize)
-            .flat_map(|cell| (0..n).map(move |ch| (cell[ch / 4] >> (8 * (ch % 4))) & 0xff))
+            .flat_map(|cell| {
+                (0..n).map(move |ch| match held(ch) {
+                    true => (cell[ch / 4] >> (8 * (ch % 4))) & 0xff,
+                    false => 1,
+                })
+            })
             .collect())
     }
 
@@ -239,9 +300,9 @@ impl DistanceMap {
 
 /// The distance map on the host, for tests: per cell, [`channels`] distances
 /// in channel order, each the Chebyshev distance in cells to the nearest
-/// cell of the kind sought (`octants`: only cells ahead of that octant),
-/// capped at [`CAP`]. Brute force: O(cells^2).
-pub fn reference(counts: [u32; 3], active: &[bool], octants: bool) -> Vec<u32> {
+/// cell of the kind sought (`octants`: only cells ahead of that octant, and
+/// 1 for an octant not `built`), capped at [`CAP`]. Brute force: O(cells^2).
+pub fn reference(counts: [u32; 3], active: &[bool], octants: bool, built: Octants) -> Vec<u32> {
     let [nx, ny, nz] = counts.map(|n| n as i64);
     let cells: Vec<[i64; 3]> = (0..nz)
         .flat_map(|z| (0..ny).flat_map(move |y| (0..nx).map(move |x| [x, y, z])))
@@ -251,6 +312,10 @@ pub fn reference(counts: [u32; 3], active: &[bool], octants: bool) -> Vec<u32> {
     for c in &cells {
         for ch in 0..2 * half {
             let (seek_active, octant) = (ch < half, ch % half);
+            if octants && !built.has(octant as u32) {
+                out.push(1);
+                continue;
+            }
             let mut best = CAP as i64;
             for (o, other) in cells.iter().enumerate() {
                 let off = [0, 1, 2].map(|k| other[k] - c[k]);
@@ -332,10 +397,16 @@ impl Built for DistanceMap {
         bytemuck::bytes_of(&march_distance::Push {
             counts: self.counts,
             cell: self.cell,
+            built: self.built.bits() as u32,
+            // A held octant's distances to active cells: 0 exactly in them.
+            probe: self.built.iter().next().unwrap_or(0),
         })
         .to_vec()
     }
     fn stats(&self) -> Result<Option<Stats>> {
         DistanceMap::stats(self).map(Some)
+    }
+    fn octants(&self) -> Octants {
+        self.built
     }
 }

@@ -8,7 +8,7 @@
 use super::builder::{Builder, RangeKind, Ranges};
 use super::params::{Param, Params};
 use super::stats::Stats;
-use crate::desc::{FrameDesc, Mode};
+use crate::desc::{FrameDesc, Mode, Octants};
 use crate::error::{Error, Result};
 use crate::gpu::{vk, Bound, DeviceInfo, Shader, Timer, Timings};
 use crate::tf::{GpuTransferFunction, TransferFunction};
@@ -34,7 +34,9 @@ impl March {
 /// host-built structures) and on the GPU, the mode of the frames it is
 /// for (what "empty" means: `accel::mode`), and optionally such a frame
 /// itself (camera, step, early termination, filter, size), which `auto`
-/// prices its candidates on (None: the default orbit at 512x512).
+/// prices its candidates on (None: the default orbit at 512x512), and the
+/// ray direction octants of the frames it will serve (octant distance maps
+/// compute only those: `Octants::ALL` where unknown).
 #[derive(Clone, Copy)]
 pub struct BuildInput<'a> {
     pub volume: &'a Volume,
@@ -43,6 +45,10 @@ pub struct BuildInput<'a> {
     pub gpu_tf: &'a GpuTransferFunction,
     pub mode: Mode,
     pub frame: Option<&'a FrameDesc>,
+    /// The ray direction octants the frames marched with the structure
+    /// will have (`FrameDesc::octants`). An octant map marches a frame with
+    /// other octants exactly, cell by cell on those (`DistanceMap`).
+    pub octants: Octants,
 }
 
 /// When a built structure is marched by another entry's kernel: which, and why.
@@ -89,6 +95,11 @@ pub trait Built: Any {
     /// the naive kernel). None: the entry's own kernel (`Method::march`).
     fn marched_as(&self) -> Option<MarchedAs> {
         None
+    }
+    /// The ray direction octants it skips for (all but a partly built
+    /// octant map: `BuildInput::octants`).
+    fn octants(&self) -> Octants {
+        Octants::ALL
     }
 }
 
@@ -276,6 +287,12 @@ impl Structure {
             )),
             _ => Ok(()),
         }
+    }
+
+    /// The ray direction octants it skips for ([`Built::octants`]); frames
+    /// with others are exact, and slower.
+    pub fn octants(&self) -> Octants {
+        self.built.octants()
     }
 
     /// The entry whose kernel marches this structure's frames: its own, or

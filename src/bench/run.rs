@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
 use crate::gpu::Context;
-use crate::render::{Filter, FrameBuilder, FrameDesc, Projection, Renderer, Scene};
+use crate::render::{Filter, FrameBuilder, FrameDesc, Octants, Projection, Renderer, Scene};
 use crate::tf::GpuTransferFunction;
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
 use std::collections::BTreeMap;
@@ -318,6 +318,10 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             gpu_tf: &lut,
             mode,
             frame: Some(&first),
+            // Every view of the orbit marches the structures built once.
+            octants: (0..config.frames).try_fold(Octants::NONE, |set, view| {
+                Ok::<_, crate::Error>(set.union(settings(view)?.octants(v.dims, v.spacing)?))
+            })?,
         };
         // lacuna info's occupancy figures.
         let n = v.data.len();

@@ -114,6 +114,7 @@ impl StepBench<'_> {
                     gpu_tf: self.lut,
                     mode: *self.desc.mode(),
                     frame: Some(self.desc),
+                    octants: self.desc.octants(volume.dims, volume.spacing)?,
                 };
                 let step = self
                     .builder

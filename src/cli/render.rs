@@ -6,7 +6,7 @@ use clap::Args;
 use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
-use lacuna::render::{self, FrameDesc, Mode, Renderer, Scene};
+use lacuna::render::{self, FrameDesc, Mode, Octants, Renderer, Scene};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
 use lacuna::{Error, Result, Timings, TransferFunction, Volume};
@@ -142,6 +142,7 @@ pub(super) fn build_and_render(
         gpu_tf: &lut,
         mode: *desc.mode(),
         frame: Some(desc),
+        octants: desc.octants(volume.dims, volume.spacing)?,
     };
     let (mut structure, build) = build(&builder, args, &input, params)?;
     let scene = Scene {
@@ -317,6 +318,13 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     }
     if let Some(stats) = structure.stats()? {
         println!("structure {stats}");
+    }
+    let octants = structure.octants();
+    if octants != Octants::ALL {
+        println!(
+            "  octants {} of 8 ({octants}): the frame's ray directions; other directions walk cell by cell",
+            octants.len()
+        );
     }
     println!("render GPU time per pass:\n{timings}");
     if let Some(peak) = peak_host_bytes() {

@@ -15,6 +15,7 @@ mod kernel;
 mod look;
 mod matrices;
 mod mode;
+mod octants;
 mod orbit;
 mod parse;
 pub use parse::parse_size;
@@ -28,6 +29,7 @@ pub use kernel::KernelConstants;
 pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
 pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID, SHININESS_CONSTANT_ID};
+pub use octants::Octants;
 pub use orbit::{Orbit, Projection};
 pub use shading::{whole_exponent, Light, Shading};
 

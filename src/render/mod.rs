@@ -10,7 +10,7 @@ mod target;
 
 pub use crate::desc::{
     orthographic, parse_size, perspective, Camera, CameraMatrices, Clip, Filter, FrameBuilder, FrameDesc, HostDepth,
-    Iso, Light, LookSpec, Mode, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF, MAX_CLIP,
+    Iso, Light, LookSpec, Mode, Octants, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF, MAX_CLIP,
 };
 pub use crate::gpu::shaders::blocks::RenderParams;
 pub use marcher::{Renderer, Scene};

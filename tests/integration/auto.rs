@@ -15,6 +15,7 @@ use lacuna::accel::probe::FrameProbe;
 use lacuna::accel::{BuildInput, Builder, Structure};
 use lacuna::bench::hard::lattice;
 use lacuna::frame::diff;
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Mode, Renderer};
 use lacuna::volume::{GpuVolume, LoadOptions, POOL_BRICK};
 use lacuna::{TransferFunction, Volume};
@@ -42,6 +43,7 @@ fn build(
         gpu_tf: &lut,
         mode: *desc.mode(),
         frame: Some(desc),
+        octants: Octants::ALL,
     };
     builder.build(auto, &input, &ranges, &params).unwrap().0
 }
@@ -142,6 +144,7 @@ fn probe_counts_are_the_lattices_samples() {
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     let (map, _) = builder.build(distance, &input, &ranges, &params).unwrap();
     let probe = FrameProbe::new(&builder, &gv, &empty, &desc, 256).unwrap();
@@ -272,6 +275,7 @@ fn auto_equals_naive_in_every_look_storage_and_channel_count() {
                 gpu_tf: &p.lut,
                 mode,
                 frame: Some(&view),
+                octants: Octants::ALL,
             };
             let s = fx.builder.build(auto, &input, &p.ranges, &untimed).unwrap().0;
             let what = format!("{what} {}", mode.name());
@@ -432,6 +436,7 @@ fn naive_counts_derived_from_a_structures_march_are_naives_own() {
                     gpu_tf: &lut,
                     mode: *desc.mode(),
                     frame: Some(&desc),
+                    octants: Octants::ALL,
                 };
                 let (s, _) = builder.build(accel, &input, &ranges, &params).unwrap();
                 let (_, derived) = probe.count_both(&s).unwrap();

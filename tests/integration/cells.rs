@@ -11,6 +11,7 @@ use lacuna::accel::{Accel, BuildInput, Builder};
 use lacuna::desc::Iso;
 use lacuna::frame::Frame;
 use lacuna::gpu::Context;
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
 use lacuna::volume::{
     cells_words, check_cells, check_gradient_cells, record_pack_cells, GpuVolume, TexelKind, VoxelData, VoxelType,
@@ -60,6 +61,7 @@ fn frame(
         gpu_tf: &lut,
         mode: *desc.mode(),
         frame: None,
+        octants: Octants::ALL,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, &accel.defaults()).unwrap();
     let scene = Scene {

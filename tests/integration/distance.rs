@@ -7,6 +7,7 @@ use lacuna::accel::distance::{self, DistanceMap};
 use lacuna::accel::{BuildInput, Builder, RangeKind};
 use lacuna::gpu::{Context, Timer};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -37,7 +38,8 @@ struct Built {
     phases: Vec<String>,
 }
 
-fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool) -> Built {
+/// The map of `v` under `tf` (`built`: the octants an octant map computes).
+fn build_for(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool, built: Octants) -> Built {
     let builder = Builder::new(ctx).unwrap();
     let gv = GpuVolume::upload(ctx, v).unwrap();
     let lut = tf.upload(ctx).unwrap();
@@ -50,6 +52,7 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: built,
     };
     let map = ctx
         .submit_and_wait(|cmd| {
@@ -78,8 +81,12 @@ fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: b
     }
 }
 
+fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool) -> Built {
+    build_for(ctx, v, tf, cell, octants, Octants::ALL)
+}
+
 fn check(what: &str, b: &Built, octants: bool) {
-    let reference = distance::reference(b.map.counts, &b.flags, octants);
+    let reference = distance::reference(b.map.counts, &b.flags, octants, b.map.built);
     assert_eq!(b.distances.len(), reference.len(), "{what}: map size");
     if let Some(i) = (0..reference.len()).find(|&i| b.distances[i] != reference[i]) {
         let per = distance::channels(octants);
@@ -127,6 +134,38 @@ fn maps_match_the_brute_force_transform() {
             }
         }
     }
+}
+
+#[test]
+fn octant_maps_of_some_octants_hold_exactly_those() {
+    let ctx = gpu();
+    let tf = TransferFunction::parse("ramp:0.5:1").unwrap();
+    // One octant, two opposite ones, the two of one z sign and one y sign,
+    // and two that differ only in z: each pass's tasks (the x signs, the
+    // xy classes copied to the z signs needed, the octants) in turn; in
+    // private arrays and in the storage deque (rows of 70 cells).
+    let sets = [
+        Octants::one(5),
+        Octants::from_bits(0b1000_0001),
+        Octants::from_bits(0b0011_0000),
+        Octants::from_bits(0b0100_0100),
+    ];
+    for (dims, seed) in [([40, 36, 44], 11), ([140, 12, 10], 12), ([10, 12, 140], 13)] {
+        let v = speckles(dims, 8, seed);
+        for built in sets {
+            let b = build_for(&ctx, &v, &tf, 2, true, built);
+            assert_eq!(b.map.built, built);
+            assert!(
+                b.active > 0 && b.active < b.cells,
+                "{dims:?}: some cells active, some empty"
+            );
+            // The octants not built read as 1: the march walks them cell by cell.
+            check(&format!("{dims:?} octants {built}"), &b, true);
+        }
+    }
+    // A cube map holds every direction whatever was asked.
+    let b = build_for(&ctx, &speckles([40, 36, 44], 8, 11), &tf, 2, false, Octants::one(3));
+    assert_eq!(b.map.built, Octants::ALL);
 }
 
 #[test]

@@ -13,6 +13,7 @@ use crate::host;
 use crate::common::{assert_clean, gpu};
 use lacuna::accel::{BuildInput, Builder};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::render::{Camera, Filter, FrameDesc, Renderer, Scene};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -51,6 +52,7 @@ fn occludes_with(accel: &str) {
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     let naive_accel = common::accel("naive");
     let naive = builder

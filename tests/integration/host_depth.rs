@@ -8,6 +8,7 @@ use crate::host;
 use crate::common::{accel, assert_clean, gpu};
 use lacuna::accel::{BuildInput, Builder, Structure};
 use lacuna::gpu::{vk, Context};
+use lacuna::render::Octants;
 use lacuna::render::{
     reference, Camera, Filter, FrameDesc, HostDepthOut, HostImage, Iso, Mode, Orbit, Output, Projection, RenderTarget,
     Renderer, Scene,
@@ -146,6 +147,7 @@ fn iso_depth_in_the_host_buffer_is_the_references_ndc_depth_for_every_structure(
             gpu_tf: &lut,
             mode: iso,
             frame: None,
+            octants: Octants::ALL,
         };
         let s = builder.build(a, &input, &ranges, &a.defaults()).unwrap().0;
         let scene = Scene {

@@ -13,6 +13,7 @@ use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{vk, Context};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::render::{
     reference, Camera, CameraMatrices, Filter, FrameDesc, HostDepth, HostImage, Orbit, Output, Projection,
     RenderTarget, Renderer, Scene,
@@ -54,6 +55,7 @@ fn fixture(names: &[&str]) -> Fixture {
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     let structures = wanted
         .iter()

@@ -8,7 +8,7 @@ use crate::common::assert_clean;
 use crate::common::identity::{cam, lattice_views, standard_views, Fixture, Given, Kernels, DEFAULTS};
 use lacuna::accel::{Params, Structure};
 use lacuna::frame::diff;
-use lacuna::render::{Filter, FrameDesc, Projection};
+use lacuna::render::{Filter, FrameDesc, Octants, Projection};
 use lacuna::volume::{LoadOptions, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -329,4 +329,49 @@ fn every_structure_parameter_set_the_paper_compares() {
         let v = load(spec);
         fx.check_with(spec, &v, &tf(t), &standard_views()[..3], &sets, kernels);
     }
+}
+
+#[test]
+fn an_octant_map_of_one_view_renders_every_direction_exactly() {
+    // Built for the first view's ray octant alone (as `render` builds it):
+    // views of every other octant read distance 1 there and walk cell by
+    // cell, and still equal naive.
+    let fx = Fixture::new();
+    let v = load("nbody:48");
+    let t = tf(v.default_tf.as_ref().unwrap());
+    let inside = Projection::Perspective {
+        fov_deg: 80.0,
+        distance: Some(0.3),
+    };
+    let mut views: Vec<FrameDesc> = [25.0, -25.0]
+        .into_iter()
+        .flat_map(|el| [30.0, 120.0, 210.0, 300.0].map(|az| cam(40, az, el, Projection::Orthographic, 0.5)))
+        .collect();
+    views.push(cam(40, 75.0, 10.0, inside, 0.5));
+    let p = fx.prepare(&v, &t, DEFAULTS);
+    let first = views[0].octants(v.dims, v.spacing).unwrap();
+    assert_eq!(first.len(), 1, "an orthographic view has one octant");
+    let all = FrameDesc::octants_of(&views, v.dims, v.spacing).unwrap();
+    assert_eq!(all, Octants::ALL, "the views cover every octant");
+    let accel = common::accel("distance-octant");
+    let params = Params::resolve(accel.method().params(), &[("cell", "4")]).unwrap();
+    let partial = fx.build_for(&p, accel, &params, first);
+    assert_eq!(partial.octants(), first);
+    let naive = Structure::naive();
+    for (i, view) in views.iter().enumerate() {
+        let want = fx.frame(&naive, &p, view, Filter::Manual);
+        assert!(
+            want.pixels.iter().any(|px| px[3] > 0.01),
+            "view {i}: empty image proves nothing"
+        );
+        let got = fx.frame(&partial, &p, view, Filter::Manual);
+        let d = diff(&want, &got).unwrap();
+        assert_eq!(
+            d.differing,
+            0,
+            "view {i} ({}): {d:?}",
+            view.octants(v.dims, v.spacing).unwrap()
+        );
+    }
+    assert_clean(&fx.ctx);
 }

@@ -9,6 +9,7 @@ use lacuna::accel::kd::occupancy::Occupancy;
 use lacuna::accel::kd::{cheaper_as_leaf, leaf_boxes, volume, Depth, IBox, KdParams};
 use lacuna::accel::{Accel, BuildInput, Builder, Params};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
 
@@ -174,6 +175,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
             gpu_tf: &lut,
             mode: Mode::Composite,
             frame: None,
+            octants: Octants::ALL,
         };
         for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {
             for accel in [common::accel("kd-cpu"), common::accel("kd-gpu")] {

@@ -7,6 +7,7 @@ use crate::common::{assert_clean, gpu};
 use lacuna::accel::lbvh::{cpu, Node};
 use lacuna::accel::{BuildInput, Builder, Classify, CostModel, Params, RangeKind, Stats};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::volume::{BrickGrid, GpuVolume, VoxelData, VoxelType, BRICK};
 use lacuna::{TransferFunction, Volume};
 
@@ -75,6 +76,7 @@ fn gpu_lbvh_with(builder: &Builder, v: &Volume, tf: &TransferFunction, params: &
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, params).unwrap();
     let l = s.tree().unwrap();
@@ -277,6 +279,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             gpu_tf: &lut,
             mode: Mode::Composite,
             frame: None,
+            octants: Octants::ALL,
         };
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);
         let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();

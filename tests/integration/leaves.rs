@@ -6,6 +6,7 @@ use lacuna::accel::cost::{self, CostModel, FLOOR_NS};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Stats};
 use lacuna::render::FrameDesc;
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -62,6 +63,7 @@ fn with_input<T>(
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     f(&builder, &input, &ranges)
 }

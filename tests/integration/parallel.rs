@@ -14,6 +14,7 @@ use lacuna::accel::{Accel, BuildInput, Params};
 use lacuna::desc::Rays;
 use lacuna::frame::{diff, Frame};
 use lacuna::parallel::{blend, pick, Decomposition};
+use lacuna::render::Octants;
 use lacuna::render::{Camera, Filter, FrameDesc, Mode, Projection, Renderer, Scene, Shading};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{TransferFunction, Volume};
@@ -149,6 +150,7 @@ fn rendered_in_parts(
             gpu_tf: &lut,
             mode: *desc.mode(),
             frame: Some(&part_desc),
+            octants: Octants::ALL,
         };
         let mut frames: Vec<(Accel, Frame)> = Vec::new();
         for &a in [accel("naive")].iter().chain(structures) {

@@ -16,6 +16,7 @@ use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::shaders::{self, march_grid};
 use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
 use lacuna::render::Mode;
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Projection, Renderer, Scene};
 use lacuna::volume::{GpuVolume, LoadOptions};
 use lacuna::{Result, TransferFunction, Volume};
@@ -271,6 +272,7 @@ fn a_structure_outside_the_table_builds_records_and_renders_exactly() {
         gpu_tf: &lut,
         mode: Mode::Composite,
         frame: None,
+        octants: Octants::ALL,
     };
     // Submitted by the default `Method::build`, and recorded into ours.
     let (built, timings) = builder.build(toy, &input, &ranges, &params).unwrap();

@@ -7,6 +7,7 @@ use crate::common;
 use crate::common::{gpu, max_abs, render};
 use lacuna::accel::Accel;
 use lacuna::render::reference;
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameBuilder, FrameDesc, Projection};
 use lacuna::volume::{VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
@@ -315,6 +316,7 @@ fn frames_split_into_bands_equal_the_whole_frame() {
             gpu_tf: &lut,
             mode: lacuna::render::Mode::Composite,
             frame: None,
+            octants: Octants::ALL,
         };
         let (structure, _) = builder.build(accel, &input, &ranges, &params).unwrap();
         assert_eq!(structure.marched_as(), accel, "its own kernel marches");

@@ -8,6 +8,7 @@ use crate::common::{fails, gzip, lacuna, nifti_bytes};
 use lacuna::accel::auto::{self, Choice, KEEP_SHARE};
 use lacuna::accel::{Accel, BuildInput, Params, Structure};
 use lacuna::frame::{diff, Frame};
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Mode, Projection};
 use lacuna::volume::{procedural, LoadOptions, Series, VoxelData, VoxelType};
 use lacuna::{Error, TransferFunction, Volume};
@@ -263,6 +264,7 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
             gpu_tf: &p.lut,
             mode: *view.mode(),
             frame: Some(view),
+            octants: Octants::ALL,
         };
         let step = fx.builder.build_step(accel, params, last, &input).unwrap();
         let naive = fx.frame(&Structure::naive(), &p, view, Filter::Manual);

@@ -384,3 +384,64 @@ fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
         assert!(!shot.exists(), "a cut frame was written");
     }
 }
+
+/// An octant map holds the ray directions of the frames it served: the
+/// orthographic first frame's one octant, then with P (perspective from
+/// outside) the viewer adds the new frame's octants before drawing it,
+/// and the frame equals `render`'s, which builds that frame's own.
+#[test]
+fn an_octant_map_grows_with_the_frames_directions() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("view.exr"), dir.path().join("render.exr"));
+    let (a_str, b_str) = (a.to_str().unwrap(), b.to_str().unwrap());
+    let common = [
+        "nbody:48",
+        "--size",
+        "64x48",
+        "--accel",
+        "distance-octant",
+        "--camera",
+        "10,30",
+    ];
+    let summary = |r: &Run| {
+        r.stdout
+            .lines()
+            .find(|l| l.starts_with("frames "))
+            .unwrap_or_default()
+            .to_string()
+    };
+    let one = [&["view"][..], &common, &["--frames", "1", "--validate"]].concat();
+    let r = lacuna_windowed(&one);
+    ok(&r, &format!("{one:?}"));
+    assert!(
+        summary(&r).contains("(distance-octant, 1 of 8 octants)"),
+        "{}",
+        r.stdout
+    );
+    let grown = [
+        &["view"][..],
+        &common,
+        &["--keys", "p", "--frames", "2", "--validate", "--screenshot", a_str],
+    ]
+    .concat();
+    let r = lacuna_windowed(&grown);
+    ok(&r, &format!("{grown:?}"));
+    let line = summary(&r);
+    let held: u32 = line
+        .split("distance-octant, ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no octant count: {line}"));
+    assert!(held > 1, "the perspective frame's rays span more octants: {line}");
+    let render = [&["render"][..], &common, &["--perspective", "40", "--out", b_str]].concat();
+    let rendered = lacuna(&render, &[]);
+    ok(&rendered, &format!("{render:?}"));
+    let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
+    assert!(
+        diff.code == 0 && diff.stdout.contains("differing 0 of 3072"),
+        "{}{}",
+        diff.stdout,
+        diff.stderr
+    );
+}

@@ -22,7 +22,7 @@ use super::super::method::{Accel, BuildInput, Structure};
 use super::super::params::Params;
 use super::super::probe::{time_interleaved, FrameProbe, Statistic};
 use super::model::{nnls, KernelCost};
-use crate::desc::{FrameDesc, Iso, Mode, Projection};
+use crate::desc::{FrameDesc, Iso, Mode, Octants, Projection};
 use crate::error::Result;
 use crate::tf::TransferFunction;
 use crate::volume::{GpuVolume, TexelKind, Volume, VoxelData, VoxelType};
@@ -171,6 +171,7 @@ pub fn calibrate(
             gpu_tf: &lut,
             mode,
             frame: None,
+            octants: Octants::ALL,
         };
         let first_probe = probes.len();
         for step in STEPS {

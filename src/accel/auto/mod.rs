@@ -164,6 +164,9 @@ impl Built for Chosen {
     fn stats(&self) -> Result<Option<Stats>> {
         self.inner.stats()
     }
+    fn octants(&self) -> crate::desc::Octants {
+        self.inner.octants()
+    }
     fn marched_as(&self) -> Option<MarchedAs> {
         Some(MarchedAs {
             accel: self.choice.accel,

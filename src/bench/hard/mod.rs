@@ -114,6 +114,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
                 gpu_tf: &lut,
                 mode: *views[0].mode(),
                 frame: Some(&views[0]),
+                octants: FrameDesc::octants_of(&views, v.dims, v.spacing)?,
             };
             let mut structures = Vec::new();
             for (label, accel, params) in &variants {

@@ -15,7 +15,7 @@ use controls::{Change, Controls, Shape};
 use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
-use lacuna::render::{self, Filter, FrameDesc};
+use lacuna::render::{self, Filter, FrameDesc, Octants};
 use lacuna::volume::Series;
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
@@ -491,8 +491,13 @@ impl Viewer {
     /// The `--frames` run's last line: what the title showed last.
     fn summary(&self) -> String {
         let step = self.step_text();
+        // An octant map holds the ray directions of the frames so far.
+        let octants = match self.scene.structure.octants() {
+            o if o == Octants::ALL => String::new(),
+            o => format!(", {} of 8 octants", o.len()),
+        };
         format!(
-            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}){}{step}{}",
+            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}{octants}){}{step}{}",
             self.drawn,
             self.fps,
             self.scene.march_ms(),

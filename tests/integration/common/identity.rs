@@ -7,6 +7,7 @@ use lacuna::accel::table::params_for;
 use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Ranges, Structure};
 use lacuna::bench::hard::{self, lattice};
 use lacuna::frame::{diff, Frame};
+use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Mode, Projection, Renderer, Scene};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
@@ -127,6 +128,11 @@ impl Fixture {
     }
 
     pub fn build(&self, p: &Prepared, accel: Accel, params: &Params) -> Structure {
+        self.build_for(p, accel, params, Octants::ALL)
+    }
+
+    /// As `build`, for frames of the ray direction `octants` only.
+    pub fn build_for(&self, p: &Prepared, accel: Accel, params: &Params, octants: Octants) -> Structure {
         let scene = BuildInput {
             volume: p.volume,
             gpu_volume: &p.gv,
@@ -134,6 +140,7 @@ impl Fixture {
             gpu_tf: &p.lut,
             mode: p.mode,
             frame: None,
+            octants,
         };
         self.builder.build(accel, &scene, &p.ranges, params).unwrap().0
     }

@@ -7,6 +7,7 @@ pub mod identity;
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{Context, ContextOptions};
+use lacuna::render::Octants;
 use lacuna::render::{FrameDesc, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
@@ -114,6 +115,7 @@ pub fn try_render_with(
         gpu_tf: &lut,
         mode: *desc.mode(),
         frame: None,
+        octants: Octants::ALL,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, params).unwrap();
     let scene = Scene {
