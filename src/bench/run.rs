@@ -518,7 +518,12 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             let accel: Accel = e.accel.parse()?;
             let params = accel.defaults();
             let (r, _) = builder.ranges_for(&[(accel, &params)], &gv)?;
-            let (structure, _) = builder.build(accel, &scene, &r, &params)?;
+            // The sweep's views are its own orbit: build for every direction.
+            let every = BuildInput {
+                octants: Octants::ALL,
+                ..scene
+            };
+            let (structure, _) = builder.build(accel, &every, &r, &params)?;
             let mut filters = e.filters(filter)?;
             filters.retain(|&f| {
                 let usable = gv.sampler_for(f).is_ok();

@@ -110,8 +110,8 @@ fn maps_match_the_brute_force_transform() {
     // The 140-voxel axes are rows of 70 cells at cell 2: longer than
     // distance_rows.comp and distance_octant_rows.comp keep in private
     // arrays, so they use the storage stack (deque), along each axis in
-    // turn (the octant kernel computes 2, 2 and 4 map words along x, y and
-    // z). The 128-voxel axis is rows of exactly 64 cells at cell 2, the
+    // turn (the octant kernel runs 1, 1 and 2 tasks a row along x, y and
+    // z, each sweeping both kinds). The 128-voxel axis is rows of exactly 64 cells at cell 2, the
     // longest kept in private arrays.
     for (dims, per_mille, seed) in [
         ([40, 36, 44], 1, 1),
@@ -143,14 +143,21 @@ fn octant_maps_of_some_octants_hold_exactly_those() {
     // One octant, two opposite ones, the two of one z sign and one y sign,
     // and two that differ only in z: each pass's tasks (the x signs, the
     // xy classes copied to the z signs needed, the octants) in turn; in
-    // private arrays and in the storage deque (rows of 70 cells).
+    // private arrays and in the storage deque (rows of 70 cells; along y,
+    // pass y writes only the z-negative words for the sets without a
+    // z-positive octant).
     let sets = [
         Octants::one(5),
         Octants::from_bits(0b1000_0001),
         Octants::from_bits(0b0011_0000),
         Octants::from_bits(0b0100_0100),
     ];
-    for (dims, seed) in [([40, 36, 44], 11), ([140, 12, 10], 12), ([10, 12, 140], 13)] {
+    for (dims, seed) in [
+        ([40, 36, 44], 11),
+        ([140, 12, 10], 12),
+        ([12, 140, 10], 14),
+        ([10, 12, 140], 13),
+    ] {
         let v = speckles(dims, 8, seed);
         for built in sets {
             let b = build_for(&ctx, &v, &tf, 2, true, built);

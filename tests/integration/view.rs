@@ -386,9 +386,10 @@ fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
 }
 
 /// An octant map holds the ray directions of the frames it served: the
-/// orthographic first frame's one octant, then with P (perspective from
-/// outside) the viewer adds the new frame's octants before drawing it,
-/// and the frame equals `render`'s, which builds that frame's own.
+/// orthographic first frame's one octant, then after that frame P
+/// (perspective from outside): the viewer adds the new frame's octants
+/// before drawing it, and the frame equals `render`'s, which builds that
+/// frame's own.
 #[test]
 fn an_octant_map_grows_with_the_frames_directions() {
     let dir = tempfile::tempdir().unwrap();
@@ -421,7 +422,15 @@ fn an_octant_map_grows_with_the_frames_directions() {
     let grown = [
         &["view"][..],
         &common,
-        &["--keys", "p", "--frames", "2", "--validate", "--screenshot", a_str],
+        &[
+            "--keys",
+            "frame,p",
+            "--frames",
+            "2",
+            "--validate",
+            "--screenshot",
+            a_str,
+        ],
     ]
     .concat();
     let r = lacuna_windowed(&grown);

@@ -58,13 +58,16 @@ pub struct ViewArgs {
     /// With --frames: write the last frame here (.exr: linear RGBA f32 as rendered; .png). The S key writes NAME.exr and NAME.png.
     #[arg(long)]
     screenshot: Option<PathBuf>,
-    /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, ...), for scripts and tests.
+    /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, ...), for scripts and tests; `frame` draws a frame before the keys after it.
     #[arg(long, value_delimiter = ',')]
     keys: Vec<String>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
     validate: bool,
 }
+
+/// In `--keys`, a frame drawn before the keys after it.
+const FRAME_KEY: &str = "frame";
 
 /// Everything the window needs; dropped in field order (lacuna before the host's device, the window last).
 struct Viewer {
@@ -75,6 +78,8 @@ struct Viewer {
     filter: Filter,
     resize: bool,
     drawn: u32,
+    /// Scripted keys not pressed yet: those after a `frame` (`--keys`).
+    pending_keys: Vec<String>,
     shots: u32,
     last: Instant,
     fps: f64,
@@ -116,11 +121,11 @@ impl ViewArgs {
         if let Some(json) = &self.json {
             TransferFunction::from_paraview_json(json)?;
         }
-        if let Some(key) = self.keys.iter().find(|k| !controls::known_key(k)) {
+        if let Some(key) = self.keys.iter().find(|k| *k != FRAME_KEY && !controls::known_key(k)) {
             return Err(Error::invalid(
                 "key",
                 key.clone(),
-                format!("expected one of: {}", controls::keys().join(", ")),
+                format!("expected one of: {}, or {FRAME_KEY}", controls::keys().join(", ")),
             ));
         }
         Ok(desc)
@@ -221,6 +226,7 @@ impl App<'_> {
             filter,
             resize: true,
             drawn: 0,
+            pending_keys: Vec::new(),
             shots: 0,
             last: Instant::now(),
             fps: 0.0,
@@ -234,12 +240,8 @@ impl App<'_> {
             load_ms: 0.0,
         });
         if let Some(viewer) = self.viewer.as_mut() {
-            for key in &self.args.keys {
-                viewer.key(key);
-                if let Some(e) = viewer.key_result.take() {
-                    return Err(e);
-                }
-            }
+            viewer.pending_keys = self.args.keys.clone();
+            viewer.press_pending()?;
         }
         Ok(())
     }
@@ -380,6 +382,7 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
+        self.press_pending()?;
         if self.controls.playing {
             self.controls.step_time(1);
         }
@@ -458,6 +461,21 @@ impl Viewer {
     }
 
     /// Applies a key: a new TF or structure is rebuilt now. True to quit.
+    /// Presses the scripted keys up to the next `frame` (`--keys`).
+    fn press_pending(&mut self) -> Result<()> {
+        while !self.pending_keys.is_empty() {
+            let key = self.pending_keys.remove(0);
+            if key == FRAME_KEY {
+                break;
+            }
+            self.key(&key);
+            if let Some(e) = self.key_result.take() {
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
     fn key(&mut self, name: &str) -> bool {
         let before = (self.controls.presets.clone(), self.controls.preset);
         let change = self.controls.key(name, self.modifiers.shift_key());

@@ -179,21 +179,15 @@ impl Scene {
     /// `desc`; ranges only when the structure or the step changed (they are
     /// per volume). A new step's build keeps auto's last choice where it
     /// may (`Builder::build_step`). An octant map holds the ray directions
-    /// of the frames since: a frame with others adds them (a rebuild that
-    /// keeps auto's choice) rather than walking them cell by cell.
+    /// of the frames since: a frame with others adds them (a rebuild, which
+    /// auto prices anew) rather than walking them cell by cell.
     pub fn prepare(&mut self, desc: &FrameDesc) -> Result<()> {
         let need = desc.octants(self.volume.dims, self.volume.spacing)?;
         let held = self.structure.octants();
         let octants = match self.stale {
             true => need,
             false if held.contains(need) => return Ok(()),
-            false => {
-                self.step_choice = auto::choice_of(&self.structure).cloned();
-                if self.step_choice.is_some() {
-                    self.ranges = None;
-                }
-                need.union(held)
-            }
+            false => need.union(held),
         };
         self.stale = false;
         self.build = Timings::default();
