@@ -307,6 +307,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let ert = ds.ert.or(config.ert);
         setup.timed_ert = ert;
         let settings = |view: u32| orbit(config, base, view, config.frames, config.step, ert, filter);
+        let views = (0..config.frames).map(settings).collect::<Result<Vec<FrameDesc>>>()?;
         let first = settings(0)?;
         let mode = *first.mode();
 
@@ -319,9 +320,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             mode,
             frame: Some(&first),
             // Every view of the orbit marches the structures built once.
-            octants: (0..config.frames).try_fold(Octants::NONE, |set, view| {
-                Ok::<_, crate::Error>(set.union(settings(view)?.octants(v.dims, v.spacing)?))
-            })?,
+            octants: FrameDesc::octants_of(&views, v.dims, v.spacing)?,
         };
         // lacuna info's occupancy figures.
         let n = v.data.len();

@@ -19,6 +19,7 @@ use lacuna::render::{self, Filter, FrameDesc, Octants};
 use lacuna::volume::Series;
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -79,7 +80,7 @@ struct Viewer {
     resize: bool,
     drawn: u32,
     /// Scripted keys not pressed yet: those after a `frame` (`--keys`).
-    pending_keys: Vec<String>,
+    pending_keys: VecDeque<String>,
     shots: u32,
     last: Instant,
     fps: f64,
@@ -226,7 +227,7 @@ impl App<'_> {
             filter,
             resize: true,
             drawn: 0,
-            pending_keys: Vec::new(),
+            pending_keys: VecDeque::new(),
             shots: 0,
             last: Instant::now(),
             fps: 0.0,
@@ -240,7 +241,7 @@ impl App<'_> {
             load_ms: 0.0,
         });
         if let Some(viewer) = self.viewer.as_mut() {
-            viewer.pending_keys = self.args.keys.clone();
+            viewer.pending_keys = self.args.keys.iter().cloned().collect();
             viewer.press_pending()?;
         }
         Ok(())
@@ -460,11 +461,9 @@ impl Viewer {
         Ok(())
     }
 
-    /// Applies a key: a new TF or structure is rebuilt now. True to quit.
     /// Presses the scripted keys up to the next `frame` (`--keys`).
     fn press_pending(&mut self) -> Result<()> {
-        while !self.pending_keys.is_empty() {
-            let key = self.pending_keys.remove(0);
+        while let Some(key) = self.pending_keys.pop_front() {
             if key == FRAME_KEY {
                 break;
             }
@@ -476,6 +475,7 @@ impl Viewer {
         Ok(())
     }
 
+    /// Applies a key: a new TF or structure is rebuilt now. True to quit.
     fn key(&mut self, name: &str) -> bool {
         let before = (self.controls.presets.clone(), self.controls.preset);
         let change = self.controls.key(name, self.modifiers.shift_key());
