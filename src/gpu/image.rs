@@ -1,7 +1,7 @@
 //! Sampled 3D images (the volume, its gradient, brick pools) backed by
 //! `gpu-allocator`, uploaded through staging in z-slabs.
 
-use super::memory::{Buffer, Staging, STAGING_CHUNK};
+use super::memory::{copy_to_mapped, Buffer, Staging, STAGING_CHUNK};
 use super::record::{self, Access};
 use super::{Context, DeviceInfo};
 use crate::error::{Error, Result, VkContext};
@@ -253,7 +253,7 @@ impl Image3d {
             let n = slices_per_chunk.min(d - z);
             let start = (z as u64 * slice_bytes) as usize;
             let len = (n as u64 * slice_bytes) as usize;
-            buffer.host_mut()?[..len].copy_from_slice(&data[start..start + len]);
+            copy_to_mapped(&mut buffer.host_mut()?[..len], &data[start..start + len]);
             self.ctx.submit_and_wait(|cmd| {
                 self.record_copy(cmd, buffer, z, n, z == 0, z + n == d);
                 Ok(())

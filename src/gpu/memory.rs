@@ -12,6 +12,26 @@ use gpu_allocator::MemoryLocation;
 /// through a bounded amount of host-visible memory.
 pub(super) const STAGING_CHUNK: u64 = 64 << 20;
 
+/// Copies at or above this size are split across the host's threads.
+const PARALLEL_COPY: usize = 4 << 20;
+
+/// `dst.copy_from_slice(src)`, in 1 MiB pieces on every host thread for
+/// large copies: one thread fills mapped memory well below what the
+/// memory system takes (a whole volume step into staging, each frame of a
+/// series).
+pub(crate) fn copy_to_mapped(dst: &mut [u8], src: &[u8]) {
+    use rayon::prelude::*;
+    const PIECE: usize = 1 << 20;
+    assert_eq!(dst.len(), src.len(), "copy_to_mapped: lengths differ");
+    if src.len() < PARALLEL_COPY {
+        dst.copy_from_slice(src);
+        return;
+    }
+    dst.par_chunks_mut(PIECE)
+        .zip(src.par_chunks(PIECE))
+        .for_each(|(d, s)| d.copy_from_slice(s));
+}
+
 pub struct Buffer {
     ctx: Context,
     pub raw: vk::Buffer,
@@ -88,7 +108,7 @@ impl Buffer {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.host_mut()?[..data.len()].copy_from_slice(data);
+        copy_to_mapped(&mut staging.host_mut()?[..data.len()], data);
         Ok(staging)
     }
 
@@ -324,5 +344,23 @@ impl Staging {
     pub fn join(mut self, other: Staging) -> Staging {
         self.0.extend(other.0);
         self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_parallel_copy_lands_every_byte_in_place() {
+        // Above the parallel threshold, with a last piece shorter than the rest.
+        let n = PARALLEL_COPY + (3 << 20) + 12345;
+        let src: Vec<u8> = (0..n).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+        let mut dst = vec![0u8; n];
+        copy_to_mapped(&mut dst, &src);
+        assert!(dst == src, "a byte of the parallel copy differs");
+        let mut small = vec![0u8; 100];
+        copy_to_mapped(&mut small, &src[..100]);
+        assert_eq!(small, src[..100]);
     }
 }
