@@ -374,3 +374,28 @@ impl BenchConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shipped_bench_config_loads_and_its_structures_resolve() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("bench");
+        let mut seen = 0;
+        for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+            let path = entry.path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let config = BenchConfig::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                assert!(!config.structures.is_empty(), "{}: no structure", path.display());
+                for s in &config.structures {
+                    s.resolve()
+                        .unwrap_or_else(|e| panic!("{}: {}: {e}", path.display(), s.label));
+                }
+                seen += 1;
+            }
+        }
+        // quick, paper, auto, looks, channels, series, gpu-sparse at least.
+        assert!(seen >= 7, "only {seen} configs in {}", dir.display());
+    }
+}
