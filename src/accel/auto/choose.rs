@@ -1,11 +1,13 @@
 //! auto's choice: its candidates (naive marching, the distance maps and
-//! the macro-cell grid at cells the device holds), each built and counted
+//! the macro-cell grid at cells the device holds, and on GPUs a collapsed
+//! k-d tree), each built and counted
 //! on the frame's probe tiles, priced by the kernel constants, and, where
 //! the best is close to another, timed on the same tiles.
 
 use super::super::builder::RangeKind;
 use super::super::distance::{self, DistanceMethod};
 use super::super::grid::GridMethod;
+use super::super::kd::gpu::KdGpu;
 use super::super::method::Accel;
 use super::super::naive::NAIVE;
 use super::super::params::Params;
@@ -56,9 +58,16 @@ pub const NAIVE_MARGIN: f64 = 0.03;
 /// frame 7 % slower. Whole frames that cheap cost the trial little.
 pub const WHOLE_FRAME_TRIAL_MS: f64 = 4.0;
 
+/// The largest volume (voxels) auto prices a k-d tree for: the tree's GPU
+/// build took 21 ms at 256^3 and 92 ms at 512^3 on an H100
+/// (`docs/results/h100/paper-table2.md`); past 512^3 it would cost more
+/// than the rest of auto's pricing.
+pub const TREE_VOXELS: u64 = 1 << 27;
+
 const DISTANCE: Accel = Accel(&DistanceMethod { octants: false });
 const OCTANT: Accel = Accel(&DistanceMethod { octants: true });
 const GRID: Accel = Accel(&GridMethod);
+const TREE: Accel = Accel(&KdGpu);
 
 /// A structure auto may march with.
 #[derive(Clone, Debug)]
@@ -85,6 +94,23 @@ impl Candidate {
         }
     }
 
+    /// The k-d tree auto prices: deep, leaves of at most 32 voxels,
+    /// collapsed, built on the device: the fastest exact structure for
+    /// sparse data on an H100 (nbody:256: 17.9x naive at 1024x1024, the
+    /// octant map 14.3x; MIP and iso 1.5 to 1.6x the octant map's speed).
+    pub fn tree() -> Result<Self> {
+        Ok(Candidate {
+            accel: TREE,
+            params: TREE.params(&[("kd", "deep"), ("max-leaf", "32"), ("collapse", "on")])?,
+            label: format!("{TREE} (MLS=32, collapsed)"),
+        })
+    }
+
+    /// Whether this is the k-d tree candidate (`Candidate::tree`).
+    pub fn is_tree(&self) -> bool {
+        self.accel == TREE
+    }
+
     /// The ranges its build reads.
     pub fn ranges(&self) -> Result<RangeKind> {
         self.accel.method().ranges(&self.params)
@@ -95,10 +121,25 @@ fn cells_of(dims: [u32; 3], cell: u32) -> u64 {
     dims.iter().map(|&d| d.div_ceil(cell) as u64).product()
 }
 
+/// Whether auto prices a k-d tree on `info`'s device: `tree` is auto's
+/// `tree` parameter (on, off, or auto: on devices that are not CPUs). On
+/// lavapipe the tree never led auto's suite by the contract's 10 %, and
+/// its build took 0.6 to 0.85 s at 256^3 (`docs/results/lavapipe`), more
+/// than auto's whole pricing.
+pub fn prices_tree(info: &DeviceInfo, tree: &str) -> bool {
+    match tree {
+        "on" => true,
+        "off" => false,
+        _ => !info.is_cpu(),
+    }
+}
+
 /// The candidates for a volume of `dims` in `mode` on `info`'s device,
 /// naive first, and a note for each left out because the device cannot
-/// hold it. Average frames read every sample: naive only.
-pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec<Candidate>, Vec<String>)> {
+/// hold it; with `tree`, the k-d tree last (up to [`TREE_VOXELS`]; its
+/// build may still find the device too small, `auto::choose` notes it).
+/// Average frames read every sample: naive only.
+pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode, tree: bool) -> Result<(Vec<Candidate>, Vec<String>)> {
     let mut out = vec![Candidate::new(NAIVE, None)?];
     let mut notes = Vec::new();
     if matches!(mode, Mode::Average) {
@@ -153,6 +194,15 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode) -> Result<(Vec
             )),
         }
     }
+    if tree {
+        let voxels: u64 = dims.iter().map(|&d| d as u64).product();
+        match voxels <= TREE_VOXELS {
+            true => out.push(Candidate::tree()?),
+            false => notes.push(format!(
+                "no k-d tree: {voxels} voxels, over the {TREE_VOXELS} its build is priced for"
+            )),
+        }
+    }
     Ok((out, notes))
 }
 
@@ -195,6 +245,31 @@ pub fn to_time(priced: &[Priced], always: bool) -> Vec<usize> {
         out.insert(0, 0);
     }
     out
+}
+
+/// `timed` (from `to_time`) with the k-d tree, candidate `tree`, and the
+/// best prediction added, where the tree is a candidate and a trial is
+/// wanted at all: the model prices the tree's kernel poorly on GPUs, so
+/// the tree is always timed against the best prediction. On an H200 it
+/// predicted nbody:256's tree at 2.0 times the octant map's frame at
+/// 1024x1024 (2.19 against 1.08 ms), which the tree then marched in 0.89
+/// of the map's time (0.078 against 0.088 ms).
+pub fn with_tree(mut timed: Vec<usize>, priced: &[Priced], tree: Option<usize>) -> Vec<usize> {
+    let Some(t) = tree else {
+        return timed;
+    };
+    let best = index_of_min(priced.iter().map(|p| p.predicted));
+    for i in [best, t] {
+        if !timed.contains(&i) {
+            timed.push(i);
+        }
+    }
+    timed.sort_unstable();
+    // The tree best and clear of the rest: the prediction picks it.
+    if timed.len() == 1 {
+        timed.clear();
+    }
+    timed
 }
 
 /// The tiles a trial of the candidates `timed` covers: every tile of the
@@ -274,6 +349,21 @@ mod tests {
         assert!(to_time(&priced(&[50.0, 90.0, 200.0]), false).is_empty());
         // Always: everything.
         assert_eq!(to_time(&priced(&[50.0, 90.0]), true), vec![0, 1]);
+    }
+
+    #[test]
+    fn the_tree_is_timed_against_the_best_prediction() {
+        let p = priced(&[100.0, 20.0, 50.0, 45.0]);
+        // A clear call: the tree (3) timed against the best (1) alone.
+        assert_eq!(with_tree(to_time(&p, false), &p, Some(3)), vec![1, 3]);
+        // A close call keeps its list, the tree joining it.
+        let p = priced(&[100.0, 20.0, 25.0, 45.0]);
+        assert_eq!(with_tree(to_time(&p, false), &p, Some(3)), vec![1, 2, 3]);
+        // The tree best and clear: no trial, the prediction picks it.
+        let p = priced(&[100.0, 50.0, 60.0, 10.0]);
+        assert!(with_tree(to_time(&p, false), &p, Some(3)).is_empty());
+        // No tree: to_time's list unchanged.
+        assert!(with_tree(to_time(&p, false), &p, None).is_empty());
     }
 
     #[test]

@@ -1,8 +1,9 @@
 //! `--accel auto`: the fastest exact structure for this volume, transfer
 //! function and frame. Its candidates are naive marching, the distance
-//! maps (octant maps on small grids, else cube maps) at cells 4 and 8 and
-//! the macro-cell grid at cells 8 and 16, those the device holds
-//! (`choose::candidates`). Each is built, and its kernel counted on a
+//! maps (octant maps on small grids, else cube maps) at cells 4 and 8, the
+//! macro-cell grid at cells 8 and 16, those the device holds, and on GPUs
+//! a collapsed k-d tree built on the device (`choose::candidates`,
+//! `choose::prices_tree`). Each is built, and its kernel counted on a
 //! sparse sample of the frame's tiles (`probe`): iterations of the sample
 //! loop, traversal steps and regions, per SIMD group. The device's kernel
 //! constants (`model`, measured once per device, driver and kernel build:
@@ -190,22 +191,30 @@ const TRIAL: Param = Param::choice(
     "auto: time the candidates on the frame's probe tiles when their predictions are close (near), always, or never (off)",
 );
 
+const TREE_PARAM: Param = Param::choice(
+    "tree",
+    &["auto", "on", "off"],
+    "auto",
+    "auto: also price a collapsed k-d tree built on the device (auto: on devices that are not CPUs, where it leads on sparse data; its build costs a CPU device more than it gains)",
+);
+
 impl Method for AutoMethod {
     fn name(&self) -> &'static str {
         "auto"
     }
     fn description(&self) -> &'static str {
-        "the fastest exact structure for this volume, TF and frame: naive, distance maps or the grid, priced by the device's measured kernel costs"
+        "the fastest exact structure for this volume, TF and frame: naive, distance maps, the grid or (on GPUs) a k-d tree, priced by the device's measured kernel costs"
     }
     fn params(&self) -> &'static [Param] {
-        &[TRIAL]
+        &[TRIAL, TREE_PARAM]
     }
     fn ranges(&self, _: &Params) -> Result<RangeKind> {
         Ok(RangeKind::None)
     }
     /// The ranges of every candidate the device holds for this volume.
-    fn range_kinds(&self, _: &Params, volume: &GpuVolume, info: &DeviceInfo) -> Result<Vec<RangeKind>> {
-        let (candidates, _) = choose::candidates(info, volume.dims, &crate::desc::Mode::Composite)?;
+    fn range_kinds(&self, p: &Params, volume: &GpuVolume, info: &DeviceInfo) -> Result<Vec<RangeKind>> {
+        let tree = choose::prices_tree(info, p.choice("tree")?);
+        let (candidates, _) = choose::candidates(info, volume.dims, &crate::desc::Mode::Composite, tree)?;
         choose::range_kinds(&candidates)
     }
     /// The naive kernel; frames use the chosen structure's
@@ -235,7 +244,8 @@ impl Method for AutoMethod {
                 .mode(input.mode)
                 .build()?,
         };
-        let (choice, inner, timings) = choose(builder, input, ranges, &frame, p.choice("trial")?)?;
+        let tree = choose::prices_tree(builder.context().info(), p.choice("tree")?);
+        let (choice, inner, timings) = choose(builder, input, ranges, &frame, p.choice("trial")?, tree)?;
         Ok((Box::new(Chosen { choice, inner }), timings))
     }
 }
@@ -264,10 +274,11 @@ fn choose(
     ranges: &Ranges,
     frame: &FrameDesc,
     trial: &str,
+    tree: bool,
 ) -> Result<(Choice, Box<dyn Built>, Timings)> {
     let ctx = builder.context();
     let info = ctx.info();
-    let (all, mut notes) = choose::candidates(info, input.volume.dims, &input.mode)?;
+    let (all, mut notes) = choose::candidates(info, input.volume.dims, &input.mode, tree)?;
     let mut timings = Timings::default();
     let mut candidates = Vec::new();
     let mut built: Vec<Structure> = Vec::new();
@@ -276,7 +287,16 @@ fn choose(
             notes.push(format!("{}: its ranges were not computed for this volume", c.label));
             continue;
         }
-        let (s, t) = builder.build(c.accel, input, ranges, &c.params)?;
+        let (s, t) = match builder.build(c.accel, input, ranges, &c.params) {
+            Ok(built) => built,
+            // The tree's buffers are sized by its build: a device too small
+            // for them leaves it out, never fails auto.
+            Err(e @ (Error::DeviceLimit { .. } | Error::Memory { .. })) if c.is_tree() => {
+                notes.push(format!("no {}: {e}", c.label));
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
         timings.push(format!("build {}", c.label), t.total());
         candidates.push(c);
         built.push(s);
@@ -358,7 +378,10 @@ fn choose(
         }
         let timed = match trial {
             "off" => Vec::new(),
-            t => choose::to_time(&priced, t == "always"),
+            t => {
+                let tree = candidates.iter().position(|c| c.is_tree());
+                choose::with_tree(choose::to_time(&priced, t == "always"), &priced, tree)
+            }
         };
         if !timed.is_empty() {
             let start = Instant::now();
