@@ -15,21 +15,27 @@ pub(super) const STAGING_CHUNK: u64 = 64 << 20;
 /// Copies at or above this size are split across the host's threads.
 const PARALLEL_COPY: usize = 4 << 20;
 
-/// `dst.copy_from_slice(src)`, in 1 MiB pieces on every host thread for
-/// large copies: one thread fills mapped memory well below what the
-/// memory system takes (a whole volume step into staging, each frame of a
-/// series).
+/// `dst.copy_from_slice(src)`, split over the host's threads for large
+/// copies: one thread fills mapped memory well below what the memory
+/// system takes (a volume step into staging, each step of a series). Own
+/// scoped threads rather than rayon's pool, where a series' next step may
+/// be generating while this one uploads (`view`).
 pub(crate) fn copy_to_mapped(dst: &mut [u8], src: &[u8]) {
-    use rayon::prelude::*;
-    const PIECE: usize = 1 << 20;
     assert_eq!(dst.len(), src.len(), "copy_to_mapped: lengths differ");
-    if src.len() < PARALLEL_COPY {
+    // At most 16 threads, each at least 1 MiB: the split that took a 16 MiB
+    // step from 3.7 to 2.5 ms on a 16-core host (docs/results/h100.md).
+    let host = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = host.min(16).min(src.len() >> 20);
+    if src.len() < PARALLEL_COPY || threads < 2 {
         dst.copy_from_slice(src);
         return;
     }
-    dst.par_chunks_mut(PIECE)
-        .zip(src.par_chunks(PIECE))
-        .for_each(|(d, s)| d.copy_from_slice(s));
+    let part = src.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        for (d, s) in dst.chunks_mut(part).zip(src.chunks(part)) {
+            scope.spawn(move || d.copy_from_slice(s));
+        }
+    });
 }
 
 pub struct Buffer {

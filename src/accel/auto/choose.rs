@@ -9,6 +9,7 @@ use super::super::distance::{self, DistanceMethod};
 use super::super::grid::GridMethod;
 use super::super::kd::gpu::KdGpu;
 use super::super::method::Accel;
+use super::super::morton::MAX_BRICKS_PER_AXIS;
 use super::super::naive::NAIVE;
 use super::super::params::Params;
 use super::super::probe::Counts;
@@ -196,11 +197,18 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode, tree: bool) ->
     }
     if tree {
         let voxels: u64 = dims.iter().map(|&d| d as u64).product();
-        match voxels <= TREE_VOXELS {
-            true => out.push(Candidate::tree()?),
-            false => notes.push(format!(
+        // Its build orders 8^3 bricks by Morton code (`kd::gpu`).
+        let bricks = dims.map(|d| d.div_ceil(8));
+        if voxels > TREE_VOXELS {
+            notes.push(format!(
                 "no k-d tree: {voxels} voxels, over the {TREE_VOXELS} its build is priced for"
-            )),
+            ));
+        } else if bricks.iter().any(|&b| b > MAX_BRICKS_PER_AXIS) {
+            notes.push(format!(
+                "no k-d tree: {bricks:?} bricks of 8^3, over the {MAX_BRICKS_PER_AXIS} per axis its Morton codes address"
+            ));
+        } else {
+            out.push(Candidate::tree()?);
         }
     }
     Ok((out, notes))
@@ -249,11 +257,12 @@ pub fn to_time(priced: &[Priced], always: bool) -> Vec<usize> {
 
 /// `timed` (from `to_time`) with the k-d tree, candidate `tree`, and the
 /// best prediction added, where the tree is a candidate and a trial is
-/// wanted at all: the model prices the tree's kernel poorly on GPUs, so
-/// the tree is always timed against the best prediction. On an H200 it
+/// wanted at all: the model overprices the tree's kernel on GPUs, so the
+/// tree is always timed against the best prediction. On an H200 it
 /// predicted nbody:256's tree at 2.0 times the octant map's frame at
 /// 1024x1024 (2.19 against 1.08 ms), which the tree then marched in 0.89
-/// of the map's time (0.078 against 0.088 ms).
+/// of the map's time (0.078 against 0.088 ms). A tree predicted best and
+/// clear of the rest is picked untimed: overpriced, it is faster still.
 pub fn with_tree(mut timed: Vec<usize>, priced: &[Priced], tree: Option<usize>) -> Vec<usize> {
     let Some(t) = tree else {
         return timed;

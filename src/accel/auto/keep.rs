@@ -6,14 +6,14 @@
 //! to compare (naive; a structure whose every region is active, as the
 //! grid of MIP frames, which decides per ray), auto prices its candidates
 //! anew. A playing series then pays one build a
-//! step, not auto's five builds, counting frames and trial. Every
+//! step, not a build of each of auto's candidates, counting frames and trial. Every
 //! candidate is exact, so keeping one changes speed, never the frame.
 
 use super::{Choice, Chosen, AUTO};
 use crate::accel::builder::{Builder, Ranges};
 use crate::accel::method::{Accel, BuildInput, Structure};
 use crate::accel::params::Params;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::Timings;
 
 /// How far the share of the kept structure's active regions may move, as
@@ -97,34 +97,43 @@ impl Builder {
         if let Some(choice) = kept {
             let c = &choice.candidate;
             let (ranges, ranges_t) = self.ranges_for(&[(c.accel, &c.params)], input.gpu_volume)?;
-            let (structure, mut build_t) = self.build(c.accel, input, &ranges, &c.params)?;
-            let now = share_of(&structure, &mut build_t)?;
-            if let (Some(now), Some(then)) = (now, choice.share) {
-                if near(now, then) {
-                    let choice = Choice {
-                        kept: choice.kept + 1,
-                        share_now: Some(now),
-                        ..choice.clone()
-                    };
-                    let chosen = Chosen {
-                        choice,
-                        inner: structure.built,
-                    };
-                    return Ok(StepBuild {
-                        structure: Structure {
-                            accel,
-                            params: params.clone(),
-                            mode: Some(input.mode),
-                            built: Box::new(chosen),
-                            _keep: None,
-                        },
-                        ranges: None,
-                        ranges_timings: ranges_t,
-                        build_timings: build_t,
-                    });
+            match self.build(c.accel, input, &ranges, &c.params) {
+                Ok((structure, mut build_t)) => {
+                    let now = share_of(&structure, &mut build_t)?;
+                    if let (Some(now), Some(then)) = (now, choice.share) {
+                        if near(now, then) {
+                            let choice = Choice {
+                                kept: choice.kept + 1,
+                                share_now: Some(now),
+                                ..choice.clone()
+                            };
+                            let chosen = Chosen {
+                                choice,
+                                inner: structure.built,
+                            };
+                            return Ok(StepBuild {
+                                structure: Structure {
+                                    accel,
+                                    params: params.clone(),
+                                    mode: Some(input.mode),
+                                    built: Box::new(chosen),
+                                    _keep: None,
+                                },
+                                ranges: None,
+                                ranges_timings: ranges_t,
+                                build_timings: build_t,
+                            });
+                        }
+                    }
+                    spent = (prefixed("kept ", ranges_t), prefixed("kept ", build_t));
                 }
+                // A kept tree whose buffers (sized by the data) no longer
+                // fit: this step is priced anew, as auto's build would.
+                Err(Error::DeviceLimit { .. } | Error::Memory { .. }) if c.is_tree() => {
+                    spent = (prefixed("kept ", ranges_t), Timings::default());
+                }
+                Err(e) => return Err(e),
             }
-            spent = (prefixed("kept ", ranges_t), prefixed("kept ", build_t));
         }
         let (ranges, ranges_t) = self.ranges_for(&[(accel, params)], input.gpu_volume)?;
         let (structure, build_t) = self.build(accel, input, &ranges, params)?;

@@ -7,12 +7,13 @@
 //! sparse sample of the frame's tiles (`probe`): iterations of the sample
 //! loop, traversal steps and regions, per SIMD group. The device's kernel
 //! constants (`model`, measured once per device, driver and kernel build:
-//! `calibrate`, `cache`) price each count; the cheapest wins, and a close
-//! call (a runner-up within `choose::CLOSE` of the best, or naive within
+//! `calibrate`, `cache`) price each count; the cheapest wins. A close call
+//! (a runner-up within `choose::CLOSE` of the best, or naive within
 //! `choose::NAIVE_GUARD` of a skipping best) is settled by timing the close
-//! ones on a quarter to an eighth of the frame's tiles, or on the whole
-//! frame where it is predicted to take only a few milliseconds
-//! (`choose::to_time`, `choose::trial_tiles`).
+//! ones, and the k-d tree, which the model overprices on GPUs, is timed
+//! against the best (`choose::with_tree`): on a quarter to an eighth of the
+//! frame's tiles, or on the whole frame where it is predicted to take only
+//! a few milliseconds (`choose::to_time`, `choose::trial_tiles`).
 //!
 //! The frame is the one the build is for (`BuildInput::frame`: camera,
 //! step, early termination, sample filter, size, mode), so the choice
@@ -57,12 +58,15 @@ pub const DEFAULT_FRAME: u32 = 512;
 pub struct Choice {
     /// The structure the frames are marched with.
     pub accel: Accel,
-    /// `distance-octant (cell 4)`, `grid (cell 16)` or `naive`.
+    /// `distance-octant (cell 4)`, `grid (cell 16)`, `kd-gpu (MLS=32, collapsed)` or `naive`.
     pub label: String,
     /// Every candidate as priced, in candidate order (naive first).
     pub priced: Vec<Priced>,
-    /// Whether a close call was settled by timing.
+    /// Whether the choice was settled by timing: a close call, or the k-d
+    /// tree against the best prediction (`choose::with_tree`).
     pub timed: bool,
+    /// Whether the trial ran for the k-d tree alone (no close call).
+    pub timed_for_tree: bool,
     /// Whether that trial timed whole frames (else a sample of the tiles).
     pub timed_whole_frames: bool,
     /// Where the kernel constants came from (one per distinct source).
@@ -88,7 +92,7 @@ pub struct Choice {
 }
 
 impl Choice {
-    /// `distance-octant (cell 4)`, `grid (cell 16)` or `naive`.
+    /// `distance-octant (cell 4)`, `grid (cell 16)`, `kd-gpu (MLS=32, collapsed)` or `naive`.
     pub fn describe(&self) -> String {
         self.label.clone()
     }
@@ -120,7 +124,11 @@ impl Choice {
                 true => "whole frames",
                 false => "the probe tiles",
             };
-            line.push_str(&format!("; close, timed on {on}: {}", timed.join(", ")));
+            let why = match self.timed_for_tree {
+                true => "the tree against the best",
+                false => "close",
+            };
+            line.push_str(&format!("; {why}, timed on {on}: {}", timed.join(", ")));
         }
         line.push_str(&format!("; model {}", self.model.join(", ")));
         if let (true, Some(then), Some(now)) = (self.kept > 0, self.share, self.share_now) {
@@ -304,6 +312,7 @@ fn choose(
     let mut priced: Vec<Priced> = Vec::new();
     let mut model = Vec::new();
     let mut whole_frames = false;
+    let mut for_tree = false;
     if built.len() > 1 {
         let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, COUNT_TILES)?;
         let start = Instant::now();
@@ -379,10 +388,13 @@ fn choose(
         let timed = match trial {
             "off" => Vec::new(),
             t => {
+                let close = choose::to_time(&priced, t == "always");
+                for_tree = close.is_empty();
                 let tree = candidates.iter().position(|c| c.is_tree());
-                choose::with_tree(choose::to_time(&priced, t == "always"), &priced, tree)
+                choose::with_tree(close, &priced, tree)
             }
         };
+        for_tree &= !timed.is_empty();
         if !timed.is_empty() {
             let start = Instant::now();
             let tiles = choose::trial_tiles(&priced, &timed);
@@ -420,6 +432,7 @@ fn choose(
         label,
         priced,
         timed,
+        timed_for_tree: for_tree,
         timed_whole_frames: whole_frames,
         model,
         notes,
