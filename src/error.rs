@@ -95,6 +95,12 @@ impl Error {
         }
     }
 
+    /// Whether the device is too small for what was asked (a limit, or
+    /// its memory): the same request may fit a smaller volume or device.
+    pub fn is_device_too_small(&self) -> bool {
+        matches!(self, Error::DeviceLimit { .. } | Error::Memory { .. })
+    }
+
     pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Invalid {
             what,

@@ -13,7 +13,7 @@ use super::{Choice, Chosen, AUTO};
 use crate::accel::builder::{Builder, Ranges};
 use crate::accel::method::{Accel, BuildInput, Structure};
 use crate::accel::params::Params;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::Timings;
 
 /// How far the share of the kept structure's active regions may move, as
@@ -129,7 +129,7 @@ impl Builder {
                 }
                 // A kept tree whose buffers (sized by the data) no longer
                 // fit: this step is priced anew, as auto's build would.
-                Err(Error::DeviceLimit { .. } | Error::Memory { .. }) if c.is_tree() => {
+                Err(e) if c.is_tree() && e.is_device_too_small() => {
                     spent = (prefixed("kept ", ranges_t), Timings::default());
                 }
                 Err(e) => return Err(e),

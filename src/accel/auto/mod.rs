@@ -299,7 +299,7 @@ fn choose(
             Ok(built) => built,
             // The tree's buffers are sized by its build: a device too small
             // for them leaves it out, never fails auto.
-            Err(e @ (Error::DeviceLimit { .. } | Error::Memory { .. })) if c.is_tree() => {
+            Err(e) if c.is_tree() && e.is_device_too_small() => {
                 notes.push(format!("no {}: {e}", c.label));
                 continue;
             }
@@ -385,16 +385,16 @@ fn choose(
         if calibrated {
             timings.push("calibrate", start.elapsed().as_secs_f64() * 1e3);
         }
+        let close = match trial {
+            "off" => Vec::new(),
+            t => choose::to_time(&priced, t == "always"),
+        };
+        let tree = candidates.iter().position(|c| c.is_tree());
         let timed = match trial {
             "off" => Vec::new(),
-            t => {
-                let close = choose::to_time(&priced, t == "always");
-                for_tree = close.is_empty();
-                let tree = candidates.iter().position(|c| c.is_tree());
-                choose::with_tree(close, &priced, tree)
-            }
+            _ => choose::with_tree(close.clone(), &priced, tree),
         };
-        for_tree &= !timed.is_empty();
+        for_tree = close.is_empty() && !timed.is_empty();
         if !timed.is_empty() {
             let start = Instant::now();
             let tiles = choose::trial_tiles(&priced, &timed);
