@@ -19,7 +19,7 @@ layout(std430, set = 0, binding = PARAMS_BINDING) PARAMS_ACCESS buffer RenderPar
     vec3 du;
     float step;       // the sample spacing dt, in voxels
     vec3 dv;
-    float ert;        // early-ray-termination alpha (> 1: off)
+    float ert;        // early-ray-termination alpha (1: off, see ERT_OFF)
     vec3 eye_or_dir;
     uint lut_size;    // transfer-function LUT entries
     uvec3 dims;       // volume dimensions in voxels

@@ -41,9 +41,13 @@ use crate::volume::GpuVolume;
 /// The default sample spacing along each ray, in voxels.
 pub const DEFAULT_STEP: f32 = 0.5;
 
-/// The early-termination alpha the shaders read as "off": accumulated
-/// alpha never exceeds 1.
-pub const ERT_OFF: f32 = 2.0;
+/// The early-termination alpha the shaders read as "off": a ray ends only
+/// once its accumulated alpha is exactly 1. Front-to-back compositing in
+/// f32 never takes alpha past 1 (`acc + (1 - acc) * a` rounds to at most
+/// 1 for `a <= 1`), and at 1 the transmittance is exactly 0, so every later
+/// sample would add exactly 0: ending there changes no bit of the frame,
+/// and saves the rest of the ray behind opaque matter.
+pub const ERT_OFF: f32 = 1.0;
 
 /// Where the rays come from.
 // Unboxed, so a frame description stays `Copy`: a few hundred bytes, made

@@ -157,7 +157,8 @@ fn probe_counts_are_the_lattices_samples() {
         0.5,
     )
     .unwrap();
-    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    // Peak alpha 0.1: no ray comes near opacity 1, so none ends early.
+    let tf = TransferFunction::parse("ramp:0.3:1:0.1").unwrap();
     let probe = FrameProbe::new(&builder, &gv, &tf, &desc, 256).unwrap();
     assert_eq!(probe.scale(), 1.0, "a small frame is probed whole");
     let c = probe.count(&Structure::naive()).unwrap();
@@ -167,6 +168,12 @@ fn probe_counts_are_the_lattices_samples() {
     // Every ray of a group takes as many samples: a group iteration each.
     assert_eq!(c.samples, 256 / group * 128);
     assert_eq!((c.steps, c.regions), (0, 0));
+    // Opaque matter (alpha 1 at the solid value) ends rays even with ERT
+    // off, and the probe counts what they skip behind it.
+    let opaque = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let probe = FrameProbe::new(&builder, &gv, &opaque, &desc, 256).unwrap();
+    let c = probe.count(&Structure::naive()).unwrap();
+    assert!(c.ray_samples < 256 * 128, "{c:?}");
     // A distance map over nothing visible: no sample, no region, a walk.
     let empty = TransferFunction::parse("band:0:1:0").unwrap();
     let lut = empty.upload(&ctx).unwrap();

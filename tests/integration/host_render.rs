@@ -128,6 +128,26 @@ fn same_bits(a: &Frame, b: &Frame) -> bool {
         .eq(b.pixels.iter().flatten().map(|v| v.to_bits()))
 }
 
+/// ERT off ends a ray once its alpha is exactly 1 (`ERT_OFF`): the frame
+/// is bit for bit the one no ray ends early in, on a TF opaque enough that
+/// many rays saturate.
+#[test]
+fn ert_off_ends_only_rays_no_later_sample_can_change() {
+    let volume = Volume::load("menger:27", &LoadOptions::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.1:0.3").unwrap();
+    let view = FrameDesc::builder(SIZE, SIZE).build().unwrap();
+    let off = view.params_for(volume.dims, volume.spacing, volume.norm).unwrap();
+    assert_eq!(off.ert, lacuna::render::ERT_OFF);
+    let mut never = off;
+    never.ert = 2.0;
+    let ended = reference::render(&volume, &tf, &off);
+    let full = reference::render(&volume, &tf, &never);
+    assert!(same_bits(&ended, &full), "ERT off changed the frame");
+    let saturated = full.pixels.iter().filter(|p| p[3] == 1.0).count();
+    assert!(saturated > 100, "only {saturated} rays reach alpha 1");
+    assert!(full.pixels.iter().all(|p| p[3] <= 1.0), "alpha past 1");
+}
+
 #[test]
 fn matrices_render_the_orbit_cameras_images_bit_for_bit() {
     let f = fixture(&["naive"]);
