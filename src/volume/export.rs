@@ -270,6 +270,17 @@ const CHUNK: usize = 1 << 20;
 /// on disk. Spacing is not stored in a raw file.
 pub fn write_raw(volume: &Volume, out: &Path, ty: Option<VoxelType>) -> Result<RawExport> {
     check_raw_out(out)?;
+    // A raw file holds one channel: writing the first alone would lose data.
+    if volume.channel_count() > 1 {
+        return Err(Error::invalid(
+            "volume",
+            volume.name.clone(),
+            format!(
+                "has {} channels and a raw file holds one: export each channel's source alone",
+                volume.channel_count()
+            ),
+        ));
+    }
     let n = check_dims(volume.dims, &volume.name)?;
     if volume.data.len() as u64 != n {
         return Err(Error::invalid(

@@ -372,7 +372,7 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
          uint16 holds every value",
         (first * 47 % 105) * 3
     );
-    let cases: [(&[&str], &str); 14] = [
+    let cases: [(&[&str], &str); 15] = [
         (&["menger:9", "{out}/existing"], "is a folder"),
         (&["menger:9", "{out}/"], "is a folder"),
         (&["menger:9", "{out}/missing/v"], "its folder does not exist"),
@@ -405,6 +405,10 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
         (&["menger:9", "{out}/v", "--type", "uint9"], "uint9"),
         (&["menger:9", "{out}/v", "--dims", "9x9x9"], "--source-type"),
         (&["nosuch:9", "{out}/v"], "not a generator"),
+        (
+            &["menger:9+nbody:9", "{out}/v"],
+            "has 2 channels and a raw file holds one",
+        ),
     ];
     for (args, needle) in cases {
         fails(input.path(), args, needle);
