@@ -198,6 +198,26 @@ fn check_file_step(path: &std::path::Path, step: u32, steps: u32) -> Result<()> 
     Ok(())
 }
 
+/// Deflate writes at most 1032 bytes for each byte it reads (zlib's
+/// documented worst ratio), and gzip's framing only adds input.
+const MAX_INFLATE_RATIO: u64 = 1032;
+
+/// Checks that `compressed` bytes of gzip data can inflate to the `needed`
+/// bytes a header describes, so a tiny file claiming a huge grid is refused
+/// before a slab or a layer is allocated for it.
+fn check_gzip_holds(path: &std::path::Path, compressed: u64, needed: u64) -> Result<()> {
+    let most = compressed.saturating_mul(MAX_INFLATE_RATIO);
+    if most < needed {
+        return Err(Error::format(
+            path,
+            format!(
+                "holds {compressed} bytes of gzip data, which inflate to at most {most} bytes, but its header describes {needed}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Checks dims are non-zero and their product fits memory indexing.
 pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
     if dims.contains(&0) {

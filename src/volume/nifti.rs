@@ -240,21 +240,21 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
     let voxel_bytes = layer * dims[2] as u64;
     let first = voxel_offset(path, &header)? + step as u64 * voxel_bytes;
     let gzip = gzipped(path)?;
-    if !gzip {
-        // A short file is found before a layer is read.
-        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
-        if len < first + voxel_bytes {
-            return Err(Error::format(
-                path,
-                format!(
-                    "holds {len} bytes, but step {step} of its {}x{}x{} {ty} voxels ends at byte {}",
-                    dims[0],
-                    dims[1],
-                    dims[2],
-                    first + voxel_bytes
-                ),
-            ));
-        }
+    // A short file is found before a layer is read.
+    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    if gzip {
+        super::check_gzip_holds(path, len, first + voxel_bytes)?;
+    } else if len < first + voxel_bytes {
+        return Err(Error::format(
+            path,
+            format!(
+                "holds {len} bytes, but step {step} of its {}x{}x{} {ty} voxels ends at byte {}",
+                dims[0],
+                dims[1],
+                dims[2],
+                first + voxel_bytes
+            ),
+        ));
     }
     let open_at = |z: u32| -> Result<Box<dyn Read>> {
         let at = first + z as u64 * layer;

@@ -357,6 +357,7 @@ fn parse(
     };
     let inflated;
     let data: &[u8] = if h.gzip {
+        super::check_gzip_holds(&source, raw.len() as u64, wanted)?;
         inflated = inflate(&source, &raw, wanted)?;
         &inflated
     } else {
@@ -454,12 +455,12 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         .checked_add(h.skip)
         .and_then(|b| b.checked_add(all))
         .ok_or_else(too_big)?;
-    if !h.gzip {
-        // A short (or long) file is found before a layer is read.
-        let len = std::fs::metadata(&source).map_err(|e| Error::io(&source, e))?.len();
-        if len != end {
-            return Err(short_data(&source, &h, len.saturating_sub(start + h.skip)));
-        }
+    // A short (or long) file is found before a layer is read.
+    let len = std::fs::metadata(&source).map_err(|e| Error::io(&source, e))?.len();
+    match h.gzip {
+        true => super::check_gzip_holds(&source, len.saturating_sub(start), end - start)?,
+        false if len != end => return Err(short_data(&source, &h, len.saturating_sub(start + h.skip))),
+        false => {}
     }
     let layer = h.dims[0] as u64 * h.dims[1] as u64 * h.ty.bytes() as u64;
     let first = h.skip + h.block() * step as u64;

@@ -123,6 +123,27 @@ fn sizes_are_checked_before_allocation() {
     for input in [&nrrd_s, &nii_s] {
         fails(files.path(), &["info", input], false, &["bytes of host memory"]);
     }
+    // Rendering streams them into bricks, one slab at a time; a slab of
+    // one 32767^2 double layer is 8 GiB, so a gzip file too small to hold
+    // the grid is refused before it (deflate inflates at most 1032:1).
+    let gz_nrrd = d.join("huge_gz.nrrd");
+    let mut bytes = b"NRRD0004\ntype: double\ndimension: 3\nsizes: 32767 32767 32767\nencoding: gzip\n\n".to_vec();
+    bytes.extend(common::gzip(&[0; 4096]));
+    std::fs::write(&gz_nrrd, bytes).unwrap();
+    let mut nii = nifti_header([32767, 32767, 32767]);
+    nii[70..72].copy_from_slice(&64i16.to_le_bytes());
+    nii[72..74].copy_from_slice(&64i16.to_le_bytes());
+    let gz_nii = d.join("huge.nii.gz");
+    std::fs::write(&gz_nii, common::gzip(&[&nii[..], &[0; 4096]].concat())).unwrap();
+    for input in [&gz_nrrd, &gz_nii] {
+        let input = input.to_str().unwrap();
+        fails(
+            files.path(),
+            &["render", input, "--size", "8x8"],
+            true,
+            &["which inflate to at most"],
+        );
+    }
 }
 
 /// A NIfTI-1 header of `dims` uint8 voxels and no data.
