@@ -24,7 +24,7 @@ pub struct BenchConfig {
     #[serde(default)]
     pub name: String,
     /// Frame size [width, height] (default 512 x 512; the paper: 1024 x 1024).
-    #[serde(default = "default_size")]
+    #[serde(default = "default_size", deserialize_with = "width_height")]
     pub size: [u32; 2],
     /// Views of the rotating orthographic camera (default 6; the paper: 36).
     #[serde(default = "default_frames")]
@@ -76,6 +76,13 @@ pub struct BenchConfig {
 
 fn default_size() -> [u32; 2] {
     [512, 512]
+}
+
+/// `[width, height]`, exactly two (serde's arrays drop extra items).
+fn width_height<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[u32; 2], D::Error> {
+    let v = Vec::<u32>::deserialize(d)?;
+    <[u32; 2]>::try_from(v.as_slice())
+        .map_err(|_| serde::de::Error::custom(format!("size must be [width, height], not {} numbers", v.len())))
 }
 
 fn default_frames() -> u32 {
@@ -290,6 +297,16 @@ impl BenchConfig {
             let stem = Path::new(origin.split(' ').next().unwrap_or(origin)).file_stem();
             c.name = stem.map_or("bench".into(), |s| s.to_string_lossy().into_owned());
         }
+        // The name is a folder under the output root, never a path out of it.
+        if matches!(c.name.as_str(), "." | "..") || c.name.contains(['/', '\\']) || c.name.contains(char::is_control) {
+            return Err(Error::format(
+                origin,
+                format!(
+                    "name '{}' must be a plain folder name (no '/', '\\' or '..')",
+                    c.name.escape_debug()
+                ),
+            ));
+        }
         c.validate(origin)?;
         Ok(c)
     }
@@ -355,12 +372,27 @@ impl BenchConfig {
             }
         }
         if let Some(e) = &self.error {
-            if e.steps
-                .iter()
-                .chain([&e.reference_step])
-                .any(|s| !(s.is_finite() && *s > 0.0))
-            {
-                return bad("error sweep steps must be > 0");
+            if let Some(s) = e.steps.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+                return bad(&format!("error sweep step {s} must be > 0"));
+            }
+            if !(e.reference_step.is_finite() && e.reference_step > 0.0) {
+                return bad(&format!("error sweep reference_step {} must be > 0", e.reference_step));
+            }
+            if e.frames == 0 {
+                return bad("error sweep frames must be at least 1");
+            }
+            if let Some(wanted) = &e.datasets {
+                let labels = self
+                    .datasets
+                    .iter()
+                    .map(|d| d.label(self))
+                    .collect::<Result<Vec<_>>>()?;
+                if let Some(w) = wanted.iter().find(|w| !labels.contains(w)) {
+                    return bad(&format!(
+                        "error sweep data set '{w}' is none of the [[dataset]] labels: {}",
+                        labels.join(", ")
+                    ));
+                }
             }
             if e.ert.iter().any(|t| !(0.0..=1.0).contains(t)) {
                 return bad("error sweep ert thresholds must be in [0, 1] (0 = off)");

@@ -161,6 +161,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("bench/out").join(&config.name));
+    check_out_dir(&out_dir)?;
     let ctx = context(args.validate)?;
     let output = bench::run::run(
         &ctx,
@@ -251,4 +252,16 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
         100.0 * tolerance
     );
     Ok(if ok { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// Refuses an output folder that is (or lies under) a file before the run,
+/// not after it: the nearest part of it that exists must be a folder.
+fn check_out_dir(dir: &Path) -> Result<()> {
+    match dir.ancestors().find(|p| p.as_os_str().is_empty() || p.exists()) {
+        Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => Err(Error::io(
+            p,
+            std::io::Error::new(std::io::ErrorKind::AlreadyExists, "exists and is not a folder"),
+        )),
+        _ => Ok(()),
+    }
 }

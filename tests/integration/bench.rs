@@ -395,7 +395,43 @@ fn bad_bench_input_is_one_line() {
         "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n[error]\nsteps = [1.0]\nert = [0.0]\nfilters = [\"manual\", \"linear\"]\nreference_step = 0.5\nframes = 1\naccel = \"grid\"\n",
     )
     .unwrap();
-    let cases: Vec<(Vec<&str>, &str)> = vec![
+    // Variations of a valid config with an error sweep, each with one fault.
+    let base = "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n[error]\nsteps = [1.0]\nert = [0.0]\nreference_step = 0.5\nframes = 1\naccel = \"grid\"\n";
+    let faults = [
+        (
+            "escape",
+            ("name = \"x\"", "name = \"../../escape\""),
+            "must be a plain folder name",
+        ),
+        (
+            "size3",
+            ("size = [8, 8]", "size = [8, 8, 8]"),
+            "size must be [width, height], not 3 numbers",
+        ),
+        (
+            "noframes",
+            ("frames = 1\naccel", "frames = 0\naccel"),
+            "error sweep frames must be at least 1",
+        ),
+        (
+            "refstep",
+            ("reference_step = 0.5", "reference_step = -1"),
+            "reference_step -1 must be > 0",
+        ),
+        (
+            "nothere",
+            ("[error]\n", "[error]\ndatasets = [\"nothere:9\"]\n"),
+            "error sweep data set 'nothere:9' is none of the [[dataset]] labels: nbody:8",
+        ),
+    ];
+    let mut fault_cases = Vec::new();
+    for (name, (from, to), needle) in faults {
+        assert!(base.contains(from), "{name}");
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&path, base.replacen(from, to, 1)).unwrap();
+        fault_cases.push((path, needle));
+    }
+    let mut cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["bench", filter.to_str().unwrap()], "expected manual or hardware"),
         (
             vec!["bench", "--quick", "--filter", "linear"],
@@ -418,6 +454,16 @@ fn bad_bench_input_is_one_line() {
         (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
         (vec!["bench", "--quick", "--size", "100000x100000"], "1..=16384 pixels"),
     ];
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let under_file = file.join("run");
+    cases.push((
+        vec!["bench", "--quick", "--out", under_file.to_str().unwrap()],
+        "a-file: exists and is not a folder",
+    ));
+    for (path, needle) in &fault_cases {
+        cases.push((vec!["bench", path.to_str().unwrap()], needle));
+    }
     for (args, needle) in cases {
         let (code, _, stderr) = lacuna(&args);
         assert_ne!(code, 0, "{args:?}");
