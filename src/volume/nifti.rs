@@ -164,7 +164,11 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
         at = start + data.len() as u64;
         blocks.push(data);
     }
-    // Data past the voxels (none in a well-formed file) is ignored, as the crate did.
+    // Data past the voxels (none in a well-formed file) is ignored, as the
+    // crate did; a gzip file's trailer is checked where the last step ends.
+    if step + 1 == steps && blocks.last().is_some_and(|b| b.len() as u64 == voxel_bytes) {
+        meet_the_trailer(path, &mut reader)?;
+    }
     let little = header.endianness == nifti::Endianness::Little;
     let mut volumes = Vec::new();
     for (c, data) in blocks.iter().enumerate() {
@@ -181,6 +185,15 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
     let mut joined = Volume::join(volumes)?;
     joined.name = path.display().to_string();
     Ok(joined)
+}
+
+/// Reads a byte past the last step's voxels, so a `.nii.gz`'s decoder
+/// reaches its trailer and checks the CRC and length of what it inflated
+/// (a corrupt file is an error, not a silently wrong volume).
+fn meet_the_trailer(path: &Path, reader: &mut dyn Read) -> Result<()> {
+    let mut byte = [0u8; 1];
+    reader.read(&mut byte).map_err(|e| unreadable(path, e))?;
+    Ok(())
 }
 
 /// Where the voxels start: `vox_offset`, checked.
@@ -274,13 +287,14 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         }
         Ok(reader)
     };
+    let trailer = |reader: &mut dyn Read| meet_the_trailer(path, reader);
     let file = super::slabs::SlabFile {
         path,
         dims,
         ty,
         little: header.endianness == nifti::Endianness::Little,
         open: &open_at,
-        tail: None,
+        tail: (step + 1 == l.steps).then_some(&trailer as &super::slabs::TailCheck),
         slab_bytes: super::slabs::SLAB_BYTES,
     };
     let mut volume = super::slabs::stream(&file, to, path.display().to_string(), spacing(&header))?;

@@ -334,3 +334,29 @@ fn a_file_shorter_or_longer_than_its_header_says_is_one_error() {
         assert!(e.contains(needle), "{}: {e}", path.display());
     }
 }
+
+#[test]
+fn a_nii_gz_whose_crc_does_not_match_is_refused_dense_and_streamed() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = encode(&values(false), VoxelType::I16, true);
+    let mut bytes = gzip(&common::nifti_bytes(DIMS.as_ref(), 4, 16, [1.0; 3], &data));
+    // The trailer: CRC-32 of the inflated bytes, then their length.
+    let crc = bytes.len() - 8;
+    bytes[crc] ^= 0x5a;
+    let bad = dir.path().join("bad.nii.gz");
+    std::fs::write(&bad, &bytes).unwrap();
+    let series = Series::open(bad.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let dense = series.load(0, None).unwrap_err().to_string();
+    let streamed = series
+        .load_bricks(0, &StreamTo::new(4, limits()))
+        .unwrap_err()
+        .to_string();
+    for e in [dense, streamed] {
+        assert!(e.contains("cannot read NIfTI data") && e.contains("checksum"), "{e}");
+    }
+    // The same file with its CRC intact loads.
+    bytes[crc] ^= 0x5a;
+    std::fs::write(&bad, &bytes).unwrap();
+    let (d, s) = dense_and_streamed(&bad, 0, 4);
+    assert_same("intact", &d, &s, 4);
+}
