@@ -91,7 +91,7 @@ impl Error {
     pub fn format(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Format {
             path: path.into(),
-            message: one_line(message.into()),
+            message: clipped(one_line(message.into()), MESSAGE),
         }
     }
 
@@ -104,9 +104,22 @@ impl Error {
     pub fn invalid(what: &'static str, value: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Invalid {
             what,
-            value: one_line(value.into()),
-            message: one_line(message.into()),
+            value: clipped(one_line(value.into()), ECHOED_INPUT),
+            message: clipped(one_line(message.into()), MESSAGE),
         }
+    }
+}
+
+/// The most characters of input an error echoes, and of a whole message:
+/// a 100 MB header line is named, not printed.
+const ECHOED_INPUT: usize = 200;
+const MESSAGE: usize = 2000;
+
+/// `text` cut to its first `max` characters, saying how long it was.
+fn clipped(text: String, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        None => text,
+        Some((end, _)) => format!("{}... ({} bytes in all)", &text[..end], text.len()),
     }
 }
 
@@ -178,5 +191,28 @@ mod tests {
             .vk("vkCreateDevice")
             .unwrap_err();
         assert!(matches!(other, Error::Vulkan { .. }));
+    }
+
+    #[test]
+    fn a_huge_echoed_input_is_cut_and_its_length_named() {
+        let line = "é".repeat(1 << 20);
+        let e = Error::invalid("header line", line.clone(), "unknown field").to_string();
+        assert!(
+            e.starts_with(&format!(
+                "invalid header line '{}... (2097152 bytes in all)'",
+                "é".repeat(200)
+            )),
+            "{}",
+            &e[..300]
+        );
+        assert!(e.len() < 600, "{}", e.len());
+        let f = Error::format("a.nrrd", format!("bad line '{line}'")).to_string();
+        assert!(
+            f.len() < 5000 && f.ends_with(&format!("({} bytes in all)", line.len() + 11)),
+            "{}",
+            &f[f.len() - 80..]
+        );
+        // Short text is untouched.
+        assert_eq!(Error::invalid("x", "y", "z").to_string(), "invalid x 'y': z");
     }
 }

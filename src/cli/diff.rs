@@ -25,6 +25,17 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
             return Err(Error::invalid("max-abs", m.to_string(), "must be a number >= 0"));
         }
     }
+    if let Some(path) = &args.heatmap {
+        let png = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if !png {
+            return Err(Error::invalid(
+                "heatmap",
+                path.display().to_string(),
+                "a heatmap is a PNG: name it .png",
+            ));
+        }
+        super::check_parent(path)?;
+    }
     let a = Frame::read_exr(&args.a)?;
     let b = Frame::read_exr(&args.b)?;
     let stats = diff(&a, &b)?;

@@ -2,6 +2,7 @@
 
 use super::{check_parent, context, validation_verdict};
 use clap::Args;
+use lacuna::frame::FrameFormat;
 use lacuna::octree::report::{self, Backend, Row};
 use lacuna::octree::whitted::WhittedOptions;
 use lacuna::octree::{Mode, TraceKernels, TraceScene, Traversal, MAX_DEPTH_LIMIT};
@@ -29,7 +30,7 @@ pub struct OctreeArgs {
     /// Image edge in pixels (the SPD's 512; one eye ray per pixel corner).
     #[arg(long, default_value_t = 512)]
     resolution: u32,
-    /// Write the image as OpenEXR.
+    /// Write the image: .exr (RGBA f32) or .png (8-bit sRGB), by extension.
     #[arg(long)]
     out: Option<PathBuf>,
     /// The full comparison: 8 scenes x modes C, A x depths 4..7 x all traversals.
@@ -75,6 +76,7 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
     for path in args.out.iter().chain(&args.report) {
         check_parent(path)?;
     }
+    let format = args.out.as_deref().map(FrameFormat::from_path).transpose()?;
     if args.resolution == 0 || args.resolution > 8192 {
         return Err(Error::invalid(
             "resolution",
@@ -133,8 +135,8 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
                     row.scene, row.mode, row.max_depth, row.build.build_s, row.disagreements
                 );
             }
-            if let (Some(path), Some(frame)) = (&args.out, image) {
-                frame.write_exr(path)?;
+            if let (Some(path), Some(format), Some(frame)) = (&args.out, format, image) {
+                frame.write(path, format)?;
                 println!("wrote {}", path.display());
             }
             rows.push(row);

@@ -33,10 +33,10 @@ pub struct RenderArgs {
     pub(super) size: (u32, u32),
     #[command(flatten)]
     pub(super) frame: FrameArgs,
-    /// Time this many builds and frames and report per-phase medians.
+    /// Time this many builds and frames (at most 100000) and report per-phase medians.
     #[arg(long, default_value_t = 1)]
     pub(super) repeat: u32,
-    /// Untimed builds and frames first (lavapipe compiles shaders on first use).
+    /// Untimed builds and frames first, at most 100000 (lavapipe compiles shaders on first use).
     #[arg(long, default_value_t = 0)]
     pub(super) warmup: u32,
     /// Write the frame: .exr (OpenEXR, RGBA f32, linear, premultiplied) or .png (8-bit sRGB, straight alpha).
@@ -50,6 +50,9 @@ pub struct RenderArgs {
     pub(super) validate: bool,
 }
 
+/// The most timed (or untimed) builds and frames `render` runs.
+const MAX_RUNS: u32 = 100_000;
+
 impl RenderArgs {
     /// Every option checked, before any file is read or GPU work is done.
     pub(super) fn options(&self) -> Result<(Params, FrameDesc, Option<FrameFormat>)> {
@@ -57,6 +60,12 @@ impl RenderArgs {
         let desc = self.frame.desc(self.size)?;
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
+        }
+        // Each is a build and a frame; more is a typo, not a measurement.
+        for (what, n) in [("repeat", self.repeat), ("warmup", self.warmup)] {
+            if n > MAX_RUNS {
+                return Err(Error::invalid(what, n.to_string(), format!("at most {MAX_RUNS}")));
+            }
         }
         let format = self.out.as_deref().map(FrameFormat::from_path).transpose()?;
         if let (Some(background), Some(FrameFormat::Exr)) = (&self.background, format) {

@@ -23,21 +23,21 @@ impl Clip {
         if !plane.iter().all(|v| v.is_finite()) {
             return Err(Error::invalid(
                 "clip",
-                format!("{plane:?}"),
+                plane.map(|v| v.to_string()).join(","),
                 "must be four finite numbers A,B,C,D",
             ));
         }
         if plane[..3] == [0.0; 3] {
             return Err(Error::invalid(
                 "clip",
-                format!("{plane:?}"),
+                plane.map(|v| v.to_string()).join(","),
                 "the normal (A, B, C) is zero",
             ));
         }
         if self.count == MAX_CLIP {
             return Err(Error::invalid(
                 "clip",
-                format!("{plane:?}"),
+                plane.map(|v| v.to_string()).join(","),
                 format!("at most {MAX_CLIP} clip planes"),
             ));
         }

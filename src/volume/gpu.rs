@@ -444,11 +444,10 @@ impl GpuVolume {
     /// and isosurfaces read one field's gradient.
     pub fn check_one_channel(&self, what: &str) -> Result<()> {
         if self.channels > 1 {
-            return Err(Error::invalid(
-                "volume",
-                format!("of {} channels", self.channels),
-                format!("{what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode"),
-            ));
+            return Err(Error::Unsupported(format!(
+                "the volume has {} channels, and {what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode",
+                self.channels
+            )));
         }
         Ok(())
     }

@@ -31,7 +31,25 @@ pub enum VolumeSpec {
 impl VolumeSpec {
     pub fn parse(spec: &str, options: &LoadOptions) -> Result<Self> {
         let path = Path::new(spec);
-        if options.raw.is_some() || path.exists() {
+        if spec.is_empty() {
+            return Err(Error::invalid(
+                "volume",
+                spec,
+                "is empty: name a file or a generator as NAME:SIZE",
+            ));
+        }
+        if path.exists() {
+            return Ok(VolumeSpec::File(path.to_path_buf()));
+        }
+        if options.raw.is_some() {
+            let name = spec.split(':').next().unwrap_or("");
+            if Generator::from_name(name).is_some() && spec.contains(':') {
+                return Err(Error::invalid(
+                    "volume",
+                    spec,
+                    "--dims and --type describe a raw file, and this names a generator",
+                ));
+            }
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }
         if spec.contains('+') {

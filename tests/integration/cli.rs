@@ -372,6 +372,8 @@ fn diff_reports_metrics_and_exit_codes() {
         vec!["diff", a.to_str().unwrap(), small.to_str().unwrap()],
         vec!["diff", a.to_str().unwrap(), "/no/such.exr"],
         vec!["diff", a.to_str().unwrap(), heat.to_str().unwrap()],
+        // A heatmap is a PNG; a name that says otherwise is refused first.
+        vec!["diff", a.to_str().unwrap(), c.to_str().unwrap(), "--heatmap", "h.exr"],
     ] {
         let r = lacuna(&args, &[]);
         assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
@@ -547,6 +549,22 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:16", "--step", "x"], &[], "--step");
     fails(&["render", "menger:16", "--ert", "1.5"], &[], "invalid ert");
     fails(&["render", "menger:16", "--repeat", "0"], &[], "invalid repeat '0'");
+    fails(&["info", ""], &[], "invalid volume '': is empty");
+    fails(
+        &["info", "menger:27", "--dims", "4x4x4", "--type", "uint8"],
+        &[],
+        "--dims and --type describe a raw file, and this names a generator",
+    );
+    fails(
+        &["render", "menger:16", "--repeat", "4000000000"],
+        &[],
+        "invalid repeat '4000000000': at most 100000",
+    );
+    fails(
+        &["render", "menger:16", "--warmup", "100001"],
+        &[],
+        "invalid warmup '100001': at most 100000",
+    );
     fails(
         &["render", "menger:16", "--accel", "magic"],
         &[],
@@ -681,6 +699,21 @@ fn octree_prints_havrans_table_and_writes_the_image() {
     assert_eq!((frame.width, frame.height), (24, 24));
     assert_eq!(frame.metadata.get("octree").map(String::as_str), Some("A5"));
     assert_eq!(frame.metadata.get("scene").map(String::as_str), Some("tree"));
+    // The extension picks the format, as render's --out.
+    let png = dir.path().join("tree.png");
+    let args = [
+        "octree",
+        "tree",
+        "--size",
+        "4",
+        "--resolution",
+        "8",
+        "--validate",
+        "--out",
+    ];
+    let r = lacuna(&[&args[..], &[png.to_str().unwrap()]].concat(), &[]);
+    assert_eq!(r.code, 0, "{}\n{}", r.stdout, r.stderr);
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
 }
 
 #[test]
@@ -696,6 +729,7 @@ fn bad_octree_and_scene_input_is_one_line() {
     fails(&["octree", "tetra", "--max-depth", "20"], &[], "invalid max depth '20'");
     fails(&["octree", "tetra", "--resolution", "0"], &[], "invalid resolution '0'");
     fails(&["octree"], &[], "name a scene, or use --all");
+    fails(&["octree", "tetra", "--out", "t.tiff"], &[], "expected a .exr");
     // Checked before the (long) comparison starts.
     fails(
         &["octree", "--all", "--report", "/no/such/dir/t.md"],
