@@ -125,6 +125,8 @@ impl<'a> SourceValues<'a> {
                 format!("without data (NaN), which {ty} cannot hold")
             } else if !v.is_finite() {
                 "not a finite number".to_string()
+            } else if ty == VoxelType::F32 && (v as f32).is_infinite() {
+                format!("{v:e}, beyond float32's largest magnitude {:e}", f32::MAX)
             } else if ty == VoxelType::F32 || self.integer_in(v, ty).is_some() {
                 return None;
             } else if (v - v.round()).abs() > self.tolerance {
@@ -251,8 +253,24 @@ pub fn check_raw_out(out: &Path) -> Result<()> {
             "is a folder; give a file stem (DIR/NAME) or an Open SciVis name (DIR/NAME_WxHxD_type.raw)",
         ));
     }
+    // A stem gets `_WxHxD_type.raw`; a name that asks for another format
+    // would get a raw file under a misleading name.
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if let Some(ext) = OTHER_FORMATS.iter().find(|e| name.ends_with(*e)) {
+        return Err(Error::invalid(
+            "output",
+            out.display().to_string(),
+            format!("export writes raw files, not {ext}; give a file stem (DIR/NAME) or an Open SciVis name (DIR/NAME_WxHxD_type.raw)"),
+        ));
+    }
     check_parent(out)
 }
+
+/// Output names export refuses: formats it does not write.
+const OTHER_FORMATS: [&str; 7] = [".nrrd", ".nhdr", ".nii", ".nii.gz", ".gz", ".exr", ".png"];
 
 /// What [`write_raw`] wrote.
 #[derive(Clone, Debug, PartialEq, Eq)]

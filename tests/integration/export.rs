@@ -363,6 +363,7 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
     write_source(input.path(), "big", DIMS, VoxelType::U16, &values(0.0, 3.0));
     write_source(input.path(), "neg", DIMS, VoxelType::I16, &values(-2.0, 1.0));
     write_source(input.path(), "frac", DIMS, VoxelType::F32, &values(0.0, 0.5));
+    write_source(input.path(), "huge", DIMS, VoxelType::F64, &values(0.0, 1e300));
     // 105 values 0, 3, .., 312, shuffled: the first above 255 in x-fastest
     // order is named.
     let first = (0..105u32).find(|i| (i * 47 % 105) * 3 > 255).unwrap();
@@ -372,7 +373,7 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
          uint16 holds every value",
         (first * 47 % 105) * 3
     );
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 18] = [
         (&["menger:9", "{out}/existing"], "is a folder"),
         (&["menger:9", "{out}/"], "is a folder"),
         (&["menger:9", "{out}/missing/v"], "its folder does not exist"),
@@ -389,7 +390,16 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
             &["{in}/frac_7x5x3_float32.raw", "{out}/v", "--type", "uint8"],
             "voxel (1, 0, 0) is 23.5, not an integer; float32 holds every value",
         ),
+        (
+            &["{in}/huge_7x5x3_float64.raw", "{out}/v"],
+            "beyond float32's largest magnitude 3.4028235e38; a raw file cannot hold it",
+        ),
         (&["menger:9", "{out}/sponge.raw"], "must be sponge_9x9x9_uint8.raw"),
+        (&["menger:9", "{out}/sponge.nrrd"], "export writes raw files, not .nrrd"),
+        (
+            &["menger:9", "{out}/sponge.NII.GZ"],
+            "export writes raw files, not .nii.gz",
+        ),
         (
             &["menger:9", "{out}/sponge_9x9x9_float32.raw"],
             "must be sponge_9x9x9_uint8.raw",
