@@ -275,21 +275,35 @@ impl TransferFunction {
             if op.chunks(4).any(|c| !(0.0..=1.0).contains(&c[1])) {
                 return Err(Error::format(path, "opacity 'Points' values must be in [0, 1]"));
             }
-        }
-        // Piecewise-linear interpolation over (x, values...) groups of `stride`.
-        let interp = |pts: &[f64], stride: usize, x: f64, channel: usize| -> f64 {
-            let groups: Vec<&[f64]> = pts.chunks(stride).collect();
-            if x <= groups[0][0] {
-                return groups[0][channel];
+            if op.chunks(4).zip(op.chunks(4).skip(1)).any(|(a, b)| b[0] < a[0]) {
+                return Err(Error::format(path, "opacity 'Points' x values must be ascending"));
             }
-            for w in groups.windows(2) {
-                if x <= w[1][0] {
-                    let span = w[1][0] - w[0][0];
-                    let f = if span > 0.0 { (x - w[0][0]) / span } else { 1.0 };
-                    return w[0][channel] + (w[1][channel] - w[0][channel]) * f;
+        }
+        // Piecewise-linear interpolation over (x, values...) groups of
+        // `stride`, ascending in x: between the first group at or past x and
+        // the one before it (a binary search, so a colormap of millions of
+        // points builds its table at once).
+        let interp = |pts: &[f64], stride: usize, x: f64, channel: usize| -> f64 {
+            let n = pts.len() / stride;
+            let at = |g: usize, c: usize| pts[g * stride + c];
+            let (mut lo, mut hi) = (0, n);
+            while lo < hi {
+                let mid = (lo + hi) / 2;
+                if at(mid, 0) < x {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
                 }
             }
-            groups[groups.len() - 1][channel]
+            match lo {
+                0 => at(0, channel),
+                j if j == n => at(n - 1, channel),
+                j => {
+                    let span = at(j, 0) - at(j - 1, 0);
+                    let f = if span > 0.0 { (x - at(j - 1, 0)) / span } else { 1.0 };
+                    at(j - 1, channel) + (at(j, channel) - at(j - 1, channel)) * f
+                }
+            }
         };
         let lut = (0..LUT_SIZE)
             .map(|i| {

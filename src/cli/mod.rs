@@ -30,7 +30,7 @@ pub struct VolumeArgs {
     /// Dimensions of a raw file whose name does not give them (WxHxD).
     #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
     pub dims: Option<[u32; 3]>,
-    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
+    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64 (also int8, uint32, int32).
     #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     pub voxel_type: Option<VoxelType>,
     /// Time step of a series (a file pattern, a NIfTI time axis, or a generator's animation), from 0.

@@ -111,6 +111,15 @@ struct Axes {
 
 /// The axes of a `dimension`-D NRRD of `sizes`, by its `kinds`.
 fn axes(path: &Path, dimension: usize, sizes: &[f64], kinds: Option<&str>) -> Result<Axes> {
+    if sizes.len() != dimension {
+        return Err(Error::format(
+            path,
+            format!(
+                "NRRD 'sizes' gives {} numbers but 'dimension' is {dimension}",
+                sizes.len()
+            ),
+        ));
+    }
     if dimension == 3 && sizes.len() == 3 {
         return Ok(Axes {
             spatial: [0, 1, 2],

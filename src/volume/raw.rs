@@ -63,7 +63,7 @@ pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
     let ty = VoxelType::from_name(ty).ok_or_else(|| {
         Error::format(
             path,
-            format!("unknown voxel type '{ty}' in file name (expected uint8, uint16, int16, float32 or float64)"),
+            format!("unknown voxel type '{ty}' in file name (expected uint8, uint16, int16, float32 or float64, also int8, uint32, int32)"),
         )
     })?;
     Ok(RawLayout { dims, ty })

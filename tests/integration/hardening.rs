@@ -224,6 +224,31 @@ fn hostile_files_are_one_line_errors() {
         false,
         &["holds more than the 64 bytes"],
     );
+    // Fewer sizes than the dimension says: the count is named.
+    std::fs::write(
+        p("sizes.nrrd"),
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4\nencoding: raw\n\n",
+    )
+    .unwrap();
+    fails(
+        dir.path(),
+        &["info", &p("sizes.nrrd")],
+        false,
+        &["NRRD 'sizes' gives 2 numbers but 'dimension' is 3"],
+    );
+    // A header line of 1 MB is named, not echoed whole.
+    let long = format!(
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: {}\n\n",
+        "x".repeat(1 << 20)
+    );
+    std::fs::write(p("long.nrrd"), long).unwrap();
+    let (code, stderr) = run(&["info", &p("long.nrrd")]);
+    assert_eq!(code, Some(2), "{}", &stderr[..stderr.len().min(300)]);
+    assert!(
+        stderr.len() < 2500 && stderr.contains("bytes in all"),
+        "{} bytes",
+        stderr.len()
+    );
     // diff of a file that is not an EXR.
     std::fs::write(p("junk.exr"), b"v/1\x01junk").unwrap();
     let (code, stderr) = run(&["diff", &p("junk.exr"), &p("junk.exr")]);

@@ -118,9 +118,71 @@ fn paraview_json_colormaps() {
             other => panic!("{text}: expected a format error, got {other:?}"),
         }
     }
+    std::fs::write(
+        &p,
+        r#"{"RGBPoints":[0,0,0,0, 1,1,1,1],"Points":[0.5,0,0.5,0, 0,1,0.5,0]}"#,
+    )
+    .unwrap();
+    let e = TransferFunction::parse(p.to_str().unwrap()).unwrap_err().to_string();
+    assert!(e.contains("opacity 'Points' x values must be ascending"), "{e}");
     let missing = dir.path().join("missing.json");
     assert!(matches!(
         TransferFunction::parse(missing.to_str().unwrap()),
         Err(Error::Io { .. })
     ));
+}
+
+/// A colormap of many uneven points, with repeated x (steps), builds the
+/// table a segment-by-segment scan of its points gives, entry for entry.
+#[test]
+fn a_colormap_of_many_points_is_interpolated_between_its_neighbours() {
+    let n = 5000;
+    let xs: Vec<f64> = (0..n).map(|i| ((i / 2) as f64).powf(1.5) - 300.0).collect();
+    let rgb: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            let t = i as f64;
+            [
+                xs[i],
+                (t * 0.37).sin() * 0.5 + 0.5,
+                (i % 3) as f64 / 2.0,
+                (i % 7 == 0) as u8 as f64,
+            ]
+        })
+        .collect();
+    let op: Vec<f64> = (0..n / 10)
+        .flat_map(|i| [xs[i * 10], ((i * 13) % 17) as f64 / 16.0, 0.5, 0.0])
+        .collect();
+    let json = format!(
+        r#"{{"RGBPoints":[{}],"Points":[{}]}}"#,
+        rgb.iter().map(f64::to_string).collect::<Vec<_>>().join(","),
+        op.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("many.json");
+    std::fs::write(&p, json).unwrap();
+    let tf = TransferFunction::parse(p.to_str().unwrap()).unwrap();
+    // The scan: the first segment whose end is at or past x.
+    let scan = |pts: &[f64], x: f64, c: usize| -> f64 {
+        let g: Vec<&[f64]> = pts.chunks(4).collect();
+        if x <= g[0][0] {
+            return g[0][c];
+        }
+        for w in g.windows(2) {
+            if x <= w[1][0] {
+                let span = w[1][0] - w[0][0];
+                let f = if span > 0.0 { (x - w[0][0]) / span } else { 1.0 };
+                return w[0][c] + (w[1][c] - w[0][c]) * f;
+            }
+        }
+        g[g.len() - 1][c]
+    };
+    let lut = tf.lut();
+    let (x0, x1) = (xs[0], xs[n - 1]);
+    for (i, entry) in lut.iter().enumerate() {
+        let x = x0 + (x1 - x0) * (i as f32 / (lut.len() - 1) as f32) as f64;
+        let want = [scan(&rgb, x, 1), scan(&rgb, x, 2), scan(&rgb, x, 3), scan(&op, x, 1)].map(|v| v as f32);
+        assert_eq!(entry[..3], want[..3], "entry {i}");
+        // from_lut may clamp alpha into [0, 1]; these are inside it.
+        assert_eq!(entry[3], want[3], "entry {i}");
+    }
 }

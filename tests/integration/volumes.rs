@@ -364,6 +364,8 @@ fn volume_spec_errors() {
         ("menger:8:2.5", "Menger level"),
         ("menger:8:x", "not a number"),
         ("nbody:8:-1", "seed"),
+        ("nbody:8:1e20", "the seed must be an integer from 0 to 2^53"),
+        ("", "is empty"),
         ("no/such/file.raw", "No such file"),
         ("volume.xyz", "No such file"),
     ] {

@@ -36,6 +36,9 @@ const SLAB_BYTES: u64 = 64 << 20;
 /// Time steps of every generator's animation (`generate_at`).
 pub const STEPS: u32 = 64;
 
+/// The largest seed a spec can name exactly (2^53).
+const MAX_SEED: f64 = 9_007_199_254_740_992.0;
+
 impl Generator {
     pub const ALL: [Generator; 5] = [
         Generator::Menger,
@@ -124,8 +127,10 @@ impl Generator {
         let seed = |p: Option<f64>| -> Result<u64> {
             match p {
                 None => Ok(1),
-                Some(v) if v >= 0.0 && v.fract() == 0.0 => Ok(v as u64),
-                Some(_) => Err(bad("the seed must be a non-negative integer")),
+                // Up to 2^53, where every integer is its own f64: a larger
+                // one would alias its neighbours' seeds.
+                Some(v) if (0.0..=MAX_SEED).contains(&v) && v.fract() == 0.0 => Ok(v as u64),
+                Some(_) => Err(bad("the seed must be an integer from 0 to 2^53")),
             }
         };
         // Layers of the volume, its parameter checked.
