@@ -38,6 +38,14 @@ impl VolumeSpec {
                 "is empty: name a file or a generator as NAME:SIZE",
             ));
         }
+        let headed = [".nii", ".nii.gz", ".nrrd", ".nhdr"];
+        if options.raw.is_some() && headed.iter().any(|e| spec.to_ascii_lowercase().ends_with(e)) {
+            return Err(Error::invalid(
+                "volume",
+                spec,
+                "--dims and --type describe a raw file, and this file's header gives its grid and type",
+            ));
+        }
         if path.exists() {
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }

@@ -556,6 +556,18 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         "--dims and --type describe a raw file, and this names a generator",
     );
     fails(
+        &[
+            "info",
+            "/usr/share/mricron/templates/ch2.nii.gz",
+            "--dims",
+            "4x4x4",
+            "--type",
+            "uint8",
+        ],
+        &[],
+        "this file's header gives its grid and type",
+    );
+    fails(
         &["render", "menger:16", "--repeat", "4000000000"],
         &[],
         "invalid repeat '4000000000': at most 100000",

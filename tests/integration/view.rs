@@ -285,7 +285,7 @@ fn without_a_display_the_viewer_says_so_in_one_line() {
     assert!(lines[0].starts_with("error: cannot open a window"), "{}", lines[0]);
 }
 
-/// A series in the viewer: `.` steps forward, Space plays (a new step each
+/// A series in the viewer: `.` steps forward, `,` back, Space plays (a new step each
 /// frame, the next loading while this one renders); the screenshot equals
 /// `render --time` of the step shown. Dense steps go into the last step's
 /// memory; bricked ones are uploaded anew, the last step freed first.
@@ -293,7 +293,8 @@ fn without_a_display_the_viewer_says_so_in_one_line() {
 fn the_viewer_steps_and_plays_a_series_and_matches_render() {
     let dir = tempfile::tempdir().unwrap();
     for (keys, frames, step, storage) in [
-        (".,.", "2", "2", "dense"),
+        // `Comma` names ',' (one step back) in the comma-separated list.
+        (".,.,.,Comma", "2", "2", "dense"),
         ("Space", "4", "3", "dense"),
         ("Space", "3", "2", "bricks:8"),
     ] {
