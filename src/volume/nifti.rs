@@ -7,7 +7,7 @@ use super::{StreamTo, Volume};
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use nifti::{NiftiHeader, NiftiType};
-use std::io::Read;
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
@@ -38,7 +38,7 @@ fn gzipped(path: &Path) -> Result<bool> {
 fn open(path: &Path) -> Result<Box<dyn Read>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     Ok(match gzipped(path)? {
-        true => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file))),
+        true => Box::new(Members::new(Box::new(std::io::BufReader::new(file)))),
         false => Box::new(std::io::BufReader::new(file)),
     })
 }
@@ -46,10 +46,54 @@ fn open(path: &Path) -> Result<Box<dyn Read>> {
 /// A `.nii` from memory, or a `.nii.gz` when `bytes` start with the gzip magic.
 pub fn from_bytes(origin: &Path, bytes: &[u8]) -> Result<Volume> {
     let reader: Box<dyn Read + '_> = match bytes.starts_with(&[0x1f, 0x8b]) {
-        true => Box::new(flate2::read::MultiGzDecoder::new(bytes)),
+        true => Box::new(Members::new(Box::new(bytes))),
         false => Box::new(bytes),
     };
     parse(origin, reader, 0, None)
+}
+
+/// Gzip members inflated one after another, as gzip(1) and Python's gzip
+/// read them: each member's CRC and length are checked at its end, and
+/// bytes after a member that do not start another (the zero padding some
+/// tools add) end the data rather than being an error.
+struct Members<'a> {
+    member: Option<flate2::bufread::GzDecoder<Box<dyn BufRead + 'a>>>,
+}
+
+impl<'a> Members<'a> {
+    fn new(raw: Box<dyn BufRead + 'a>) -> Self {
+        Members {
+            member: Some(flate2::bufread::GzDecoder::new(raw)),
+        }
+    }
+}
+
+impl Read for Members<'_> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        while let Some(member) = self.member.as_mut() {
+            let n = member.read(out)?;
+            if n > 0 || out.is_empty() {
+                return Ok(n);
+            }
+            // The member ended, checked: does another member's magic follow?
+            let Some(mut raw) = self.member.take().map(|m| m.into_inner()) else {
+                break;
+            };
+            let buf = raw.fill_buf()?;
+            if buf.starts_with(&[0x1f, 0x8b]) {
+                self.member = Some(flate2::bufread::GzDecoder::new(raw));
+            } else if buf == [0x1f] {
+                // The buffer ends between the magic's two bytes (rare): look
+                // past it, and put the first back in front.
+                raw.consume(1);
+                if raw.fill_buf()?.first() == Some(&0x8b) {
+                    let rest: Box<dyn BufRead + '_> = Box::new(std::io::Cursor::new([0x1f]).chain(raw));
+                    self.member = Some(flate2::bufread::GzDecoder::new(rest));
+                }
+            }
+        }
+        Ok(0)
+    }
 }
 
 /// The NIfTI-1 header's size: the voxels' offset is counted from the start.

@@ -354,9 +354,33 @@ fn a_nii_gz_whose_crc_does_not_match_is_refused_dense_and_streamed() {
     for e in [dense, streamed] {
         assert!(e.contains("cannot read NIfTI data") && e.contains("checksum"), "{e}");
     }
-    // The same file with its CRC intact loads.
+    // The same file with its CRC intact loads, also with zero padding
+    // after its gzip member (past the voxels, as in a .nii).
     bytes[crc] ^= 0x5a;
     std::fs::write(&bad, &bytes).unwrap();
     let (d, s) = dense_and_streamed(&bad, 0, 4);
     assert_same("intact", &d, &s, 4);
+    for pad in [3, 512] {
+        let padded = [&bytes[..], &vec![0u8; pad]].concat();
+        std::fs::write(&bad, &padded).unwrap();
+        let (d, s) = dense_and_streamed(&bad, 0, 4);
+        assert_same(&format!("padded with {pad} zeros"), &d, &s, 4);
+    }
+    // Two gzip members (as pigz or a concatenation writes): one volume.
+    let file = common::nifti_bytes(DIMS.as_ref(), 4, 16, [1.0; 3], &data);
+    let split = file.len() / 3;
+    std::fs::write(&bad, [gzip(&file[..split]), gzip(&file[split..])].concat()).unwrap();
+    let (d, s) = dense_and_streamed(&bad, 0, 4);
+    assert_same("two members", &d, &s, 4);
+    // A corrupt second member is found as the first's was.
+    let mut two = [gzip(&file[..split]), gzip(&file[split..])].concat();
+    let end = two.len() - 8;
+    two[end] ^= 0x5a;
+    std::fs::write(&bad, two).unwrap();
+    let e = Series::open(bad.to_str().unwrap(), &LoadOptions::default())
+        .unwrap()
+        .load(0, None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("checksum"), "{e}");
 }
