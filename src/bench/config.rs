@@ -78,11 +78,19 @@ fn default_size() -> [u32; 2] {
     [512, 512]
 }
 
-/// `[width, height]`, exactly two (serde's arrays drop extra items).
-fn width_height<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[u32; 2], D::Error> {
+/// Exactly two numbers, `form` naming them in the error (serde's arrays
+/// from TOML drop extra items).
+fn two<'de, D: serde::Deserializer<'de>>(d: D, form: &str) -> std::result::Result<[u32; 2], D::Error> {
     let v = Vec::<u32>::deserialize(d)?;
-    <[u32; 2]>::try_from(v.as_slice())
-        .map_err(|_| serde::de::Error::custom(format!("size must be [width, height], not {} numbers", v.len())))
+    <[u32; 2]>::try_from(v.as_slice()).map_err(|_| serde::de::Error::custom(format!("{form}, not {} numbers", v.len())))
+}
+
+fn width_height<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[u32; 2], D::Error> {
+    two(d, "size must be [width, height]")
+}
+
+fn first_last<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<[u32; 2]>, D::Error> {
+    two(d, "time must be [FIRST, LAST]").map(Some)
 }
 
 fn default_frames() -> u32 {
@@ -140,6 +148,7 @@ pub struct DatasetConfig {
     /// A time series' steps `[FIRST, LAST]`: the data set is step FIRST,
     /// and each later step is timed to its first exact frame (upload,
     /// ranges, build, frame) per structure; FIRST warms up.
+    #[serde(default, deserialize_with = "first_last")]
     pub time: Option<[u32; 2]>,
     /// Voxel storage on the device: dense, bricks, bricks:EDGE or auto
     /// (default auto, as `render --storage`).

@@ -93,6 +93,7 @@ impl Series {
             }
             Source::Channels(channels)
         } else if let Some(pattern) = Pattern::parse(spec) {
+            super::spec::check_raw_options(spec, options)?;
             Source::Files(pattern.files()?)
         } else {
             match VolumeSpec::parse(spec, options)? {

@@ -38,14 +38,7 @@ impl VolumeSpec {
                 "is empty: name a file or a generator as NAME:SIZE",
             ));
         }
-        let headed = [".nii", ".nii.gz", ".nrrd", ".nhdr"];
-        if options.raw.is_some() && headed.iter().any(|e| spec.to_ascii_lowercase().ends_with(e)) {
-            return Err(Error::invalid(
-                "volume",
-                spec,
-                "--dims and --type describe a raw file, and this file's header gives its grid and type",
-            ));
-        }
+        check_raw_options(spec, options)?;
         if path.exists() {
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }
@@ -170,6 +163,20 @@ impl VolumeSpec {
             }
         }
     }
+}
+
+/// Refuses raw options (`--dims`, `--type`) for a file (or a pattern of
+/// files) whose header gives the grid and type.
+pub(super) fn check_raw_options(spec: &str, options: &LoadOptions) -> Result<()> {
+    let headed = [".nii", ".nii.gz", ".nrrd", ".nhdr"];
+    if options.raw.is_some() && headed.iter().any(|e| spec.to_ascii_lowercase().ends_with(e)) {
+        return Err(Error::invalid(
+            "volume",
+            spec,
+            "--dims and --type describe a raw file, and this file's header gives its grid and type",
+        ));
+    }
+    Ok(())
 }
 
 fn is_raw(path: &Path, options: &LoadOptions) -> bool {

@@ -409,6 +409,11 @@ fn bad_bench_input_is_one_line() {
             "size must be [width, height], not 3 numbers",
         ),
         (
+            "time3",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\ntime = [0, 3, 9]"),
+            "time must be [FIRST, LAST], not 3 numbers",
+        ),
+        (
             "noframes",
             ("frames = 1\naccel", "frames = 0\naccel"),
             "error sweep frames must be at least 1",

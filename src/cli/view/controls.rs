@@ -44,6 +44,15 @@ pub fn keys() -> Vec<&'static str> {
     OWN_KEYS.iter().chain(look::KEYS).copied().collect()
 }
 
+/// A `--keys` name as the window names the key: `Comma` is ',' (the list's
+/// own separator).
+pub fn script_key(name: &str) -> std::result::Result<String, std::convert::Infallible> {
+    Ok(match name {
+        "Comma" => ",".to_string(),
+        other => other.to_string(),
+    })
+}
+
 /// Whether `Controls::key` acts on `name`.
 pub fn known_key(name: &str) -> bool {
     keys()

@@ -60,20 +60,11 @@ pub struct ViewArgs {
     #[arg(long)]
     screenshot: Option<PathBuf>,
     /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, Comma for ',', ...), for scripts and tests; `frame` draws a frame before the keys after it.
-    #[arg(long, value_delimiter = ',', value_parser = script_key)]
+    #[arg(long, value_delimiter = ',', value_parser = controls::script_key)]
     keys: Vec<String>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
     #[arg(long)]
     validate: bool,
-}
-
-/// A `--keys` name as the window names the key: `Comma` is ',' (the list's
-/// own separator).
-fn script_key(name: &str) -> std::result::Result<String, std::convert::Infallible> {
-    Ok(match name {
-        "Comma" => ",".to_string(),
-        other => other.to_string(),
-    })
 }
 
 /// In `--keys`, a frame drawn before the keys after it.
