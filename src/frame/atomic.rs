@@ -60,7 +60,21 @@ pub fn check_parent(path: &Path) -> Result<()> {
             std::io::Error::new(std::io::ErrorKind::NotFound, "its folder does not exist"),
         ));
     }
-    Ok(())
+    // The folder takes a file (the temporary one the write makes there):
+    // a read-only or full folder is found now, not after the work.
+    let probe = parent.join(format!(".lacuna-probe.{}.tmp", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        // Left by a process of this id that died: the folder took it.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(Error::io(
+            path,
+            std::io::Error::new(e.kind(), format!("its folder takes no new file: {e}")),
+        )),
+    }
 }
 
 #[cfg(test)]
@@ -108,6 +122,23 @@ mod tests {
         })
         .unwrap();
         assert_eq!(std::fs::read(&link).unwrap(), b"newer");
+        // The probe leaves the folder as it was.
+        check_parent(&dir.join("new.exr")).unwrap();
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["dangling.txt", "link.txt", "made.txt", "out.exr", "real.txt"]);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A folder that takes no file (procfs refuses new files, also to root)
+    /// is found before any work.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn a_folder_that_takes_no_file_is_refused_before_the_work() {
+        let e = check_parent(Path::new("/proc/frame.exr")).unwrap_err().to_string();
+        assert!(e.starts_with("/proc/frame.exr: its folder takes no new file"), "{e}");
     }
 }
