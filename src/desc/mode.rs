@@ -164,7 +164,7 @@ impl Iso {
         if !rgb.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c)) {
             return Err(Error::invalid(
                 "iso color",
-                format!("{rgb:?}"),
+                rgb.map(|c| c.to_string()).join(","),
                 "components must be in [0, 1]",
             ));
         }
