@@ -271,6 +271,9 @@ impl TransferFunction {
         if x1 <= x0 {
             return Err(Error::format(path, "'RGBPoints' spans an empty range"));
         }
+        if rgb.chunks(4).any(|c| c[1..].iter().any(|v| !(0.0..=1.0).contains(v))) {
+            return Err(Error::format(path, "'RGBPoints' colours must be in [0, 1]"));
+        }
         if let Some(op) = &opacity {
             if op.chunks(4).any(|c| !(0.0..=1.0).contains(&c[1])) {
                 return Err(Error::format(path, "opacity 'Points' values must be in [0, 1]"));

@@ -97,6 +97,10 @@ fn default_frames() -> u32 {
     6
 }
 
+/// The most frames, builds, rounds or warm-up runs a protocol field asks
+/// for, as `render --repeat` caps them.
+pub const MAX_RUNS: u32 = 100_000;
+
 fn default_warmup() -> u32 {
     2
 }
@@ -334,6 +338,18 @@ impl BenchConfig {
         }
         if self.frames == 0 || self.builds == 0 {
             return bad("frames and builds must be at least 1");
+        }
+        // Each is a frame or a build per structure: more is a typo.
+        for (what, n) in [
+            ("frames", self.frames),
+            ("builds", self.builds),
+            ("rounds", self.rounds),
+            ("warmup", self.warmup),
+            ("warmup_cap", self.warmup_cap),
+        ] {
+            if n > MAX_RUNS {
+                return bad(&format!("{what} {n} must be at most {MAX_RUNS}"));
+            }
         }
         // What a run keeps per structure: the phase timings of each build
         // and a time per frame and round (a few hundred bytes each at most).

@@ -228,12 +228,33 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
 
 fn read_records(path: &Path) -> Result<Vec<lacuna::bench::Record>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_str(&text).map_err(|e| Error::format(path, format!("not a bench results.json: {e}")))
+    let records: Vec<lacuna::bench::Record> =
+        serde_json::from_str(&text).map_err(|e| Error::format(path, format!("not a bench results.json: {e}")))?;
+    // What a run writes: positive finite times, one record per data set
+    // and structure; anything else would compare as NaN or pass unseen.
+    let mut seen = std::collections::HashSet::new();
+    for r in &records {
+        let what = format!("{} / {}", r.dataset, r.structure);
+        if !(r.frame.median_ms.is_finite() && r.frame.median_ms > 0.0) {
+            return Err(Error::format(
+                path,
+                format!("{what}: median_ms {} is not a positive time", r.frame.median_ms),
+            ));
+        }
+        if !seen.insert((&r.dataset, &r.structure)) {
+            return Err(Error::format(path, format!("{what} appears twice")));
+        }
+    }
+    Ok(records)
 }
 
 fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
     if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(Error::invalid("tolerance", tolerance.to_string(), "must be >= 0"));
+        return Err(Error::invalid(
+            "tolerance",
+            tolerance.to_string(),
+            "must be a finite number >= 0",
+        ));
     }
     let (ra, rb) = (read_records(a)?, read_records(b)?);
     let c = lacuna::bench::compare::Comparison::new(&ra, &rb);

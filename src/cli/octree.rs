@@ -73,6 +73,14 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
     let mode = args.mode;
     check_depth(args.max_depth)?;
     let kinds = traversals(&args.traversal)?;
+    // clap's `requires` counts --all's default as given: check it here.
+    if let (Some(path), false) = (&args.report, args.all) {
+        return Err(Error::invalid(
+            "report",
+            path.display().to_string(),
+            "is the --all comparison's tables: give --all with it",
+        ));
+    }
     for path in args.out.iter().chain(&args.report) {
         check_parent(path)?;
     }

@@ -102,6 +102,17 @@ impl Orbit {
                     "must be in (0, 180) degrees",
                 ));
             }
+            // Fitting the volume in a narrow field puts the eye as far away.
+            let fitted = 1.0 / (fov_deg / 2.0).to_radians().sin();
+            if distance.is_none() && fitted > MAX_DISTANCE {
+                return Err(Error::invalid(
+                    "field of view",
+                    fov_deg.to_string(),
+                    format!(
+                        "fits the volume from {fitted:.0} bounding-sphere radii, past the {MAX_DISTANCE} a camera may stand: take a wider field, or --distance"
+                    ),
+                ));
+            }
             if let Some(d) = distance.filter(|d| !(*d >= 0.0 && *d <= MAX_DISTANCE)) {
                 return Err(Error::invalid(
                     "camera distance",

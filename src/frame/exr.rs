@@ -99,6 +99,17 @@ impl Frame {
                 16,
             )?;
         }
+        // The crate fills a missing alpha with 1: a frame without one is
+        // not lacuna's (premultiplied RGBA), and would diff as opaque.
+        let has = |h: &exr::meta::header::Header, name: &str| h.channels.list.iter().any(|c| c.name.eq(name));
+        if let Some(rgb) = meta.headers.iter().find(|h| ["R", "G", "B"].iter().all(|c| has(h, c))) {
+            if !has(rgb, "A") {
+                return Err(crate::Error::format(
+                    origin,
+                    "EXR layer has R, G and B but no A (alpha) channel: lacuna's frames are RGBA",
+                ));
+            }
+        }
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
@@ -157,5 +168,19 @@ impl Frame {
             metadata,
             depth,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_exr_without_alpha_is_refused_not_read_as_opaque() {
+        let path = std::env::temp_dir().join(format!("lacuna-rgb-{}.exr", std::process::id()));
+        exr::prelude::write_rgb_file(&path, 4, 3, |x, y| (x as f32, y as f32, 0.5)).unwrap();
+        let e = Frame::read_exr(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(e.contains("no A (alpha) channel"), "{e}");
     }
 }

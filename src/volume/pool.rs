@@ -269,7 +269,9 @@ impl PoolLayout {
             return Err(Error::invalid(
                 "brick edge",
                 edge.to_string(),
-                format!("is longer than the volume's longest side ({longest} voxels)"),
+                format!(
+                    "is longer than the volume's longest side ({longest} voxels; `bricks` alone means bricks:{POOL_BRICK}): take bricks:EDGE with EDGE at most {longest}, or dense"
+                ),
             ));
         }
         let counts = dims.map(|d| d.div_ceil(edge));

@@ -215,6 +215,24 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         stdout.contains("largest change of a median 100.0 %") && stdout.contains("FAIL"),
         "{stdout}"
     );
+    // Records no run writes are refused, not compared as NaN: a time of
+    // zero or less, and a data set x structure twice.
+    let mut zero = records.clone();
+    zero[0].frame.median_ms = 0.0;
+    let twice = [records.clone(), records.clone()].concat();
+    for (name, bad, needle) in [
+        ("zero.json", &zero, "median_ms 0 is not a positive time"),
+        ("twice.json", &twice, "appears twice"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_string(bad).unwrap()).unwrap();
+        let (code, _, stderr) = lacuna(&["bench", "--compare", path.to_str().unwrap(), results.to_str().unwrap()]);
+        assert_eq!(code, 2, "{name}: {stderr}");
+        assert!(
+            stderr.trim().lines().count() == 1 && stderr.contains(needle),
+            "{name}: {stderr}"
+        );
+    }
     // Speed against error: 2 filters x 2 steps x 2 thresholds, errors shrink
     // with the step under each filter.
     let points: Vec<ErrorPoint> =

@@ -175,7 +175,7 @@ fn a_pool_past_the_device_limits_is_an_error_naming_the_limit() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("is longer than the volume's longest side (29 voxels)"),
+        e.contains("is longer than the volume's longest side (29 voxels; `bricks` alone means bricks:16): take bricks:EDGE with EDGE at most 29, or dense"),
         "{e}"
     );
     let few = PoolLimits {

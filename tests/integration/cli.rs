@@ -609,6 +609,11 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     );
     fails(&["render", "menger:16", "--perspective", "0"], &[], "field of view");
     fails(
+        &["render", "menger:16", "--perspective", "1e-30"],
+        &[],
+        "past the 1000 a camera may stand",
+    );
+    fails(
         &["render", "menger:16", "--perspective", "40", "--distance", "1e9"],
         &[],
         "bounding-sphere radii",
@@ -750,6 +755,7 @@ fn bad_octree_and_scene_input_is_one_line() {
     fails(&["octree", "tetra", "--resolution", "0"], &[], "invalid resolution '0'");
     fails(&["octree"], &[], "name a scene, or use --all");
     fails(&["octree", "tetra", "--out", "t.tiff"], &[], "expected a .exr");
+    fails(&["octree", "tetra", "--report", "r.md"], &[], "give --all with it");
     // Checked before the (long) comparison starts.
     fails(
         &["octree", "--all", "--report", "/no/such/dir/t.md"],

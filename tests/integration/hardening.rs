@@ -82,14 +82,33 @@ fn sizes_are_checked_before_allocation() {
             "bench",
             "--quick",
             "--frames",
-            "4000000000",
+            "100000",
+            "--rounds",
+            "100000",
             "--out",
             bench_out.to_str().unwrap(),
             "--quiet",
         ],
         false,
-        &["4000000000 frames", "bytes of host memory"],
+        &["100000 frames x 100000 rounds", "bytes of host memory"],
     );
+    // Past the cap of runs a field may ask for, before any work.
+    for flag in ["--frames", "--warmup", "--builds", "--rounds"] {
+        let what = flag.trim_start_matches('-');
+        fails(
+            d,
+            &[
+                "bench",
+                "--quick",
+                flag,
+                "4000000000",
+                "--out",
+                bench_out.to_str().unwrap(),
+            ],
+            false,
+            &[&format!("{what} 4000000000 must be at most 100000")],
+        );
+    }
     // The device's limits, from the spec, before the volume is generated:
     // a volume of one image dimension's maximum squared, deep enough to
     // pass maxMemoryAllocationSize, stored dense (auto would store it in

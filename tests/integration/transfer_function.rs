@@ -108,6 +108,10 @@ fn paraview_json_colormaps() {
         (r#"{"RGBPoints":[0,0,0]}"#, "groups of 4"),
         (r#"{"RGBPoints":[1,0,0,0, 0,1,1,1]}"#, "ascending"),
         (r#"{"RGBPoints":[0,0,0,0, 1,1,1,1],"Points":[0,2,0.5,0]}"#, "in [0, 1]"),
+        (
+            r#"{"RGBPoints":[0,5,0,0, 1,0,1,0]}"#,
+            "'RGBPoints' colours must be in [0, 1]",
+        ),
         (r#"{"RGBPoints":[0,0,0,0, 1,"a",1,1]}"#, "not a finite number"),
     ] {
         std::fs::write(&p, text).unwrap();

@@ -224,7 +224,7 @@ fn bad_view_input_is_one_line_before_any_window() {
     let cases: [(Vec<&str>, &str); 7] = [
         (
             vec!["view", "nbody:16", "--keys", "t,Teleport"],
-            "invalid key 'Teleport'",
+            "invalid key 'Teleport': expected one of:",
         ),
         (
             vec![

@@ -53,6 +53,12 @@ pub fn script_key(name: &str) -> std::result::Result<String, std::convert::Infal
     })
 }
 
+/// Every key name as `--keys` takes it, listed for an error.
+pub fn script_names() -> String {
+    let names: Vec<&str> = keys().into_iter().map(|k| if k == "," { "Comma" } else { k }).collect();
+    names.join(", ")
+}
+
 /// Whether `Controls::key` acts on `name`.
 pub fn known_key(name: &str) -> bool {
     keys()
@@ -468,6 +474,10 @@ mod tests {
             assert!(known_key(key) && (key.len() > 1 || known_key(&key.to_uppercase())));
         }
         assert!(!known_key("z") && !known_key("Arrowleft") && !known_key(""));
+        // `--keys` names ',' as Comma: the name maps to the key, and the
+        // error's list shows the name.
+        assert_eq!(script_key("Comma"), Ok(",".to_string()));
+        assert!(script_names().contains(", Comma, ") && !script_names().contains(", , "));
     }
 
     #[test]

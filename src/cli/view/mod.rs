@@ -126,7 +126,7 @@ impl ViewArgs {
             return Err(Error::invalid(
                 "key",
                 key.clone(),
-                format!("expected one of: {}, or {FRAME_KEY}", controls::keys().join(", ")),
+                format!("expected one of: {}, or {FRAME_KEY}", controls::script_names()),
             ));
         }
         Ok(desc)
