@@ -334,10 +334,16 @@ impl BenchConfig {
         let bad = |m: &str| Err(Error::format(origin, m.to_string()));
         let side = crate::limits::MAX_FRAME_SIDE;
         if self.size.iter().any(|&s| s == 0 || s > side) {
-            return bad(&format!("width and height must be in 1..={side} pixels"));
+            return bad(&format!(
+                "width and height must be in 1..={side} pixels, not {}x{}",
+                self.size[0], self.size[1]
+            ));
         }
-        if self.frames == 0 || self.builds == 0 {
-            return bad("frames and builds must be at least 1");
+        if self.frames == 0 {
+            return bad("frames and builds must be at least 1: frames is 0");
+        }
+        if self.builds == 0 {
+            return bad("frames and builds must be at least 1: builds is 0");
         }
         // Each is a frame or a build per structure: more is a typo.
         for (what, n) in [
@@ -375,7 +381,7 @@ impl BenchConfig {
             return bad("stable must be a fraction in (0, 1), like 0.05");
         }
         if self.ert.is_some_and(|t| !(t > 0.0 && t <= 1.0)) {
-            return bad("ert must be in (0, 1]");
+            return bad(&format!("ert must be in (0, 1], not {}", self.ert.unwrap_or_default()));
         }
         if !(self.step.is_finite() && self.step > 0.0) {
             return bad("step must be > 0");
