@@ -59,6 +59,10 @@ pub fn zeroed<T: Clone + Default>(what: impl std::fmt::Display, count: u64) -> R
 /// before any memory is sought for it.
 pub const MAX_FRAME_SIDE: u32 = 16384;
 
+/// The most frames, builds, rounds or warm-up runs a command or a bench
+/// protocol asks for: each is a frame or a build, and more is a typo.
+pub const MAX_RUNS: u32 = 100_000;
+
 /// Checks that rays through a `dims` box sampled every `step` voxels take
 /// at most `MAX_SAMPLES_PER_RAY` samples, and that the step is no longer
 /// than the box's diagonal (a longer one samples a ray at most once);

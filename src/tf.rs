@@ -282,29 +282,23 @@ impl TransferFunction {
                 return Err(Error::format(path, "opacity 'Points' x values must be ascending"));
             }
         }
-        // Piecewise-linear interpolation over (x, values...) groups of
-        // `stride`, ascending in x: between the first group at or past x and
-        // the one before it (a binary search, so a colormap of millions of
-        // points builds its table at once).
-        let interp = |pts: &[f64], stride: usize, x: f64, channel: usize| -> f64 {
-            let n = pts.len() / stride;
-            let at = |g: usize, c: usize| pts[g * stride + c];
-            let (mut lo, mut hi) = (0, n);
-            while lo < hi {
-                let mid = (lo + hi) / 2;
-                if at(mid, 0) < x {
-                    lo = mid + 1;
-                } else {
-                    hi = mid;
-                }
-            }
-            match lo {
-                0 => at(0, channel),
-                j if j == n => at(n - 1, channel),
+        // Piecewise-linear interpolation over (x, values...) groups,
+        // ascending in x: between the first group at or past x and the one
+        // before it (a binary search, so a colormap of millions of points
+        // builds its table at once).
+        let (rgb, opacity) = (
+            rgb.chunks(4).collect::<Vec<_>>(),
+            opacity.as_ref().map(|op| op.chunks(4).collect::<Vec<_>>()),
+        );
+        let interp = |groups: &[&[f64]], x: f64, channel: usize| -> f64 {
+            match groups.partition_point(|g| g[0] < x) {
+                0 => groups[0][channel],
+                j if j == groups.len() => groups[j - 1][channel],
                 j => {
-                    let span = at(j, 0) - at(j - 1, 0);
-                    let f = if span > 0.0 { (x - at(j - 1, 0)) / span } else { 1.0 };
-                    at(j - 1, channel) + (at(j, channel) - at(j - 1, channel)) * f
+                    let (a, b) = (groups[j - 1], groups[j]);
+                    let span = b[0] - a[0];
+                    let f = if span > 0.0 { (x - a[0]) / span } else { 1.0 };
+                    a[channel] + (b[channel] - a[channel]) * f
                 }
             }
         };
@@ -312,13 +306,13 @@ impl TransferFunction {
             .map(|i| {
                 let x = x0 + (x1 - x0) * entry_value(i) as f64;
                 let a = match &opacity {
-                    Some(op) => interp(op, 4, x, 1),
+                    Some(op) => interp(op, x, 1),
                     None => entry_value(i) as f64,
                 };
                 [
-                    interp(&rgb, 4, x, 1) as f32,
-                    interp(&rgb, 4, x, 2) as f32,
-                    interp(&rgb, 4, x, 3) as f32,
+                    interp(&rgb, x, 1) as f32,
+                    interp(&rgb, x, 2) as f32,
+                    interp(&rgb, x, 3) as f32,
                     a as f32,
                 ]
             })

@@ -97,10 +97,6 @@ fn default_frames() -> u32 {
     6
 }
 
-/// The most frames, builds, rounds or warm-up runs a protocol field asks
-/// for, as `render --repeat` caps them.
-pub const MAX_RUNS: u32 = 100_000;
-
 fn default_warmup() -> u32 {
     2
 }
@@ -339,13 +335,12 @@ impl BenchConfig {
                 self.size[0], self.size[1]
             ));
         }
-        if self.frames == 0 {
-            return bad("frames and builds must be at least 1: frames is 0");
+        for (what, n) in [("frames", self.frames), ("builds", self.builds)] {
+            if n == 0 {
+                return bad(&format!("frames and builds must be at least 1: {what} is 0"));
+            }
         }
-        if self.builds == 0 {
-            return bad("frames and builds must be at least 1: builds is 0");
-        }
-        // Each is a frame or a build per structure: more is a typo.
+        let most = crate::limits::MAX_RUNS;
         for (what, n) in [
             ("frames", self.frames),
             ("builds", self.builds),
@@ -353,8 +348,8 @@ impl BenchConfig {
             ("warmup", self.warmup),
             ("warmup_cap", self.warmup_cap),
         ] {
-            if n > MAX_RUNS {
-                return bad(&format!("{what} {n} must be at most {MAX_RUNS}"));
+            if n > most {
+                return bad(&format!("{what} {n} must be at most {most}"));
             }
         }
         // What a run keeps per structure: the phase timings of each build

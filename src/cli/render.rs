@@ -6,6 +6,7 @@ use clap::Args;
 use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
+use lacuna::limits::MAX_RUNS;
 use lacuna::render::{self, FrameDesc, Mode, Octants, Renderer, Scene};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
@@ -50,9 +51,6 @@ pub struct RenderArgs {
     pub(super) validate: bool,
 }
 
-/// The most timed (or untimed) builds and frames `render` runs.
-const MAX_RUNS: u32 = 100_000;
-
 impl RenderArgs {
     /// Every option checked, before any file is read or GPU work is done.
     pub(super) fn options(&self) -> Result<(Params, FrameDesc, Option<FrameFormat>)> {
@@ -61,7 +59,6 @@ impl RenderArgs {
         if self.repeat == 0 {
             return Err(Error::invalid("repeat", "0", "must be at least 1"));
         }
-        // Each is a build and a frame; more is a typo, not a measurement.
         for (what, n) in [("repeat", self.repeat), ("warmup", self.warmup)] {
             if n > MAX_RUNS {
                 return Err(Error::invalid(what, n.to_string(), format!("at most {MAX_RUNS}")));

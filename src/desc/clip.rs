@@ -20,26 +20,15 @@ pub struct Clip {
 impl Clip {
     /// Keeps `a x + b y + c z + d >= 0`.
     pub fn plane(mut self, plane: [f32; 4]) -> Result<Clip> {
+        let shown = plane.map(|v| v.to_string()).join(",");
         if !plane.iter().all(|v| v.is_finite()) {
-            return Err(Error::invalid(
-                "clip",
-                plane.map(|v| v.to_string()).join(","),
-                "must be four finite numbers A,B,C,D",
-            ));
+            return Err(Error::invalid("clip", shown, "must be four finite numbers A,B,C,D"));
         }
         if plane[..3] == [0.0; 3] {
-            return Err(Error::invalid(
-                "clip",
-                plane.map(|v| v.to_string()).join(","),
-                "the normal (A, B, C) is zero",
-            ));
+            return Err(Error::invalid("clip", shown, "the normal (A, B, C) is zero"));
         }
         if self.count == MAX_CLIP {
-            return Err(Error::invalid(
-                "clip",
-                plane.map(|v| v.to_string()).join(","),
-                format!("at most {MAX_CLIP} clip planes"),
-            ));
+            return Err(Error::invalid("clip", shown, format!("at most {MAX_CLIP} clip planes")));
         }
         self.planes[self.count] = plane;
         self.count += 1;

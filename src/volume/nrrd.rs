@@ -120,14 +120,14 @@ fn axes(path: &Path, dimension: usize, sizes: &[f64], kinds: Option<&str>) -> Re
             ),
         ));
     }
-    if dimension == 3 && sizes.len() == 3 {
+    if dimension == 3 {
         return Ok(Axes {
             spatial: [0, 1, 2],
             channels: 1,
             steps: 1,
         });
     }
-    if dimension != 4 || sizes.len() != 4 {
+    if dimension != 4 {
         return Err(Error::format(
             path,
             format!("NRRD has dimension {dimension}; lacuna reads 3-D volumes, with channels or time as a 4th axis"),

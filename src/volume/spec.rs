@@ -39,18 +39,7 @@ impl VolumeSpec {
             ));
         }
         check_raw_options(spec, options)?;
-        if path.exists() {
-            return Ok(VolumeSpec::File(path.to_path_buf()));
-        }
-        if options.raw.is_some() {
-            let name = spec.split(':').next().unwrap_or("");
-            if Generator::from_name(name).is_some() && spec.contains(':') {
-                return Err(Error::invalid(
-                    "volume",
-                    spec,
-                    "--dims and --type describe a raw file, and this names a generator",
-                ));
-            }
+        if options.raw.is_some() || path.exists() {
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }
         if spec.contains('+') {
@@ -166,17 +155,21 @@ impl VolumeSpec {
 }
 
 /// Refuses raw options (`--dims`, `--type`) for a file (or a pattern of
-/// files) whose header gives the grid and type.
+/// files) whose header gives the grid and type, and for a generator.
 pub(super) fn check_raw_options(spec: &str, options: &LoadOptions) -> Result<()> {
-    let headed = [".nii", ".nii.gz", ".nrrd", ".nhdr"];
-    if options.raw.is_some() && headed.iter().any(|e| spec.to_ascii_lowercase().ends_with(e)) {
-        return Err(Error::invalid(
-            "volume",
-            spec,
-            "--dims and --type describe a raw file, and this file's header gives its grid and type",
-        ));
-    }
-    Ok(())
+    let path = Path::new(spec);
+    let generator = || spec.contains(':') && Generator::from_name(spec.split(':').next().unwrap_or("")).is_some();
+    let why = match () {
+        _ if options.raw.is_none() => return Ok(()),
+        _ if is_nrrd(path) || is_nifti(path) => "this file's header gives its grid and type",
+        _ if !path.exists() && generator() => "this names a generator",
+        _ => return Ok(()),
+    };
+    Err(Error::invalid(
+        "volume",
+        spec,
+        format!("--dims and --type describe a raw file, and {why}"),
+    ))
 }
 
 fn is_raw(path: &Path, options: &LoadOptions) -> bool {
@@ -184,7 +177,6 @@ fn is_raw(path: &Path, options: &LoadOptions) -> bool {
     options.raw.is_some() || name.ends_with(".raw")
 }
 
-#[cfg(feature = "loaders")]
 pub(super) fn is_nifti(path: &Path) -> bool {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_lowercase();
     name.ends_with(".nii") || name.ends_with(".nii.gz")

@@ -553,38 +553,24 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
     fails(&["render", "menger:16", "--ert", "1.5"], &[], "invalid ert");
     fails(&["render", "menger:16", "--repeat", "0"], &[], "invalid repeat '0'");
     fails(&["info", ""], &[], "invalid volume '': is empty");
-    fails(
-        &["info", "menger:27", "--dims", "4x4x4", "--type", "uint8"],
-        &[],
-        "--dims and --type describe a raw file, and this names a generator",
-    );
-    fails(
-        &[
-            "info",
+    // --dims and --type are a raw file's: refused with a generator, a file
+    // whose header gives them, or a pattern of such files.
+    let raw = ["--dims", "4x4x4", "--type", "uint8"];
+    for (volume, why) in [
+        ("menger:27", "this names a generator"),
+        (
             "/usr/share/mricron/templates/ch2.nii.gz",
-            "--dims",
-            "4x4x4",
-            "--type",
-            "uint8",
-        ],
-        &[],
-        "this file's header gives its grid and type",
-    );
-    fails(
-        &["info", "t_%02d.nii.gz", "--dims", "4x4x4", "--type", "uint8"],
-        &[],
-        "this file's header gives its grid and type",
-    );
-    fails(
-        &["render", "menger:16", "--repeat", "4000000000"],
-        &[],
-        "invalid repeat '4000000000': at most 100000",
-    );
-    fails(
-        &["render", "menger:16", "--warmup", "100001"],
-        &[],
-        "invalid warmup '100001': at most 100000",
-    );
+            "this file's header gives its grid and type",
+        ),
+        ("t_%02d.nii.gz", "this file's header gives its grid and type"),
+    ] {
+        let args = [&["info", volume][..], &raw].concat();
+        fails(&args, &[], &format!("--dims and --type describe a raw file, and {why}"));
+    }
+    for (flag, n) in [("--repeat", "4000000000"), ("--warmup", "100001")] {
+        let needle = format!("invalid {} '{n}': at most 100000", &flag[2..]);
+        fails(&["render", "menger:16", flag, n], &[], &needle);
+    }
     fails(
         &["render", "menger:16", "--accel", "magic"],
         &[],
