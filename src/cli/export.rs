@@ -3,7 +3,7 @@
 
 use super::{load_volume, parse_dims, parse_type};
 use clap::Args;
-use lacuna::volume::{check_raw_out, parse_export_type, write_raw, VoxelType};
+use lacuna::volume::{check_raw_out, parse_export_type, write_raw, LoadOptions, RawLayout, Series, VoxelType};
 use lacuna::Result;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -24,12 +24,23 @@ pub struct ExportArgs {
     /// Voxel type of a raw input file whose name does not give it (render's --type).
     #[arg(long, value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     source_type: Option<VoxelType>,
+    /// Time step of a series (a file pattern, a NIfTI time axis, or a generator's animation), from 0.
+    #[arg(long, default_value_t = 0)]
+    time: u32,
 }
 
 pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     // The output's folder is checked before a (possibly long) load.
     check_raw_out(&args.out)?;
-    let volume = load_volume(&args.volume, args.dims, args.source_type)?;
+    let volume = match args.time {
+        0 => load_volume(&args.volume, args.dims, args.source_type)?,
+        k => {
+            let raw = args.dims.zip(args.source_type).map(|(dims, ty)| RawLayout { dims, ty });
+            let series = Series::open(&args.volume, &LoadOptions { raw })?;
+            series.check_step(k)?;
+            series.load(k, None)?
+        }
+    };
     let written = write_raw(&volume, &args.out, args.ty)?;
     println!("{}", written.path.display());
     let [sx, sy, sz] = volume.spacing;

@@ -229,6 +229,28 @@ fn the_default_type_is_the_smallest_that_holds_every_value() {
 }
 
 #[test]
+fn export_time_writes_that_step_of_a_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let series = lacuna::volume::Series::open("nbody:20", &LoadOptions::default()).unwrap();
+    let steps = [0u32, 3].map(|k| series.load(k, None).unwrap());
+    assert_ne!(
+        u8s(&steps[0]),
+        u8s(&steps[1]),
+        "steps 0 and 3 are alike: the test shows nothing"
+    );
+    for (k, step) in [0u32, 3].iter().zip(&steps) {
+        let stem = dir.path().join(format!("step{k}"));
+        let r = lacuna(
+            &["export", "nbody:20", stem.to_str().unwrap(), "--time", &k.to_string()],
+            &[],
+        );
+        assert_eq!(r.code, 0, "{}", r.stderr);
+        let back = load(&dir.path().join(format!("step{k}_20x20x20_uint8.raw")));
+        assert_eq!(u8s(&back), u8s(step), "step {k}");
+    }
+}
+
+#[test]
 fn export_from_the_cli_reads_back_and_renders_the_same_image() {
     let dir = tempfile::tempdir().unwrap();
     let stem = dir.path().join("menger");
@@ -373,7 +395,15 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
          uint16 holds every value",
         (first * 47 % 105) * 3
     );
-    let cases: [(&[&str], &str); 18] = [
+    let cases: [(&[&str], &str); 20] = [
+        (
+            &["nbody:9", "{out}/v", "--time", "64"],
+            "invalid time '64': nbody:9 has 64 steps, 0 to 63",
+        ),
+        (
+            &["{in}/big_7x5x3_uint16.raw", "{out}/v", "--time", "1"],
+            "big_7x5x3_uint16.raw is one volume, not a time series",
+        ),
         (&["menger:9", "{out}/existing"], "is a folder"),
         (&["menger:9", "{out}/"], "is a folder"),
         (&["menger:9", "{out}/missing/v"], "its folder does not exist"),
