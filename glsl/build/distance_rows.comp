@@ -66,8 +66,12 @@ struct Row {
 
 Row row_cells(uint row) {
     uvec3 c;
-    uint a1 = (pc.axis + 1u) % 3u;
-    uint a2 = (pc.axis + 2u) % 3u;
+    // The lower other axis varies fastest from row to row: neighbouring
+    // lanes' cells are neighbours in memory along y and z passes (x then
+    // varies fastest; with z, lanes of a y pass read a plane apart each,
+    // and the pass took 2.3 times as long as the z pass).
+    uint a1 = pc.axis == 0u ? 1u : 0u;
+    uint a2 = pc.axis == 2u ? 1u : 3u - pc.axis - a1;
     c[pc.axis] = 0u;
     c[a1] = row % pc.counts[a1];
     c[a2] = row / pc.counts[a1];
