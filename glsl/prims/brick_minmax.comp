@@ -16,7 +16,7 @@ layout(std430, set = 0, binding = 1) writeonly buffer Ranges { vec2 ranges[]; };
 #include "bricks.glsl"
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
-    uvec4 counts; // xyz: bricks per axis; w: total bricks
+    uvec4 counts; // xyz: bricks per axis; w: total bricks (LISTED: listed bricks)
     vec4 lo;      // per channel: texel normalisation v = (texel - lo) * scale
     vec4 scale;
     uint apron;
@@ -31,6 +31,10 @@ layout(push_constant) uniform Push {
 layout(constant_id = 0) const uint SOURCE = 0u; // SOURCE_*
 layout(constant_id = 1) const uint KIND = 0u;   // SOURCE_CELLS: VOLUME_KIND, 0 float, 1 unorm8, 2 unorm16
 layout(constant_id = 2) const uint CHANNELS = 1u;
+// 1: only the bricks `listed` names (a time step's changed bricks, the
+// others kept from the step before); counts.w is then their number.
+layout(constant_id = 3) const uint LISTED = 0u;
+layout(std430, set = 0, binding = 7) readonly buffer Listed { uint listed[]; };
 const uint SOURCE_IMAGE = 0u; // the dense volume image
 const uint SOURCE_CELLS = 1u; // its cells copy (one channel)
 const uint SOURCE_POOL = 2u;  // bricked storage: the brick table and pools
@@ -156,10 +160,11 @@ void take_cells(ivec3 lo, ivec3 hi, inout vec4 mn, inout vec4 mx) {
 }
 
 void main() {
-    uint b = linear_index(pc.groups_x);
-    if (b >= pc.counts.w) {
+    uint i = linear_index(pc.groups_x);
+    if (i >= pc.counts.w) {
         return;
     }
+    uint b = LISTED != 0u ? listed[i] : i;
     uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     ivec3 lo = max(ivec3(bc * pc.dims.w) - int(pc.apron), ivec3(0));
     ivec3 hi = min(ivec3(bc * pc.dims.w + pc.dims.w - 1u) + int(pc.apron), ivec3(pc.dims.xyz) - 1);

@@ -3,8 +3,10 @@
 //! change then reclassifies in O(bricks).
 
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Timer};
+use crate::gpu::record::{self, Access};
+use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Staging, Timer};
 use crate::prims::brick_minmax::{brick_counts, coarsens_exactly, BrickMinMax};
+use crate::prims::entry_barrier;
 use crate::volume::GpuVolume;
 
 /// Brick edge in voxels for the LBVH and classification.
@@ -19,33 +21,89 @@ pub struct GpuBricks {
     pub ranges: Buffer,
     /// The volume's channels.
     pub channels: u32,
+    /// How many bricks' ranges were read from the voxels (`total`, or a
+    /// series step's changed bricks; 0 when coarsened from finer ranges).
+    pub computed: u64,
+    /// The changed bricks' list a step's ranges were recorded with: kept
+    /// until the submission completed.
+    _list: Option<(Buffer, Staging)>,
+}
+
+/// Where `GpuBricks::record` takes the ranges from.
+pub enum RangesFrom<'a> {
+    /// The volume's voxels, every brick.
+    Volume,
+    /// Ranges of smaller bricks whose edge divides this one's, recorded
+    /// before (used where the volume's normalisation allows it:
+    /// `coarsens_exactly`; else the voxels).
+    Finer(&'a GpuBricks),
+    /// A series step's: the step before's ranges of these bricks (`ranges`,
+    /// the same grid, normalisation and channels), and the bricks whose
+    /// voxels changed since (`StepDelta::bricks_changed`), computed from
+    /// the voxels; the others are copied.
+    Step { ranges: &'a Buffer, changed: Vec<u32> },
 }
 
 impl GpuBricks {
-    /// Records the computation of the ranges (timed as `pass`) into `cmd`:
-    /// from `finer` (ranges of smaller bricks whose edge divides this one's,
-    /// recorded before) where the volume's normalisation allows it
-    /// (`coarsens_exactly`), the same ranges from fewer reads; else from
-    /// the volume. Ends with compute writes of `ranges` (the `prims`
-    /// convention).
+    /// Records the computation of the ranges (timed as `pass`) into `cmd`,
+    /// `from` where it can (`RangesFrom`), the same ranges from fewer
+    /// reads. Ends with compute and transfer writes of `ranges` (the
+    /// `prims` convention; `entry_barrier` makes both visible).
     pub fn record(
-        &self,
+        &mut self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
         pass: &str,
         minmax: &BrickMinMax,
         volume: &GpuVolume,
-        finer: Option<&GpuBricks>,
+        from: RangesFrom,
     ) -> Result<()> {
         let p = timer.begin(cmd, pass)?;
-        match finer.filter(|f| self.brick.is_multiple_of(f.brick) && coarsens_exactly(volume)) {
-            Some(f) => {
-                minmax.record_coarsen(cmd, volume, (&f.ranges, self.brick / f.brick), self.brick, &self.ranges)?
+        match from {
+            RangesFrom::Finer(f) if self.brick.is_multiple_of(f.brick) && coarsens_exactly(volume) => {
+                minmax.record_coarsen(cmd, volume, (&f.ranges, self.brick / f.brick), self.brick, &self.ranges)?;
+                self.computed = 0;
             }
-            None => minmax.record(cmd, volume, self.brick, 1, &self.ranges)?,
+            RangesFrom::Step { ranges, changed } => {
+                let ctx = volume.context();
+                let device = ctx.device();
+                entry_barrier(device, cmd);
+                let region = [vk::BufferCopy::default().size(self.ranges.size())];
+                unsafe { device.cmd_copy_buffer(cmd, ranges.raw, self.ranges.raw, &region) };
+                self.computed = changed.len() as u64;
+                if !changed.is_empty() {
+                    let (list, staging) = Buffer::record_with_data(
+                        ctx,
+                        cmd,
+                        "changed bricks",
+                        bytemuck::cast_slice(&changed),
+                        vk::BufferUsageFlags::STORAGE_BUFFER,
+                    )?;
+                    let count = changed.len() as u32;
+                    minmax.record_listed(cmd, volume, (self.brick, 1), &self.ranges, (&list, count))?;
+                    self._list = Some((list, staging));
+                } else {
+                    record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+                }
+            }
+            _ => {
+                minmax.record(cmd, volume, self.brick, 1, &self.ranges)?;
+                self.computed = self.total;
+            }
         }
         timer.end(cmd, p);
         Ok(())
+    }
+
+    /// Records a copy of the ranges into `to` (a buffer of their size) for
+    /// the next step (`RangesFrom::Step`), after `entry_barrier`; ends with
+    /// one, so the copy's read is ordered before later writes.
+    pub fn record_keep(&self, cmd: vk::CommandBuffer, ctx: &Context, to: &Buffer) {
+        let device = ctx.device();
+        entry_barrier(device, cmd);
+        let region = [vk::BufferCopy::default().size(self.ranges.size())];
+        unsafe { device.cmd_copy_buffer(cmd, self.ranges.raw, to.raw, &region) };
+        entry_barrier(device, cmd);
     }
 
     /// The ranges buffer of `volume`'s `brick`^3 bricks, not yet computed.
@@ -70,8 +128,11 @@ impl GpuBricks {
             ctx,
             "brick ranges",
             total * 8 * volume.channels as u64,
-            // A grid's MIP frames copy them (src/accel/grid.rs).
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+            // A grid's MIP frames copy them (src/accel/grid.rs); a series
+            // step's are copied from and to the step before's.
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_SRC
+                | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
         Ok(GpuBricks {
@@ -80,6 +141,8 @@ impl GpuBricks {
             total,
             ranges,
             channels: volume.channels,
+            computed: 0,
+            _list: None,
         })
     }
 }

@@ -3,9 +3,10 @@
 //! model), and the per-volume value ranges builds read. `Builder::build`
 //! itself is in `method.rs`, beside the `Method` trait it calls.
 
-use super::bricks::{self, GpuBricks};
+use super::bricks::{self, GpuBricks, RangesFrom};
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Context, Timer, Timings};
+use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer, Timings};
+use crate::prims::brick_minmax::coarsens_exactly;
 use crate::prims::BrickMinMax;
 use crate::volume::GpuVolume;
 use std::any::{Any, TypeId};
@@ -88,15 +89,59 @@ fn missing(what: &str) -> Error {
 /// Builds structures: holds the context and what is made once per context.
 pub struct Builder {
     ctx: Context,
-    shared: Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>,
+    shared: Arc<Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>>,
+    /// The last series step's ranges, per brick edge: the next step's
+    /// start from them (`RangesFrom::Step`).
+    step_ranges: Mutex<Vec<StepRanges>>,
+}
+
+/// A copy of a series step's ranges of one brick edge.
+struct StepRanges {
+    /// The step's `StepMark::id`.
+    step: u64,
+    brick: u32,
+    /// What else the ranges depend on: the grid, channels, normalisation.
+    dims: [u32; 3],
+    channels: u32,
+    norms: [[f32; 2]; crate::volume::MAX_CHANNELS],
+    ranges: Buffer,
+}
+
+impl StepRanges {
+    /// The bricks of `volume` whose ranges differ from these, where these
+    /// are its step's or the step before's ranges of `brick`^3 bricks.
+    fn changed_for(&self, volume: &GpuVolume, brick: u32) -> Option<Vec<u32>> {
+        let same = self.brick == brick
+            && self.dims == volume.dims
+            && self.channels == volume.channels
+            && self.norms == volume.norms;
+        let mark = volume.step_mark().filter(|_| same)?;
+        match &mark.since {
+            _ if mark.id == self.step => Some(Vec::new()),
+            Some((before, delta)) if *before == self.step => Some(delta.bricks_changed(brick)),
+            _ => None,
+        }
+    }
 }
 
 impl Builder {
     pub fn new(ctx: &Context) -> Result<Self> {
         Ok(Builder {
             ctx: ctx.clone(),
-            shared: Mutex::new(HashMap::new()),
+            shared: Arc::new(Mutex::new(HashMap::new())),
+            step_ranges: Mutex::new(Vec::new()),
         })
+    }
+
+    /// A builder sharing this one's per-context objects (kernels, the cost
+    /// model) with series step ranges of its own: `bench` times each
+    /// structure's new step as if it played the series alone.
+    pub fn fork(&self) -> Builder {
+        Builder {
+            ctx: self.ctx.clone(),
+            shared: self.shared.clone(),
+            step_ranges: Mutex::new(Vec::new()),
+        }
     }
 
     pub fn context(&self) -> &Context {
@@ -132,15 +177,27 @@ impl Builder {
     }
 
     /// The per-volume ranges of every kind in `kinds` (each once), computed
-    /// and waited for: once per volume upload.
+    /// and waited for: once per volume upload. A series step's
+    /// (`GpuVolume::step_mark`) start from the step before's where this
+    /// builder computed them: only the bricks whose voxels changed are
+    /// computed, the same ranges bit for bit.
     pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
         // One submission, one timed pass a kind.
         let passes = distinct(kinds)?.len() as u32;
         let mut timer = Timer::new(&self.ctx, passes)?;
+        let mut kept = Vec::new();
         let mut ranges = self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_ranges(cmd, Some(&mut timer), kinds, volume)
+            self.record_kinds(cmd, Some(&mut timer), kinds, volume, Some(&mut kept))
         })?;
+        // The copies kept for the next step are whole now.
+        let mut step_ranges = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
+        for (brick, step) in kept {
+            if let Some(k) = step_ranges.iter_mut().find(|k| k.brick == brick) {
+                k.step = step;
+            }
+        }
+        drop(step_ranges);
         let t = timer.results()?;
         let several = ranges.cells.len() > 1;
         if let Some((_, ms)) = &mut ranges.bricks {
@@ -153,29 +210,107 @@ impl Builder {
     }
 
     /// As `ranges`, recorded into `cmd` (passes "ranges" and "cell ranges"
-    /// on `timer`): the ranges are ready after the submission, and
-    /// `Ranges::ms` is NaN for them (read the caller's timer). Ends with
-    /// compute writes: a barrier from `Access::COMPUTE_WRITE` to
-    /// `Access::COMPUTE_READ` before a build reads them (`record_build`
-    /// begins with one).
+    /// on `timer`), every brick from the voxels: the ranges are ready after
+    /// the submission, and `Ranges::ms` is NaN for them (read the caller's
+    /// timer). Ends with compute writes: a barrier from
+    /// `Access::COMPUTE_WRITE` to `Access::COMPUTE_READ` before a build
+    /// reads them (`record_build` begins with one).
     pub fn record_ranges(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        kinds: &[RangeKind],
+        volume: &GpuVolume,
+    ) -> Result<Ranges> {
+        self.record_kinds(cmd, timer, kinds, volume, None)
+    }
+
+    /// `record_ranges`; with `kept`, from and for a series step's kept
+    /// ranges, `kept` hearing which copies hold which step once the
+    /// submission completed.
+    fn record_kinds(
         &self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
         kinds: &[RangeKind],
         volume: &GpuVolume,
+        mut kept: Option<&mut Vec<(u32, u64)>>,
     ) -> Result<Ranges> {
         let mut ranges = Ranges::default();
         let kinds = distinct(kinds)?;
         let several = several_cells(&kinds);
+        let minmax = self.shared::<BrickMinMax>()?;
         for kind in kinds {
-            let minmax = self.shared::<BrickMinMax>()?;
             let (size, pass) = size_and_pass(kind, several);
-            let b = GpuBricks::allocate(&self.ctx, volume, size)?;
-            b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, ranges.finer(size))?;
+            let mut b = GpuBricks::allocate(&self.ctx, volume, size)?;
+            let finer = ranges.finer(size).filter(|_| coarsens_exactly(volume));
+            let step = volume.step_mark().map(|m| m.id);
+            match (finer, step, kept.as_deref_mut()) {
+                (Some(f), _, _) => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Finer(f))?,
+                (None, Some(step), Some(kept)) => {
+                    self.record_step_ranges(cmd, timer.as_deref_mut(), &pass, &mut b, volume)?;
+                    kept.push((size, step));
+                }
+                _ => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Volume)?,
+            }
             ranges.insert(kind, b, f64::NAN);
         }
         Ok(ranges)
+    }
+
+    /// Records `b`'s ranges from the step before's where this builder kept
+    /// them (only the changed bricks computed), else from the volume, and a
+    /// copy of them for the next step (marked as no step's until the
+    /// submission completed: `ranges`).
+    fn record_step_ranges(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        pass: &str,
+        b: &mut GpuBricks,
+        volume: &GpuVolume,
+    ) -> Result<()> {
+        let minmax = self.shared::<BrickMinMax>()?;
+        let mut kept = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
+        let at = kept.iter().position(|k| k.brick == b.brick);
+        match at.and_then(|i| Some((i, kept[i].changed_for(volume, b.brick)?))) {
+            Some((i, changed)) => {
+                let from = RangesFrom::Step {
+                    ranges: &kept[i].ranges,
+                    changed,
+                };
+                b.record(cmd, timer, pass, &minmax, volume, from)?;
+            }
+            None => b.record(cmd, timer, pass, &minmax, volume, RangesFrom::Volume)?,
+        }
+        let i = match at.filter(|&i| kept[i].ranges.size() == b.ranges.size()) {
+            Some(i) => i,
+            None => {
+                if let Some(i) = at {
+                    kept.swap_remove(i);
+                }
+                let ranges = Buffer::new(
+                    &self.ctx,
+                    "last step's brick ranges",
+                    b.ranges.size(),
+                    vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuOnly,
+                )?;
+                kept.push(StepRanges {
+                    step: 0,
+                    brick: b.brick,
+                    dims: volume.dims,
+                    channels: volume.channels,
+                    norms: volume.norms,
+                    ranges,
+                });
+                kept.len() - 1
+            }
+        };
+        b.record_keep(cmd, &self.ctx, &kept[i].ranges);
+        let k = &mut kept[i];
+        (k.step, k.dims, k.channels, k.norms) = (0, volume.dims, volume.channels, volume.norms);
+        Ok(())
     }
 }
 

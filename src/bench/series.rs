@@ -93,7 +93,12 @@ impl StepBench<'_> {
         // one, per structure.
         let mut choices: Vec<Option<Choice>> = vec![None; n];
         let mut kept = vec![0u32; n];
-        let mut last_gv: Option<GpuVolume> = None;
+        // The last step on the device, and its voxels: the next step
+        // rewrites only what changed (`GpuVolume::replace`).
+        let mut on_device: Option<(GpuVolume, crate::volume::Volume)> = None;
+        // Each structure's step ranges of its own, as when it plays the
+        // series alone (no structure starts from another's).
+        let builders: Vec<Builder> = self.structures.iter().map(|_| self.builder.fork()).collect();
         for k in first..=last {
             progress.at(&format!("{label} - new step {k}"));
             let t = Instant::now();
@@ -103,7 +108,16 @@ impl StepBench<'_> {
             // step's memory, as the viewer plays a series.
             let t = Instant::now();
             let lit = self.desc.lighting().is_some();
-            let gv = GpuVolume::upload_step(self.ctx, last_gv.take(), &volume, self.storage, lit, self.filter)?;
+            let (last_gv, previous) = on_device.take().unzip();
+            let gv = GpuVolume::upload_step(
+                self.ctx,
+                last_gv.map(|gv| (gv, previous.as_ref())),
+                &volume,
+                self.storage,
+                lit,
+                self.filter,
+            )?;
+            drop(previous);
             let upload = ms_since(t);
             let mut naive: Option<Frame> = None;
             for (i, s) in self.structures.iter().enumerate() {
@@ -116,9 +130,7 @@ impl StepBench<'_> {
                     frame: Some(self.desc),
                     octants: self.desc.octants(volume.dims, volume.spacing)?,
                 };
-                let step = self
-                    .builder
-                    .build_step(s.accel, &s.params, choices[i].as_ref(), &input)?;
+                let step = builders[i].build_step(s.accel, &s.params, choices[i].as_ref(), &input)?;
                 let (structure, ranges_t, build_t) = (step.structure, step.ranges_timings, step.build_timings);
                 choices[i] = auto::choice_of(&structure).cloned();
                 if k > first {
@@ -147,7 +159,7 @@ impl StepBench<'_> {
             if k > first {
                 loads.push(load_ms);
             }
-            last_gv = Some(gv);
+            on_device = Some((gv, volume));
         }
         let load_ms = median(loads);
         for (s, d) in self.structures.iter().zip(&differing).filter(|(_, d)| **d > 0) {

@@ -8,12 +8,14 @@ use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record;
 use crate::gpu::shaders::{self, prims_brick_minmax as k, prims_ranges_coarsen as coarsen};
-use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
+use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 use crate::volume::GpuVolume;
 
 pub struct BrickMinMax {
     ctx: Context,
     coarsen: Kernel,
+    /// Bound as the brick list where the kernel reads none.
+    no_list: Buffer,
 }
 
 /// The ranges kernel's constants (`brick_minmax.comp`): where the voxels
@@ -33,6 +35,13 @@ impl BrickMinMax {
         Ok(BrickMinMax {
             ctx: ctx.clone(),
             coarsen: Kernel::new::<coarsen::Push>(ctx, &shaders::PRIMS_RANGES_COARSEN)?,
+            no_list: Buffer::new(
+                ctx,
+                "no brick list",
+                4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?,
         })
     }
 
@@ -47,9 +56,34 @@ impl BrickMinMax {
         apron: u32,
         out: &Buffer,
     ) -> Result<()> {
+        self.record_bricks(cmd, volume, (brick, apron), out, None)
+    }
+
+    /// As `record`, for the bricks `listed` only (`list` holds `count` brick
+    /// indices, u32): the others of `out` are left as they are.
+    pub fn record_listed(
+        &self,
+        cmd: vk::CommandBuffer,
+        volume: &GpuVolume,
+        (brick, apron): (u32, u32),
+        out: &Buffer,
+        (list, count): (&Buffer, u32),
+    ) -> Result<()> {
+        self.record_bricks(cmd, volume, (brick, apron), out, Some((list, count)))
+    }
+
+    fn record_bricks(
+        &self,
+        cmd: vk::CommandBuffer,
+        volume: &GpuVolume,
+        (brick, apron): (u32, u32),
+        out: &Buffer,
+        listed: Option<(&Buffer, u32)>,
+    ) -> Result<()> {
         let counts = brick_counts(volume.dims, brick);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
+        let (list, n) = listed.unwrap_or((&self.no_list, total as u32));
         // The cells copy serves every box but a one-voxel one inside the
         // volume (brick 1 without apron): its cells pair voxels.
         // (A one-channel copy: the kernel reads it for one channel only.)
@@ -63,14 +97,19 @@ impl BrickMinMax {
             &self.ctx,
             &shaders::PRIMS_BRICK_MINMAX,
             std::mem::size_of::<k::Push>(),
-            &[(0, source), (1, kind), (2, volume.channels)],
+            &[
+                (0, source),
+                (1, kind),
+                (2, volume.channels),
+                (3, listed.is_some() as u32),
+            ],
         )?;
         entry_barrier(self.ctx.device(), cmd);
-        let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, kernel.local_size()[0])?;
+        let groups = record::groups_linear(self.ctx.info(), "brick ranges", n as u64, kernel.local_size()[0])?;
         // dims.w: brick edge; counts.w: total bricks.
         let push = k::Push {
             dims: [volume.dims[0], volume.dims[1], volume.dims[2], brick],
-            counts: [counts[0], counts[1], counts[2], total as u32],
+            counts: [counts[0], counts[1], counts[2], n],
             lo: volume.norms.map(|n| n[0]),
             scale: volume.norms.map(|n| n[1]),
             apron,
@@ -87,6 +126,8 @@ impl BrickMinMax {
                 pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
                 pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
                 cells: Binding::TexelBuffer(cells.unwrap_or(volume.brick_table()).view()),
+                // Not read unless listed (a constant).
+                listed: Binding::Storage(list),
             }
             .list(),
             bytemuck::bytes_of(&push),

@@ -64,6 +64,30 @@ pub struct GpuVolume {
     pub(super) step_staging: Option<Buffer>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
+    /// A series step (`upload_step`): which, and what changed from the
+    /// step before, for the builds that reuse that step's work.
+    pub(super) step: Option<StepMark>,
+}
+
+/// A dense series step's identity on the device, and where it was put in
+/// place of the step before with that step's voxels at hand, what changed
+/// since (`replace`).
+#[derive(Clone, Debug)]
+pub struct StepMark {
+    /// Unique to these texels in this process.
+    pub id: u64,
+    /// The step before's `id` and the segments changed since.
+    pub since: Option<(u64, std::sync::Arc<super::StepDelta>)>,
+}
+
+impl StepMark {
+    pub(super) fn new(since: Option<(u64, std::sync::Arc<super::StepDelta>)>) -> StepMark {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        StepMark {
+            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            since,
+        }
+    }
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -326,6 +350,7 @@ impl GpuVolume {
             brick_table,
             pool_images: images,
             step_staging: None,
+            step: None,
             pool: pool.map(PoolLayout::stats),
         };
         // Bricked storage samples with the manual filter only: the

@@ -1,13 +1,15 @@
 //! Another time step on a `GpuVolume`: its voxels, and what `prepare`
 //! added for the last step, written where the last step's were.
 
+use super::delta::StepDelta;
 use super::filter::Filter;
-use super::gpu::{resolve_storage, texels};
+use super::gpu::{resolve_storage, texels, StepMark};
 use super::pool::Storage;
 use super::{cells, gradient_cells};
 use super::{channels, GpuVolume, Volume};
 use crate::error::Result;
 use crate::gpu::Context;
+use std::sync::Arc;
 
 impl GpuVolume {
     /// Puts `volume`, another step on this volume's grid (the same dims,
@@ -21,10 +23,18 @@ impl GpuVolume {
     /// false, changing nothing, where `volume` does not fit (other dims,
     /// channels or texel kind, or bricked storage); upload it anew then.
     ///
+    /// `previous`, where the caller still has it, is the step these
+    /// texels came from (`upload` or the last `replace` had it): then only
+    /// what changed is rewritten (`StepDelta`), the cells copy around the
+    /// changed voxels on a CPU device, and the step is marked with what
+    /// changed (`step_mark`), so the next build recomputes only the value
+    /// ranges of the bricks whose voxels changed. Passing a volume these
+    /// texels did not come from leaves stale texels: the delta is trusted.
+    ///
     /// No submission reading this volume may still be pending (the host
     /// writes memory the device reads). After an error its contents are
     /// unspecified: drop it.
-    pub fn replace(&mut self, volume: &Volume) -> Result<bool> {
+    pub fn replace(&mut self, volume: &Volume, previous: Option<&Volume>) -> Result<bool> {
         let fits = self.pool.is_none()
             && volume.dims == self.dims
             && volume.channel_count() as u32 == self.channels
@@ -32,6 +42,9 @@ impl GpuVolume {
         if !fits {
             return Ok(false);
         }
+        let delta = previous.and_then(|p| StepDelta::between(p, volume)).map(Arc::new);
+        let last = self.step.as_ref().map(|m| m.id);
+        self.step = Some(StepMark::new(last.zip(delta.clone())));
         let (_, _, bytes) = texels(volume);
         self.image.upload_through(&bytes, &mut self.step_staging)?;
         self.spacing = volume.spacing;
@@ -41,7 +54,10 @@ impl GpuVolume {
         let shared = cells::host_shared(&self.ctx);
         if let Some(copy) = &mut self.cells {
             if shared {
-                cells::repack_shared(copy, volume)?;
+                match &delta {
+                    Some(delta) => cells::repack_changed(copy, volume, delta)?,
+                    None => cells::repack_shared(copy, volume)?,
+                }
             } else {
                 // Made again from the image by the device's kernel.
                 self.cells = None;
@@ -69,25 +85,40 @@ impl GpuVolume {
     }
 
     /// `volume` uploaded with `storage` and prepared (`prepare`), in the
-    /// memory of `last` (the series' step before) where it fits
-    /// (`replace`), else anew, `last` dropped first.
+    /// memory of `last` (the series' step before, with that step's voxels
+    /// where the caller still has them: `replace`) where it fits, else
+    /// anew, `last` dropped first. Dense steps are marked (`step_mark`).
     pub fn upload_step(
         ctx: &Context,
-        last: Option<GpuVolume>,
+        last: Option<(GpuVolume, Option<&Volume>)>,
         volume: &Volume,
         storage: Storage,
         lit: bool,
         filter: Option<Filter>,
     ) -> Result<GpuVolume> {
         let dense = resolve_storage(ctx, volume, storage) == Storage::Dense;
-        if let (true, Some(mut gv)) = (dense, last) {
-            if gv.replace(volume)? {
+        if let (true, Some((mut gv, previous))) = (dense, last) {
+            if gv.replace(volume, previous)? {
                 gv.prepare(volume, lit, filter)?;
                 return Ok(gv);
             }
         }
         let mut gv = GpuVolume::upload_as(ctx, volume, storage)?;
         gv.prepare(volume, lit, filter)?;
+        if dense {
+            gv.step = Some(StepMark::new(None));
+        }
         Ok(gv)
+    }
+
+    /// The context it was uploaded with.
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// Which series step this is and what changed since the step before
+    /// (None: not a dense step of `upload_step`).
+    pub fn step_mark(&self) -> Option<&StepMark> {
+        self.step.as_ref()
     }
 }

@@ -5,6 +5,7 @@ mod bricks;
 mod cells;
 mod channels;
 mod decode;
+mod delta;
 mod export;
 mod filter;
 mod gpu;
@@ -30,11 +31,12 @@ pub use cells::{
 };
 pub use channels::{common_kind, stored_texel, CHANNELS_CONSTANT_ID};
 pub use decode::VoxelType;
+pub use delta::{StepDelta, SEGMENT};
 pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
 };
 pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
-pub use gpu::{resolve_storage, GpuVolume};
+pub use gpu::{resolve_storage, GpuVolume, StepMark};
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 pub use gradient_cells::{check_gradient_cells, GRADIENT_CELL_BYTES};
 pub use pool::{

@@ -71,8 +71,8 @@ impl Scene {
         (filter, storage): (Option<Filter>, Storage),
     ) -> Result<Scene> {
         let ctx = &builder.context().clone();
-        let mut gpu_volume = GpuVolume::upload_as(ctx, &volume, storage)?;
-        gpu_volume.prepare(&volume, false, filter)?;
+        // A series' first step: the next ones start from its work.
+        let gpu_volume = GpuVolume::upload_step(ctx, None, &volume, storage, false, filter)?;
         let lut = tf.upload(ctx)?;
         let mut scene = Scene {
             ctx: ctx.clone(),
@@ -142,6 +142,8 @@ impl Scene {
         self.structure = Structure::naive();
         self.stale = true;
         let last = self.gpu_volume.take();
+        // Only what changed since this step is written (`GpuVolume::replace`).
+        let last = last.map(|gv| (gv, Some(&self.volume)));
         let step = GpuVolume::upload_step(&self.ctx, last, &volume, self.storage, lit, self.filter)?;
         self.gpu_volume = Some(step);
         self.upload_ms = t.elapsed().as_secs_f64() * 1000.0;

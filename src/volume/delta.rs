@@ -1,0 +1,226 @@
+//! What changed between two time steps on one grid, found on the host by
+//! comparing their texels: per row of voxels along x, a bit per segment of
+//! [`SEGMENT`] voxels whose texels differ. A new step then rewrites only
+//! the cells copy around changed segments (`cells::repack_changed`) and
+//! recomputes only the value ranges of bricks whose apron holds one
+//! (`bricks_changed`); everything else stays as the step before left it,
+//! equal bit for bit to what a full upload makes. In a simulation's series
+//! most of the volume repeats from step to step (nbody:256: 3 % of voxels,
+//! 14 % of 4^3 bricks change a step).
+
+use super::{channels, Volume, VoxelData};
+use rayon::prelude::*;
+
+/// Voxels per segment along x: a brick of 4 (the distance maps' finest
+/// cell) is one segment, so its apron reaches one segment either side.
+pub const SEGMENT: u32 = 4;
+
+/// The changed segments of each row of voxels between two steps.
+#[derive(Clone, Debug)]
+pub struct StepDelta {
+    dims: [u32; 3],
+    /// u64 words of segment bits per row.
+    words: usize,
+    /// Row (y + H * z)'s bits at `words * row`: bit s of word w is segment
+    /// 64 * w + s (voxels SEGMENT * that up to SEGMENT more).
+    bits: Vec<u64>,
+    changed: u64,
+}
+
+impl StepDelta {
+    /// The segments whose texels differ from `before` to `after`, or None
+    /// where they cannot be compared texel for texel: other dims, channels
+    /// or texel kinds, or voxels streamed into bricks.
+    pub fn between(before: &Volume, after: &Volume) -> Option<StepDelta> {
+        let dense = |v: &Volume| v.channels().all(|c| !matches!(c.data, VoxelData::Bricks(_)));
+        let comparable = before.dims == after.dims
+            && before.channel_count() == after.channel_count()
+            && channels::common_kind(before) == channels::common_kind(after)
+            && dense(before)
+            && dense(after);
+        if !comparable {
+            return None;
+        }
+        let (a, b) = (channels::texel_data(before), channels::texel_data(after));
+        let [w, h, d] = after.dims.map(|n| n as usize);
+        let rows = h * d;
+        if a.len() != b.len() || rows == 0 || a.len() % rows != 0 {
+            return None;
+        }
+        let row_bytes = a.len() / rows;
+        let texel = row_bytes / w.max(1);
+        let seg_bytes = texel * SEGMENT as usize;
+        let segments = w.div_ceil(SEGMENT as usize);
+        let words = segments.div_ceil(64);
+        let mut bits = vec![0u64; rows * words];
+        bits.par_chunks_mut(words)
+            .zip(a.par_chunks(row_bytes).zip(b.par_chunks(row_bytes)))
+            .for_each(|(out, (ra, rb))| {
+                if ra == rb {
+                    return;
+                }
+                // Fixed-size compares (a slice compare of a length known
+                // only at run time is a call per segment: 4x slower).
+                match seg_bytes {
+                    4 => mark_segments::<4>(ra, rb, out),
+                    8 => mark_segments::<8>(ra, rb, out),
+                    16 => mark_segments::<16>(ra, rb, out),
+                    _ => {
+                        for (s, (sa, sb)) in ra.chunks(seg_bytes).zip(rb.chunks(seg_bytes)).enumerate() {
+                            if sa != sb {
+                                out[s / 64] |= 1 << (s % 64);
+                            }
+                        }
+                    }
+                }
+            });
+        let changed = bits.iter().map(|w| w.count_ones() as u64).sum();
+        Some(StepDelta {
+            dims: after.dims,
+            words,
+            bits,
+            changed,
+        })
+    }
+
+    /// The volume's dims.
+    pub fn dims(&self) -> [u32; 3] {
+        self.dims
+    }
+
+    /// Whether any voxel changed.
+    pub fn any(&self) -> bool {
+        self.changed > 0
+    }
+
+    /// The share of segments that changed, in [0, 1].
+    pub fn fraction(&self) -> f64 {
+        let [w, h, d] = self.dims.map(|n| n as u64);
+        let total = w.div_ceil(SEGMENT as u64) * h * d;
+        self.changed as f64 / total.max(1) as f64
+    }
+
+    /// Row (y, z)'s segment bits (`words` u64s).
+    pub fn row(&self, y: u32, z: u32) -> &[u64] {
+        let r = y as usize + self.dims[1] as usize * z as usize;
+        &self.bits[r * self.words..][..self.words]
+    }
+
+    /// Whether a voxel of x in [x0, x1] changed in row bits `row`.
+    pub fn row_any(row: &[u64], x0: u32, x1: u32) -> bool {
+        let (s0, s1) = ((x0 / SEGMENT) as usize, (x1 / SEGMENT) as usize);
+        // The bits below `n` of a word.
+        let low = |n: usize| if n >= 64 { !0 } else { (1u64 << n) - 1 };
+        let (w0, w1) = (s0 / 64, s1 / 64);
+        if w0 == w1 {
+            return row[w0] >> (s0 % 64) & low(s1 - s0 + 1) != 0;
+        }
+        row[w0] >> (s0 % 64) != 0 || row[w0 + 1..w1].iter().any(|&w| w != 0) || row[w1] & low(s1 % 64 + 1) != 0
+    }
+
+    /// The bricks of edge `brick` (x fastest, as `brick_counts` counts
+    /// them) whose box widened by a one-voxel apron, clamped to the volume,
+    /// holds a changed voxel: the bricks whose ranges differ from the step
+    /// before's, or a few more (a segment changes as a whole).
+    pub fn bricks_changed(&self, brick: u32) -> Vec<u32> {
+        let [w, h, d] = self.dims;
+        let counts = self.dims.map(|n| n.div_ceil(brick));
+        let span = |b: u32, n: u32| ((b * brick).saturating_sub(1), (b * brick + brick).min(n - 1));
+        // Per (brick y, z) of rows: the OR of the rows its apron'd box reads.
+        let mut out: Vec<Vec<u32>> = (0..counts[2])
+            .into_par_iter()
+            .map(|bz| {
+                let mut found = Vec::new();
+                let (z0, z1) = span(bz, d);
+                let mut acc = vec![0u64; self.words];
+                for by in 0..counts[1] {
+                    let (y0, y1) = span(by, h);
+                    acc.iter_mut().for_each(|a| *a = 0);
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            for (a, r) in acc.iter_mut().zip(self.row(y, z)) {
+                                *a |= r;
+                            }
+                        }
+                    }
+                    if acc.iter().all(|&a| a == 0) {
+                        continue;
+                    }
+                    for bx in 0..counts[0] {
+                        let (x0, x1) = span(bx, w);
+                        if Self::row_any(&acc, x0, x1) {
+                            found.push(bx + counts[0] * (by + counts[1] * bz));
+                        }
+                    }
+                }
+                found
+            })
+            .collect();
+        out.iter_mut().flat_map(std::mem::take).collect()
+    }
+}
+
+/// Sets the bits of the segments of `N` bytes (the last one may be
+/// shorter) where rows `a` and `b` differ.
+fn mark_segments<const N: usize>(a: &[u8], b: &[u8], out: &mut [u64]) {
+    let (ca, cb) = (a.chunks_exact(N), b.chunks_exact(N));
+    let (ta, tb, tail) = (ca.remainder(), cb.remainder(), a.len() / N);
+    for (s, (x, y)) in ca.zip(cb).enumerate() {
+        // Arrays of N bytes: one compare of a word of N bytes.
+        let differs = <&[u8; N]>::try_from(x).ok() != <&[u8; N]>::try_from(y).ok();
+        out[s / 64] |= (differs as u64) << (s % 64);
+    }
+    if ta != tb {
+        out[tail / 64] |= 1 << (tail % 64);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn volume(dims: [u32; 3], data: Vec<u8>) -> Volume {
+        let mut v = Volume::load("menger:9", &Default::default()).unwrap();
+        v.dims = dims;
+        v.data = VoxelData::U8(data);
+        v
+    }
+
+    #[test]
+    fn changed_segments_and_the_bricks_whose_apron_reads_them() {
+        let dims = [20, 6, 5];
+        let n = 20 * 6 * 5;
+        let before = volume(dims, vec![0; n]);
+        let mut data = vec![0; n];
+        // Voxel (9, 2, 3): segment 2 of row (2, 3).
+        data[9 + 20 * (2 + 6 * 3)] = 7;
+        let after = volume(dims, data);
+        let delta = StepDelta::between(&before, &after).unwrap();
+        assert!(delta.any());
+        assert_eq!(delta.row(2, 3), &[0b100]);
+        assert!(delta.row(2, 2).iter().all(|&w| w == 0));
+        assert!((delta.fraction() - 1.0 / (5.0 * 30.0)).abs() < 1e-12);
+        // Bricks of 4 with the apron: segment 2 (x 8 to 11) lies in the
+        // apron'd boxes of x bricks 1 (3 to 8), 2 (7 to 12) and 3 (11 to
+        // 16); y 2 in y brick 0's (0 to 4) only; z 3 in z bricks 0 (0 to 4)
+        // and 1 (3 to 4).
+        let mut got = delta.bricks_changed(4);
+        got.sort_unstable();
+        let counts = [5, 2, 2];
+        let at = |x: u32, y: u32, z: u32| x + counts[0] * (y + counts[1] * z);
+        let mut want = vec![
+            at(1, 0, 0),
+            at(2, 0, 0),
+            at(3, 0, 0),
+            at(1, 0, 1),
+            at(2, 0, 1),
+            at(3, 0, 1),
+        ];
+        want.sort_unstable();
+        assert_eq!(got, want);
+        // No change: nothing to redo; other dims: not comparable.
+        let same = StepDelta::between(&after, &after).unwrap();
+        assert!(!same.any() && same.bricks_changed(4).is_empty());
+        assert!(StepDelta::between(&before, &volume([20, 6, 4], vec![0; 480])).is_none());
+    }
+}
