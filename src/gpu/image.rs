@@ -264,7 +264,125 @@ impl Image3d {
     }
 }
 
+/// A box of texels: its low corner and extent.
+pub type TexelBox = ([u32; 3], [u32; 3]);
+
 impl Image3d {
+    /// Writes the texels of `boxes` from `data` (every texel of the image,
+    /// x fastest, as `upload` takes them) and leaves the others as they
+    /// are, through `staging` (as `upload_through`), and waits: a series
+    /// step that changed in places. The image must hold texels already
+    /// (an upload before), and no submission reading it may be pending.
+    pub(crate) fn upload_boxes_through(
+        &self,
+        data: &[u8],
+        boxes: &[TexelBox],
+        staging: &mut Option<Buffer>,
+    ) -> Result<()> {
+        let [w, h, d] = self.extent.map(|n| n as usize);
+        let tb = self.texel_bytes as usize;
+        if w * h * d * tb != data.len()
+            || boxes
+                .iter()
+                .any(|(lo, n)| (0..3).any(|a| lo[a] + n[a] > self.extent[a]))
+        {
+            return Err(Error::Interface(format!(
+                "{} bytes or boxes past image {w}x{h}x{d} of {tb}-byte texels",
+                data.len()
+            )));
+        }
+        // Offsets kept at multiples of 16 bytes (any texel size divides it).
+        let box_bytes =
+            |(_, n): &TexelBox| (n.iter().map(|&k| k as u64).product::<u64>() * tb as u64).next_multiple_of(16);
+        let mut at = 0;
+        while at < boxes.len() {
+            // As many boxes as fit a chunk (one at least).
+            let mut end = at;
+            let mut bytes = 0;
+            while end < boxes.len() && (end == at || bytes + box_bytes(&boxes[end]) <= STAGING_CHUNK) {
+                bytes += box_bytes(&boxes[end]);
+                end += 1;
+            }
+            let buffer = match staging.take() {
+                Some(kept) if kept.size() >= bytes => staging.insert(kept),
+                small => {
+                    drop(small);
+                    staging.insert(Buffer::new(
+                        &self.ctx,
+                        "staging volume",
+                        bytes,
+                        vk::BufferUsageFlags::TRANSFER_SRC,
+                        MemoryLocation::CpuToGpu,
+                    )?)
+                }
+            };
+            let mapped = buffer.host_mut()?;
+            let mut regions = Vec::with_capacity(end - at);
+            let mut offset = 0usize;
+            for b in &boxes[at..end] {
+                let ([x, y, z], [nx, ny, nz]) = (b.0.map(|k| k as usize), b.1.map(|k| k as usize));
+                let row = nx * tb;
+                for k in 0..nz {
+                    for j in 0..ny {
+                        let src = ((x + w * (y + j + h * (z + k))) * tb)..;
+                        let dst = offset + (j + ny * k) * row;
+                        copy_to_mapped(&mut mapped[dst..dst + row], &data[src][..row]);
+                    }
+                }
+                regions.push(
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(offset as u64)
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: 0,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_offset(vk::Offset3D {
+                            x: x as i32,
+                            y: y as i32,
+                            z: z as i32,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: nx as u32,
+                            height: ny as u32,
+                            depth: nz as u32,
+                        }),
+                );
+                offset += box_bytes(b) as usize;
+            }
+            let device = self.ctx.device();
+            let (read, dst) = (
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            );
+            self.ctx.submit_and_wait(|cmd| {
+                record::image_barrier(
+                    device,
+                    cmd,
+                    self.raw,
+                    read,
+                    dst,
+                    Access::COMPUTE_READ,
+                    Access::TRANSFER_WRITE,
+                );
+                unsafe { device.cmd_copy_buffer_to_image(cmd, buffer.raw, self.raw, dst, &regions) };
+                record::image_barrier(
+                    device,
+                    cmd,
+                    self.raw,
+                    dst,
+                    read,
+                    Access::TRANSFER_WRITE,
+                    Access::COMPUTE_READ,
+                );
+                Ok(())
+            })?;
+            at = end;
+        }
+        Ok(())
+    }
+
     /// Records the copy of slices `z .. z + n` from `staging`: the transition
     /// to TRANSFER_DST first (from UNDEFINED when `first`), and to
     /// SHADER_READ_ONLY_OPTIMAL for compute reads after the `last`.

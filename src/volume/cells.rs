@@ -19,7 +19,7 @@
 //! (`record_pack_cells`, `glsl/volume/cells.comp`), so neither staging nor
 //! the host's packing of 8 to 32 bytes a voxel is paid.
 
-use super::delta::StepDelta;
+use super::delta::{StepDelta, SEGMENT};
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
@@ -487,19 +487,34 @@ fn cell_rows_changed<T: Copy + Sync, U: Send>(
         if any(w - 1, w - 1) {
             put(tail, corners(w - 1, w - 1));
         }
-        // Middle cell m reads voxels m and m + 1.
-        for (b, cells) in middle.chunks_mut(CHANGE_BLOCK * per_cell).enumerate() {
-            let m0 = b * CHANGE_BLOCK;
-            let n = cells.len() / per_cell;
-            if !any(m0, m0 + n) {
-                continue;
-            }
-            let done = match blocks {
-                Some(pack) if n == CHANGE_BLOCK => pack(cells, rows.map(|r| &r[m0..=m0 + n])),
-                _ => 0,
-            };
-            for (i, cell) in cells.chunks_exact_mut(per_cell).enumerate().skip(done) {
-                put(cell, corners(m0 + i, m0 + i + 1));
+        // Middle cell m reads voxels m and m + 1: block b (cells 16b on)
+        // reads voxels 16b to 16b + 16. Changed segments in order, each
+        // packing the blocks that read it and were not packed yet (a row
+        // is mostly unchanged: testing every block cost as much as packing).
+        let seg = SEGMENT as usize;
+        let blocks_in_row = (cw - 2).div_ceil(CHANGE_BLOCK);
+        let mut next = 0; // the first block not packed yet
+        for (wi, &word) in changed.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let s = 64 * wi + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let (x0, x1) = (seg * s, seg * s + seg - 1);
+                let first = x0.saturating_sub(CHANGE_BLOCK).div_ceil(CHANGE_BLOCK).max(next);
+                let last = (x1 / CHANGE_BLOCK).min(blocks_in_row - 1);
+                for b in first..=last {
+                    let m0 = b * CHANGE_BLOCK;
+                    let cells = &mut middle[m0 * per_cell..((m0 + CHANGE_BLOCK).min(cw - 2)) * per_cell];
+                    let n = cells.len() / per_cell;
+                    let done = match blocks {
+                        Some(pack) if n == CHANGE_BLOCK => pack(cells, rows.map(|r| &r[m0..=m0 + n])),
+                        _ => 0,
+                    };
+                    for (i, cell) in cells.chunks_exact_mut(per_cell).enumerate().skip(done) {
+                        put(cell, corners(m0 + i, m0 + i + 1));
+                    }
+                }
+                next = next.max(last + 1);
             }
         }
     });

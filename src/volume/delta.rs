@@ -118,6 +118,52 @@ impl StepDelta {
         row[w0] >> (s0 % 64) != 0 || row[w0 + 1..w1].iter().any(|&w| w != 0) || row[w1] & low(s1 % 64 + 1) != 0
     }
 
+    /// Boxes (low corner, extent) that cover every changed voxel: the
+    /// bricks of edge `brick` that hold one, each run of them along x one
+    /// box, clipped to the volume; what an upload of the change copies.
+    pub fn boxes(&self, brick: u32) -> Vec<([u32; 3], [u32; 3])> {
+        let counts = self.dims.map(|n| n.div_ceil(brick));
+        let span = |b: u32, n: u32| (b * brick, (b * brick + brick).min(n) - b * brick);
+        let rows: Vec<Vec<([u32; 3], [u32; 3])>> = (0..counts[2])
+            .into_par_iter()
+            .map(|bz| {
+                let mut found = Vec::new();
+                let (z0, nz) = span(bz, self.dims[2]);
+                let mut acc = vec![0u64; self.words];
+                for by in 0..counts[1] {
+                    let (y0, ny) = span(by, self.dims[1]);
+                    acc.iter_mut().for_each(|a| *a = 0);
+                    for z in z0..z0 + nz {
+                        for y in y0..y0 + ny {
+                            for (a, r) in acc.iter_mut().zip(self.row(y, z)) {
+                                *a |= r;
+                            }
+                        }
+                    }
+                    let mut run: Option<u32> = None;
+                    for bx in 0..=counts[0] {
+                        let changed = bx < counts[0] && {
+                            let (x0, nx) = span(bx, self.dims[0]);
+                            Self::row_any(&acc, x0, x0 + nx - 1)
+                        };
+                        match (changed, run) {
+                            (true, None) => run = Some(bx),
+                            (false, Some(first)) => {
+                                let x0 = first * brick;
+                                let x1 = (bx * brick).min(self.dims[0]);
+                                found.push(([x0, y0, z0], [x1 - x0, ny, nz]));
+                                run = None;
+                            }
+                            _ => {}
+                        }
+                    }
+                }
+                found
+            })
+            .collect();
+        rows.into_iter().flatten().collect()
+    }
+
     /// The bricks of edge `brick` (x fastest, as `brick_counts` counts
     /// them) whose box widened by a one-voxel apron, clamped to the volume,
     /// holds a changed voxel: the bricks whose ranges differ from the step
@@ -218,9 +264,11 @@ mod tests {
         ];
         want.sort_unstable();
         assert_eq!(got, want);
+        // The brick of 8 holding it, one box (clipped to the volume).
+        assert_eq!(delta.boxes(8), vec![([8, 0, 0], [8, 6, 5])]);
         // No change: nothing to redo; other dims: not comparable.
         let same = StepDelta::between(&after, &after).unwrap();
-        assert!(!same.any() && same.bricks_changed(4).is_empty());
+        assert!(!same.any() && same.bricks_changed(4).is_empty() && same.boxes(16).is_empty());
         assert!(StepDelta::between(&before, &volume([20, 6, 4], vec![0; 480])).is_none());
     }
 }

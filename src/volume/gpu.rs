@@ -64,6 +64,13 @@ pub struct GpuVolume {
     pub(super) step_staging: Option<Buffer>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
+    /// Whether `replace` with the step before at hand uploads only the
+    /// bricks of the image that changed (one copy region each), rather
+    /// than the whole image. By default on devices that are not the CPU
+    /// (the copy crosses a bus, regions are cheap); lavapipe copies
+    /// region by region at about a millisecond each (nbody:256's thousand
+    /// took 1.25 s against 5 ms for the whole image).
+    pub upload_changed: bool,
     /// A series step (`upload_step`): which, and what changed from the
     /// step before, for the builds that reuse that step's work.
     pub(super) step: Option<StepMark>,
@@ -350,6 +357,7 @@ impl GpuVolume {
             brick_table,
             pool_images: images,
             step_staging: None,
+            upload_changed: !ctx.info().is_cpu(),
             step: None,
             pool: pool.map(PoolLayout::stats),
         };

@@ -333,11 +333,19 @@ fn wide_volumes() -> Vec<Volume> {
 
 /// `v` changed in a few places only: a voxel inside, a run along x across
 /// a block of cells, the first and last voxel of a row (the edge cells),
-/// a voxel on the top face; floats also get a NaN (no data).
+/// voxels 16 and 32 of rows (each read by two blocks of 16 cells), a voxel
+/// on the top face; floats also get a NaN (no data).
 fn changed_in_places(v: &Volume) -> Volume {
     let [w, h, _] = v.dims.map(|n| n as usize);
     let at = |x: usize, y: usize, z: usize| x + w * (y + h * z);
-    let mut places = vec![at(9, 10, 8), at(0, 3, 4), at(36, 3, 4), at(20, 20, 18)];
+    let mut places = vec![
+        at(9, 10, 8),
+        at(0, 3, 4),
+        at(36, 3, 4),
+        at(16, 7, 2),
+        at(32, 11, 6),
+        at(20, 20, 18),
+    ];
     places.extend((13..=21).map(|x| at(x, 5, 12)));
     let data = match &v.data {
         VoxelData::U8(d) => VoxelData::U8(with(d, &places, |x| x ^ 0x5a)),
@@ -361,9 +369,10 @@ fn with<T: Copy>(d: &[T], places: &[usize], change: impl Fn(T) -> T) -> Vec<T> {
 }
 
 /// A series step put in place with the step before at hand rewrites only
-/// what changed (the cells copy around the changed voxels, the ranges of
-/// the bricks whose apron holds one), and its cells copy and ranges equal
-/// a fresh upload's bit for bit, in every kind, for ranges of 4^3 cells
+/// what changed (the image's changed bricks, the cells copy around the
+/// changed voxels, the ranges of the bricks whose apron holds one), and its
+/// cells copy and ranges (read from the cells copy, or from the image
+/// where there is none) equal a fresh upload's bit for bit, in every kind, for ranges of 4^3 cells
 /// and 8^3 bricks computed alone or together; the same step's ranges
 /// asked again are the kept ones.
 #[test]
@@ -372,19 +381,27 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
     use lacuna::prims::brick_minmax::coarsens_exactly;
     use lacuna::volume::Storage;
     let ctx = gpu();
-    let manual = Some(Filter::Manual);
     let bits = |b: &lacuna::gpu::Buffer| b.download(0, b.size()).unwrap();
     let sets: [&[RangeKind]; 3] = [
         &[RangeKind::Cells(4)],
         &[RangeKind::Bricks],
         &[RangeKind::Cells(4), RangeKind::Bricks],
     ];
-    for before in wide_volumes() {
+    // The manual filter's volumes have their cells copy, which the ranges
+    // read; the hardware filter's have none: the ranges read the image.
+    for (before, filter) in wide_volumes()
+        .into_iter()
+        .flat_map(|v| [(v.clone(), Filter::Manual), (v, Filter::Hardware)])
+    {
+        let manual = Some(filter);
         let after = changed_in_places(&before);
         for kinds in sets {
             let builder = Builder::new(&ctx).unwrap();
-            let placed = GpuVolume::upload_step(&ctx, None, &before, Storage::Dense, false, manual).unwrap();
+            let mut placed = GpuVolume::upload_step(&ctx, None, &before, Storage::Dense, false, manual).unwrap();
             builder.ranges(kinds, &placed).unwrap();
+            // Only the image's changed bricks copied, or all of it (as on
+            // a CPU device by default).
+            placed.upload_changed = filter == Filter::Hardware;
             let placed = GpuVolume::upload_step(
                 &ctx,
                 Some((placed, Some(&before))),
@@ -403,7 +420,8 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
                 delta.fraction()
             );
             let fresh = GpuVolume::upload_step(&ctx, None, &after, Storage::Dense, false, manual).unwrap();
-            let words = |g: &GpuVolume| bits(g.cells().unwrap().buffer());
+            let words = |g: &GpuVolume| g.cells().map(|c| bits(c.buffer()));
+            assert_eq!(placed.cells().is_some(), filter == Filter::Manual, "{}", before.name);
             assert!(words(&placed) == words(&fresh), "{}: cells copies differ", before.name);
             let (want, _) = Builder::new(&ctx).unwrap().ranges(kinds, &fresh).unwrap();
             // From the step before's (the finest from its changed bricks
