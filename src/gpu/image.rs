@@ -234,20 +234,7 @@ impl Image3d {
         let slice_bytes = (w as u64 * h as u64 * texel_bytes).max(1);
         let slices_per_chunk = (STAGING_CHUNK / slice_bytes).max(1) as u32;
         let chunk = slices_per_chunk.min(d) as u64 * slice_bytes;
-        let buffer = match staging.take() {
-            Some(kept) if kept.size() >= chunk => staging.insert(kept),
-            small => {
-                // Freed before the larger one is made.
-                drop(small);
-                staging.insert(Buffer::new(
-                    &self.ctx,
-                    "staging volume",
-                    chunk,
-                    vk::BufferUsageFlags::TRANSFER_SRC,
-                    MemoryLocation::CpuToGpu,
-                )?)
-            }
-        };
+        let buffer = staging_of(&self.ctx, staging, chunk)?;
         let mut z = 0u32;
         while z < d {
             let n = slices_per_chunk.min(d - z);
@@ -262,6 +249,25 @@ impl Image3d {
         }
         Ok(())
     }
+}
+
+/// The staging buffer `kept`, made (or made larger) where it is None or
+/// smaller than `bytes`.
+fn staging_of<'a>(ctx: &Context, kept: &'a mut Option<Buffer>, bytes: u64) -> Result<&'a mut Buffer> {
+    Ok(match kept.take() {
+        Some(k) if k.size() >= bytes => kept.insert(k),
+        small => {
+            // Freed before the larger one is made.
+            drop(small);
+            kept.insert(Buffer::new(
+                ctx,
+                "staging volume",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?)
+        }
+    })
 }
 
 /// A box of texels: its low corner and extent.
@@ -303,19 +309,7 @@ impl Image3d {
                 bytes += box_bytes(&boxes[end]);
                 end += 1;
             }
-            let buffer = match staging.take() {
-                Some(kept) if kept.size() >= bytes => staging.insert(kept),
-                small => {
-                    drop(small);
-                    staging.insert(Buffer::new(
-                        &self.ctx,
-                        "staging volume",
-                        bytes,
-                        vk::BufferUsageFlags::TRANSFER_SRC,
-                        MemoryLocation::CpuToGpu,
-                    )?)
-                }
-            };
+            let buffer = staging_of(&self.ctx, staging, bytes)?;
             let mapped = buffer.host_mut()?;
             let mut regions = Vec::with_capacity(end - at);
             let mut offset = 0usize;
@@ -367,15 +361,7 @@ impl Image3d {
                     Access::TRANSFER_WRITE,
                 );
                 unsafe { device.cmd_copy_buffer_to_image(cmd, buffer.raw, self.raw, dst, &regions) };
-                record::image_barrier(
-                    device,
-                    cmd,
-                    self.raw,
-                    dst,
-                    read,
-                    Access::TRANSFER_WRITE,
-                    Access::COMPUTE_READ,
-                );
+                self.record_readable(cmd);
                 Ok(())
             })?;
             at = end;
@@ -415,17 +401,26 @@ impl Image3d {
             })];
         unsafe { device.cmd_copy_buffer_to_image(cmd, staging.raw, self.raw, dst, &region) };
         if last {
-            let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-            record::image_barrier(
-                device,
-                cmd,
-                self.raw,
-                dst,
-                read,
-                Access::TRANSFER_WRITE,
-                Access::COMPUTE_READ,
-            );
+            self.record_readable(cmd);
         }
+    }
+
+    /// Records the transition from the copies' TRANSFER_DST_OPTIMAL to
+    /// SHADER_READ_ONLY_OPTIMAL for compute reads.
+    fn record_readable(&self, cmd: vk::CommandBuffer) {
+        let (dst, read) = (
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        );
+        record::image_barrier(
+            self.ctx.device(),
+            cmd,
+            self.raw,
+            dst,
+            read,
+            Access::TRANSFER_WRITE,
+            Access::COMPUTE_READ,
+        );
     }
 }
 

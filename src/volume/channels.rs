@@ -8,6 +8,7 @@
 //! so each channel's normalisation (`Volume::norm`) still applies as it is.
 
 use super::cells::TexelKind;
+use super::delta::StepDelta;
 use super::{Volume, VoxelData};
 use crate::gpu::vk;
 use std::borrow::Cow;
@@ -67,6 +68,21 @@ pub fn format(kind: TexelKind, channels: usize) -> vk::Format {
 
 /// The image's bytes: a one-channel volume's own, else every channel's
 /// voxel interleaved per texel, widened to `common_kind`.
+impl StepDelta {
+    /// The segments whose texels differ from `before` to `after`, or None
+    /// where they cannot be compared texel for texel: other dims, channels
+    /// or texel kinds, or voxels streamed into bricks.
+    pub fn between(before: &Volume, after: &Volume) -> Option<StepDelta> {
+        let dense = |v: &Volume| v.channels().all(|c| !matches!(c.data, VoxelData::Bricks(_)));
+        let comparable = before.dims == after.dims
+            && before.channel_count() == after.channel_count()
+            && common_kind(before) == common_kind(after)
+            && dense(before)
+            && dense(after);
+        comparable.then(|| StepDelta::of_texels(after.dims, &texel_data(before), &texel_data(after)))?
+    }
+}
+
 pub fn texel_data(volume: &Volume) -> Cow<'_, [u8]> {
     if volume.channel_count() == 1 {
         return match &volume.data {

@@ -8,7 +8,6 @@
 //! most of the volume repeats from step to step (nbody:256: 3 % of voxels,
 //! 14 % of 4^3 bricks change a step).
 
-use super::{channels, Volume, VoxelData};
 use rayon::prelude::*;
 
 /// Voxels per segment along x: a brick of 4 (the distance maps' finest
@@ -28,27 +27,18 @@ pub struct StepDelta {
 }
 
 impl StepDelta {
-    /// The segments whose texels differ from `before` to `after`, or None
-    /// where they cannot be compared texel for texel: other dims, channels
-    /// or texel kinds, or voxels streamed into bricks.
-    pub fn between(before: &Volume, after: &Volume) -> Option<StepDelta> {
-        let dense = |v: &Volume| v.channels().all(|c| !matches!(c.data, VoxelData::Bricks(_)));
-        let comparable = before.dims == after.dims
-            && before.channel_count() == after.channel_count()
-            && channels::common_kind(before) == channels::common_kind(after)
-            && dense(before)
-            && dense(after);
-        if !comparable {
-            return None;
-        }
-        let (a, b) = (channels::texel_data(before), channels::texel_data(after));
-        let [w, h, d] = after.dims.map(|n| n as usize);
+    /// The segments whose texels differ between `a` and `b`, each every
+    /// texel of a volume of `dims` (x fastest, texels of one size), or
+    /// None where their sizes differ (`StepDelta::between` compares two
+    /// volumes).
+    pub fn of_texels(dims: [u32; 3], a: &[u8], b: &[u8]) -> Option<StepDelta> {
+        let [w, h, d] = dims.map(|n| n as usize);
         let rows = h * d;
-        if a.len() != b.len() || rows == 0 || a.len() % rows != 0 {
+        if a.len() != b.len() || rows == 0 || w == 0 || !a.len().is_multiple_of(rows * w) {
             return None;
         }
         let row_bytes = a.len() / rows;
-        let texel = row_bytes / w.max(1);
+        let texel = row_bytes / w;
         let seg_bytes = texel * SEGMENT as usize;
         let segments = w.div_ceil(SEGMENT as usize);
         let words = segments.div_ceil(64);
@@ -76,7 +66,7 @@ impl StepDelta {
             });
         let changed = bits.iter().map(|w| w.count_ones() as u64).sum();
         Some(StepDelta {
-            dims: after.dims,
+            dims,
             words,
             bits,
             changed,
@@ -224,6 +214,7 @@ fn mark_segments<const N: usize>(a: &[u8], b: &[u8], out: &mut [u64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::volume::{Volume, VoxelData};
 
     fn volume(dims: [u32; 3], data: Vec<u8>) -> Volume {
         let mut v = Volume::load("menger:9", &Default::default()).unwrap();

@@ -5,7 +5,7 @@ use super::delta::StepDelta;
 use super::filter::Filter;
 use super::gpu::{resolve_storage, texels, StepMark};
 use super::pool::Storage;
-use super::{cells, gradient_cells};
+use super::{cells, cells_delta, gradient_cells};
 use super::{channels, GpuVolume, Volume};
 use crate::error::Result;
 use crate::gpu::Context;
@@ -65,7 +65,7 @@ impl GpuVolume {
         if let Some(copy) = &mut self.cells {
             if shared {
                 match &delta {
-                    Some(delta) => cells::repack_changed(copy, volume, delta)?,
+                    Some(delta) => cells_delta::repack_changed(copy, volume, delta)?,
                     None => cells::repack_shared(copy, volume)?,
                 }
             } else {

@@ -3,6 +3,7 @@
 
 mod bricks;
 mod cells;
+mod cells_delta;
 mod channels;
 mod decode;
 mod delta;
