@@ -248,7 +248,7 @@ impl Builder {
             match (finer, step, kept.as_deref_mut()) {
                 (Some(f), _, _) => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Finer(f))?,
                 (None, Some(step), Some(kept)) => {
-                    self.record_step_ranges(cmd, timer.as_deref_mut(), &pass, &mut b, volume)?;
+                    self.record_step_ranges(cmd, (timer.as_deref_mut(), &pass), &minmax, &mut b, volume)?;
                     kept.push((size, step));
                 }
                 _ => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Volume)?,
@@ -265,12 +265,11 @@ impl Builder {
     fn record_step_ranges(
         &self,
         cmd: vk::CommandBuffer,
-        timer: Option<&mut Timer>,
-        pass: &str,
+        (timer, pass): (Option<&mut Timer>, &str),
+        minmax: &BrickMinMax,
         b: &mut GpuBricks,
         volume: &GpuVolume,
     ) -> Result<()> {
-        let minmax = self.shared::<BrickMinMax>()?;
         let mut kept = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
         let at = kept.iter().position(|k| k.brick == b.brick);
         match at.and_then(|i| Some((i, kept[i].changed_for(volume, b.brick)?))) {
@@ -279,9 +278,9 @@ impl Builder {
                     ranges: &kept[i].ranges,
                     changed,
                 };
-                b.record(cmd, timer, pass, &minmax, volume, from)?;
+                b.record(cmd, timer, pass, minmax, volume, from)?;
             }
-            None => b.record(cmd, timer, pass, &minmax, volume, RangesFrom::Volume)?,
+            None => b.record(cmd, timer, pass, minmax, volume, RangesFrom::Volume)?,
         }
         let i = match at.filter(|&i| kept[i].ranges.size() == b.ranges.size()) {
             Some(i) => i,

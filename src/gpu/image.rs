@@ -273,6 +273,29 @@ fn staging_of<'a>(ctx: &Context, kept: &'a mut Option<Buffer>, bytes: u64) -> Re
 /// A box of texels: its low corner and extent.
 pub type TexelBox = ([u32; 3], [u32; 3]);
 
+/// The copy of texel box `b` of the image's colour from `offset` in a
+/// buffer, its rows tightly packed.
+fn copy_region(offset: u64, ([x, y, z], [w, h, d]): TexelBox) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_offset(vk::Offset3D {
+            x: x as i32,
+            y: y as i32,
+            z: z as i32,
+        })
+        .image_extent(vk::Extent3D {
+            width: w,
+            height: h,
+            depth: d,
+        })
+}
+
 impl Image3d {
     /// Writes the texels of `boxes` from `data` (every texel of the image,
     /// x fastest, as `upload` takes them) and leaves the others as they
@@ -323,26 +346,7 @@ impl Image3d {
                         copy_to_mapped(&mut mapped[dst..dst + row], &data[src][..row]);
                     }
                 }
-                regions.push(
-                    vk::BufferImageCopy::default()
-                        .buffer_offset(offset as u64)
-                        .image_subresource(vk::ImageSubresourceLayers {
-                            aspect_mask: vk::ImageAspectFlags::COLOR,
-                            mip_level: 0,
-                            base_array_layer: 0,
-                            layer_count: 1,
-                        })
-                        .image_offset(vk::Offset3D {
-                            x: x as i32,
-                            y: y as i32,
-                            z: z as i32,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: nx as u32,
-                            height: ny as u32,
-                            depth: nz as u32,
-                        }),
-                );
+                regions.push(copy_region(offset as u64, *b));
                 offset += box_bytes(b) as usize;
             }
             let device = self.ctx.device();
@@ -382,23 +386,7 @@ impl Image3d {
         };
         let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
         record::image_barrier(device, cmd, self.raw, old, dst, src, Access::TRANSFER_WRITE);
-        let region = [vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            })
-            .image_offset(vk::Offset3D {
-                x: 0,
-                y: 0,
-                z: z as i32,
-            })
-            .image_extent(vk::Extent3D {
-                width: w,
-                height: h,
-                depth: n,
-            })];
+        let region = [copy_region(0, ([0, 0, z], [w, h, n]))];
         unsafe { device.cmd_copy_buffer_to_image(cmd, staging.raw, self.raw, dst, &region) };
         if last {
             self.record_readable(cmd);

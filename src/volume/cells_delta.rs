@@ -71,11 +71,7 @@ fn cell_rows_changed<T: Copy + Sync, U: Send>(
                 &mut large[..]
             }
         };
-        for (y, z) in [(ys[0], zs[0]), (ys[1], zs[0]), (ys[0], zs[1]), (ys[1], zs[1])] {
-            for (c, bits) in changed.iter_mut().zip(delta.row(y as u32, z as u32)) {
-                *c |= bits;
-            }
-        }
+        delta.rows_or(ys[0] as u32..=ys[1] as u32, zs[0] as u32..=zs[1] as u32, changed);
         let changed = &*changed;
         if changed.iter().all(|&c| c == 0) {
             return;

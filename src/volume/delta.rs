@@ -9,6 +9,7 @@
 //! 14 % of 4^3 bricks change a step).
 
 use rayon::prelude::*;
+use std::ops::RangeInclusive;
 
 /// Voxels per segment along x: a brick of 4 (the distance maps' finest
 /// cell) is one segment, so its apron reaches one segment either side.
@@ -96,6 +97,19 @@ impl StepDelta {
         &self.bits[r * self.words..][..self.words]
     }
 
+    /// The OR of the segment bits of rows `ys` x `zs` into `acc` (cleared
+    /// first, `row(0, 0).len()` words): the segments any of them changed.
+    pub fn rows_or(&self, ys: RangeInclusive<u32>, zs: RangeInclusive<u32>, acc: &mut [u64]) {
+        acc.fill(0);
+        for z in zs {
+            for y in ys.clone() {
+                for (a, r) in acc.iter_mut().zip(self.row(y, z)) {
+                    *a |= r;
+                }
+            }
+        }
+    }
+
     /// Whether a voxel of x in [x0, x1] changed in row bits `row`.
     pub fn row_any(row: &[u64], x0: u32, x1: u32) -> bool {
         let (s0, s1) = ((x0 / SEGMENT) as usize, (x1 / SEGMENT) as usize);
@@ -122,14 +136,7 @@ impl StepDelta {
                 let mut acc = vec![0u64; self.words];
                 for by in 0..counts[1] {
                     let (y0, ny) = span(by, self.dims[1]);
-                    acc.iter_mut().for_each(|a| *a = 0);
-                    for z in z0..z0 + nz {
-                        for y in y0..y0 + ny {
-                            for (a, r) in acc.iter_mut().zip(self.row(y, z)) {
-                                *a |= r;
-                            }
-                        }
-                    }
+                    self.rows_or(y0..=y0 + ny - 1, z0..=z0 + nz - 1, &mut acc);
                     let mut run: Option<u32> = None;
                     for bx in 0..=counts[0] {
                         let changed = bx < counts[0] && {
@@ -163,7 +170,7 @@ impl StepDelta {
         let counts = self.dims.map(|n| n.div_ceil(brick));
         let span = |b: u32, n: u32| ((b * brick).saturating_sub(1), (b * brick + brick).min(n - 1));
         // Per (brick y, z) of rows: the OR of the rows its apron'd box reads.
-        let mut out: Vec<Vec<u32>> = (0..counts[2])
+        let out: Vec<Vec<u32>> = (0..counts[2])
             .into_par_iter()
             .map(|bz| {
                 let mut found = Vec::new();
@@ -171,14 +178,7 @@ impl StepDelta {
                 let mut acc = vec![0u64; self.words];
                 for by in 0..counts[1] {
                     let (y0, y1) = span(by, h);
-                    acc.iter_mut().for_each(|a| *a = 0);
-                    for z in z0..=z1 {
-                        for y in y0..=y1 {
-                            for (a, r) in acc.iter_mut().zip(self.row(y, z)) {
-                                *a |= r;
-                            }
-                        }
-                    }
+                    self.rows_or(y0..=y1, z0..=z1, &mut acc);
                     if acc.iter().all(|&a| a == 0) {
                         continue;
                     }
@@ -192,7 +192,7 @@ impl StepDelta {
                 found
             })
             .collect();
-        out.iter_mut().flat_map(std::mem::take).collect()
+        out.into_iter().flatten().collect()
     }
 }
 
