@@ -357,13 +357,28 @@ impl Context {
 
     /// Records commands with `record`, submits them and waits for completion.
     pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+        self.submit_while(record, || Ok(())).map(|(value, ())| value)
+    }
+
+    /// As `submit_and_wait`, running `meanwhile` on the host between the
+    /// submission and the wait: host work that needs nothing the commands
+    /// write overlaps the device's (on a CPU device, its queue thread's).
+    /// `meanwhile` may submit work of its own. The wait comes even when
+    /// `meanwhile` fails (its error is returned after it).
+    pub fn submit_while<T, U>(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
+        meanwhile: impl FnOnce() -> Result<U>,
+    ) -> Result<(T, U)> {
         let device = self.device();
-        let pool = self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+        let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
+        let pool = lock_pool();
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let mut pool = Some(pool);
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
@@ -377,11 +392,20 @@ impl Context {
                 let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
                 unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
             };
-            let waited = submitted
-                .and_then(|_| unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            if let Err(e) = submitted {
+                unsafe { device.destroy_fence(fence, None) };
+                return Err(e);
+            }
+            // The pool is not touched again until the free: `meanwhile`
+            // may record and submit its own commands.
+            pool.take();
+            let host = meanwhile();
+            let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
             unsafe { device.destroy_fence(fence, None) };
-            waited.map(|_| value)
+            waited?;
+            Ok((value, host?))
         })();
+        let pool = pool.unwrap_or_else(lock_pool);
         unsafe { device.free_command_buffers(*pool, &[cmd]) };
         result
     }

@@ -251,6 +251,57 @@ impl Image3d {
     }
 }
 
+impl Image3d {
+    /// Whether the image's texels fit one staging buffer, as
+    /// `upload_mirrored` takes them.
+    pub(crate) fn mirrorable(&self) -> bool {
+        self.extent.iter().map(|&n| n as u64).product::<u64>() * self.texel_bytes <= STAGING_CHUNK
+    }
+
+    /// Writes `data` (every texel, as `upload`) through `mirror`: a
+    /// host-visible buffer that holds every texel as the last upload
+    /// through it left them (None: made here). Where `update` is given and
+    /// the mirror was there, `update` rewrites in the mapped texels only
+    /// what changed since (the caller vouches for it); else all of `data`
+    /// is copied in. The image's copy from the mirror is then submitted,
+    /// `meanwhile` runs on the host while the device copies (a series
+    /// step's cells copy), and the call waits. The image must fit one
+    /// staging buffer (`mirrorable`); no submission reading it may be
+    /// pending, and it must hold texels already where `update` is used.
+    pub(crate) fn upload_mirrored<T>(
+        &self,
+        data: &[u8],
+        mirror: &mut Option<Buffer>,
+        update: Option<impl FnOnce(&mut [u8])>,
+        meanwhile: impl FnOnce() -> Result<T>,
+    ) -> Result<T> {
+        let [w, h, d] = self.extent;
+        let bytes = w as u64 * h as u64 * d as u64 * self.texel_bytes;
+        if bytes != data.len() as u64 || !self.mirrorable() {
+            return Err(Error::Interface(format!(
+                "{} bytes for image {w}x{h}x{d} of {}-byte texels, mirrored in one staging buffer",
+                data.len(),
+                self.texel_bytes
+            )));
+        }
+        let kept = mirror.as_ref().is_some_and(|m| m.size() >= bytes);
+        let buffer = staging_of(&self.ctx, mirror, bytes)?;
+        let mapped = &mut buffer.host_mut()?[..bytes as usize];
+        match update {
+            Some(update) if kept => update(mapped),
+            _ => copy_to_mapped(mapped, data),
+        }
+        let buffer = &*buffer;
+        // The whole image from the mirror: from UNDEFINED, as every texel
+        // is written.
+        let record = |cmd| {
+            self.record_copy(cmd, buffer, 0, d, true, true);
+            Ok(())
+        };
+        self.ctx.submit_while(record, meanwhile).map(|((), value)| value)
+    }
+}
+
 /// The staging buffer `kept`, made (or made larger) where it is None or
 /// smaller than `bytes`.
 fn staging_of<'a>(ctx: &Context, kept: &'a mut Option<Buffer>, bytes: u64) -> Result<&'a mut Buffer> {

@@ -62,6 +62,10 @@ pub struct GpuVolume {
     /// or one z-slice where a slice is larger; a lit series' gradient
     /// (8 bytes a voxel) takes it there for volumes past 2^23 voxels.
     pub(super) step_staging: Option<Buffer>,
+    /// The staging buffer a series' steps pass through to the image where
+    /// the image fits one (`Image3d::upload_mirrored`): it holds the last
+    /// step's texels, so a step rewrites in it only what changed.
+    pub(super) image_mirror: Option<Buffer>,
     /// Bricked storage's layout in numbers; None: dense.
     pub pool: Option<PoolStats>,
     /// Whether `replace` with the step before at hand uploads only the
@@ -357,6 +361,7 @@ impl GpuVolume {
             brick_table,
             pool_images: images,
             step_staging: None,
+            image_mirror: None,
             upload_changed: !ctx.info().is_cpu(),
             step: None,
             pool: pool.map(PoolLayout::stats),

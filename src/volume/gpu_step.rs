@@ -8,7 +8,7 @@ use super::pool::Storage;
 use super::{cells, cells_delta, gradient_cells};
 use super::{channels, GpuVolume, Volume};
 use crate::error::Result;
-use crate::gpu::Context;
+use crate::gpu::{Context, TexelBuffer};
 use std::sync::Arc;
 
 /// The edge of the bricks a step's changed texels are uploaded in.
@@ -49,31 +49,52 @@ impl GpuVolume {
         let last = self.step.as_ref().map(|m| m.id);
         self.step = Some(StepMark::new(last.zip(delta.clone())));
         let (_, _, bytes) = texels(volume);
+        let shared = cells::host_shared(&self.ctx);
+        // On a CPU device the host packs the cells copy, while the device
+        // copies the image where it can (`upload_mirrored`).
+        let host_cells = |cells: &mut Option<TexelBuffer>| match cells.as_mut().filter(|_| shared) {
+            Some(copy) => match &delta {
+                Some(delta) => cells_delta::repack_changed(copy, volume, delta),
+                None => cells::repack_shared(copy, volume),
+            },
+            None => Ok(()),
+        };
         match delta.as_ref().filter(|_| self.upload_changed) {
             // Only the bricks that changed (nbody:256: two fifths of them).
             Some(delta) => {
+                self.image_mirror = None;
                 self.image
-                    .upload_boxes_through(&bytes, &delta.boxes(UPLOAD_BRICK), &mut self.step_staging)?
+                    .upload_boxes_through(&bytes, &delta.boxes(UPLOAD_BRICK), &mut self.step_staging)?;
+                host_cells(&mut self.cells)?;
             }
-            None => self.image.upload_through(&bytes, &mut self.step_staging)?,
+            // The changed texels into the mirror of the last step's.
+            None if self.image.mirrorable() => {
+                let update = delta.as_ref().map(|delta| {
+                    |mirror: &mut [u8]| {
+                        if !delta.copy_changed(&bytes, mirror) {
+                            mirror.copy_from_slice(&bytes);
+                        }
+                    }
+                });
+                let cells = &mut self.cells;
+                self.image
+                    .upload_mirrored(&bytes, &mut self.image_mirror, update, || host_cells(cells))?;
+            }
+            None => {
+                self.image_mirror = None;
+                self.image.upload_through(&bytes, &mut self.step_staging)?;
+                host_cells(&mut self.cells)?;
+            }
         }
         self.spacing = volume.spacing;
         self.norm = volume.norm;
         self.norms = std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm));
         self.has_nan = volume.no_data_total() > 0;
-        let shared = cells::host_shared(&self.ctx);
-        if let Some(copy) = &mut self.cells {
-            if shared {
-                match &delta {
-                    Some(delta) => cells_delta::repack_changed(copy, volume, delta)?,
-                    None => cells::repack_shared(copy, volume)?,
-                }
-            } else {
-                // Made again from the image by the device's kernel.
-                self.cells = None;
-                self.cells_kernel = None;
-                self.add_cells(volume)?;
-            }
+        if self.cells.is_some() && !shared {
+            // Made again from the image by the device's kernel.
+            self.cells = None;
+            self.cells_kernel = None;
+            self.add_cells(volume)?;
         }
         if self.gradient.is_some() {
             let gradient = self.gradient_texels(volume)?;

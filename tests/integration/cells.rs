@@ -212,6 +212,22 @@ fn step_before(v: &Volume) -> Volume {
     Volume::new("step before", v.dims, spacing, v.source_type, data).unwrap()
 }
 
+/// `v` with its middle z plane changed (every voxel of it, NaN too).
+fn plane_changed(v: &Volume) -> Volume {
+    let [w, h, d] = v.dims.map(|n| n as usize);
+    let plane = w * h * (d / 2)..w * h * (d / 2 + 1);
+    let mut data = v.data.clone();
+    match &mut data {
+        VoxelData::U8(x) => x[plane].iter_mut().for_each(|x| *x = 255 - *x),
+        VoxelData::U16(x) => x[plane].iter_mut().for_each(|x| *x = 65535 - *x),
+        VoxelData::F32(x) => x[plane]
+            .iter_mut()
+            .for_each(|x| *x = if x.is_nan() { 0.25 } else { 1.0 - *x }),
+        VoxelData::Bricks(_) => unreachable!("volumes() are dense"),
+    }
+    Volume::new("plane changed", v.dims, v.spacing, v.source_type, data).unwrap()
+}
+
 /// A step put in place of the one before (`GpuVolume::replace`, as `view`
 /// and `bench` play a series) renders as a fresh upload of it, bit for
 /// bit, cells and gradient copies included, in every kind and mode; a
@@ -277,17 +293,40 @@ fn a_step_put_in_place_renders_as_its_fresh_upload() {
             }
         }
         // The image alone (no cells copy: the manual filter's eight fetches
-        // read it), put in place three times through the staging buffer
-        // `replace` keeps from step to step.
+        // read it), put in place through the mirror of its texels that
+        // `replace` keeps from step to step: whole (no step before at
+        // hand, or no mirror yet), then only where a plane changed.
+        let touched = plane_changed(v);
+        let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
         let mut plain = GpuVolume::upload(&ctx, &before).unwrap();
-        for step in [v, &before, v] {
-            assert!(plain.replace(step, None).unwrap(), "{}: not put in place", v.name);
+        let steps: [(&Volume, Option<&Volume>); 4] =
+            [(v, None), (&before, None), (v, Some(&before)), (&touched, Some(v))];
+        for (step, previous) in steps {
+            assert!(plain.replace(step, previous).unwrap(), "{}: not put in place", v.name);
         }
         assert!(plain.cells().is_none());
+        let mut fresh_touched = GpuVolume::upload(&ctx, &touched).unwrap();
+        fresh_touched.prepare(&touched, true, Some(Filter::Manual)).unwrap();
+        let a = frame(&ctx, &renderer, &plain, &touched, &tf, &desc);
+        let b = frame(&ctx, &renderer, &fresh_touched, &touched, &tf, &desc);
+        assert!(
+            bits(&a) == bits(&b),
+            "{}: the changed plane put in place differs",
+            v.name
+        );
+        let unchanged = frame(&ctx, &renderer, &fresh, v, &tf, &desc);
+        assert!(
+            bits(&a) != bits(&unchanged),
+            "{}: the changed plane does not show",
+            v.name
+        );
+        assert!(plain.replace(v, Some(&touched)).unwrap());
         let a = frame(&ctx, &renderer, &plain, v, &tf, &desc);
-        let b = frame(&ctx, &renderer, &fresh, v, &tf, &desc);
-        let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
-        assert!(bits(&a) == bits(&b), "{}: the image put in place differs", v.name);
+        assert!(
+            bits(&a) == bits(&unchanged),
+            "{}: the image put in place differs",
+            v.name
+        );
     }
     // Not in place: other dims, another kind, bricked storage.
     let mut u8s = GpuVolume::upload(&ctx, &volumes[0]).unwrap();
