@@ -357,19 +357,40 @@ impl Context {
 
     /// Records commands with `record`, submits them and waits for completion.
     pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
-        self.submit_while(record, || Ok(())).map(|(value, ())| value)
+        // The pool stays locked through the wait: submissions from several
+        // threads run one after another, as they always have.
+        self.submit_inner(record, None::<fn() -> Result<()>>)
+            .map(|(value, _)| value)
     }
 
     /// As `submit_and_wait`, running `meanwhile` on the host between the
     /// submission and the wait: host work that needs nothing the commands
     /// write overlaps the device's (on a CPU device, its queue thread's).
     /// `meanwhile` may submit work of its own. The wait comes even when
-    /// `meanwhile` fails (its error is returned after it).
+    /// `meanwhile` fails or panics (its error is returned, its panic
+    /// resumed, after it), so nothing the commands read is dropped while
+    /// they run.
     pub fn submit_while<T, U>(
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
         meanwhile: impl FnOnce() -> Result<U>,
     ) -> Result<(T, U)> {
+        let (value, host) = self.submit_inner(record, Some(meanwhile))?;
+        match host {
+            Some(Ok(host)) => Ok((value, host?)),
+            Some(Err(panic)) => std::panic::resume_unwind(panic),
+            None => Err(Error::Interface("submit_while ran no host work".into())),
+        }
+    }
+
+    /// The submission of `submit_and_wait` and `submit_while`: with
+    /// `meanwhile`, the pool is unlocked and `meanwhile` runs (its panic
+    /// caught) between the submission and the wait.
+    fn submit_inner<T, U>(
+        &self,
+        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
+        meanwhile: Option<impl FnOnce() -> Result<U>>,
+    ) -> Result<(T, Option<std::thread::Result<Result<U>>>)> {
         let device = self.device();
         let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let pool = lock_pool();
@@ -396,14 +417,16 @@ impl Context {
                 unsafe { device.destroy_fence(fence, None) };
                 return Err(e);
             }
-            // The pool is not touched again until the free: `meanwhile`
-            // may record and submit its own commands.
-            pool.take();
-            let host = meanwhile();
+            let host = meanwhile.map(|meanwhile| {
+                // The pool is not touched again until the free: `meanwhile`
+                // may record and submit its own commands.
+                pool.take();
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile))
+            });
             let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
             unsafe { device.destroy_fence(fence, None) };
             waited?;
-            Ok((value, host?))
+            Ok((value, host))
         })();
         let pool = pool.unwrap_or_else(lock_pool);
         unsafe { device.free_command_buffers(*pool, &[cmd]) };

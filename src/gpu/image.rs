@@ -266,8 +266,8 @@ impl Image3d {
     /// is copied in. The image's copy from the mirror is then submitted,
     /// `meanwhile` runs on the host while the device copies (a series
     /// step's cells copy), and the call waits. The image must fit one
-    /// staging buffer (`mirrorable`); no submission reading it may be
-    /// pending, and it must hold texels already where `update` is used.
+    /// staging buffer (`mirrorable`), and no submission reading it may be
+    /// pending; it is written whole (its texels before are not read).
     pub(crate) fn upload_mirrored<T>(
         &self,
         data: &[u8],
@@ -284,8 +284,11 @@ impl Image3d {
                 self.texel_bytes
             )));
         }
-        let kept = mirror.as_ref().is_some_and(|m| m.size() >= bytes);
-        let buffer = staging_of(&self.ctx, mirror, bytes)?;
+        // Out of `mirror` until the copy is done: after an error it is
+        // None, never a buffer holding other texels than the image's.
+        let mut taken = mirror.take();
+        let kept = taken.as_ref().is_some_and(|m| m.size() >= bytes);
+        let buffer = staging_of(&self.ctx, &mut taken, bytes)?;
         let mapped = &mut buffer.host_mut()?[..bytes as usize];
         match update {
             Some(update) if kept => update(mapped),
@@ -298,7 +301,9 @@ impl Image3d {
             self.record_copy(cmd, buffer, 0, d, true, true);
             Ok(())
         };
-        self.ctx.submit_while(record, meanwhile).map(|((), value)| value)
+        let ((), value) = self.ctx.submit_while(record, meanwhile)?;
+        *mirror = taken;
+        Ok(value)
     }
 }
 

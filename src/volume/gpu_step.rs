@@ -67,8 +67,10 @@ impl GpuVolume {
                     .upload_boxes_through(&bytes, &delta.boxes(UPLOAD_BRICK), &mut self.step_staging)?;
                 host_cells(&mut self.cells)?;
             }
-            // The changed texels into the mirror of the last step's.
-            None if self.image.mirrorable() => {
+            // The changed texels into the mirror of the last step's, where
+            // the whole image is copied (a GPU without the step before at
+            // hand gains nothing by keeping one).
+            None if !self.upload_changed && self.image.mirrorable() => {
                 let update = delta.as_ref().map(|delta| {
                     |mirror: &mut [u8]| {
                         if !delta.copy_changed(&bytes, mirror) {

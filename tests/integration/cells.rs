@@ -228,6 +228,36 @@ fn plane_changed(v: &Volume) -> Volume {
     Volume::new("plane changed", v.dims, v.spacing, v.source_type, data).unwrap()
 }
 
+/// `v` with a few voxels changed: the last of a row (a segment of one
+/// voxel), and a block of 2x2x2 in the middle.
+fn voxels_changed(v: &Volume) -> Volume {
+    let [w, h, d] = v.dims.map(|n| n as usize);
+    let at = |x: usize, y: usize, z: usize| x + w * (y + h * z);
+    let mut places = vec![at(w - 1, h / 2, d / 2)];
+    for (x, y, z) in [
+        (0, 0, 0),
+        (1, 0, 0),
+        (0, 1, 0),
+        (1, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (0, 1, 1),
+        (1, 1, 1),
+    ] {
+        places.push(at(w / 2 + x, h / 2 + y, d / 2 + z));
+    }
+    let mut data = v.data.clone();
+    match &mut data {
+        VoxelData::U8(x) => places.iter().for_each(|&i| x[i] = 255 - x[i]),
+        VoxelData::U16(x) => places.iter().for_each(|&i| x[i] = 65535 - x[i]),
+        VoxelData::F32(x) => places
+            .iter()
+            .for_each(|&i| x[i] = if x[i].is_nan() { 0.25 } else { 1.0 - x[i] }),
+        VoxelData::Bricks(_) => unreachable!("volumes() are dense"),
+    }
+    Volume::new("voxels changed", v.dims, v.spacing, v.source_type, data).unwrap()
+}
+
 /// A step put in place of the one before (`GpuVolume::replace`, as `view`
 /// and `bench` play a series) renders as a fresh upload of it, bit for
 /// bit, cells and gradient copies included, in every kind and mode; a
@@ -325,6 +355,19 @@ fn a_step_put_in_place_renders_as_its_fresh_upload() {
         assert!(
             bits(&a) == bits(&unchanged),
             "{}: the image put in place differs",
+            v.name
+        );
+        // A few voxels: one in a row's short last segment (13 voxels a row).
+        let sparse = voxels_changed(v);
+        assert!(plain.replace(&sparse, Some(v)).unwrap());
+        let mut fresh_sparse = GpuVolume::upload(&ctx, &sparse).unwrap();
+        fresh_sparse.prepare(&sparse, true, Some(Filter::Manual)).unwrap();
+        let a = frame(&ctx, &renderer, &plain, &sparse, &tf, &desc);
+        let b = frame(&ctx, &renderer, &fresh_sparse, &sparse, &tf, &desc);
+        assert!(bits(&a) == bits(&b), "{}: a few voxels put in place differ", v.name);
+        assert!(
+            bits(&a) != bits(&unchanged),
+            "{}: the changed voxels do not show",
             v.name
         );
     }

@@ -559,3 +559,55 @@ fn a_context_creates_each_kernel_once() {
     assert!(ctx.kernels_created() > made, "another filter is another specialization");
     assert_clean(&ctx);
 }
+
+/// Records the copy of `from` into `to` (`n` words).
+fn copy_job<'a>(
+    kernel: &'a Kernel,
+    from: &'a Buffer,
+    to: &'a Buffer,
+    n: u32,
+    groups: [u32; 3],
+) -> impl FnOnce(vk::CommandBuffer) -> lacuna::Result<()> + 'a {
+    move |cmd| kernel.dispatch(cmd, &copy(from, to), &push(n, groups[0]), groups)
+}
+
+/// `submit_while` runs host work between the submission and the wait (here
+/// a submission of its own), returns both results, and waits for the
+/// commands even where the host work fails or panics: the context stays
+/// usable and what the commands wrote is there.
+#[test]
+fn submit_while_runs_host_work_and_always_waits() {
+    let ctx = gpu();
+    let n = 4096u32;
+    let input: Vec<u32> = (0..n).map(|i| i ^ 0x5a5a).collect();
+    let a = storage(&ctx, "a", &input);
+    let kernel = copy_kernel(&ctx);
+    let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
+    let words = |b: &Buffer| bytemuck::pod_collect_to_vec::<u8, u32>(&b.download(0, n as u64 * 4).unwrap());
+    let zeros = |name| storage(&ctx, name, &vec![0; n as usize]);
+    let (b, c) = (zeros("b"), zeros("c"));
+    let ((), host) = ctx
+        .submit_while(copy_job(&kernel, &a, &b, n, groups), || {
+            ctx.submit_and_wait(copy_job(&kernel, &a, &c, n, groups))?;
+            Ok(7)
+        })
+        .unwrap();
+    assert_eq!((host, words(&b), words(&c)), (7, input.clone(), input.clone()));
+    // Host work that fails: its error, after the wait.
+    let d = zeros("d");
+    let failed = ctx.submit_while(copy_job(&kernel, &a, &d, n, groups), || -> lacuna::Result<()> {
+        Err(Error::Interface("planted".into()))
+    });
+    assert!(matches!(failed, Err(Error::Interface(m)) if m == "planted"));
+    assert_eq!(words(&d), input);
+    // Host work that panics: the panic comes back after the wait.
+    let e = zeros("e");
+    let panicked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        ctx.submit_while(copy_job(&kernel, &a, &e, n, groups), || -> lacuna::Result<()> {
+            panic!("planted panic")
+        })
+    }));
+    assert!(panicked.is_err());
+    assert_eq!(words(&e), input);
+    assert_clean(&ctx);
+}
