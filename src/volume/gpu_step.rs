@@ -29,9 +29,12 @@ impl GpuVolume {
     /// `previous`, where the caller still has it, is the step these
     /// texels came from (`upload` or the last `replace` had it): then only
     /// what changed is rewritten (`StepDelta`), the cells copy around the
-    /// changed voxels on a CPU device, and the step is marked with what
-    /// changed (`step_mark`), so the next build recomputes only the value
-    /// ranges of the bricks whose voxels changed. Passing a volume these
+    /// changed voxels on a CPU device, the image's changed bricks
+    /// (`upload_changed`) or else its changed texels in the staging buffer
+    /// this keeps with the last step's (where the image fits one), and the
+    /// step is marked with what changed (`step_mark`), so the next build
+    /// recomputes only the value ranges of the bricks whose apron holds a
+    /// changed voxel. Passing a volume these
     /// texels did not come from leaves stale texels: the delta is trusted.
     ///
     /// No submission reading this volume may still be pending (the host
