@@ -359,8 +359,8 @@ impl Context {
     pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
         // The pool stays locked through the wait: submissions from several
         // threads run one after another, as they always have.
-        self.submit_inner(record, None::<fn() -> Result<()>>)
-            .map(|(value, _)| value)
+        let (value, _) = self.submit_inner(record, || Ok(()), false)?;
+        Ok(value)
     }
 
     /// As `submit_and_wait`, running `meanwhile` on the host between the
@@ -375,22 +375,21 @@ impl Context {
         record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
         meanwhile: impl FnOnce() -> Result<U>,
     ) -> Result<(T, U)> {
-        let (value, host) = self.submit_inner(record, Some(meanwhile))?;
-        match host {
-            Some(Ok(host)) => Ok((value, host?)),
-            Some(Err(panic)) => std::panic::resume_unwind(panic),
-            None => Err(Error::Interface("submit_while ran no host work".into())),
+        match self.submit_inner(record, meanwhile, true)? {
+            (value, Ok(host)) => Ok((value, host?)),
+            (_, Err(panic)) => std::panic::resume_unwind(panic),
         }
     }
 
-    /// The submission of `submit_and_wait` and `submit_while`: with
-    /// `meanwhile`, the pool is unlocked and `meanwhile` runs (its panic
-    /// caught) between the submission and the wait.
+    /// The submission of `submit_and_wait` and `submit_while`: `meanwhile`
+    /// runs (its panic caught) between the submission and the wait, with
+    /// the pool unlocked where `unlock` (it may then submit).
     fn submit_inner<T, U>(
         &self,
         record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
-        meanwhile: Option<impl FnOnce() -> Result<U>>,
-    ) -> Result<(T, Option<std::thread::Result<Result<U>>>)> {
+        meanwhile: impl FnOnce() -> Result<U>,
+        unlock: bool,
+    ) -> Result<(T, std::thread::Result<Result<U>>)> {
         let device = self.device();
         let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let pool = lock_pool();
@@ -417,12 +416,12 @@ impl Context {
                 unsafe { device.destroy_fence(fence, None) };
                 return Err(e);
             }
-            let host = meanwhile.map(|meanwhile| {
+            if unlock {
                 // The pool is not touched again until the free: `meanwhile`
                 // may record and submit its own commands.
                 pool.take();
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile))
-            });
+            }
+            let host = std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile));
             let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
             unsafe { device.destroy_fence(fence, None) };
             waited?;

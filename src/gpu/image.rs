@@ -251,6 +251,51 @@ impl Image3d {
     }
 }
 
+/// The staging buffer `kept`, made (or made larger) where it is None or
+/// smaller than `bytes`.
+fn staging_of<'a>(ctx: &Context, kept: &'a mut Option<Buffer>, bytes: u64) -> Result<&'a mut Buffer> {
+    Ok(match kept.take() {
+        Some(k) if k.size() >= bytes => kept.insert(k),
+        small => {
+            // Freed before the larger one is made.
+            drop(small);
+            kept.insert(Buffer::new(
+                ctx,
+                "staging volume",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?)
+        }
+    })
+}
+
+/// A box of texels: its low corner and extent.
+pub type TexelBox = ([u32; 3], [u32; 3]);
+
+/// The copy of texel box `b` of the image's colour from `offset` in a
+/// buffer, its rows tightly packed.
+fn copy_region(offset: u64, ([x, y, z], [w, h, d]): TexelBox) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_offset(vk::Offset3D {
+            x: x as i32,
+            y: y as i32,
+            z: z as i32,
+        })
+        .image_extent(vk::Extent3D {
+            width: w,
+            height: h,
+            depth: d,
+        })
+}
+
 impl Image3d {
     /// Whether the image's texels fit one staging buffer, as
     /// `upload_mirrored` takes them.
@@ -305,54 +350,7 @@ impl Image3d {
         *mirror = taken;
         Ok(value)
     }
-}
 
-/// The staging buffer `kept`, made (or made larger) where it is None or
-/// smaller than `bytes`.
-fn staging_of<'a>(ctx: &Context, kept: &'a mut Option<Buffer>, bytes: u64) -> Result<&'a mut Buffer> {
-    Ok(match kept.take() {
-        Some(k) if k.size() >= bytes => kept.insert(k),
-        small => {
-            // Freed before the larger one is made.
-            drop(small);
-            kept.insert(Buffer::new(
-                ctx,
-                "staging volume",
-                bytes,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::CpuToGpu,
-            )?)
-        }
-    })
-}
-
-/// A box of texels: its low corner and extent.
-pub type TexelBox = ([u32; 3], [u32; 3]);
-
-/// The copy of texel box `b` of the image's colour from `offset` in a
-/// buffer, its rows tightly packed.
-fn copy_region(offset: u64, ([x, y, z], [w, h, d]): TexelBox) -> vk::BufferImageCopy {
-    vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_offset(vk::Offset3D {
-            x: x as i32,
-            y: y as i32,
-            z: z as i32,
-        })
-        .image_extent(vk::Extent3D {
-            width: w,
-            height: h,
-            depth: d,
-        })
-}
-
-impl Image3d {
     /// Writes the texels of `boxes` from `data` (every texel of the image,
     /// x fastest, as `upload` takes them) and leaves the others as they
     /// are, through `staging` (as `upload_through`), and waits: a series

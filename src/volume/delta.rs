@@ -287,7 +287,7 @@ impl StepDelta {
 /// compare took 4 to 5 ms segment by segment, below what the memory moves.
 fn mark_segments_u8(a: &[u8], b: &[u8], sets: [&mut [u64]; 3]) {
     let n = a.len().min(b.len());
-    let blocks = if cfg!(target_arch = "x86_64") { n / 16 } else { 0 };
+    let blocks = n / 16;
     // Bits 0, 4, 8 and 12 of a 16-bit mask as bits 0 to 3.
     let compress = |y: u32| (y | y >> 3 | y >> 6 | y >> 9) & 0b1111;
     let [out, first, last] = sets;
@@ -305,7 +305,7 @@ fn mark_segments_u8(a: &[u8], b: &[u8], sets: [&mut [u64]; 3]) {
             set[i] |= w;
         }
     }
-    // The bytes past the last 16 (all of them off x86-64), one by one.
+    // The bytes past the last 16, one by one.
     for s in (16 * blocks / 4)..n.div_ceil(4) {
         let (lo, hi) = (4 * s, (4 * s + 4).min(n));
         let differs = |i: usize| a[i] != b[i];
@@ -334,8 +334,8 @@ fn differing_bytes(a: &[u8], b: &[u8], at: usize) -> u32 {
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn differing_bytes(_: &[u8], _: &[u8], _: usize) -> u32 {
-    unreachable!("no vector compare off x86-64 (mark_segments_u8 takes no blocks)")
+fn differing_bytes(a: &[u8], b: &[u8], at: usize) -> u32 {
+    (0..16).fold(0, |m, k| m | ((a[at + k] != b[at + k]) as u32) << k)
 }
 
 /// Sets the bits of the segments of `N` bytes (the last one may be
@@ -459,6 +459,11 @@ mod tests {
                     {
                         set[s / 64] |= (on as u64) << (s % 64);
                     }
+                }
+                // The 16-byte mask is the per-byte one (the portable form).
+                if len >= 16 {
+                    let per_byte = (0..16).fold(0, |m, k| m | ((a[k] != b[k]) as u32) << k);
+                    assert_eq!(differing_bytes(&a, &b, 0), per_byte, "row of {len} bytes");
                 }
                 let mut got = vec![vec![0u64; words]; 3];
                 let [x, y, z] = &mut got[..] else { unreachable!() };
