@@ -4,8 +4,9 @@
 //! transfer-function change: the range classification (O(cells)) and a
 //! separable distance transform (three linear-time 1-D passes,
 //! `distance_rows.comp`, one-sided for octants in `distance_octant_rows.comp`),
-//! with no host round trip. `glsl/march/distance.comp` then takes one O(1)
-//! step per empty region.
+//! with no host round trip; on a CPU device `Builder::build` makes the
+//! transform on the host's cores instead (`build_on_host`). The march
+//! (`glsl/march/distance.comp`) then takes one O(1) step per empty region.
 //!
 //! Every cell stores its distance to the nearest cell of the other kind, so
 //! a ray crosses a cube of empty cells (skipped) or of active cells (marched
@@ -17,15 +18,17 @@
 use super::bricks::GpuBricks;
 use super::builder::{Builder, RangeKind, Ranges};
 use super::classify::{Classifier, Classify};
-use super::method::{BuildInput, Built, March, Method};
+use super::distance_host;
+pub use super::distance_host::{channels, reference, CAP};
+use super::method::{submit_build, BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::STORAGE_XFER;
 use crate::desc::Octants;
 use crate::error::Result;
-use crate::gpu::record;
+use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
-use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer};
+use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer, Timings};
 use crate::prims::entry_barrier;
 
 /// Default cell edge in voxels: the 8^3 brick grid.
@@ -33,9 +36,6 @@ pub const CELL: u32 = 8;
 
 /// The cell parameter of the distance maps (default [`CELL`]).
 const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
-
-/// Largest stored distance (`DISTANCE_CAP` in `distance_map.glsl`).
-pub const CAP: u32 = 255;
 
 /// Longest row whose envelope (deque) `distance_rows.comp`
 /// (`distance_octant_rows.comp`) keeps in private arrays (their PRIVATE_ROW).
@@ -108,20 +108,11 @@ pub struct DistanceMap {
     pub flags: Buffer,
     /// Per cell: [`channels`] byte distances packed in words.
     pub distances: Buffer,
-    /// The transform's intermediate pass and row stacks; kept until the build has run.
-    _scratch: [Buffer; 2],
+    /// The transform's intermediate pass and row stacks (a device
+    /// transform); kept until the build has run.
+    _scratch: Vec<Buffer>,
     total: u64,
     active: std::sync::OnceLock<u64>,
-}
-
-/// Byte distances per cell: to the nearest active cell, then to the nearest
-/// empty cell, one each (cube maps) or one per octant each (`distance_map.glsl`).
-pub fn channels(octants: bool) -> usize {
-    if octants {
-        16
-    } else {
-        2
-    }
 }
 
 fn words_per_cell(octants: bool) -> u64 {
@@ -159,24 +150,15 @@ pub fn record(
     octants: bool,
 ) -> Result<DistanceMap> {
     let ctx = builder.context();
-    let classifier = builder.shared::<Classifier>()?;
     let info = ctx.info();
-    check_fits(info, cells.total, octants)?;
-    let bytes = cells.total * 4 * words_per_cell(octants);
+    let mut map = classified_map(builder, cmd, &mut timer, input, cells, octants, MemoryLocation::GpuOnly)?;
+    let bytes = map.distances.size();
     // Rows of at most PRIVATE_ROW cells keep their stacks in private arrays:
     // where every axis's rows do, the binding gets a one-word placeholder.
     let stack_bytes = match cells.counts.iter().any(|&n| n > PRIVATE_ROW) {
         true => stack_bytes(cells.total, octants),
         false => 4,
     };
-    let flags = Buffer::new(
-        ctx,
-        "distance cell flags",
-        cells.total * 4,
-        STORAGE_XFER,
-        MemoryLocation::GpuOnly,
-    )?;
-    let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
     let scratch = Buffer::new(ctx, "distance scratch", bytes, STORAGE_XFER, MemoryLocation::GpuOnly)?;
     let stack = Buffer::new(
         ctx,
@@ -185,19 +167,11 @@ pub fn record(
         STORAGE_XFER,
         MemoryLocation::GpuOnly,
     )?;
-
-    // An octant map computes the octants its frames need (none named: all).
-    let built = match input.octants {
-        o if !octants || o.is_empty() => Octants::ALL,
-        o => o,
-    };
-    let pass = timer.begin(cmd, "classify")?;
-    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
-    timer.end(cmd, pass);
+    let (flags, distances, built) = (&map.flags, &map.distances, map.built);
     // x: flags -> distances, y: distances -> scratch, z: scratch -> distances.
     let c = cells.counts;
     let counts = [c[0], c[1], c[2], cells.total as u32];
-    for (axis, (src, dst)) in [(&flags, &distances), (&distances, &scratch), (&scratch, &distances)]
+    for (axis, (src, dst)) in [(flags, distances), (distances, &scratch), (&scratch, distances)]
         .into_iter()
         .enumerate()
     {
@@ -250,6 +224,35 @@ pub fn record(
         k.dispatch(cmd, &bindings, &push, groups)?;
         timer.end(cmd, pass);
     }
+    map._scratch = vec![scratch, stack];
+    Ok(map)
+}
+
+/// The map's buffers (flags, distances; in `location`) and the recorded
+/// classification of `cells` ("classify"), for the octants the input's
+/// frames need (none named: all).
+fn classified_map(
+    builder: &Builder,
+    cmd: vk::CommandBuffer,
+    timer: &mut Option<&mut Timer>,
+    input: &BuildInput,
+    cells: &GpuBricks,
+    octants: bool,
+    location: MemoryLocation,
+) -> Result<DistanceMap> {
+    let ctx = builder.context();
+    let classifier = builder.shared::<Classifier>()?;
+    check_fits(ctx.info(), cells.total, octants)?;
+    let bytes = cells.total * 4 * words_per_cell(octants);
+    let flags = Buffer::new(ctx, "distance cell flags", cells.total * 4, STORAGE_XFER, location)?;
+    let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_XFER, location)?;
+    let built = match input.octants {
+        o if !octants || o.is_empty() => Octants::ALL,
+        o => o,
+    };
+    let pass = timer.begin(cmd, "classify")?;
+    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
+    timer.end(cmd, pass);
     Ok(DistanceMap {
         cell: cells.brick,
         counts: cells.counts,
@@ -257,10 +260,51 @@ pub fn record(
         built,
         flags,
         distances,
-        _scratch: [scratch, stack],
+        _scratch: Vec::new(),
         total: cells.total,
         active: std::sync::OnceLock::new(),
     })
+}
+
+/// Whether `Builder::build` transforms on the host (`build_on_host`): on a
+/// CPU device, whose memory the host reads and writes in place.
+pub fn transforms_on_host(ctx: &Context) -> bool {
+    ctx.info().is_cpu()
+}
+
+/// As `record`, submitted and waited for, with the transform made on the
+/// host (`distance_host::transform`) from the flags the device classified:
+/// the same map, faster on a CPU device. The buffers must be host visible
+/// (`transforms_on_host`). Timings: "classify" (GPU) and "distance (host)".
+pub fn build_on_host(
+    builder: &Builder,
+    input: &BuildInput,
+    cells: &GpuBricks,
+    octants: bool,
+) -> Result<(DistanceMap, Timings)> {
+    let ctx = builder.context();
+    let mut timer = Timer::new(ctx, 2)?;
+    let mut map = ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let map = classified_map(
+            builder,
+            cmd,
+            &mut Some(&mut timer),
+            input,
+            cells,
+            octants,
+            MemoryLocation::GpuToCpu,
+        )?;
+        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        Ok(map)
+    })?;
+    let mut timings = timer.results()?;
+    let start = std::time::Instant::now();
+    let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.host()?[..4 * map.total as usize]);
+    let (counts, built) = (map.counts, map.built);
+    distance_host::transform(counts, &flags, octants, built, map.distances.host_mut()?);
+    timings.push("distance (host)", start.elapsed().as_secs_f64() * 1e3);
+    Ok((map, timings))
 }
 
 impl DistanceMap {
@@ -296,38 +340,6 @@ impl DistanceMap {
             bytes: self.total * 4 * words_per_cell(self.octants),
         })
     }
-}
-
-/// The distance map on the host, for tests: per cell, [`channels`] distances
-/// in channel order, each the Chebyshev distance in cells to the nearest
-/// cell of the kind sought (`octants`: only cells ahead of that octant, and
-/// 1 for an octant not `built`), capped at [`CAP`]. Brute force: O(cells^2).
-pub fn reference(counts: [u32; 3], active: &[bool], octants: bool, built: Octants) -> Vec<u32> {
-    let [nx, ny, nz] = counts.map(|n| n as i64);
-    let cells: Vec<[i64; 3]> = (0..nz)
-        .flat_map(|z| (0..ny).flat_map(move |y| (0..nx).map(move |x| [x, y, z])))
-        .collect();
-    let half = channels(octants) / 2;
-    let mut out = Vec::with_capacity(cells.len() * 2 * half);
-    for c in &cells {
-        for ch in 0..2 * half {
-            let (seek_active, octant) = (ch < half, ch % half);
-            if octants && !built.has(octant as u32) {
-                out.push(1);
-                continue;
-            }
-            let mut best = CAP as i64;
-            for (o, other) in cells.iter().enumerate() {
-                let off = [0, 1, 2].map(|k| other[k] - c[k]);
-                let ahead = !octants || (0..3).all(|k| if octant >> k & 1 == 1 { off[k] <= 0 } else { off[k] >= 0 });
-                if active[o] == seek_active && ahead {
-                    best = best.min(off.iter().map(|v| v.abs()).max().unwrap_or(0));
-                }
-            }
-            out.push(best as u32);
-        }
-    }
-    out
 }
 
 /// `--accel distance` (one distance per cell) and `--accel distance-octant`
@@ -383,6 +395,21 @@ impl Method for DistanceMethod {
     ) -> Result<Box<dyn Built>> {
         let cells = ranges.cells(p.int("cell")?)?;
         Ok(Box::new(record(builder, cmd, timer, input, cells, self.octants)?))
+    }
+    /// On a CPU device the transform runs on the host (`build_on_host`).
+    fn build(
+        &self,
+        builder: &Builder,
+        input: &BuildInput,
+        ranges: &Ranges,
+        p: &Params,
+    ) -> Result<(Box<dyn Built>, Timings)> {
+        if !transforms_on_host(builder.context()) {
+            return submit_build(self, builder, input, ranges, p);
+        }
+        let cells = ranges.cells(p.int("cell")?)?;
+        let (map, timings) = build_on_host(builder, input, cells, self.octants)?;
+        Ok((Box::new(map), timings))
     }
 }
 

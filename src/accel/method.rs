@@ -187,14 +187,26 @@ pub trait Method: Sync {
         ranges: &Ranges,
         params: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let ctx = builder.context();
-        let mut timer = Timer::new(ctx, 16)?;
-        let built = ctx.submit_and_wait(|cmd| {
-            timer.reset(cmd);
-            self.record_build(builder, cmd, Some(&mut timer), input, ranges, params)
-        })?;
-        Ok((built, timer.results()?))
+        submit_build(self, builder, input, ranges, params)
     }
+}
+
+/// `method`'s `record_build` submitted once and waited for, with its
+/// passes' timings: `Method::build`'s default.
+pub fn submit_build(
+    method: &(impl Method + ?Sized),
+    builder: &Builder,
+    input: &BuildInput,
+    ranges: &Ranges,
+    params: &Params,
+) -> Result<(Box<dyn Built>, Timings)> {
+    let ctx = builder.context();
+    let mut timer = Timer::new(ctx, 16)?;
+    let built = ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        method.record_build(builder, cmd, Some(&mut timer), input, ranges, params)
+    })?;
+    Ok((built, timer.results()?))
 }
 
 /// A handle to a structure: cheap to copy, compared by name.

@@ -13,6 +13,7 @@ pub mod builder;
 pub mod classify;
 pub mod cost;
 pub mod distance;
+mod distance_host;
 pub mod grid;
 pub mod hybrid;
 pub mod kd;

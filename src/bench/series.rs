@@ -41,6 +41,10 @@ pub struct StepRecord {
     pub build_ms: f64,
     /// The step's first frame (GPU).
     pub frame_ms: f64,
+    /// The same view's next frame, timed right after the first (GPU): the
+    /// frame time of this step, interleaved with its new-step time.
+    #[serde(default)]
+    pub next_frame_ms: f64,
     /// upload + ranges + build + frame: the first exact frame of a new step.
     pub new_step_ms: f64,
     /// Pixels of its frames that differ from naive's on the same step.
@@ -86,7 +90,7 @@ impl StepBench<'_> {
             ));
         }
         let n = self.structures.len();
-        let mut times: Vec<[Vec<f64>; 5]> = vec![Default::default(); n];
+        let mut times: Vec<[Vec<f64>; 6]> = vec![Default::default(); n];
         let mut loads = Vec::new();
         let mut differing = vec![0u64; n];
         // auto's choice on the last step, and the timed steps that kept
@@ -143,6 +147,7 @@ impl StepBench<'_> {
                 };
                 let (frame_ms, image) = frame(scene, self.desc, true)?;
                 let image = image.ok_or_else(|| Error::Unsupported("a frame read back was not returned".into()))?;
+                let (next_ms, _) = frame(scene, self.desc, false)?;
                 match &naive {
                     None => naive = Some(image),
                     Some(reference) => differing[i] += diff(reference, &image)?.differing as u64,
@@ -150,7 +155,7 @@ impl StepBench<'_> {
                 if k > first {
                     let parts = [upload, ranges_t.total(), build_t.total(), frame_ms];
                     let total = parts.iter().sum();
-                    for (series, v) in times[i].iter_mut().zip(parts.into_iter().chain([total])) {
+                    for (series, v) in times[i].iter_mut().zip(parts.into_iter().chain([total, next_ms])) {
                         series.push(v);
                     }
                 }
@@ -184,7 +189,7 @@ impl StepBench<'_> {
             .zip(differing)
             .zip(chosen)
             .map(
-                |(((s, [upload, ranges, build, frame, total]), differing_pixels), chosen)| StepRecord {
+                |(((s, [upload, ranges, build, frame, total, next]), differing_pixels), chosen)| StepRecord {
                     dataset: label.to_string(),
                     structure: s.label.clone(),
                     steps: (first + 1..=last).collect(),
@@ -193,6 +198,7 @@ impl StepBench<'_> {
                     ranges_ms: median(ranges),
                     build_ms: median(build),
                     frame_ms: median(frame),
+                    next_frame_ms: median(next),
                     new_step_ms: median(total),
                     differing_pixels,
                     chosen,
@@ -219,18 +225,25 @@ fn ms_since(t: Instant) -> f64 {
 }
 
 /// The new-step table: per data set and structure, the parts and the
-/// total, and the total over the structure's frame time in the run's
-/// timed frames (`frame_of`), where it has one.
+/// total; the total over the step's next frame (the same view, timed right
+/// after the new step's frame: interleaved, so the machine's drift between
+/// a run's phases stays out of it), and over the structure's median frame
+/// in the run's timed frames (`frame_of`, over the orbit's views), where it
+/// has one.
 pub fn steps_md(records: &[StepRecord], frame_of: impl Fn(&str, &str) -> Option<f64>) -> String {
     let mut out = String::from(
         "Time to the first exact frame of a new time step (ms, medians over the timed steps; the step's voxels already in host memory)\n\n\
-         | data set | structure | load (host) | upload | ranges | build | frame | new step | new step / frame | differing px |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         | data set | structure | load (host) | upload | ranges | build | frame | new step | next frame | new step / next frame | new step / run's frame | differing px |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in records {
         let ratio = frame_of(&r.dataset, &r.structure).map_or("-".to_string(), |f| format!("{:.2}", r.new_step_ms / f));
+        let next = match r.next_frame_ms > 0.0 {
+            true => format!("{:.2}", r.new_step_ms / r.next_frame_ms),
+            false => "-".to_string(),
+        };
         out += &format!(
-            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {ratio} | {} |\n",
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {next} | {ratio} | {} |\n",
             r.dataset,
             r.structure,
             r.load_ms,
@@ -239,6 +252,7 @@ pub fn steps_md(records: &[StepRecord], frame_of: impl Fn(&str, &str) -> Option<
             r.build_ms,
             r.frame_ms,
             r.new_step_ms,
+            r.next_frame_ms,
             r.differing_pixels
         );
     }
@@ -264,6 +278,7 @@ mod tests {
             ranges_ms: 60.0,
             build_ms: 100.0,
             frame_ms: 60.0,
+            next_frame_ms: 52.0,
             new_step_ms: 260.0,
             differing_pixels: 0,
             chosen: chosen.map(String::from),
@@ -278,11 +293,11 @@ mod tests {
         ];
         let md = steps_md(&records, |_, s| (s == "auto").then_some(65.0));
         assert!(
-            md.contains("| nbody:256 | auto | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | 4.00 | 0 |"),
+            md.contains("| nbody:256 | auto | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | 52.0 | 5.00 | 4.00 | 0 |"),
             "{md}"
         );
         assert!(
-            md.contains("| nbody:256 | grid | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | - | 0 |"),
+            md.contains("| nbody:256 | grid | 300.0 | 40.0 | 60.0 | 100.0 | 60.0 | 260.0 | 52.0 | 5.00 | - | 0 |"),
             "{md}"
         );
         assert!(

@@ -65,7 +65,7 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
             assert_eq!(r.differing_pixels, 0, "{r:?}");
         }
         let parts = r.upload_ms + r.ranges_ms + r.build_ms + r.frame_ms;
-        assert!(r.new_step_ms > 0.0 && r.load_ms > 0.0, "{r:?}");
+        assert!(r.new_step_ms > 0.0 && r.load_ms > 0.0 && r.next_frame_ms > 0.0, "{r:?}");
         // Medians of sums are not sums of medians, but they bound each other.
         assert!(r.new_step_ms <= 4.0 * parts && parts <= 4.0 * r.new_step_ms, "{r:?}");
     }

@@ -1,6 +1,6 @@
 //! The GPU distance maps (cube and octant) against a brute-force CPU
-//! transform, and the extremes: no active cell, every cell active, one
-//! active cell.
+//! transform and against the host's sweeps (`build_on_host`), and the
+//! extremes: no active cell, every cell active, one active cell.
 
 use crate::common::{assert_clean, gpu};
 use lacuna::accel::distance::{self, DistanceMap};
@@ -64,6 +64,17 @@ fn build_for(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octant
     let total = map.counts.iter().product::<u32>() as usize;
     let flags: Vec<bool> = flags[..total].iter().map(|&f| f != 0).collect();
     let distances = map.download().unwrap();
+    // The host's transform of the device's classification (what
+    // `Builder::build` makes on a CPU device) holds the same bytes.
+    let (host, host_timings) = distance::build_on_host(&builder, &input, ranges.cells(cell).unwrap(), octants).unwrap();
+    assert_eq!(host.built, map.built, "{}: octants built on the host", v.name);
+    assert_eq!(
+        host.download().unwrap(),
+        distances,
+        "{}: host transform differs from the device's",
+        v.name
+    );
+    assert!(host_timings.get("classify").is_some() && host_timings.get("distance (host)").is_some());
     let timings = timer.results().unwrap();
     let phases = ["classify", "distance x", "distance y", "distance z"]
         .into_iter()
