@@ -300,8 +300,13 @@ pub fn build_on_host(
     })?;
     let mut timings = timer.results()?;
     let start = std::time::Instant::now();
-    let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.host()?[..4 * map.total as usize]);
     let (counts, built) = (map.counts, map.built);
+    let flags = &map.flags.host()?[..4 * map.total as usize];
+    // Mapped memory is aligned for words; a copy where it were not.
+    let flags: std::borrow::Cow<[u32]> = match bytemuck::try_cast_slice(flags) {
+        Ok(words) => words.into(),
+        Err(_) => bytemuck::pod_collect_to_vec(flags).into(),
+    };
     distance_host::transform(counts, &flags, octants, built, map.distances.host_mut()?);
     timings.push("distance (host)", start.elapsed().as_secs_f64() * 1e3);
     Ok((map, timings))

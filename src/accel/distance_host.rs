@@ -4,11 +4,12 @@
 //! GPU transform (`distance_octant_rows.comp`, `distance_rows.comp`) runs
 //! a row per SIMD lane through storage-buffer accesses it makes one lane at
 //! a time with a bounds check each: nbody:256's octant map at cell 4 took
-//! 11 to 20 ms in its three passes. The same distances by sequential sweeps
+//! 16 to 24 ms in its three passes. The same distances by sequential sweeps
 //! take a few milliseconds on the host, so `Builder::build` classifies on
 //! the device and transforms here when the device is the CPU
 //! (`distance::build_on_host`); recorded builds (`record_build`) stay on
-//! the device. The two give the same bytes (tests/integration/distance.rs).
+//! the device. The two give the same distances, every byte the march reads
+//! (tests/integration/distance.rs).
 //!
 //! Each channel is one dynamic-programming sweep over the cells, which is
 //! exact for the Chebyshev (chessboard) distance:
@@ -73,6 +74,10 @@ pub fn reference(counts: [u32; 3], active: &[bool], octants: bool, built: Octant
     }
     out
 }
+
+/// Bytes of swept channels held at once before they are interleaved into
+/// the map (a channel is a byte a cell).
+pub const SWEPT_BYTES: usize = 256 << 20;
 
 const CAP8: u8 = CAP as u8;
 // A byte's saturation is the cap.
@@ -204,12 +209,16 @@ fn sweep_cube(grid: Grid, flags: &[u32], seek_active: bool) -> Vec<u8> {
 /// four to a word, little-endian; the first half to active cells). An
 /// octant map holds the octants `built` (the others' bytes are 0: the
 /// march reads 1 for them); a cube map holds all. Channels are swept in
-/// parallel, as many at once as the pool has threads.
+/// parallel, as many at once as rayon's pool has threads and
+/// [`SWEPT_BYTES`] holds.
 pub fn transform(counts: [u32; 3], flags: &[u32], octants: bool, built: Octants, out: &mut [u8]) {
     let grid = Grid {
         n: counts.map(|n| n as usize),
     };
     let total = grid.n.iter().product::<usize>();
+    if total == 0 {
+        return;
+    }
     let per_cell = 4 * channels(octants).div_ceil(4);
     let out = &mut out[..total * per_cell];
     out.fill(0);
@@ -220,7 +229,8 @@ pub fn transform(counts: [u32; 3], flags: &[u32], octants: bool, built: Octants,
         .filter(|&(_, _, o)| !octants || built.has(o))
         .collect();
     let flags = &flags[..total];
-    for batch in jobs.chunks(rayon::current_num_threads().max(1)) {
+    let at_once = rayon::current_num_threads().min(SWEPT_BYTES / total).max(1);
+    for batch in jobs.chunks(at_once) {
         let swept: Vec<(usize, Vec<u8>)> = batch
             .par_iter()
             .map(|&(ch, seek, o)| {
@@ -295,5 +305,38 @@ mod tests {
                 assert!(out[out.len() - 8..].iter().all(|&b| b == 0xaa), "wrote past the map");
             }
         }
+    }
+
+    #[test]
+    fn distances_past_the_cap_stay_at_the_cap() {
+        // One active cell at an end of rows longer than the cap, along each
+        // axis: the distances count up to 255 and stay there.
+        for (counts, at) in [([300, 1, 1], 0), ([1, 2, 400], 1), ([3, 270, 2], 0)] {
+            let total = counts.iter().product::<u32>() as usize;
+            let mut flags = vec![0u32; total];
+            flags[at] = 1;
+            let active: Vec<bool> = flags.iter().map(|&f| f != 0).collect();
+            for (octants, built) in [(false, Octants::ALL), (true, Octants::ALL)] {
+                let mut out = vec![0; total * 4 * channels(octants).div_ceil(4)];
+                transform(counts, &flags, octants, built, &mut out);
+                let got = listed(&out, octants, built);
+                assert!(
+                    got.contains(&CAP) && got.contains(&(CAP - 1)),
+                    "{counts:?}: the cap reached"
+                );
+                assert_eq!(
+                    got,
+                    reference(counts, &active, octants, built),
+                    "{counts:?} octants {octants}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn an_empty_grid_writes_nothing() {
+        let mut out = vec![7u8; 8];
+        transform([0, 4, 4], &[], true, Octants::ALL, &mut out);
+        assert_eq!(out, vec![7u8; 8]);
     }
 }
