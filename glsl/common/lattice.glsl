@@ -232,18 +232,33 @@ void march_skip_to(inout March m, float t) {
 // the host's opaque surface when the frame has a depth limit. The limit only
 // shortens t_exit: the lattice stays t_enter + k * dt, so every structure
 // still takes exactly naive's samples.
+// What a frame's rays may do beyond the plain march (src/desc/kernel.rs
+// `cuts_constant`): CUT_* bits, all by default. The cuts of a ray's
+// interval (jitter, a host depth image, clip planes or crop, a rank's
+// segment) and the depth a ray writes. A constant, not only the
+// parameters' flags: lavapipe runs every side of an `if`, and a frame with
+// none of them ran their code (the lattice indices of the cut ends, the
+// clip planes' loop, a depth through a matrix) for every ray: ch2's
+// unshaded octant-map frame took 4-10 % longer (docs/results/samples.md).
+layout(constant_id = 30) const uint MARCH_CUTS = 31u;
+const uint CUT_JITTER = 1u;
+const uint CUT_DEPTH = 2u;
+const uint CUT_CLIP = 4u;
+const uint CUT_SEGMENT = 8u;
+const uint CUT_DEPTH_OUT = 16u;
+
 bool march_pixel(uvec2 px, out March m) {
     bool hit = march_begin(camera_ray(px), params.step, m);
-    if (hit && params.jitter != 0u) {
+    if ((MARCH_CUTS & CUT_JITTER) != 0u && hit && params.jitter != 0u) {
         m.jitter = pixel_jitter(px);
         march_set_exit(m, m.t_exit);
     }
-    if (hit && params.depth_limits != 0u) {
+    if ((MARCH_CUTS & CUT_DEPTH) != 0u && hit && params.depth_limits != 0u) {
         march_set_exit(m, min(m.t_exit, params.t_max[px.y * params.image.x + px.x]));
     }
     // Clip planes and the crop box cut the ray's interval; the lattice
     // keeps its origin at the box entry.
-    if (hit && (params.clip_count != 0u || params.crop != 0u)) {
+    if ((MARCH_CUTS & CUT_CLIP) != 0u && hit && (params.clip_count != 0u || params.crop != 0u)) {
         vec2 keep = clip_interval(m.ray);
         march_set_exit(m, min(m.t_exit, keep.y));
         march_skip_to(m, keep.x);
@@ -251,7 +266,7 @@ bool march_pixel(uvec2 px, out March m) {
     // A data-parallel rank's part of the ray (src/parallel): the lattice
     // samples inside its block, each weighted as the whole ray weights it,
     // so the blocks' parts blended front to back are the whole ray.
-    if (hit && !m.done && params.segment != 0u) {
+    if ((MARCH_CUTS & CUT_SEGMENT) != 0u && hit && !m.done && params.segment != 0u) {
         int whole_first = m.k;
         vec2 part = segment_interval(m.ray);
         march_set_stop(m, min(m.t_exit, part.y));

@@ -153,7 +153,7 @@ void main() {
     } else {
         frame_store(px, march_result(m));
         // Only iso frames hit a surface; the others write the far depth.
-        if (params.depth_out != 0u) {
+        if ((MARCH_CUTS & CUT_DEPTH_OUT) != 0u && params.depth_out != 0u) {
             depth_store(px, march_depth(m));
         }
     }

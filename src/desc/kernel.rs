@@ -12,7 +12,22 @@ use crate::volume::{
 };
 
 /// The frame's and volume's constants, in a fixed order: (constant_id, value).
-pub type KernelConstants = [(u32, u32); 11];
+pub type KernelConstants = [(u32, u32); 12];
+
+/// `constant_id` of `MARCH_CUTS` in `glsl/common/lattice.glsl`.
+pub const CUTS_CONSTANT_ID: u32 = 30;
+/// `MARCH_CUTS`'s bit of a frame that writes its rays' depth.
+pub const CUT_DEPTH_OUT: u32 = 16;
+
+/// `constants` for a frame that writes its rays' depth (or not).
+pub fn with_depth_out(mut constants: KernelConstants, writes: bool) -> KernelConstants {
+    for (id, v) in &mut constants {
+        if *id == CUTS_CONSTANT_ID {
+            *v = (*v & !CUT_DEPTH_OUT) | if writes { CUT_DEPTH_OUT } else { 0 };
+        }
+    }
+    constants
+}
 
 impl FrameDesc {
     /// The constants of a march kernel for this frame on `volume`: the
@@ -21,7 +36,8 @@ impl FrameDesc {
     /// opacity, a lit frame's whole Phong exponent, whether the volume has
     /// NaN voxels, how its texels are stored, whether the manual filter
     /// reads its cells copy and (lit frames) the gradient's, how many
-    /// channels it has, and its pool's brick edge (0: dense) and images.
+    /// channels it has, its pool's brick edge (0: dense) and images, and
+    /// which cuts of a ray's interval the frame has (`cuts_constant`).
     pub fn kernel_constants(&self, volume: &GpuVolume) -> KernelConstants {
         let filter = self.filter_for(volume);
         let shade = matches!(self.mode(), Mode::Composite) && self.shading().is_some();
@@ -44,7 +60,20 @@ impl FrameDesc {
             (CHANNELS_CONSTANT_ID, volume.channels),
             (BRICK_CONSTANT_ID, volume.brick_edge()),
             (POOL_IMAGES_CONSTANT_ID, volume.pool_image_count()),
+            (CUTS_CONSTANT_ID, self.cuts_constant()),
         ]
+    }
+
+    /// `MARCH_CUTS`: bit 0 jitter, bit 1 a host depth image, bit 2 clip
+    /// planes or a crop box, bit 3 a rank's segment of the ray; bit 4
+    /// ([`CUT_DEPTH_OUT`], set by [`with_depth_out`]) a frame that writes
+    /// its rays' depth. A ray has only the code of what its frame does.
+    pub fn cuts_constant(&self) -> u32 {
+        let clipped = !self.clip.planes().is_empty() || self.clip.crop_box().is_some();
+        self.jitter as u32
+            | (self.depth.is_some() as u32) << 1
+            | (clipped as u32) << 2
+            | (self.segment.is_some() as u32) << 3
     }
 }
 

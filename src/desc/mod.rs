@@ -25,7 +25,7 @@ mod shading;
 
 pub use crate::volume::Filter;
 pub use clip::{Clip, MAX_CLIP};
-pub use kernel::KernelConstants;
+pub use kernel::{with_depth_out, KernelConstants};
 pub use look::LookSpec;
 pub use matrices::{orthographic, perspective, CameraMatrices};
 pub use mode::{Iso, Mode, MAX_ISO, MODE_CONSTANT_ID, SHADE_CONSTANT_ID, SHININESS_CONSTANT_ID};

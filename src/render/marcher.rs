@@ -73,10 +73,11 @@ impl Renderer {
     }
 
     /// The march kernel `march` sampling `volume` for frames of `desc`,
-    /// writing the frame buffer; created on first use.
+    /// writing the frame buffer (and its depth where `desc` writes depth);
+    /// created on first use.
     pub fn kernel(&self, march: March, desc: &FrameDesc, volume: &GpuVolume) -> Result<Arc<Kernel>> {
-        self.kernels
-            .get(march, None, desc.kernel_constants(volume), ProbeConstants::PLAIN)
+        let constants = crate::desc::with_depth_out(desc.kernel_constants(volume), desc.writes_depth());
+        self.kernels.get(march, None, constants, ProbeConstants::PLAIN)
     }
 
     /// Records one frame of `desc` into `cmd` (timed as "march" when `timer`
@@ -228,7 +229,7 @@ impl Renderer {
         let kernel = self.kernels.get(
             structure.march(),
             variant,
-            desc.kernel_constants(volume),
+            crate::desc::with_depth_out(desc.kernel_constants(volume), write_depth),
             ProbeConstants::PLAIN,
         )?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
