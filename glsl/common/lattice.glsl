@@ -228,18 +228,15 @@ void march_skip_to(inout March m, float t) {
     }
 }
 
-// Sets up pixel px's march along its camera ray (camera.glsl), ending at
-// the host's opaque surface when the frame has a depth limit. The limit only
-// shortens t_exit: the lattice stays t_enter + k * dt, so every structure
-// still takes exactly naive's samples.
 // What a frame's rays may do beyond the plain march (src/desc/kernel.rs
 // `cuts_constant`): CUT_* bits, all by default. The cuts of a ray's
 // interval (jitter, a host depth image, clip planes or crop, a rank's
 // segment) and the depth a ray writes. A constant, not only the
 // parameters' flags: lavapipe runs every side of an `if`, and a frame with
 // none of them ran their code (the lattice indices of the cut ends, the
-// clip planes' loop, a depth through a matrix) for every ray: ch2's
-// unshaded octant-map frame took 4-10 % longer (docs/results/samples.md).
+// clip planes' loop, a depth through a matrix) for every ray: about 4 %
+// of ch2's unshaded octant-map frame, 20-40 % of nbody:256's sparse one
+// (docs/results/samples.md, docs/results/series-host/README.md).
 layout(constant_id = 30) const uint MARCH_CUTS = 31u;
 const uint CUT_JITTER = 1u;
 const uint CUT_DEPTH = 2u;
@@ -247,6 +244,10 @@ const uint CUT_CLIP = 4u;
 const uint CUT_SEGMENT = 8u;
 const uint CUT_DEPTH_OUT = 16u;
 
+// Sets up pixel px's march along its camera ray (camera.glsl), ending at
+// the host's opaque surface when the frame has a depth limit. The limit only
+// shortens t_exit: the lattice stays t_enter + k * dt, so every structure
+// still takes exactly naive's samples.
 bool march_pixel(uvec2 px, out March m) {
     bool hit = march_begin(camera_ray(px), params.step, m);
     if ((MARCH_CUTS & CUT_JITTER) != 0u && hit && params.jitter != 0u) {

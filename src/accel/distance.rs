@@ -30,6 +30,7 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
 use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer, Timings};
 use crate::prims::entry_barrier;
+use crate::volume::host_shared;
 
 /// Default cell edge in voxels: the 8^3 brick grid.
 pub const CELL: u32 = 8;
@@ -266,16 +267,10 @@ fn classified_map(
     })
 }
 
-/// Whether `Builder::build` transforms on the host (`build_on_host`): on a
-/// CPU device, whose memory the host reads and writes in place.
-pub fn transforms_on_host(ctx: &Context) -> bool {
-    ctx.info().is_cpu()
-}
-
 /// As `record`, submitted and waited for, with the transform made on the
 /// host (`distance_host::transform`) from the flags the device classified:
 /// the same map, faster on a CPU device. The buffers must be host visible
-/// (`transforms_on_host`). Timings: "classify" (GPU) and "distance (host)".
+/// (a device whose memory is the host's: `volume::host_shared`). Timings: "classify" (GPU) and "distance (host)".
 pub fn build_on_host(
     builder: &Builder,
     input: &BuildInput,
@@ -409,7 +404,7 @@ impl Method for DistanceMethod {
         ranges: &Ranges,
         p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        if !transforms_on_host(builder.context()) {
+        if !host_shared(builder.context()) {
             return submit_build(self, builder, input, ranges, p);
         }
         let cells = ranges.cells(p.int("cell")?)?;

@@ -27,7 +27,7 @@ mod stream;
 
 pub use bricks::{BrickGrid, BRICK};
 pub use cells::{
-    cells_bytes, cells_words, check_cells, no_cells, record_pack_cells, TexelKind, CELLS_CONSTANT_ID,
+    cells_bytes, cells_words, check_cells, host_shared, no_cells, record_pack_cells, TexelKind, CELLS_CONSTANT_ID,
     GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID,
 };
 pub use channels::{common_kind, stored_texel, CHANNELS_CONSTANT_ID};
