@@ -56,6 +56,7 @@ struct March {
     int k;         // next lattice index to sample
     int k_end;     // the first lattice index at or past t_exit
     bool done;     // past t_exit, or terminated early
+    bool last_due; // the ray's last sample is left for march_finish
     vec4 acc;      // premultiplied RGBA, front to back
     // Per-frame values the samples use, read from the parameters once per
     // ray rather than once per sample.
@@ -149,6 +150,7 @@ bool march_begin(Ray ray, float dt, out March m) {
     m.prev = 0.0;
     m.has_prev = false;
     m.hit = false;
+    m.last_due = false;
     m.hit_t = 0.0;
     m.hit_v = 0.0;
     m.bracket = vec4(0.0);
@@ -617,7 +619,18 @@ void march_until(inout March m, int stop) {
             march_full_sample(m);
         }
     }
+    // The ray's last sample (k = k_end - 1) is taken once, after the
+    // traversal (march_finish): taken here, its code ran, masked, for every
+    // region of every ray, as lavapipe runs every `if`.
     if (!m.done && m.k < stop) {
+        m.last_due = true;
+        m.done = true;
+    }
+}
+
+// After march_ray: the last sample a span left due, which nothing follows.
+void march_finish(inout March m) {
+    if (m.last_due) {
         march_last_sample(m);
     }
 }

@@ -143,6 +143,7 @@ void main() {
     int k0 = m.k;
     if (marched) {
         march_ray(m);
+        march_finish(m);
         if (MARCH_MODE == MODE_ISO) {
             iso_refine(m);
         }
