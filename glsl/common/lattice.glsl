@@ -666,6 +666,18 @@ vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
     return vec2(max(h.x, m.t_enter), min(h.y, m.t_exit));
 }
 
+// Regions that follow one another along a ray make one run, marched as one
+// span up to RUN_CELLS cells long (the distance maps' boxes, the grid's
+// cells). A SIMD group's sample loop runs for the longest of its lanes'
+// spans, so where neighbouring rays' regions split a run at different
+// places the group paid for every split: on lavapipe, menger:243's and
+// ch2's octant-map frames took 1.12 to 1.25x their time with runs, the
+// grid's 1.3 to 1.5x. Walking on past where early termination ends a ray
+// costs steps, hence the cap (docs/results/samples.md, "Runs of active
+// regions"). Merging is exact: a run's span covers each region's span and
+// the rounding gaps between them, and a sample taken there is naive's own.
+const float RUN_CELLS = 4.0;
+
 // Marches the lattice samples of a region's span. Regions must come front to
 // back; k never moves backwards, so overlapping spans take no sample twice.
 void march_region(inout March m, vec2 span) {

@@ -105,10 +105,10 @@ bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
     return is_active;
 }
 
-// Walks to each active span in turn and marches it: the samples run in a
-// loop of their own, with nothing else in it (a CPU SIMD lane executes both
-// sides of a branch, so a loop that either samples or walks pays for both
-// on every sample).
+// Walks to each run of active boxes (RUN_CELLS, lattice.glsl) in turn and
+// marches it: the samples run in a loop of their own, with nothing else in
+// it (a CPU SIMD lane executes both sides of a branch, so a loop that either
+// samples or walks pays for both on every sample).
 void march_distance(inout March m, float eps) {
     float c = float(grid.cell);
     ivec3 counts = ivec3(grid.counts);
@@ -118,18 +118,28 @@ void march_distance(inout March m, float eps) {
     Walk w;
     w.cell = clamp(ivec3(floor((m.ray.org + m.t_enter * dir) / c)), ivec3(0), counts - 1);
     w.more = true;
+    float run_cap = RUN_CELLS * c;
     // Every step moves at least one cell forward on some axis.
     int guard = counts.x + counts.y + counts.z + 4;
     while (!m.done) {
-        vec2 span;
+        vec2 run = vec2(0.0);
         bool found = false;
-        while (w.more && !found && guard-- > 0) {
-            found = walk_step(w, m, octant, eps, span) && span.x < span.y;
+        while (w.more && guard-- > 0) {
+            vec2 span;
+            bool joins = walk_step(w, m, octant, eps, span) && span.x < span.y;
+            if (joins) {
+                run = vec2(found ? run.x : span.x, span.y);
+                found = true;
+            }
+            // A run ends at an empty box (walked past already) or at its cap.
+            if (found && (!joins || run.y - run.x >= run_cap)) {
+                break;
+            }
         }
         if (!found) {
             break;
         }
-        march_region(m, span);
+        march_region(m, run);
     }
 }
 
