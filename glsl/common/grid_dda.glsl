@@ -9,7 +9,11 @@
 #ifndef LACUNA_GRID_DDA_GLSL
 #define LACUNA_GRID_DDA_GLSL
 
-// Marches active cells between t0 and t1 (already inside the volume span).
+// Marches active cells between t0 and t1 (already inside the volume span),
+// runs of consecutive active cells as one span (RUN_CELLS, lattice.glsl).
+// A MIP (MinIP) cell's test reads the running max (min) of the samples
+// marched before its run: lower (higher) than after, so it only keeps more
+// cells, each sample of which is naive's.
 void march_grid(inout March m, float t0, float t1, float eps) {
     if (!(t0 < t1) || m.done) {
         return;
@@ -20,35 +24,56 @@ void march_grid(inout March m, float t0, float t1, float eps) {
     vec3 p = m.ray.org + max(t0, m.t_enter) * dir;
     ivec3 cell = clamp(ivec3(floor(p / c)), ivec3(0), counts - 1);
     ivec3 stp = ivec3(sign(dir));
+    float run_cap = RUN_CELLS * c;
     int guard = counts.x + counts.y + counts.z + 4;
-    while (guard-- > 0 && !m.done) {
-        count_iteration(COUNT_STEP);
-        uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
-        if (GRID_CELL_ACTIVE(m, index)) {
-            vec3 lo = vec3(cell) * c;
-            vec3 hi = min(lo + c, vec3(params.dims));
-            vec2 s = region_span(m, lo, hi, eps);
-            march_region(m, vec2(max(s.x, t0), min(s.y, t1)));
-        }
-        // The nearest crossing of a cell plane along the ray.
-        float best = 3.4e38;
-        int axis = -1;
-        for (int a = 0; a < 3; ++a) {
-            if (stp[a] != 0) {
-                float plane = float(cell[a] + (stp[a] > 0 ? 1 : 0)) * c;
-                precise float t = (plane - m.ray.org[a]) / dir[a];
-                if (t < best) {
-                    best = t;
-                    axis = a;
+    bool more = true;
+    while (more && !m.done) {
+        vec2 run = vec2(0.0);
+        bool found = false;
+        more = false;
+        while (guard-- > 0) {
+            count_iteration(COUNT_STEP);
+            uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
+            bool joins = false;
+            if (GRID_CELL_ACTIVE(m, index)) {
+                vec3 lo = vec3(cell) * c;
+                vec3 hi = min(lo + c, vec3(params.dims));
+                vec2 s = region_span(m, lo, hi, eps);
+                s = vec2(max(s.x, t0), min(s.y, t1));
+                joins = s.x < s.y;
+                if (joins) {
+                    run = vec2(found ? run.x : s.x, s.y);
+                    found = true;
                 }
             }
+            // The nearest crossing of a cell plane along the ray.
+            float best = 3.4e38;
+            int axis = -1;
+            for (int a = 0; a < 3; ++a) {
+                if (stp[a] != 0) {
+                    float plane = float(cell[a] + (stp[a] > 0 ? 1 : 0)) * c;
+                    precise float t = (plane - m.ray.org[a]) / dir[a];
+                    if (t < best) {
+                        best = t;
+                        axis = a;
+                    }
+                }
+            }
+            if (axis < 0 || !(best < t1)) {
+                break;
+            }
+            cell[axis] += stp[axis];
+            if (cell[axis] < 0 || cell[axis] >= counts[axis]) {
+                break;
+            }
+            // A run ends at an empty cell (stepped past already) or at its cap.
+            if (found && (!joins || run.y - run.x >= run_cap)) {
+                more = true;
+                break;
+            }
         }
-        if (axis < 0 || !(best < t1)) {
-            return;
-        }
-        cell[axis] += stp[axis];
-        if (cell[axis] < 0 || cell[axis] >= counts[axis]) {
-            return;
+        if (found) {
+            march_region(m, run);
         }
     }
 }

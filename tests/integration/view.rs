@@ -331,7 +331,7 @@ fn the_viewer_steps_and_plays_a_series_and_matches_render() {
     }
 }
 
-/// A frame lavapipe's loop cap cut short (the grid on vessels:32 at the
+/// A frame lavapipe's loop cap cut short (the LBVH on vessels:32 at the
 /// least step naive marching fits: `modes::at_the_loop_pass_limit_...`)
 /// says so in the title and the `--frames` summary and is not written as a
 /// screenshot; naive's frame at the same step is whole and says nothing.
@@ -363,8 +363,8 @@ fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
             .to_string()
     };
     let capped = crate::common::gpu().info().loop_pass_limit.is_some();
-    let grid = summary("grid");
-    assert_eq!(grid.contains("NOT EXACT: the device's loop cap cut"), capped, "{grid}");
+    let lbvh = summary("lbvh");
+    assert_eq!(lbvh.contains("NOT EXACT: the device's loop cap cut"), capped, "{lbvh}");
     let naive = summary("naive");
     assert!(
         naive.starts_with("frames 1: ") && !naive.contains("NOT EXACT"),
@@ -374,7 +374,7 @@ fn a_frame_the_loop_cap_cut_short_says_it_is_not_exact() {
         // Such a frame is not written as a screenshot: one error line, no file.
         let dir = tempfile::tempdir().unwrap();
         let shot = dir.path().join("shot.exr");
-        let r = view("grid", &["--screenshot", shot.to_str().unwrap()]);
+        let r = view("lbvh", &["--screenshot", shot.to_str().unwrap()]);
         assert_ne!(r.code, 0, "{}", r.stdout);
         let lines: Vec<&str> = r.stderr.trim().lines().collect();
         assert!(
