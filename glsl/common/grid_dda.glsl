@@ -42,31 +42,32 @@ void march_grid(inout March m, float t0, float t1, float eps) {
                 s = vec2(max(s.x, t0), min(s.y, t1));
                 joins = s.x < s.y;
                 if (joins) {
-                    run = vec2(found ? run.x : s.x, s.y);
+                    run = found ? vec2(run.x, max(run.y, s.y)) : s;
                     found = true;
                 }
             }
             // The nearest crossing of a cell plane along the ray.
-            float best = 3.4e38;
+            float t_next = 3.4e38;
             int axis = -1;
             for (int a = 0; a < 3; ++a) {
                 if (stp[a] != 0) {
                     float plane = float(cell[a] + (stp[a] > 0 ? 1 : 0)) * c;
                     precise float t = (plane - m.ray.org[a]) / dir[a];
-                    if (t < best) {
-                        best = t;
+                    if (t < t_next) {
+                        t_next = t;
                         axis = a;
                     }
                 }
             }
-            if (axis < 0 || !(best < t1)) {
+            if (axis < 0 || !(t_next < t1)) {
                 break;
             }
             cell[axis] += stp[axis];
             if (cell[axis] < 0 || cell[axis] >= counts[axis]) {
                 break;
             }
-            // A run ends at an empty cell (stepped past already) or at its cap.
+            // A run ends at an empty cell, or an active one whose span is
+            // (stepped past already), or at its cap.
             if (found && (!joins || run.y - run.x >= run_cap)) {
                 more = true;
                 break;

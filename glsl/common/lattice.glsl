@@ -55,7 +55,7 @@ struct March {
     float dt;
     int k;         // next lattice index to sample
     int k_end;     // the first lattice index at or past t_exit
-    bool done;     // past t_exit, or terminated early
+    bool done;     // past t_exit, or terminated early (or the last sample due)
     bool last_due; // the ray's last sample is left for march_finish
     vec4 acc;      // premultiplied RGBA, front to back
     // Per-frame values the samples use, read from the parameters once per
@@ -605,7 +605,8 @@ float march_depth(March m) {
 }
 
 // Marches the samples k < stop (stop <= k_end), front to back: the full
-// ones in a loop of their own, then the last one if the span reaches it.
+// ones in a loop of their own; where the span reaches the ray's last one,
+// it is left due (march_finish takes it) and the march ends.
 void march_until(inout March m, int stop) {
     int full = min(stop, m.k_end - 1);
     // One loop or the other (a constant): lavapipe runs a loop's body once
@@ -628,19 +629,22 @@ void march_until(inout March m, int stop) {
     }
 }
 
-// After march_ray: the last sample a span left due, which nothing follows.
+// After march_ray (main): the last sample a span left due, which nothing
+// follows.
 void march_finish(inout March m) {
     if (m.last_due) {
+        m.last_due = false;
         march_last_sample(m);
     }
 }
 
-// Marches every remaining sample of the ray.
+// Marches every remaining sample of the ray (the last one left due).
 void march_rest(inout March m) {
     march_until(m, m.k_end);
 }
 
-// Marches every lattice sample with t_k < t_end (and < t_exit), front to back.
+// Marches every lattice sample with t_k < t_end (and < t_exit), front to
+// back (the ray's last one left due).
 void march_span(inout March m, float t_end) {
     if (m.done) {
         return;
@@ -667,15 +671,19 @@ vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
 }
 
 // Regions that follow one another along a ray make one run, marched as one
-// span up to RUN_CELLS cells long (the distance maps' boxes, the grid's
-// cells). A SIMD group's sample loop runs for the longest of its lanes'
-// spans, so where neighbouring rays' regions split a run at different
-// places the group paid for every split: on lavapipe, menger:243's and
-// ch2's octant-map frames took 1.12 to 1.25x their time with runs, the
-// grid's 1.3 to 1.5x. Walking on past where early termination ends a ray
-// costs steps, hence the cap (docs/results/samples.md, "Runs of active
-// regions"). Merging is exact: a run's span covers each region's span and
-// the rounding gaps between them, and a sample taken there is naive's own.
+// span (the distance maps' boxes, the grid's cells); a run ends at a region
+// that is empty or whose span is, or once it is RUN_CELLS cells of ray long
+// (the region that reaches the cap is the run's last). A SIMD group's sample
+// loop runs for the longest of its lanes' spans, so where neighbouring rays'
+// regions split a run at different places the group paid for every split:
+// on lavapipe menger:243's and ch2's octant-map frames took 1.13 to 1.27x
+// as long without runs, the grid's 1.3 to 1.5x. Walking on past where early
+// termination ends a ray costs steps, hence the cap (docs/results/samples.md,
+// "Runs of active regions"). Merging is exact: a run spans from its first
+// region's entry to the furthest exit of its regions (a box ahead can end
+// before a longer one behind it, grown by the margin), so it covers each
+// region's span and the rounding gaps between them, and a sample taken
+// there is naive's own.
 const float RUN_CELLS = 4.0;
 
 // Marches the lattice samples of a region's span. Regions must come front to

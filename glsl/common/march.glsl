@@ -9,7 +9,9 @@
 //     void march_ray(inout March m) { ... }
 //
 // march_ray marches pixel's ray m (entered by march_pixel, so m.t_enter <
-// m.t_exit) through the structure on the global lattice (lattice.glsl).
+// m.t_exit) through the structure on the global lattice (lattice.glsl); a
+// march that reaches the ray's last sample leaves it due and ends (m.done),
+// and main takes it after march_ray (march_finish).
 #ifndef LACUNA_MARCH_GLSL
 #define LACUNA_MARCH_GLSL
 #extension GL_KHR_shader_subgroup_basic : require

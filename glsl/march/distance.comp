@@ -6,8 +6,9 @@
 // tree. An active cell (d = 0) is marched on the global lattice with the
 // usual margin, as the grid marches its cells; a distance to the nearest
 // empty cell likewise lets the ray cross a whole cube of active cells as one
-// span. Only active cells' spans move k, so skipping is exact for the same
-// reasons as the grid's 3D-DDA.
+// span, and active boxes that follow one another are one run (RUN_CELLS,
+// lattice.glsl). Only active cells' spans move k, so skipping is exact for
+// the same reasons as the grid's 3D-DDA.
 #extension GL_GOOGLE_include_directive : require
 
 #include "march.glsl"
@@ -128,10 +129,11 @@ void march_distance(inout March m, float eps) {
             vec2 span;
             bool joins = walk_step(w, m, octant, eps, span) && span.x < span.y;
             if (joins) {
-                run = vec2(found ? run.x : span.x, span.y);
+                run = found ? vec2(run.x, max(run.y, span.y)) : span;
                 found = true;
             }
-            // A run ends at an empty box (walked past already) or at its cap.
+            // A run ends at an empty box, or an active one whose span is
+            // (walked past already), or at its cap.
             if (found && (!joins || run.y - run.x >= run_cap)) {
                 break;
             }

@@ -2,7 +2,8 @@
 // Macro-cell grid: 3D-DDA over the cells from entry to exit, marching the
 // active ones on the global lattice. A cell is active by its flag (the
 // frame's classification), or in MIP (MinIP) frames by its value range
-// against the ray's running max (min), decided as the ray reaches it.
+// against the ray's running max (min) from before the run it joins
+// (grid_dda.glsl): no higher (lower) than at the cell, so it keeps no fewer.
 #extension GL_GOOGLE_include_directive : require
 
 #include "march.glsl"
