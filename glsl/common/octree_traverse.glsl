@@ -4,6 +4,9 @@
 // parent links). The includer binds `oct_nodes`,
 // defines OCTREE_KIND (0 = 84, 1 = 89, 2 = 93, 3 = rev) and implements
 // `bool octree_leaf(uint node, float t0, float t1)` (true stops the walk).
+// 93 and rev visit several nodes per leaf in one loop, so they hand each
+// leaf on outside it: a march inside ran, masked, at every node (84 and 89
+// step from leaf to leaf, one pass of their loop each).
 #ifndef LACUNA_OCTREE_TRAVERSE_GLSL
 #define LACUNA_OCTREE_TRAVERSE_GLSL
 
@@ -282,49 +285,66 @@ void oct_rev(OctRay r) {
     }
     uint node = 0u;
     uint from = NONE;
-    while (true) {
-        OctNode n = oct_nodes[node];
-        oct_plane_params(r, n, t0, t1);
-        uint next = NONE;
-        if (from == NONE) {
-            float enter = oct_max3(t0);
-            float exit = oct_min3(t1);
-            if (!(exit < r.tmin || enter > r.tmax)) {
-                if (oct_is_leaf(n)) {
-                    if (oct_leaf(node, max(enter, r.tmin), min(exit, r.tmax))) {
-                        return;
+    bool more = true;
+    while (more) {
+        // To the next leaf, handed on outside this loop (its march inside
+        // ran, masked, at every node a SIMD group visited: lavapipe runs
+        // every `if`).
+        bool found = false;
+        uint leaf = 0u;
+        vec2 span = vec2(0.0);
+        more = false;
+        while (true) {
+            OctNode n = oct_nodes[node];
+            oct_plane_params(r, n, t0, t1);
+            uint next = NONE;
+            if (from == NONE) {
+                float enter = oct_max3(t0);
+                float exit = oct_min3(t1);
+                if (!(exit < r.tmin || enter > r.tmax)) {
+                    if (oct_is_leaf(n)) {
+                        found = true;
+                        leaf = node;
+                        span = vec2(max(enter, r.tmin), min(exit, r.tmax));
+                    } else {
+                        oc.steps += 1u;
+                        vec3 tm;
+                        for (int a = 0; a < 3; ++a) {
+                            tm[a] = oct_cross(r, n.split[a], a);
+                        }
+                        next = oct_first_child(t0, tm);
                     }
-                } else {
-                    oc.steps += 1u;
-                    vec3 tm;
-                    for (int a = 0; a < 3; ++a) {
-                        tm[a] = oct_cross(r, n.split[a], a);
-                    }
-                    next = oct_first_child(t0, tm);
+                }
+            } else {
+                uint c = from ^ mask;
+                vec3 t1c;
+                for (int a = 0; a < 3; ++a) {
+                    t1c[a] = (c & oct_axis_bit(a)) != 0u ? t1[a] : oct_cross(r, n.split[a], a);
+                }
+                int axis = oct_exit_axis(t1c);
+                if ((c & oct_axis_bit(axis)) == 0u) {
+                    next = c | oct_axis_bit(axis);
                 }
             }
-        } else {
-            uint c = from ^ mask;
-            vec3 t1c;
-            for (int a = 0; a < 3; ++a) {
-                t1c[a] = (c & oct_axis_bit(a)) != 0u ? t1[a] : oct_cross(r, n.split[a], a);
+            if (next != NONE) {
+                node = n.info.x + (next ^ mask);
+                from = NONE;
+                continue;
             }
-            int axis = oct_exit_axis(t1c);
-            if ((c & oct_axis_bit(axis)) == 0u) {
-                next = c | oct_axis_bit(axis);
+            if (node == 0u) {
+                break;
+            }
+            uint parent = n.info.z;
+            from = node - oct_nodes[parent].info.x;
+            node = parent;
+            if (found) {
+                more = true;
+                break;
             }
         }
-        if (next != NONE) {
-            node = n.info.x + (next ^ mask);
-            from = NONE;
-            continue;
-        }
-        if (node == 0u) {
+        if (found && oct_leaf(leaf, span.x, span.y)) {
             return;
         }
-        uint parent = n.info.z;
-        from = node - oct_nodes[parent].info.x;
-        node = parent;
     }
 }
 
@@ -344,33 +364,48 @@ void oct_o93(OctRay r) {
     }
     uint node = 0u;
     uint from = NONE;
-    while (true) {
-        OctNode n = oct_nodes[node];
-        vec2 s = oct_clipped_span(r, n);
-        uint next = NONE;
-        if (from == NONE) {
-            if (oct_is_leaf(n)) {
-                if (oct_leaf(node, s.x, s.y)) {
-                    return;
+    bool more = true;
+    while (more) {
+        // To the next leaf, handed on outside this loop (as oct_rev).
+        bool found = false;
+        uint leaf = 0u;
+        vec2 span = vec2(0.0);
+        more = false;
+        while (true) {
+            OctNode n = oct_nodes[node];
+            vec2 s = oct_clipped_span(r, n);
+            uint next = NONE;
+            if (from == NONE) {
+                if (oct_is_leaf(n)) {
+                    found = true;
+                    leaf = node;
+                    span = s;
+                } else {
+                    oc.steps += 1u;
+                    next = oct_o93_next(r, n, s.x, s.y, NONE);
                 }
             } else {
-                oc.steps += 1u;
-                next = oct_o93_next(r, n, s.x, s.y, NONE);
+                next = oct_o93_next(r, n, s.x, s.y, from);
             }
-        } else {
-            next = oct_o93_next(r, n, s.x, s.y, from);
+            if (next != NONE) {
+                node = n.info.x + next;
+                from = NONE;
+                continue;
+            }
+            if (node == 0u) {
+                break;
+            }
+            uint parent = n.info.z;
+            from = node - oct_nodes[parent].info.x;
+            node = parent;
+            if (found) {
+                more = true;
+                break;
+            }
         }
-        if (next != NONE) {
-            node = n.info.x + next;
-            from = NONE;
-            continue;
-        }
-        if (node == 0u) {
+        if (found && oct_leaf(leaf, span.x, span.y)) {
             return;
         }
-        uint parent = n.info.z;
-        from = node - oct_nodes[parent].info.x;
-        node = parent;
     }
 }
 
