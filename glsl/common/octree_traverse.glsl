@@ -266,6 +266,18 @@ int oct_exit_axis(vec3 t1) {
     return 2;
 }
 
+// Climbs from `node` to its parent, `from` the child it came from (93
+// and rev keep no stack); false at the root, where the walk is over.
+bool oct_climb(inout uint node, inout uint from) {
+    if (node == 0u) {
+        return false;
+    }
+    uint parent = oct_nodes[node].info.z;
+    from = node - oct_nodes[parent].info.x;
+    node = parent;
+    return true;
+}
+
 // Revelles, Ureña & Lastra 2000: parametric, mirrored so d > 0 (mask),
 // without a stack: returning from a child climbs the parent link and
 // recomputes the parent's parameters from its box.
@@ -331,12 +343,9 @@ void oct_rev(OctRay r) {
                 from = NONE;
                 continue;
             }
-            if (node == 0u) {
+            if (!oct_climb(node, from)) {
                 break;
             }
-            uint parent = n.info.z;
-            from = node - oct_nodes[parent].info.x;
-            node = parent;
             if (found) {
                 more = true;
                 break;
@@ -392,12 +401,9 @@ void oct_o93(OctRay r) {
                 from = NONE;
                 continue;
             }
-            if (node == 0u) {
+            if (!oct_climb(node, from)) {
                 break;
             }
-            uint parent = n.info.z;
-            from = node - oct_nodes[parent].info.x;
-            node = parent;
             if (found) {
                 more = true;
                 break;
