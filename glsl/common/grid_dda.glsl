@@ -35,17 +35,15 @@ void march_grid(inout March m, float t0, float t1, float eps) {
             count_iteration(COUNT_STEP);
             uint index = uint(cell.x) + uint(counts.x) * (uint(cell.y) + uint(counts.y) * uint(cell.z));
             bool joins = false;
+            vec2 s = vec2(0.0);
             if (GRID_CELL_ACTIVE(m, index)) {
                 vec3 lo = vec3(cell) * c;
                 vec3 hi = min(lo + c, vec3(params.dims));
-                vec2 s = region_span(m, lo, hi, eps);
+                s = region_span(m, lo, hi, eps);
                 s = vec2(max(s.x, t0), min(s.y, t1));
                 joins = s.x < s.y;
-                if (joins) {
-                    run = found ? vec2(run.x, max(run.y, s.y)) : s;
-                    found = true;
-                }
             }
+            bool ends = run_add(run, found, joins, s, run_cap);
             // The nearest crossing of a cell plane along the ray.
             float t_next = 3.4e38;
             int axis = -1;
@@ -66,9 +64,8 @@ void march_grid(inout March m, float t0, float t1, float eps) {
             if (cell[axis] < 0 || cell[axis] >= counts[axis]) {
                 break;
             }
-            // A run ends at an empty cell, or an active one whose span is
-            // (stepped past already), or at its cap.
-            if (found && (!joins || run.y - run.x >= run_cap)) {
+            // A cell that ends the run is stepped past already.
+            if (ends) {
                 more = true;
                 break;
             }

@@ -686,6 +686,17 @@ vec2 region_span(March m, vec3 lo, vec3 hi, float eps) {
 // there is naive's own.
 const float RUN_CELLS = 4.0;
 
+// Adds a region to `run` (`found`: the run has one): `joins` when the
+// region is active and its span (`span`) nonempty. Returns whether the run
+// is over: at a region that does not join, or once the run is `cap` long.
+bool run_add(inout vec2 run, inout bool found, bool joins, vec2 span, float cap) {
+    if (joins) {
+        run = found ? vec2(run.x, max(run.y, span.y)) : span;
+        found = true;
+    }
+    return found && (!joins || run.y - run.x >= cap);
+}
+
 // Marches the lattice samples of a region's span. Regions must come front to
 // back; k never moves backwards, so overlapping spans take no sample twice.
 void march_region(inout March m, vec2 span) {

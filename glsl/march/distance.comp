@@ -128,13 +128,8 @@ void march_distance(inout March m, float eps) {
         while (w.more && guard-- > 0) {
             vec2 span;
             bool joins = walk_step(w, m, octant, eps, span) && span.x < span.y;
-            if (joins) {
-                run = found ? vec2(run.x, max(run.y, span.y)) : span;
-                found = true;
-            }
-            // A run ends at an empty box, or an active one whose span is
-            // (walked past already), or at its cap.
-            if (found && (!joins || run.y - run.x >= run_cap)) {
+            // A box that ends the run is walked past already.
+            if (run_add(run, found, joins, span, run_cap)) {
                 break;
             }
         }

@@ -16,7 +16,13 @@ pub type KernelConstants = [(u32, u32); 12];
 
 /// `constant_id` of `MARCH_CUTS` in `glsl/common/lattice.glsl`.
 pub const CUTS_CONSTANT_ID: u32 = 30;
-/// `MARCH_CUTS`'s bit of a frame that writes its rays' depth.
+/// `MARCH_CUTS`'s bits (`CUT_*` in `glsl/common/lattice.glsl`): jitter, a
+/// host depth image, clip planes or a crop box, a rank's segment of the
+/// ray, and a frame that writes its rays' depth.
+pub const CUT_JITTER: u32 = 1;
+pub const CUT_DEPTH: u32 = 2;
+pub const CUT_CLIP: u32 = 4;
+pub const CUT_SEGMENT: u32 = 8;
 pub const CUT_DEPTH_OUT: u32 = 16;
 
 /// `constants` for a frame that writes its rays' depth (or not).
@@ -64,16 +70,20 @@ impl FrameDesc {
         ]
     }
 
-    /// `MARCH_CUTS`: bit 0 jitter, bit 1 a host depth image, bit 2 clip
-    /// planes or a crop box, bit 3 a rank's segment of the ray; bit 4
-    /// ([`CUT_DEPTH_OUT`], set by [`with_depth_out`]) a frame that writes
-    /// its rays' depth. A ray has only the code of what its frame does.
+    /// `MARCH_CUTS`: the `CUT_*` bits of the cuts this frame's rays have
+    /// ([`CUT_DEPTH_OUT`] is the target's, set by [`with_depth_out`]). A
+    /// ray has only the code of what its frame does.
     pub fn cuts_constant(&self) -> u32 {
         let clipped = !self.clip.planes().is_empty() || self.clip.crop_box().is_some();
-        self.jitter as u32
-            | (self.depth.is_some() as u32) << 1
-            | (clipped as u32) << 2
-            | (self.segment.is_some() as u32) << 3
+        [
+            (self.jitter, CUT_JITTER),
+            (self.depth.is_some(), CUT_DEPTH),
+            (clipped, CUT_CLIP),
+            (self.segment.is_some(), CUT_SEGMENT),
+        ]
+        .iter()
+        .filter(|(has, _)| *has)
+        .fold(0, |bits, (_, bit)| bits | bit)
     }
 }
 
