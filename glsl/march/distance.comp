@@ -16,7 +16,10 @@ layout(constant_id = 0) const uint OCTANTS = 0u;
 
 #include "distance_map.glsl"
 
-layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Distances { uint distances[]; };
+// One texel a cell (RGBA32UI with OCTANTS, else R32UI): read as texels, as
+// llvmpipe loads a storage buffer lane by lane through the stack on a CPU
+// with AVX2 (docs/results/samples.md).
+layout(set = 0, binding = OWN_BINDING) uniform usamplerBuffer distance_texels;
 layout(push_constant) uniform Grid {
     uvec3 counts; // cells per axis
     uint cell;    // cell edge in voxels
@@ -26,22 +29,25 @@ layout(push_constant) uniform Grid {
     uint probe;
 } grid;
 
-// The distance from `cell` to the nearest cell of the other kind, for a ray
-// of `octant`; 1 (this cell alone) for an octant the map does not hold, so
-// such a ray walks cell by cell, exactly.
-uint distance_at(ivec3 cell, bool is_active, uint octant) {
+// The words of `cell`: its byte distances, DISTANCE_CHANNELS of them.
+uvec4 cell_words(ivec3 cell) {
     ivec3 n = ivec3(grid.counts);
     uint i = uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z));
+    return texelFetch(distance_texels, int(i));
+}
+
+// The distance from the cell of `words` to the nearest cell of the other
+// kind, for a ray of `octant`; 1 (this cell alone) for an octant the map
+// does not hold, so such a ray walks cell by cell, exactly.
+uint distance_at(uvec4 words, bool is_active, uint octant) {
     uint ch = distance_channel(is_active, octant);
-    uint d = distance_byte(distances[DISTANCE_WORDS * i + (ch >> 2u)], ch);
+    uint d = distance_byte(words[ch >> 2u], ch);
     return ((grid.built >> octant) & 1u) != 0u ? d : 1u;
 }
 
-bool active_at(ivec3 cell) {
-    ivec3 n = ivec3(grid.counts);
-    // A held octant's distance to an active cell is 0 exactly in active cells.
-    uint i = uint(cell.x) + uint(n.x) * (uint(cell.y) + uint(n.y) * uint(cell.z));
-    return distance_byte(distances[DISTANCE_WORDS * i + (grid.probe >> 2u)], grid.probe) == 0u;
+// A held octant's distance to an active cell is 0 exactly in active cells.
+bool active_at(uvec4 words) {
+    return distance_byte(words[grid.probe >> 2u], grid.probe) == 0u;
 }
 
 // The traversal: the current cell, and whether any cell is left.
@@ -60,8 +66,9 @@ bool walk_step(inout Walk w, March m, uint octant, float eps, out vec2 span) {
     vec3 dir = m.ray.dir;
     ivec3 stp = ivec3(sign(dir));
     ivec3 cell = w.cell;
-    bool is_active = active_at(cell);
-    int d = max(int(distance_at(cell, is_active, octant)) - 1, 0);
+    uvec4 words = cell_words(cell);
+    bool is_active = active_at(words);
+    int d = max(int(distance_at(words, is_active, octant)) - 1, 0);
     ivec3 lo = cell - d;
     ivec3 hi = cell + d;
     if (OCTANTS != 0u) {

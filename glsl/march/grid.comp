@@ -8,9 +8,11 @@
 
 #include "march.glsl"
 
-// Per cell: a flag (composite, iso), or the bits of its normalised value
-// range over the apron, (min, max) (mip, minip: src/accel/grid.rs).
-layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Cells { uint cells[]; };
+// Per cell, one texel: a flag (composite, iso; R32UI), or the bits of its
+// normalised value range over the apron, (min, max) (mip, minip; RG32UI:
+// src/accel/grid.rs). Texels, as llvmpipe loads a storage buffer lane by
+// lane through the stack on an AVX2 CPU (docs/results/samples.md).
+layout(set = 0, binding = OWN_BINDING) uniform usamplerBuffer cell_texels;
 layout(push_constant) uniform Grid {
     uvec3 counts; // cells per axis
     uint cell;    // cell edge in voxels
@@ -21,15 +23,16 @@ layout(push_constant) uniform Grid {
 // within the cell's range widened by value_margin (src/accel/mode.rs).
 // Several channels classify by flags in every mode (src/accel/grid.rs).
 bool grid_cell_active(March m, uint i) {
+    uvec4 cell = texelFetch(cell_texels, int(i));
     if (MARCH_MODE == MODE_MIP && VOLUME_CHANNELS == 1u) {
-        float hi = uintBitsToFloat(cells[2u * i + 1u]);
+        float hi = uintBitsToFloat(cell.y);
         return hi + params.value_margin > max(m.best, params.value_bound);
     }
     if (MARCH_MODE == MODE_MINIP && VOLUME_CHANNELS == 1u) {
-        float lo = uintBitsToFloat(cells[2u * i]);
+        float lo = uintBitsToFloat(cell.x);
         return lo - params.value_margin < min(m.best, params.value_bound);
     }
-    return cells[i] != 0u;
+    return cell.x != 0u;
 }
 
 #define GRID_CELL grid.cell

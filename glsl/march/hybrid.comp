@@ -9,7 +9,8 @@
 
 layout(std430, set = 0, binding = OWN_BINDING) readonly buffer Nodes { BvhNode nodes[]; };
 layout(std430, set = 0, binding = OWN_BINDING + 1) readonly buffer Count { uint leaf_count; };
-layout(std430, set = 0, binding = OWN_BINDING + 2) readonly buffer CellFlags { uint cell_flags[]; };
+// The grid's flags, a texel a cell (R32UI; grid.comp says why texels).
+layout(set = 0, binding = OWN_BINDING + 2) uniform usamplerBuffer cell_flags;
 layout(push_constant) uniform Grid {
     uvec3 counts; // cells per axis
     uint cell;    // cell edge in voxels
@@ -17,7 +18,7 @@ layout(push_constant) uniform Grid {
 
 #define GRID_CELL grid.cell
 #define GRID_COUNTS grid.counts
-#define GRID_CELL_ACTIVE(m, i) (cell_flags[i] != 0u)
+#define GRID_CELL_ACTIVE(m, i) (texelFetch(cell_flags, int(i)).x != 0u)
 #include "grid_dda.glsl"
 #define TREE_LEAF(m, span, eps) march_grid(m, span.x, span.y, eps)
 #include "tree_traverse.glsl"

@@ -28,7 +28,9 @@ use crate::desc::Octants;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
-use crate::gpu::{vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer, Timings};
+use crate::gpu::{
+    vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, TexelBuffer, Timer, Timings,
+};
 use crate::prims::entry_barrier;
 use crate::volume::host_shared;
 
@@ -107,8 +109,12 @@ pub struct DistanceMap {
     pub built: Octants,
     /// u32 per cell, 1 = active (the classification).
     pub flags: Buffer,
-    /// Per cell: [`channels`] byte distances packed in words.
-    pub distances: Buffer,
+    /// Per cell: [`channels`] byte distances packed in words, one texel a
+    /// cell (`texel_format`): the march reads it as a texel buffer (llvmpipe
+    /// loads a storage buffer lane by lane through the stack on an AVX2
+    /// CPU, an eighth of a sparse frame there), the build passes write it
+    /// as a storage buffer.
+    pub distances: TexelBuffer,
     /// The transform's intermediate pass and row stacks (a device
     /// transform); kept until the build has run.
     _scratch: Vec<Buffer>,
@@ -127,17 +133,48 @@ fn stack_bytes(cells: u64, octants: bool) -> u64 {
     cells * if octants { 4 * words_per_cell(true) } else { 12 }
 }
 
+/// The map's texel format: a cell's words in one texel.
+fn texel_format(octants: bool) -> vk::Format {
+    match octants {
+        true => vk::Format::R32G32B32A32_UINT,
+        false => vk::Format::R32_UINT,
+    }
+}
+
+/// The bytes of a map's largest buffer: the map, or the row stacks.
+fn largest_buffer(cells: u64, octants: bool) -> u64 {
+    (cells * 4 * words_per_cell(octants)).max(stack_bytes(cells, octants))
+}
+
 /// Whether a map of `cells` cells fits the device: its largest buffer
-/// within `maxStorageBufferRange` (the error names the limit).
+/// within `maxStorageBufferRange`, and its cells (a texel each) within
+/// `maxTexelBufferElements` (the error names the limit).
 pub fn check_fits(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) -> Result<()> {
-    let bytes = (cells * 4 * words_per_cell(octants)).max(stack_bytes(cells, octants));
+    let bytes = largest_buffer(cells, octants);
+    let what = format!("distance map of {cells} cells ({bytes} bytes)");
     info.check(
-        format!("distance map of {cells} cells ({bytes} bytes)"),
+        what.clone(),
         "maxStorageBufferRange",
         bytes,
         info.max_storage_buffer_range,
+    )?;
+    info.check(
+        what,
+        "maxTexelBufferElements",
+        cells,
+        info.max_texel_buffer_elements as u64,
     )
 }
+
+/// The device limit a map of `cells` cells exceeds (`check_fits`), if any.
+pub fn exceeded_limit(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) -> Option<&'static str> {
+    info.exceeded_buffer_limit(largest_buffer(cells, octants), cells)
+}
+
+/// The build passes write the map, the march reads it as texels, a host
+/// reads it back.
+const MAP_USAGE: vk::BufferUsageFlags =
+    vk::BufferUsageFlags::from_raw(STORAGE_XFER.as_raw() | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw());
 
 /// Records the classification of `cells` for a TF ("classify") and the
 /// three transform passes ("distance x", "distance y", "distance z") into
@@ -153,7 +190,7 @@ pub fn record(
     let ctx = builder.context();
     let info = ctx.info();
     let mut map = classified_map(builder, cmd, &mut timer, input, cells, octants, MemoryLocation::GpuOnly)?;
-    let bytes = map.distances.size();
+    let bytes = map.distances.buffer().size();
     // Rows of at most PRIVATE_ROW cells keep their stacks in private arrays:
     // where every axis's rows do, the binding gets a one-word placeholder.
     let stack_bytes = match cells.counts.iter().any(|&n| n > PRIVATE_ROW) {
@@ -168,7 +205,7 @@ pub fn record(
         STORAGE_XFER,
         MemoryLocation::GpuOnly,
     )?;
-    let (flags, distances, built) = (&map.flags, &map.distances, map.built);
+    let (flags, distances, built) = (&map.flags, map.distances.buffer(), map.built);
     // x: flags -> distances, y: distances -> scratch, z: scratch -> distances.
     let c = cells.counts;
     let counts = [c[0], c[1], c[2], cells.total as u32];
@@ -246,7 +283,8 @@ fn classified_map(
     check_fits(ctx.info(), cells.total, octants)?;
     let bytes = cells.total * 4 * words_per_cell(octants);
     let flags = Buffer::new(ctx, "distance cell flags", cells.total * 4, STORAGE_XFER, location)?;
-    let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_XFER, location)?;
+    let distances = Buffer::new(ctx, "distance map", bytes, MAP_USAGE, location)?;
+    let distances = TexelBuffer::new(ctx, distances, texel_format(octants))?;
     let built = match input.octants {
         o if !octants || o.is_empty() => Octants::ALL,
         o => o,
@@ -310,7 +348,8 @@ pub fn build_on_host(
 impl DistanceMap {
     /// The distances on the host: [`channels`] per cell, in channel order.
     pub fn download(&self) -> Result<Vec<u32>> {
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&self.distances.download(0, self.distances.size())?);
+        let map = self.distances.buffer();
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&map.download(0, map.size())?);
         let per = words_per_cell(self.octants) as usize;
         let n = channels(self.octants);
         let built = self.built;
@@ -416,7 +455,7 @@ impl Method for DistanceMethod {
 impl Built for DistanceMap {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_distance::Own {
-            distances: Binding::Storage(&self.distances),
+            distance_texels: Binding::TexelBuffer(self.distances.view()),
         }
         .list()
     }

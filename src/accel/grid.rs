@@ -16,7 +16,7 @@ use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, march_grid};
-use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
+use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
 
 /// Default cell edge in voxels.
 pub const CELL: u32 = 16;
@@ -24,8 +24,11 @@ pub const CELL: u32 = 16;
 pub struct Grid {
     pub cell: u32,
     pub counts: [u32; 3],
-    /// u32 per cell, 1 = active; or, when `ranges`, vec2(min, max) per cell.
-    pub flags: Buffer,
+    /// u32 per cell, 1 = active; or, when `ranges`, vec2(min, max) per
+    /// cell: one texel a cell, which the grid's march reads as a texel
+    /// buffer (a storage buffer is loaded lane by lane on a CPU device; see
+    /// `distance::DistanceMap::distances`).
+    pub flags: TexelBuffer,
     /// The cells hold value ranges, decided per ray (MIP, MinIP).
     pub ranges: bool,
     total: u64,
@@ -40,7 +43,7 @@ impl Grid {
         let active = if self.ranges {
             self.total
         } else {
-            count_active(&self.flags, self.total, &self.active)?
+            count_active(self.flags.buffer(), self.total, &self.active)?
         };
         let unit = if self.cell == 16 { "16^3 cells" } else { "cells" };
         Ok(Stats {
@@ -50,7 +53,7 @@ impl Grid {
             nodes: self.total,
             leaves: active,
             height: 1,
-            bytes: self.flags.size(),
+            bytes: self.flags.buffer().size(),
         })
     }
 
@@ -86,15 +89,24 @@ pub fn record(
     cells: &GpuBricks,
 ) -> Result<Grid> {
     let classifier = builder.shared::<Classifier>()?;
+    let ctx = builder.context();
     let flags = Buffer::new(
-        builder.context(),
+        ctx,
         "grid cell flags",
         cells.total * 4,
-        STORAGE_XFER,
+        CELLS_USAGE,
         MemoryLocation::GpuOnly,
     )?;
+    let flags = TexelBuffer::new(ctx, flags, vk::Format::R32_UINT)?;
     let pass = timer.begin(cmd, "classify")?;
-    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
+    classifier.record(
+        cmd,
+        Classify::Range,
+        input.gpu_volume,
+        cells,
+        input.gpu_tf,
+        flags.buffer(),
+    )?;
     timer.end(cmd, pass);
     Ok(Grid {
         cell: cells.brick,
@@ -120,9 +132,10 @@ pub fn record_ranges(
         builder.context(),
         "grid cell ranges",
         bytes,
-        STORAGE_XFER,
+        CELLS_USAGE,
         MemoryLocation::GpuOnly,
     )?;
+    let ranges = TexelBuffer::new(builder.context(), ranges, vk::Format::R32G32_UINT)?;
     let device = builder.context().device();
     let pass = timer.begin(cmd, "classify")?;
     record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
@@ -131,7 +144,7 @@ pub fn record_ranges(
         dst_offset: 0,
         size: bytes,
     }];
-    unsafe { device.cmd_copy_buffer(cmd, cells.ranges.raw, ranges.raw, &region) };
+    unsafe { device.cmd_copy_buffer(cmd, cells.ranges.raw, ranges.buffer().raw, &region) };
     record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
     timer.end(cmd, pass);
     Ok(Grid {
@@ -143,6 +156,18 @@ pub fn record_ranges(
         active: std::sync::OnceLock::new(),
     })
 }
+
+/// The device limit a grid of `cells` cells exceeds, if any: value ranges
+/// (MIP, MinIP) take 8 bytes a cell, flags 4, within `maxStorageBufferRange`,
+/// and the march reads a texel a cell, within `maxTexelBufferElements`.
+pub fn exceeded_limit(info: &crate::gpu::DeviceInfo, cells: u64) -> Option<&'static str> {
+    info.exceeded_buffer_limit(cells * 8, cells)
+}
+
+/// The classification writes a grid's cells, its march and the hybrid's
+/// read them as texels, statistics read them back.
+const CELLS_USAGE: vk::BufferUsageFlags =
+    vk::BufferUsageFlags::from_raw(STORAGE_XFER.as_raw() | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw());
 
 /// The cell parameter of the grid and the hybrid (default [`CELL`]).
 pub(crate) const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));
@@ -190,7 +215,7 @@ impl Method for GridMethod {
 impl Built for Grid {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
-            cells: Binding::Storage(&self.flags),
+            cell_texels: Binding::TexelBuffer(self.flags.view()),
         }
         .list()
     }

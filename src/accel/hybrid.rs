@@ -70,7 +70,7 @@ impl Built for Hybrid {
         march_hybrid::Own {
             nodes: Binding::Storage(&self.tree.nodes),
             count: Binding::Storage(&self.tree.count),
-            cell_flags: Binding::Storage(&self.grid.flags),
+            cell_flags: Binding::TexelBuffer(self.grid.flags.view()),
         }
         .list()
     }

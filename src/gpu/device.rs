@@ -77,6 +77,18 @@ impl DeviceInfo {
         }
     }
 
+    /// The limit a storage buffer of `bytes` read as `texels` texels
+    /// exceeds (`maxStorageBufferRange`, then `maxTexelBufferElements`), if any.
+    pub fn exceeded_buffer_limit(&self, bytes: u64, texels: u64) -> Option<&'static str> {
+        if bytes > self.max_storage_buffer_range {
+            Some("maxStorageBufferRange")
+        } else if texels > self.max_texel_buffer_elements as u64 {
+            Some("maxTexelBufferElements")
+        } else {
+            None
+        }
+    }
+
     /// Fails with a message naming `limit` when `value > max`.
     pub fn check(&self, what: impl Into<String>, limit: &'static str, value: u64, max: u64) -> Result<()> {
         if value > max {

@@ -394,7 +394,7 @@ fn interfaces_are_read_from_the_spirv() {
             ("pool_2", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("pool_3", vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ("march_status", d),
-            ("cells", d)
+            ("cell_texels", texels)
         ]
     );
     assert_eq!(g.push_size, 16);

@@ -14,7 +14,7 @@ use lacuna::bench::{config, BenchConfig};
 use lacuna::frame::diff;
 use lacuna::gpu::record::{self, Access};
 use lacuna::gpu::shaders::{self, march_grid};
-use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Timer};
+use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
 use lacuna::render::Mode;
 use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Projection, Renderer, Scene};
@@ -157,7 +157,7 @@ const EDGE: Param = Param::power_of_two("edge", 32, 4, 64, "Toy cell edge in vox
 struct FullGridData {
     counts: [u32; 3],
     edge: u32,
-    flags: Buffer,
+    flags: TexelBuffer,
 }
 
 impl Method for FullGrid {
@@ -193,7 +193,8 @@ impl Method for FullGrid {
         let edge = params.int("edge")?;
         let counts = input.gpu_volume.dims.map(|d| d.div_ceil(edge));
         let cells = counts.iter().map(|&c| c as u64).product::<u64>();
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        // The grid kernel reads a cell's flag as a texel (R32UI).
+        let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let flags = Buffer::new(
             builder.context(),
             "toy flags",
@@ -201,12 +202,13 @@ impl Method for FullGrid {
             usage,
             MemoryLocation::GpuOnly,
         )?;
+        let flags = TexelBuffer::new(builder.context(), flags, vk::Format::R32_UINT)?;
         let pass = timer.begin(cmd, "fill")?;
         unsafe {
             builder
                 .context()
                 .device()
-                .cmd_fill_buffer(cmd, flags.raw, 0, vk::WHOLE_SIZE, 1)
+                .cmd_fill_buffer(cmd, flags.buffer().raw, 0, vk::WHOLE_SIZE, 1)
         };
         // ALL_TRANSFER, not CLEAR, as the source stage (see the README's validation notes).
         record::barrier(
@@ -223,7 +225,7 @@ impl Method for FullGrid {
 impl Built for FullGridData {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
-            cells: Binding::Storage(&self.flags),
+            cell_texels: Binding::TexelBuffer(self.flags.view()),
         }
         .list()
     }

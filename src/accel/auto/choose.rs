@@ -6,7 +6,7 @@
 
 use super::super::builder::RangeKind;
 use super::super::distance::{self, DistanceMethod};
-use super::super::grid::GridMethod;
+use super::super::grid::{self, GridMethod};
 use super::super::kd::gpu::KdGpu;
 use super::super::method::Accel;
 use super::super::morton::MAX_BRICKS_PER_AXIS;
@@ -146,33 +146,31 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode, tree: bool) ->
     if matches!(mode, Mode::Average) {
         return Ok((out, notes));
     }
-    let distance_map = |cell: u32| -> Result<Option<Candidate>> {
+    // The candidate, or the device limit it exceeds.
+    let distance_map = |cell: u32| -> Result<std::result::Result<Candidate, &'static str>> {
         let n = cells_of(dims, cell);
         let octants = n <= OCTANT_CELLS;
-        match distance::check_fits(info, n, octants) {
-            Ok(()) => Ok(Some(Candidate::new(
-                if octants { OCTANT } else { DISTANCE },
-                Some(cell),
-            )?)),
-            Err(_) => Ok(None),
+        match distance::exceeded_limit(info, n, octants) {
+            None => Ok(Ok(Candidate::new(if octants { OCTANT } else { DISTANCE }, Some(cell))?)),
+            Some(limit) => Ok(Err(limit)),
         }
     };
     let mut fine_map = false;
     for cell in DISTANCE_CELLS {
         match distance_map(cell)? {
-            Some(c) => {
+            Ok(c) => {
                 out.push(c);
                 fine_map = true;
             }
-            None => notes.push(format!(
-                "no distance map at cell {cell}: over maxStorageBufferRange ({} cells)",
+            Err(limit) => notes.push(format!(
+                "no distance map at cell {cell}: over {limit} ({} cells)",
                 cells_of(dims, cell)
             )),
         }
     }
     if !fine_map {
         for cell in COARSE_DISTANCE_CELLS {
-            if let Some(c) = distance_map(cell)? {
+            if let Ok(c) = distance_map(cell)? {
                 notes.push(format!("a distance map at cell {cell}: the finest that fits"));
                 out.push(c);
                 break;
@@ -180,17 +178,10 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode, tree: bool) ->
         }
     }
     for cell in GRID_CELLS {
-        // Value ranges (MIP, MinIP) take 8 bytes a cell, flags 4.
-        let bytes = cells_of(dims, cell) * 8;
-        match info.check(
-            format!("grid of {} cells ({bytes} bytes)", cells_of(dims, cell)),
-            "maxStorageBufferRange",
-            bytes,
-            info.max_storage_buffer_range,
-        ) {
-            Ok(()) => out.push(Candidate::new(GRID, Some(cell))?),
-            Err(_) => notes.push(format!(
-                "no grid at cell {cell}: over maxStorageBufferRange ({} cells)",
+        match grid::exceeded_limit(info, cells_of(dims, cell)) {
+            None => out.push(Candidate::new(GRID, Some(cell))?),
+            Some(limit) => notes.push(format!(
+                "no grid at cell {cell}: over {limit} ({} cells)",
                 cells_of(dims, cell)
             )),
         }
