@@ -23,7 +23,7 @@ pub use super::distance_host::{channels, reference, CAP};
 use super::method::{submit_build, BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
-use super::tree::STORAGE_XFER;
+use super::tree::{STORAGE_TEXELS, STORAGE_XFER};
 use crate::desc::Octants;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
@@ -171,11 +171,6 @@ pub fn exceeded_limit(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) 
     info.exceeded_buffer_limit(largest_buffer(cells, octants), cells)
 }
 
-/// The build passes write the map, the march reads it as texels, a host
-/// reads it back.
-const MAP_USAGE: vk::BufferUsageFlags =
-    vk::BufferUsageFlags::from_raw(STORAGE_XFER.as_raw() | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw());
-
 /// Records the classification of `cells` for a TF ("classify") and the
 /// three transform passes ("distance x", "distance y", "distance z") into
 /// `cmd`. Follows the `prims` barrier convention; ends with compute writes.
@@ -283,7 +278,7 @@ fn classified_map(
     check_fits(ctx.info(), cells.total, octants)?;
     let bytes = cells.total * 4 * words_per_cell(octants);
     let flags = Buffer::new(ctx, "distance cell flags", cells.total * 4, STORAGE_XFER, location)?;
-    let distances = Buffer::new(ctx, "distance map", bytes, MAP_USAGE, location)?;
+    let distances = Buffer::new(ctx, "distance map", bytes, STORAGE_TEXELS, location)?;
     let distances = TexelBuffer::new(ctx, distances, texel_format(octants))?;
     let built = match input.octants {
         o if !octants || o.is_empty() => Octants::ALL,

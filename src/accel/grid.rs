@@ -11,7 +11,7 @@ use super::classify::{Classifier, Classify};
 use super::method::{BuildInput, Built, March, Method};
 use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
-use super::tree::STORAGE_XFER;
+use super::tree::STORAGE_TEXELS;
 use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
@@ -90,11 +90,12 @@ pub fn record(
 ) -> Result<Grid> {
     let classifier = builder.shared::<Classifier>()?;
     let ctx = builder.context();
+    check_texels(ctx.info(), cells.total)?;
     let flags = Buffer::new(
         ctx,
         "grid cell flags",
         cells.total * 4,
-        CELLS_USAGE,
+        STORAGE_TEXELS,
         MemoryLocation::GpuOnly,
     )?;
     let flags = TexelBuffer::new(ctx, flags, vk::Format::R32_UINT)?;
@@ -128,11 +129,12 @@ pub fn record_ranges(
     cells: &GpuBricks,
 ) -> Result<Grid> {
     let bytes = cells.total * 8;
+    check_texels(builder.context().info(), cells.total)?;
     let ranges = Buffer::new(
         builder.context(),
         "grid cell ranges",
         bytes,
-        CELLS_USAGE,
+        STORAGE_TEXELS,
         MemoryLocation::GpuOnly,
     )?;
     let ranges = TexelBuffer::new(builder.context(), ranges, vk::Format::R32G32_UINT)?;
@@ -164,10 +166,16 @@ pub fn exceeded_limit(info: &crate::gpu::DeviceInfo, cells: u64) -> Option<&'sta
     info.exceeded_buffer_limit(cells * 8, cells)
 }
 
-/// The classification writes a grid's cells, its march and the hybrid's
-/// read them as texels, statistics read them back.
-const CELLS_USAGE: vk::BufferUsageFlags =
-    vk::BufferUsageFlags::from_raw(STORAGE_XFER.as_raw() | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw());
+/// A grid's march reads a texel a cell: its cells within
+/// `maxTexelBufferElements`, checked before anything is allocated.
+fn check_texels(info: &crate::gpu::DeviceInfo, cells: u64) -> Result<()> {
+    info.check(
+        format!("grid of {cells} cells"),
+        "maxTexelBufferElements",
+        cells,
+        info.max_texel_buffer_elements as u64,
+    )
+}
 
 /// The cell parameter of the grid and the hybrid (default [`CELL`]).
 pub(crate) const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL));

@@ -171,6 +171,11 @@ pub(crate) const STORAGE_XFER: vk::BufferUsageFlags = vk::BufferUsageFlags::from
         | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
 );
 
+/// `STORAGE_XFER`, and read by a march kernel as a texel buffer (the
+/// distance maps, the grid's cells).
+pub(crate) const STORAGE_TEXELS: vk::BufferUsageFlags =
+    vk::BufferUsageFlags::from_raw(STORAGE_XFER.as_raw() | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw());
+
 impl GpuTree {
     /// Uploads a tree built on the CPU.
     pub fn upload(ctx: &Context, nodes: &[Node], mut stats: Stats) -> Result<Self> {
