@@ -63,7 +63,9 @@ impl MarchKernels {
 
     /// Creates the kernels of `wanted` the context has not made yet, in
     /// parallel (one thread each; creating a pipeline compiles it, on
-    /// lavapipe in about a fifth of a second): what a probe will dispatch.
+    /// lavapipe in 0.5 to 3 s a march kernel): what a probe will dispatch.
+    /// Candidates that differ only in cell size share a kernel; its threads
+    /// wait for the one that makes it (`gpu/kernel_cache.rs`).
     pub fn prepare(&self, wanted: &[(March, KernelConstants, ProbeConstants)]) -> Result<()> {
         std::thread::scope(|scope| {
             let jobs: Vec<_> = wanted

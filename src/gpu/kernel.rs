@@ -72,13 +72,7 @@ impl Kernel {
             info.max_compute_work_group_invocations as u64,
         )?;
         let key = KernelKey::new(shader, constants);
-        let objects = match ctx.inner.kernels.get(&key) {
-            Some(objects) => objects,
-            None => {
-                let made = make(ctx, shader, constants)?;
-                ctx.inner.kernels.keep(ctx.device(), key, made)
-            }
-        };
+        let objects = ctx.inner.kernels.get_or_make(key, || make(ctx, shader, constants))?;
         Ok(Kernel {
             ctx: ctx.clone(),
             name,

@@ -1,13 +1,15 @@
 //! The kernels a context has created, kept until the context goes: a
 //! builder, a renderer, auto's probes and a viewer rebuilding its structure
 //! all ask for the same pipelines, and creating one is not free. On
-//! lavapipe it costs 0.2 to 0.7 s a march kernel, even with Mesa's shader
-//! cache warm (its NIR passes run before the cache is consulted).
+//! lavapipe it costs 0.5 to 1 s a march kernel over a dense volume (up to
+//! 3 s over bricks), even with Mesa's shader cache warm: its NIR passes run
+//! before the cache is consulted.
 
 use super::shaders::Shader;
+use crate::error::Result;
 use ash::vk;
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 /// A kernel's Vulkan objects, owned by the cache.
 #[derive(Clone, Copy)]
@@ -50,31 +52,35 @@ impl KernelKey {
     }
 }
 
+/// A key's kernel: empty until the thread that asked first has made it.
+type Slot = Arc<Mutex<Option<KernelObjects>>>;
+
 #[derive(Default)]
 pub(crate) struct KernelCache {
-    made: Mutex<HashMap<KernelKey, KernelObjects>>,
+    made: Mutex<HashMap<KernelKey, Slot>>,
 }
 
 impl KernelCache {
-    pub fn get(&self, key: &KernelKey) -> Option<KernelObjects> {
-        self.lock().get(key).copied()
-    }
-
-    /// Keeps `made` for `key`, or, where another thread kept one first,
-    /// destroys `made` and returns that one.
-    pub fn keep(&self, device: &ash::Device, key: KernelKey, made: KernelObjects) -> KernelObjects {
-        let mut map = self.lock();
-        if let Some(first) = map.get(&key) {
-            // SAFETY: `made` was just created and never recorded.
-            unsafe { made.destroy(device) };
-            return *first;
+    /// `key`'s kernel, made by `make` unless it was made before. A thread
+    /// asking for a key another thread is making waits for that one rather
+    /// than make it again (auto's candidates often share a kernel, and
+    /// their kernels are made on a thread each: `MarchKernels::prepare`).
+    /// Where `make` fails, the next thread to ask tries again.
+    pub fn get_or_make(&self, key: KernelKey, make: impl FnOnce() -> Result<KernelObjects>) -> Result<KernelObjects> {
+        let slot = self.lock().entry(key).or_default().clone();
+        // A thread that panicked while making leaves the slot empty.
+        let mut slot = slot.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(made) = *slot {
+            return Ok(made);
         }
-        map.insert(key, made);
-        made
+        let made = make()?;
+        *slot = Some(made);
+        Ok(made)
     }
 
+    /// How many kernels were made.
     pub fn len(&self) -> usize {
-        self.lock().len()
+        self.lock().values().filter(|slot| lock_slot(slot).is_some()).count()
     }
 
     /// # Safety
@@ -82,22 +88,31 @@ impl KernelCache {
     /// destroyed (or, adopted, handed back to its host).
     pub unsafe fn destroy_all(&mut self, device: &ash::Device) {
         let map = self.made.get_mut().unwrap_or_else(|p| p.into_inner());
-        for (_, objects) in map.drain() {
-            objects.destroy(device);
+        for (_, slot) in map.drain() {
+            if let Some(objects) = lock_slot(&slot).take() {
+                objects.destroy(device);
+            }
         }
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<KernelKey, KernelObjects>> {
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<KernelKey, Slot>> {
         // A panic elsewhere never leaves the map half-written: it is only
         // read or inserted into whole.
         self.made.lock().unwrap_or_else(|p| p.into_inner())
     }
 }
 
+fn lock_slot(slot: &Slot) -> std::sync::MutexGuard<'_, Option<KernelObjects>> {
+    slot.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 #[cfg(test)]
 mod tests {
-    use super::KernelKey;
+    use super::{KernelCache, KernelKey, KernelObjects};
+    use crate::error::Error;
     use crate::gpu::shaders;
+    use ash::vk;
+    use std::sync::atomic::{AtomicUsize, Ordering};
 
     #[test]
     fn keys_name_the_shader_and_its_constants_in_any_order() {
@@ -106,5 +121,57 @@ mod tests {
         assert!(key(&[(1, 2), (0, 3)]) == key(&[(0, 3), (1, 2)]));
         assert!(key(&[(0, 3)]) != key(&[(0, 4)]));
         assert!(KernelKey::new(&shaders::PRIMS_COMPACT, &[]) != key(&[]));
+    }
+
+    /// Null handles stand in for a kernel: nothing here touches a device.
+    fn objects() -> KernelObjects {
+        KernelObjects {
+            module: vk::ShaderModule::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+        }
+    }
+
+    #[test]
+    fn threads_asking_for_one_key_at_once_make_it_once() {
+        let cache = KernelCache::default();
+        let makes = AtomicUsize::new(0);
+        let key = || KernelKey::new(&shaders::PRIMS_COPY, &[(0, 1)]);
+        std::thread::scope(|scope| {
+            for _ in 0..4 {
+                scope.spawn(|| {
+                    cache
+                        .get_or_make(key(), || {
+                            makes.fetch_add(1, Ordering::SeqCst);
+                            // Long enough that the other threads ask while it is made.
+                            std::thread::sleep(std::time::Duration::from_millis(100));
+                            Ok(objects())
+                        })
+                        .unwrap()
+                });
+            }
+        });
+        assert_eq!(makes.load(Ordering::SeqCst), 1);
+        assert_eq!(cache.len(), 1);
+        // Another key is made on its own.
+        cache
+            .get_or_make(KernelKey::new(&shaders::PRIMS_COPY, &[(0, 2)]), || {
+                makes.fetch_add(1, Ordering::SeqCst);
+                Ok(objects())
+            })
+            .unwrap();
+        assert_eq!(makes.load(Ordering::SeqCst), 2);
+    }
+
+    #[test]
+    fn a_kernel_that_failed_is_tried_again() {
+        let cache = KernelCache::default();
+        let key = || KernelKey::new(&shaders::PRIMS_COPY, &[]);
+        let failed = cache.get_or_make(key(), || Err(Error::Interface("no pipeline".into())));
+        assert!(failed.is_err());
+        assert_eq!(cache.len(), 0);
+        assert!(cache.get_or_make(key(), || Ok(objects())).is_ok());
+        assert_eq!(cache.len(), 1);
     }
 }
