@@ -32,6 +32,10 @@ pub struct BenchArgs {
     /// "iso, jittered"); repeatable. Default: every look.
     #[arg(long, requires = "suite")]
     look: Vec<String>,
+    /// With --suite hard: only this case (its name as the table shows it, e.g. "grazing rays");
+    /// repeatable. Default: every case.
+    #[arg(long, requires = "suite")]
+    case: Vec<String>,
     /// Output folder (default bench/out/<config name>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -91,17 +95,14 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         if suite != "hard" {
             return Err(Error::invalid("suite", suite, "expected hard or auto"));
         }
-        let names: Vec<&str> = bench::hard::looks("0.5").iter().map(|l| l.name).collect();
-        if let Some(bad) = args.look.iter().find(|l| !names.contains(&l.as_str())) {
-            return Err(Error::invalid(
-                "look",
-                bad,
-                format!("expected one of: {}", names.join("; ")),
-            ));
-        }
+        let only = bench::hard::Selection {
+            looks: args.look.clone(),
+            cases: args.case.clone(),
+        };
+        only.check()?;
         let ctx = context(true)?;
         let progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let outcomes = bench::hard::run(&ctx, &args.look, |case| {
+        let outcomes = bench::hard::run(&ctx, &only, |case| {
             if progress {
                 eprintln!("hard case: {case}");
             }

@@ -1,6 +1,8 @@
 //! `lacuna bench` end to end on a tiny config: every output exists and is
 //! consistent (the JSON holds every data set x structure), every exact
-//! structure matches naive, the hard-case suite passes, bad input fails.
+//! structure matches naive, the hard-case suite's command runs the cases
+//! and looks it is asked for, the whole suite passes (run in this process),
+//! bad input fails.
 
 use crate::common;
 use lacuna::bench::{BenchConfig, ErrorPoint, Record};
@@ -281,10 +283,75 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     assert_eq!(frames, records.len());
 }
 
-/// Runs `bench --suite hard` in `looks`; asserts every run passed, every
-/// case and structure ran in each look, and the table shows them.
+/// Runs the hard-case suite in `looks` on a pooled context (the kernels it
+/// makes serve later tests; a `lacuna bench` process would make them for
+/// itself alone); asserts every run passed, and every case and structure
+/// ran in each look under at least the manual filter.
 fn hard_suite_passes(looks: &[&str]) {
+    use lacuna::bench::hard::{self, Selection};
+    let gpu = common::gpu();
+    let only = Selection {
+        looks: looks.iter().map(|l| l.to_string()).collect(),
+        cases: Vec::new(),
+    };
+    let outcomes = hard::run(&gpu, &only, |_| {}).unwrap();
+    let failed: Vec<String> = outcomes
+        .iter()
+        .filter(|o| !o.passed())
+        .map(|o| format!("{} / {} / {} / {}: {}", o.case, o.look, o.filter, o.structure, o.detail))
+        .collect();
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+    let cases = hard::cases().unwrap();
+    let structures = hard::structures().unwrap();
+    assert!(cases.iter().any(|c| c.volume.channel_count() > 1));
+    // Several channels are not rendered lit (README, "Channels").
+    let lit = |look: &str| look.starts_with("shaded") || look.starts_with("iso");
+    for case in &cases {
+        for look in looks.iter().filter(|l| case.volume.channel_count() == 1 || !lit(l)) {
+            for (label, _, _) in &structures {
+                assert!(
+                    outcomes.iter().any(|o| o.case == case.name
+                        && o.look == *look
+                        && o.filter == lacuna::render::Filter::Manual
+                        && o.structure == *label),
+                    "{} / {look} / {label} did not run",
+                    case.name
+                );
+            }
+        }
+    }
+    // Average is marched naively by every structure; the others skip.
+    let naive = outcomes.iter().filter(|o| o.mode_fallback).count();
+    let average = outcomes.iter().filter(|o| o.look == "average").count();
+    assert_eq!(naive, average);
+}
+
+// The suite in three parts, which the test harness runs side by side.
+#[test]
+fn the_hard_case_suite_passes_in_composite_and_shaded() {
+    hard_suite_passes(&["composite", "shaded, jittered"]);
+}
+
+#[test]
+fn the_hard_case_suite_passes_in_mip_and_minip() {
+    hard_suite_passes(&["mip", "minip"]);
+}
+
+#[test]
+fn the_hard_case_suite_passes_in_average_and_iso() {
+    hard_suite_passes(&["average", "iso, jittered"]);
+}
+
+/// `lacuna bench --suite hard` end to end on two cases in two looks: the
+/// table's rows and the summary count what ran.
+#[test]
+fn the_hard_suite_command_runs_the_cases_and_looks_named() {
+    let cases = ["a single active voxel", "two channels, one transparent"];
+    let looks = ["shaded, jittered", "average"];
     let mut args = vec!["bench", "--suite", "hard", "--quiet"];
+    for c in cases {
+        args.extend(["--case", c]);
+    }
     for l in looks {
         args.extend(["--look", l]);
     }
@@ -295,47 +362,43 @@ fn hard_suite_passes(looks: &[&str]) {
         "{stdout}"
     );
     assert!(!stdout.contains("FAIL"), "{stdout}");
-    let cases = lacuna::bench::hard::cases().unwrap();
+    // Two channels are not lit: three case-look pairs, each under the
+    // manual filter at least.
+    for row in [
+        "| a single active voxel | shaded, jittered | manual |",
+        "| a single active voxel | average | manual |",
+        "| two channels, one transparent | average | manual |",
+    ] {
+        assert!(stdout.contains(row), "{row}\n{stdout}");
+    }
+    assert!(!stdout.contains("| two channels, one transparent | shaded"), "{stdout}");
+    assert!(!stdout.contains("grazing rays"), "{stdout}");
+    let rows = stdout
+        .lines()
+        .filter(|l| l.starts_with("| a ") || l.starts_with("| two "))
+        .count();
     let structures = lacuna::bench::hard::structures().unwrap().len();
     let line = stdout.lines().find(|l| l.starts_with("hard cases: ")).unwrap();
     let numbers: Vec<usize> = line
         .split(|c: char| !c.is_ascii_digit())
         .filter_map(|w| w.parse().ok())
         .collect();
-    // passed, of total, marched naively; at least one filter per case and look.
+    // passed, of total, marched naively (every structure in average).
     assert_eq!(numbers[0], numbers[1], "{line}");
-    // Several channels are not rendered lit (README, "Channels").
-    let lit = |look: &str| look.starts_with("shaded") || look.starts_with("iso");
-    let applies = |case: &lacuna::bench::hard::HardCase, look: &str| case.volume.channel_count() == 1 || !lit(look);
-    let runs: usize = cases
-        .iter()
-        .map(|c| looks.iter().filter(|l| applies(c, l)).count())
-        .sum();
-    assert!(numbers[1] >= runs * structures, "{line}");
-    assert!(cases.iter().any(|c| c.volume.channel_count() > 1));
-    for case in &cases {
-        for look in looks.iter().filter(|l| applies(case, l)) {
-            assert!(
-                stdout.contains(&format!("| {} | {look} | manual |", case.name)),
-                "{} {look}",
-                case.name
-            );
-        }
-    }
-    // Average is marched naively by every structure; the others skip.
-    let naive = structures * cases.len() * usize::from(looks.contains(&"average"));
-    assert_eq!(numbers[2], naive, "{line}");
-}
-
-// The suite in two halves, which the test harness runs side by side.
-#[test]
-fn the_hard_case_suite_passes_in_composite_shaded_and_mip() {
-    hard_suite_passes(&["composite", "shaded, jittered", "mip"]);
+    assert_eq!(numbers[1], rows * structures, "{line}");
+    let average_rows = stdout.lines().filter(|l| l.contains("| average |")).count();
+    assert_eq!(numbers[2], average_rows * structures, "{line}");
 }
 
 #[test]
-fn the_hard_case_suite_passes_in_minip_average_and_iso() {
-    hard_suite_passes(&["minip", "average", "iso, jittered"]);
+fn an_unknown_hard_suite_case_is_refused() {
+    let (code, _, stderr) = lacuna(&["bench", "--suite", "hard", "--case", "rays of light"]);
+    assert_ne!(code, 0);
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("invalid case 'rays of light': expected one of: rays parallel to an axis;"),
+        "{stderr}"
+    );
 }
 
 #[test]

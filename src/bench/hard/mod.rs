@@ -10,7 +10,7 @@ mod cases;
 pub use cases::{along_z_through_brick_faces, cam, cases, lattice, looks, masked, series_steps, HardCase, HardLook};
 
 use crate::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::Context;
 use crate::render::{Filter, FrameDesc, Renderer, Scene};
@@ -73,9 +73,39 @@ fn views_in(case: &HardCase, look: &HardLook) -> Result<Vec<FrameDesc>> {
         .collect()
 }
 
-/// Runs every case in every look (those named in `only`, when given) for
-/// every structure and filter on a validated context.
-pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>> {
+/// Which cases and looks a run covers: those named, or all where none is.
+#[derive(Clone, Debug, Default)]
+pub struct Selection {
+    pub looks: Vec<String>,
+    pub cases: Vec<String>,
+}
+
+impl Selection {
+    /// Refuses a look or case the suite does not have, naming those it has.
+    pub fn check(&self) -> Result<()> {
+        let looks: Vec<&str> = looks("0.5").iter().map(|l| l.name).collect();
+        let cases: Vec<&str> = cases()?.iter().map(|c| c.name).collect();
+        for (what, asked, known) in [("look", &self.looks, looks), ("case", &self.cases, cases)] {
+            if let Some(bad) = asked.iter().find(|a| !known.contains(&a.as_str())) {
+                return Err(Error::invalid(
+                    what,
+                    bad,
+                    format!("expected one of: {}", known.join("; ")),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn has(named: &[String], name: &str) -> bool {
+        named.is_empty() || named.iter().any(|n| n == name)
+    }
+}
+
+/// Runs every case in every look that `only` selects for every structure
+/// and filter on a validated context.
+pub fn run(ctx: &Context, only: &Selection, mut on_case: impl FnMut(&str)) -> Result<Vec<Outcome>> {
+    only.check()?;
     let builder = Builder::new(ctx)?;
     // What is checked is that every structure equals naive; which exact
     // structure auto marches does not change that, so its candidates are
@@ -86,7 +116,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
     let mut out = Vec::new();
     ctx.take_validation_messages();
     let variants = structures()?;
-    for case in cases()? {
+    for case in cases()?.into_iter().filter(|c| Selection::has(&only.cases, c.name)) {
         let v = &case.volume;
         let tf = TransferFunction::parse_channels(case.tf)?;
         let mut gv = GpuVolume::upload(ctx, v)?;
@@ -102,7 +132,7 @@ pub fn run(ctx: &Context, only: &[String], mut on_case: impl FnMut(&str)) -> Res
         let (ranges, _) = builder.ranges_for(&with, &gv)?;
         for look in looks(case.iso)
             .into_iter()
-            .filter(|l| only.is_empty() || only.iter().any(|o| o == l.name))
+            .filter(|l| Selection::has(&only.looks, l.name))
             .filter(|l| one_channel || !(l.spec.shade == Some(true) || l.spec.mode.as_deref() == Some("iso")))
         {
             on_case(&format!("{} ({})", case.name, look.name));
