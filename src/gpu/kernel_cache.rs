@@ -80,7 +80,10 @@ impl KernelCache {
 
     /// How many kernels were made.
     pub fn len(&self) -> usize {
-        self.lock().values().filter(|slot| lock_slot(slot).is_some()).count()
+        // The slots are read after the map is let go: one being made holds
+        // its lock for seconds, and the map's would stall every other key.
+        let slots: Vec<Slot> = self.lock().values().cloned().collect();
+        slots.iter().filter(|slot| lock_slot(slot).is_some()).count()
     }
 
     /// # Safety

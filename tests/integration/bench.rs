@@ -321,9 +321,16 @@ fn hard_suite_passes(looks: &[&str]) {
         }
     }
     // Average is marched naively by every structure; the others skip.
-    let naive = outcomes.iter().filter(|o| o.mode_fallback).count();
-    let average = outcomes.iter().filter(|o| o.look == "average").count();
-    assert_eq!(naive, average);
+    for o in &outcomes {
+        assert_eq!(
+            o.mode_fallback,
+            o.look == "average",
+            "{} / {} / {}: marched naively",
+            o.case,
+            o.look,
+            o.structure
+        );
+    }
 }
 
 // The suite in three parts, which the test harness runs side by side.
@@ -377,6 +384,7 @@ fn the_hard_suite_command_runs_the_cases_and_looks_named() {
         .lines()
         .filter(|l| l.starts_with("| a ") || l.starts_with("| two "))
         .count();
+    assert_eq!(rows, 3, "{stdout}");
     let structures = lacuna::bench::hard::structures().unwrap().len();
     let line = stdout.lines().find(|l| l.starts_with("hard cases: ")).unwrap();
     let numbers: Vec<usize> = line
@@ -399,6 +407,20 @@ fn an_unknown_hard_suite_case_is_refused() {
         stderr.contains("invalid case 'rays of light': expected one of: rays parallel to an axis;"),
         "{stderr}"
     );
+    // A case named only in looks it does not run in runs nothing: an
+    // error, not an empty pass.
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        "--suite",
+        "hard",
+        "--case",
+        "two channels, one transparent",
+        "--look",
+        "shaded, jittered",
+    ]);
+    assert_ne!(code, 0, "{stdout}");
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("runs in none of the looks named"), "{stderr}");
 }
 
 #[test]

@@ -202,6 +202,15 @@ pub fn run(ctx: &Context, only: &Selection, mut on_case: impl FnMut(&str)) -> Re
             }
         }
     }
+    // Asked for cases only in looks they are not run in (several channels
+    // are not lit): passing nothing would read as a pass.
+    if out.is_empty() {
+        return Err(Error::invalid(
+            "case",
+            only.cases.join("; "),
+            "runs in none of the looks named (cases of several channels are not shaded or iso)",
+        ));
+    }
     Ok(out)
 }
 
