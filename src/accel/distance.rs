@@ -151,19 +151,7 @@ fn largest_buffer(cells: u64, octants: bool) -> u64 {
 /// `maxTexelBufferElements` (the error names the limit).
 pub fn check_fits(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) -> Result<()> {
     let bytes = largest_buffer(cells, octants);
-    let what = format!("distance map of {cells} cells ({bytes} bytes)");
-    info.check(
-        what.clone(),
-        "maxStorageBufferRange",
-        bytes,
-        info.max_storage_buffer_range,
-    )?;
-    info.check(
-        what,
-        "maxTexelBufferElements",
-        cells,
-        info.max_texel_buffer_elements as u64,
-    )
+    info.check_texel_buffer(format!("distance map of {cells} cells ({bytes} bytes)"), bytes, cells)
 }
 
 /// The device limit a map of `cells` cells exceeds (`check_fits`), if any.

@@ -77,15 +77,30 @@ impl DeviceInfo {
         }
     }
 
-    /// The limit a storage buffer of `bytes` read as `texels` texels
-    /// exceeds (`maxStorageBufferRange`, then `maxTexelBufferElements`), if any.
+    /// Fails, naming the limit, when a storage buffer of `bytes` read as
+    /// `texels` texels exceeds `maxStorageBufferRange` or
+    /// `maxTexelBufferElements` (checked in that order).
+    pub fn check_texel_buffer(&self, what: impl Into<String>, bytes: u64, texels: u64) -> Result<()> {
+        let what = what.into();
+        self.check(
+            what.clone(),
+            "maxStorageBufferRange",
+            bytes,
+            self.max_storage_buffer_range,
+        )?;
+        self.check(
+            what,
+            "maxTexelBufferElements",
+            texels,
+            self.max_texel_buffer_elements as u64,
+        )
+    }
+
+    /// The limit `check_texel_buffer` would name, if any.
     pub fn exceeded_buffer_limit(&self, bytes: u64, texels: u64) -> Option<&'static str> {
-        if bytes > self.max_storage_buffer_range {
-            Some("maxStorageBufferRange")
-        } else if texels > self.max_texel_buffer_elements as u64 {
-            Some("maxTexelBufferElements")
-        } else {
-            None
+        match self.check_texel_buffer("", bytes, texels) {
+            Err(Error::DeviceLimit { limit, .. }) => Some(limit),
+            _ => None,
         }
     }
 
