@@ -240,6 +240,15 @@ impl Kernel {
 
 /// Creates `shader`'s module, layouts and pipeline specialized with
 /// `constants`; on failure destroys what it made.
+/// Whether kernels are created from SPIR-V pruned of the code their
+/// specialization constants rule out (`gpu/prune.rs`): yes, unless
+/// `LACUNA_SPIRV_PRUNE=0` hands drivers every module whole (to compare the
+/// two, or to work around a driver that mishandles a pruned one).
+fn prune_spirv() -> bool {
+    static PRUNE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *PRUNE.get_or_init(|| std::env::var("LACUNA_SPIRV_PRUNE").map_or(true, |v| v != "0"))
+}
+
 fn make(ctx: &Context, shader: &Shader, constants: &[(u32, u32)]) -> Result<KernelObjects> {
     let name = shader.name;
     let device = ctx.device();
@@ -250,8 +259,12 @@ fn make(ctx: &Context, shader: &Shader, constants: &[(u32, u32)]) -> Result<Kern
         pipeline: vk::Pipeline::null(),
     };
     let made = (|| {
+        let words = match prune_spirv() {
+            true => std::borrow::Cow::Owned(super::prune::prune(shader.words, constants)),
+            false => std::borrow::Cow::Borrowed(shader.words),
+        };
         objects.module =
-            unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
+            unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }
                 .vk("vkCreateShaderModule")?;
         ctx.name_object(objects.module, name);
         let slots: Vec<_> = shader

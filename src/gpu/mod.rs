@@ -12,6 +12,7 @@ mod instance;
 mod kernel;
 mod kernel_cache;
 mod memory;
+mod prune;
 pub mod record;
 mod requirements;
 pub mod shaders;

@@ -479,6 +479,47 @@ fn every_structure_from_the_cli_is_bit_identical_to_naive() {
     }
 }
 
+/// Kernels are created from SPIR-V pruned of the code their specialization
+/// constants rule out (`gpu/prune.rs`); `LACUNA_SPIRV_PRUNE=0` creates them
+/// from the whole modules. The frames are the same bit for bit, and both
+/// modules pass the validation layer's SPIR-V checks (`--validate`).
+#[test]
+fn kernels_pruned_by_their_constants_render_what_whole_ones_render() {
+    let dir = tempfile::tempdir().unwrap();
+    for (accel, look) in [
+        ("octree-93", vec!["--shade", "on"]),
+        ("distance", vec!["--mode", "iso", "--iso", "0.4", "--filter", "manual"]),
+        ("naive", vec!["--mode", "mip", "--filter", "hardware"]),
+    ] {
+        let (pruned, whole) = (dir.path().join("pruned.exr"), dir.path().join("whole.exr"));
+        let mut args = vec!["--camera", "30,20", "--accel", accel];
+        args.extend(&look);
+        render_ok("nbody:40", &pruned, &args);
+        let mut all = vec!["render", "nbody:40", "--size", "40x32", "--validate", "--out"];
+        all.push(whole.to_str().unwrap());
+        all.extend(&args);
+        let r = lacuna(&all, &[("LACUNA_SPIRV_PRUNE", "0")]);
+        assert_eq!(r.code, 0, "{accel} {look:?} whole: {}", r.stderr);
+        let d = lacuna(
+            &[
+                "diff",
+                pruned.to_str().unwrap(),
+                whole.to_str().unwrap(),
+                "--max-abs",
+                "0",
+            ],
+            &[],
+        );
+        assert_eq!(d.code, 0, "{accel} {look:?}: {}", d.stdout);
+        assert!(d.stdout.contains("differing 0 of"), "{}", d.stdout);
+        let frame = Frame::read_exr(&pruned).unwrap();
+        assert!(
+            frame.pixels.iter().any(|p| p[3] > 0.0),
+            "{accel} {look:?}: an empty frame"
+        );
+    }
+}
+
 #[test]
 fn devices_lists_at_least_one() {
     let r = lacuna(&["devices"], &[]);
