@@ -238,10 +238,8 @@ impl Kernel {
     }
 }
 
-/// Creates `shader`'s module, layouts and pipeline specialized with
-/// `constants`; on failure destroys what it made.
 /// Whether kernels are created from SPIR-V pruned of the code their
-/// specialization constants rule out (`gpu/prune.rs`): yes, unless
+/// specialization constants rule out (`gpu/prune`): yes, unless
 /// `LACUNA_SPIRV_PRUNE=0` hands drivers every module whole (to compare the
 /// two, or to work around a driver that mishandles a pruned one).
 fn prune_spirv() -> bool {
@@ -249,6 +247,8 @@ fn prune_spirv() -> bool {
     *PRUNE.get_or_init(|| std::env::var("LACUNA_SPIRV_PRUNE").map_or(true, |v| v != "0"))
 }
 
+/// Creates `shader`'s module, layouts and pipeline specialized with
+/// `constants`; on failure destroys what it made.
 fn make(ctx: &Context, shader: &Shader, constants: &[(u32, u32)]) -> Result<KernelObjects> {
     let name = shader.name;
     let device = ctx.device();

@@ -7,8 +7,10 @@
 //! constants decide becomes a plain branch, the blocks no longer reached go,
 //! and so do the functions no longer called. Nothing else changes: the
 //! constants stay specialization constants (the driver applies the same
-//! values), and every instruction left is the one the compiler emitted, so a
-//! pruned kernel computes what the whole one does, bit for bit.
+//! values), and every instruction that computes a value is left as the
+//! compiler emitted it (only branches, merge instructions and the parents a
+//! phi lists change), so a pruned kernel computes what the whole one does,
+//! bit for bit.
 //!
 //! What it decides is deliberately little: 32-bit integer and boolean
 //! arithmetic on constants (comparisons, logic, bitwise ops, shifts, add,
@@ -31,8 +33,9 @@ pub(crate) fn prune(words: &[u32], constants: &[(u32, u32)]) -> Vec<u32> {
 }
 
 impl Module<'_> {
-    /// The constants the globals define, with `constants` applied.
-    fn known(&self, constants: &[(u32, u32)]) -> Known {
+    /// The constants the globals define, with `constants` applied, and the
+    /// 32-bit integer and boolean types (the only values folded).
+    fn known(&self, constants: &[(u32, u32)]) -> (Known, HashSet<u32>) {
         let spec_ids: HashMap<u32, u32> = self
             .globals
             .iter()
@@ -41,7 +44,8 @@ impl Module<'_> {
             .collect();
         let value_of = |id: u32| {
             let spec = spec_ids.get(&id)?;
-            constants.iter().rev().find(|(c, _)| c == spec).map(|&(_, v)| v)
+            // The first entry, as `Shader::local_size_for` reads them.
+            constants.iter().find(|(c, _)| c == spec).map(|&(_, v)| v)
         };
         let mut scalar = HashSet::new();
         let mut known = Known::new();
@@ -81,14 +85,25 @@ impl Module<'_> {
                 _ => {}
             }
         }
-        known
+        (known, scalar)
     }
 
     /// None where a loop would lose its continue target while its header
     /// has phis (glslang emits none there), which this does not rewrite.
     fn pruned(&self, constants: &[(u32, u32)]) -> Option<Vec<u32>> {
-        let known = self.known(constants);
-        let mut live: Vec<Option<LiveFunction>> = self.functions.iter().map(|f| Some(f.live(&known))).collect();
+        let (known, scalar) = self.known(constants);
+        let loop_headers: HashSet<u32> = self
+            .functions
+            .iter()
+            .flat_map(|f| &f.blocks)
+            .filter(|b| b.merge.is_some_and(|m| m.op() == OP_LOOP_MERGE))
+            .map(|b| b.label)
+            .collect();
+        let live: Vec<LiveFunction> = self
+            .functions
+            .iter()
+            .map(|f| f.live(&known, &scalar, &loop_headers))
+            .collect();
         // Functions no live block calls (entry points always live).
         let ids: HashMap<u32, usize> = self
             .functions
@@ -107,9 +122,8 @@ impl Module<'_> {
             if std::mem::replace(&mut called[f], true) {
                 continue;
             }
-            let Some(l) = &live[f] else { continue };
             for b in &self.functions[f].blocks {
-                if !l.reached.contains(&b.label) {
+                if !live[f].reached.contains(&b.label) {
                     continue;
                 }
                 for inst in b.body.iter().filter(|i| i.op() == OP_FUNCTION_CALL) {
@@ -119,16 +133,9 @@ impl Module<'_> {
                 }
             }
         }
-        for (l, c) in live.iter_mut().zip(&called) {
-            if !c {
-                *l = None;
-            }
-        }
         let mut body = Vec::new();
-        for (f, l) in self.functions.iter().zip(&live) {
-            if let Some(l) = l {
-                f.write(l, &mut body)?;
-            }
+        for ((f, l), _) in self.functions.iter().zip(&live).zip(&called).filter(|(_, &c)| c) {
+            f.write(l, &mut body)?;
         }
         // Names and decorations of the values that went with their code.
         let mut gone = HashSet::new();
@@ -140,7 +147,8 @@ impl Module<'_> {
                 gone.remove(&id);
             }
         });
-        // Never a global's (a value a removed store stored, say).
+        // Never a global's: an opcode `function_result` does not know to have
+        // no result would name an operand (a global, say) as its result.
         for inst in &self.globals {
             if let Some(id) = global_result(*inst) {
                 gone.remove(&id);
@@ -170,7 +178,7 @@ impl Function<'_> {
     /// The blocks reached from the entry when branches the constants decide
     /// take their one way; to a fixed point, as a phi fed only by reached
     /// blocks may decide a branch further on.
-    fn live(&self, globals: &Known) -> LiveFunction {
+    fn live(&self, globals: &Known, scalar: &HashSet<u32>, loop_headers: &HashSet<u32>) -> LiveFunction {
         let index: HashMap<u32, usize> = self.blocks.iter().enumerate().map(|(i, b)| (b.label, i)).collect();
         let mut known = globals.clone();
         loop {
@@ -183,7 +191,7 @@ impl Function<'_> {
                 if !reached.insert(block.label) {
                     continue;
                 }
-                let targets = block.successors(&known, block.merge.is_some_and(|m| m.op() == OP_LOOP_MERGE));
+                let targets = block.successors(&known, loop_headers);
                 if let Some(&only) = targets.decided.as_ref() {
                     decided.insert(block.label, only);
                 }
@@ -198,7 +206,9 @@ impl Function<'_> {
             for block in self.blocks.iter().filter(|b| reached.contains(&b.label)) {
                 for inst in &block.body {
                     let Some(id) = inst.result() else { continue };
-                    if known.contains_key(&id) {
+                    // 32-bit scalars only: a bitcast to a vector of halves,
+                    // say, is no one 32-bit value to add or shift.
+                    if known.contains_key(&id) || !inst.arg(0).is_some_and(|t| scalar.contains(&t)) {
                         continue;
                     }
                     let value = match inst.op() {
@@ -261,7 +271,7 @@ impl Function<'_> {
                     }
                 }
                 match live.decided.get(&b.label) {
-                    // Never a loop header (`successors`): its selection merge goes.
+                    // A selection header decided (`successors`): its merge goes.
                     Some(&to) => out.extend([(2 << 16) | OP_BRANCH, to]),
                     None => {
                         if let Some(m) = b.merge {
@@ -291,23 +301,20 @@ struct Successors {
 
 impl Block<'_> {
     /// The labels this block may branch to given `known`, and the one it
-    /// takes when the constants decide it. A loop header's own branch is left
-    /// as it is (its merge instruction must stay where it is).
-    fn successors(&self, known: &Known, loop_header: bool) -> Successors {
+    /// takes when the constants decide it. Left as they are: a loop header's
+    /// branch (its merge instruction stays where it is), a branch that may
+    /// be a loop's back edge unless it goes back (a loop keeps its one back
+    /// edge), and a switch (a case's `break` branches to the switch's merge,
+    /// a structured exit only while the switch stays a construct).
+    fn successors(&self, known: &Known, loop_headers: &HashSet<u32>) -> Successors {
         let t = self.terminator;
+        let is_header = self.merge.is_some_and(|m| m.op() == OP_LOOP_MERGE);
         let decided = match t.op() {
-            OP_BRANCH_CONDITIONAL if !loop_header => {
-                t.arg(0)
-                    .and_then(|c| known.get(&c))
-                    .and_then(|&c| if c != 0 { t.arg(1) } else { t.arg(2) })
-            }
-            OP_SWITCH if t.0.len() % 2 == 1 => t.arg(0).and_then(|s| known.get(&s)).and_then(|&s| {
-                t.0[3..]
-                    .chunks(2)
-                    .find(|c| c[0] == s)
-                    .map(|c| c[1])
-                    .or_else(|| t.arg(1))
-            }),
+            OP_BRANCH_CONDITIONAL if !is_header => t
+                .arg(0)
+                .and_then(|c| known.get(&c))
+                .and_then(|&c| if c != 0 { t.arg(1) } else { t.arg(2) })
+                .filter(|to| loop_headers.contains(to) || !self.targets().iter().any(|t| loop_headers.contains(t))),
             _ => None,
         };
         match decided {
@@ -323,7 +330,8 @@ impl Block<'_> {
     }
 }
 
-/// A phi with the pairs of parents that no longer branch here left out.
+/// A phi with the pairs of parents that no longer branch here left out
+/// (`Module::read` refused phis shorter than a result).
 fn write_phi(inst: &Inst, block: u32, preds: &HashSet<(u32, u32)>, out: &mut Vec<u32>) {
     let pairs: Vec<&[u32]> = inst.0[3..]
         .chunks(2)
@@ -409,7 +417,7 @@ mod tests {
     fn folds_integer_and_boolean_ops_on_known_ids() {
         let known: Known = [(1, 6), (2, 4), (3, 1), (4, 0)].into_iter().collect();
         assert_eq!(evaluate(OP_BITWISE_AND, &[1, 2], &known), Some(4));
-        assert_eq!(evaluate(171, &[1, 2], &known), Some(1));
+        assert_eq!(evaluate(OP_INOT_EQUAL, &[1, 2], &known), Some(1));
         assert_eq!(evaluate(OP_LOGICAL_AND, &[3, 4], &known), Some(0));
         assert_eq!(evaluate(OP_SELECT, &[4, 1, 2], &known), Some(4));
         assert_eq!(evaluate(OP_UDIV, &[1, 4], &known), None);

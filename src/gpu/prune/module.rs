@@ -36,6 +36,14 @@ pub(super) const OP_LOGICAL_AND: u32 = 167;
 pub(super) const OP_LOGICAL_NOT: u32 = 168;
 pub(super) const OP_SELECT: u32 = 169;
 pub(super) const OP_IEQUAL: u32 = 170;
+pub(super) const OP_INOT_EQUAL: u32 = 171;
+pub(super) const OP_UGREATER_THAN: u32 = 172;
+pub(super) const OP_SGREATER_THAN: u32 = 173;
+pub(super) const OP_UGREATER_THAN_EQUAL: u32 = 174;
+pub(super) const OP_SGREATER_THAN_EQUAL: u32 = 175;
+pub(super) const OP_ULESS_THAN: u32 = 176;
+pub(super) const OP_SLESS_THAN: u32 = 177;
+pub(super) const OP_ULESS_THAN_EQUAL: u32 = 178;
 pub(super) const OP_SLESS_THAN_EQUAL: u32 = 179;
 pub(super) const OP_SHIFT_RIGHT_LOGICAL: u32 = 194;
 pub(super) const OP_SHIFT_RIGHT_ARITHMETIC: u32 = 195;
@@ -158,6 +166,21 @@ impl<'a> Module<'a> {
                     terminator,
                 });
             }
+        }
+        // What is left whole: phis without a result, group decorations (a
+        // SpecId could hide in one), and switches where a literal may be
+        // 64 bits wide (`Block::targets` reads pairs of 32-bit words).
+        let wide = globals.iter().any(|i| i.op() == OP_TYPE_INT && i.arg(1) != Some(32));
+        let blocks = || functions.iter().flat_map(|f: &Function| &f.blocks);
+        if globals.iter().any(|i| matches!(i.op(), 73..=75))
+            || blocks().any(|b| {
+                b.body
+                    .iter()
+                    .any(|i| i.op() == OP_PHI && (i.0.len() < 3 || i.0.len() % 2 == 0))
+            })
+            || (wide && blocks().any(|b| b.terminator.op() == OP_SWITCH))
+        {
+            return None;
         }
         Some(Module {
             header: &words[..5],
