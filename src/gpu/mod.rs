@@ -1,6 +1,7 @@
 //! The thin `ash` layer: loader and instance, device selection and
 //! requirements, the context (own or adopted), memory, kernels from the
-//! reflected shaders (each made once per context), recording and barriers,
+//! reflected shaders (each made once per context, from SPIR-V pruned of
+//! what its specialization constants rule out: `prune`), recording and barriers,
 //! timestamp timer and timings, validation messenger. Imports nothing of
 //! lacuna but `error`.
 
