@@ -166,12 +166,15 @@ impl Module<'_> {
     }
 }
 
-/// What of a function is live: the blocks reached, and the edges taken
-/// (from, to) where the constants decide a branch.
+/// What of a function is live: the blocks reached, the branches decided
+/// and the edges taken.
 struct LiveFunction {
     reached: HashSet<u32>,
     /// Blocks whose branch the constants decide: the one target taken.
     decided: HashMap<u32, u32>,
+    /// The edges (from, to) taken out of reached blocks: the parents a
+    /// phi keeps.
+    edges: HashSet<(u32, u32)>,
 }
 
 impl Function<'_> {
@@ -221,7 +224,11 @@ impl Function<'_> {
                 }
             }
             if known.len() == before {
-                return LiveFunction { reached, decided };
+                return LiveFunction {
+                    reached,
+                    decided,
+                    edges,
+                };
             }
         }
     }
@@ -248,24 +255,12 @@ impl Function<'_> {
                 named.insert(target, Some(b.label));
             }
         }
-        let preds: HashSet<(u32, u32)> = self
-            .blocks
-            .iter()
-            .filter(|b| live.reached.contains(&b.label))
-            .flat_map(|b| {
-                let targets: Vec<u32> = match live.decided.get(&b.label) {
-                    Some(&t) => vec![t],
-                    None => b.targets(),
-                };
-                targets.into_iter().map(move |t| (b.label, t))
-            })
-            .collect();
         for b in &self.blocks {
             if live.reached.contains(&b.label) {
                 out.extend([(2 << 16) | OP_LABEL, b.label]);
                 for inst in &b.body {
                     if inst.op() == OP_PHI {
-                        write_phi(inst, b.label, &preds, out);
+                        write_phi(inst, b.label, &live.edges, out);
                     } else {
                         out.extend_from_slice(inst.0);
                     }
@@ -377,6 +372,11 @@ mod tests {
                 let all = LiveFunction {
                     reached: f.blocks.iter().map(|b| b.label).collect(),
                     decided: HashMap::new(),
+                    edges: f
+                        .blocks
+                        .iter()
+                        .flat_map(|b| b.targets().into_iter().map(move |t| (b.label, t)))
+                        .collect(),
                 };
                 f.write(&all, &mut back);
             }

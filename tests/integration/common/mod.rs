@@ -191,6 +191,11 @@ pub fn lacuna(args: &[&str], env: &[(&str, &str)]) -> Run {
 
 /// Renders `spec` at a small size with validation on; panics on failure.
 pub fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
+    render_ok_with(spec, out, extra, &[])
+}
+
+/// `render_ok` with `env` set for the process.
+pub fn render_ok_with(spec: &str, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Run {
     let mut args = vec![
         "render",
         spec,
@@ -201,7 +206,7 @@ pub fn render_ok(spec: &str, out: &Path, extra: &[&str]) -> Run {
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    let r = lacuna(&args, &[]);
+    let r = lacuna(&args, env);
     assert_eq!(r.code, 0, "stdout: {}\nstderr: {}", r.stdout, r.stderr);
     r
 }
