@@ -19,6 +19,7 @@
 //! (`record_pack_cells`, `glsl/volume/cells.comp`), so neither staging nor
 //! the host's packing of 8 to 32 bytes a voxel is paid.
 
+pub(super) use super::cells_simd::{pack_u8_blocks, stream_u8_blocks};
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
@@ -272,57 +273,6 @@ fn pack_rows<T: Copy + Send + Sync>(v: &[T], dims: [u32; 3], out: &mut [T], bloc
         |cell, corners| cell.copy_from_slice(&corners),
         blocks,
     );
-}
-
-/// Sixteen unorm8 cells at a time, by byte, pair and quad interleaves
-/// (SSE2, which every x86-64 CPU has): one cell at a time, nbody:256's
-/// 16.8 million cells packed in 18 to 26 ms on lavapipe's two cores, so
-/// in 8 to 16 (a plain fill of those 134 MB takes 8).
-#[cfg(target_arch = "x86_64")]
-pub(super) fn pack_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
-    use std::arch::x86_64::{
-        __m128i, _mm_loadu_si128, _mm_storeu_si128, _mm_unpackhi_epi16, _mm_unpackhi_epi32, _mm_unpackhi_epi8,
-        _mm_unpacklo_epi16, _mm_unpacklo_epi32, _mm_unpacklo_epi8,
-    };
-    // Cell m reads voxels m and m + 1 of each row: a block of 16 reads 17.
-    let blocks = (rows[0].len().saturating_sub(1) / 16).min(out.len() / 128);
-    for b in 0..blocks {
-        let m = 16 * b;
-        let o = &mut out[128 * b..][..128];
-        // SAFETY: every load reads 16 bytes of a slice of 16 (checked by
-        // the slicing), every store writes 16 bytes within `o`'s 128;
-        // loadu and storeu take any alignment, and SSE2 is part of x86-64.
-        unsafe {
-            let load = |r: &[u8], at: usize| _mm_loadu_si128(r[at..at + 16].as_ptr() as *const __m128i);
-            // Per row, the (m, m + 1) byte pairs of cells 0-7 and 8-15.
-            let pairs = rows.map(|r| {
-                let (a, b) = (load(r, m), load(r, m + 1));
-                (_mm_unpacklo_epi8(a, b), _mm_unpackhi_epi8(a, b))
-            });
-            // Rows 0 and 1, rows 2 and 3: a quad per cell, four cells a vector.
-            let quads = |p: (__m128i, __m128i), q: (__m128i, __m128i)| {
-                [
-                    _mm_unpacklo_epi16(p.0, q.0),
-                    _mm_unpackhi_epi16(p.0, q.0),
-                    _mm_unpacklo_epi16(p.1, q.1),
-                    _mm_unpackhi_epi16(p.1, q.1),
-                ]
-            };
-            let (lo, hi) = (quads(pairs[0], pairs[1]), quads(pairs[2], pairs[3]));
-            for k in 0..4 {
-                // Two cells a vector: their low quads, then their high ones.
-                let at = o[32 * k..].as_mut_ptr() as *mut __m128i;
-                _mm_storeu_si128(at, _mm_unpacklo_epi32(lo[k], hi[k]));
-                _mm_storeu_si128(at.add(1), _mm_unpackhi_epi32(lo[k], hi[k]));
-            }
-        }
-    }
-    16 * blocks
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-pub(super) fn pack_u8_blocks(_: &mut [u8], _: [&[u8]; 4]) -> usize {
-    0
 }
 
 /// Packs dense `volume`'s cells copy into `out` (its `cells_bytes`).

@@ -4,6 +4,7 @@
 mod bricks;
 mod cells;
 mod cells_delta;
+mod cells_simd;
 mod channels;
 mod decode;
 mod delta;
