@@ -48,13 +48,15 @@ fn put_corners<T: Copy>(cell: &mut [T], corners: [T; 8]) {
 const ROWS_PER_TASK: usize = 64;
 
 /// Cells per block of `cell_rows_changed`'s test for change (what
-/// `pack_u8_blocks` packs at once).
+/// `stream_u8_blocks` packs at once).
 const CHANGE_BLOCK: usize = 16;
 
 /// As `cell_layers` over every layer, for the cells that read a voxel of a
 /// segment `delta` marks: per row of cells, the segments its four voxel
 /// rows changed; a row without any is skipped, and its cells between the
 /// edges are packed in blocks of `CHANGE_BLOCK` where the block reads one.
+/// `blocks` may stream (`stream_u8_blocks`): each task of `ROWS_PER_TASK`
+/// rows fences after its last.
 fn cell_rows_changed<T: Copy + Sync, U: Send>(
     v: &[T],
     dims: [u32; 3],
@@ -123,7 +125,9 @@ fn cell_rows_changed<T: Copy + Sync, U: Send>(
                     let cells = &mut middle[m0 * per_cell..((m0 + CHANGE_BLOCK).min(cw - 2)) * per_cell];
                     let n = cells.len() / per_cell;
                     let done = match blocks {
-                        Some(pack) if n == CHANGE_BLOCK => pack(cells, rows.map(|r| &r[m0..=m0 + n])),
+                        // SAFETY: a streamed block is not touched again
+                        // before the fence that ends this task (below).
+                        Some(pack) if n == CHANGE_BLOCK => unsafe { pack(cells, rows.map(|r| &r[m0..=m0 + n])) },
                         _ => 0,
                     };
                     for (i, cell) in cells.chunks_exact_mut(per_cell).enumerate().skip(done) {

@@ -4,8 +4,8 @@
 
 /// Sixteen unorm8 cells at a time, by byte, pair and quad interleaves
 /// (SSE2, which every x86-64 CPU has): one cell at a time, nbody:256's
-/// 16.8 million cells packed in 18 to 26 ms on lavapipe's two cores, so
-/// in 8 to 16 (a plain fill of those 134 MB takes 8).
+/// 17 million cells packed in 18 to 26 ms on lavapipe's two cores, so
+/// in 8 to 16 (a plain fill of those 136 MB takes 8).
 #[cfg(target_arch = "x86_64")]
 pub(crate) fn pack_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
     pack_u8_blocks_as::<false>(out, rows)
@@ -16,14 +16,22 @@ pub(crate) fn pack_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
 /// whose lines are not in cache and would otherwise be read in before
 /// they are overwritten (nbody:256's changed blocks: about 16 ms to 10 on
 /// the EPYC host). Slower for a whole copy, which the CPU streams anyway.
-/// The caller fences (`_mm_sfence`) before the device reads the copy.
+///
+/// # Safety
+/// The calling thread must run `_mm_sfence` after it and before `out` is
+/// read or written again by any thread, this one included: until then
+/// the streamed stores are not ordered with other accesses.
 #[cfg(target_arch = "x86_64")]
-pub(crate) fn stream_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
+pub(crate) unsafe fn stream_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
     pack_u8_blocks_as::<true>(out, rows)
 }
 
+/// Packs nothing (no SIMD here): `cells_delta.rs` packs cell by cell.
+///
+/// # Safety
+/// None: nothing is streamed.
 #[cfg(not(target_arch = "x86_64"))]
-pub(crate) fn stream_u8_blocks(_: &mut [u8], _: [&[u8]; 4]) -> usize {
+pub(crate) unsafe fn stream_u8_blocks(_: &mut [u8], _: [&[u8]; 4]) -> usize {
     0
 }
 
@@ -41,8 +49,9 @@ fn pack_u8_blocks_as<const STREAM: bool>(out: &mut [u8], rows: [&[u8]; 4]) -> us
         let o = &mut out[128 * b..][..128];
         // SAFETY: every load reads 16 bytes of a slice of 16 (checked by
         // the slicing), every store writes 16 bytes within `o`'s 128 (a
-        // streamed one as two 8-byte words, which take any alignment);
-        // loadu and storeu take any alignment, and SSE2 is part of x86-64.
+        // streamed one as two 8-byte words: movnti takes any alignment,
+        // and the fence is `stream_u8_blocks`'s caller's); loadu and
+        // storeu take any alignment, and SSE2 is part of x86-64.
         unsafe {
             let load = |r: &[u8], at: usize| _mm_loadu_si128(r[at..at + 16].as_ptr() as *const __m128i);
             // Per row, the (m, m + 1) byte pairs of cells 0-7 and 8-15.
