@@ -16,8 +16,9 @@ use crate::gpu::record;
 use crate::gpu::shaders::{self, build_classify_range, build_classify_voxel};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
 use crate::prims::entry_barrier;
-use crate::tf::{GpuTransferFunction, LUT_SIZE};
+use crate::tf::{entry_span, GpuTransferFunction, TransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
+use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -155,5 +156,69 @@ impl Classifier {
 impl super::builder::PerContext for Classifier {
     fn new(ctx: &Context) -> Result<Self> {
         Classifier::new(ctx)
+    }
+}
+
+/// Range classification on the host (`Classify::Range`, as
+/// `glsl/build/classify_range.comp` makes it): `flags[b]` is 1 iff any
+/// channel's transfer function has a visible entry among those brick b's
+/// value range can touch (`tf::entry_span`, the kernel's f32 arithmetic),
+/// the ranges being (min, max) per brick and channel, brick-major, as
+/// `GpuBricks::ranges` holds them. So the same flags; a NaN bound counts
+/// as the end it bounds (the kernel's clamp may take either end), which
+/// can only add active bricks. For a CPU device, where a dispatch over the
+/// bricks costs more than this loop.
+pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFunction, flags: &mut [u32]) {
+    let next: Vec<Vec<u16>> = (0..channels).map(|c| tf.channel(c).next_visible()).collect();
+    let per_brick = 2 * channels;
+    flags
+        .par_chunks_mut(4096)
+        .zip(ranges.par_chunks(4096 * per_brick))
+        .for_each(|(flags, ranges)| {
+            for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(per_brick)) {
+                let visible =
+                    |c: usize| entry_span(r[2 * c], r[2 * c + 1]).is_some_and(|(i, j)| next[c][i] as usize <= j);
+                *flag = (0..channels).any(visible) as u32;
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A brick is active on the host iff some channel's `max_alpha` over
+    /// its range is above 0: over ranges that start and end on, between and
+    /// beside LUT entries, empty ones (lo > hi), and NaN bounds.
+    #[test]
+    fn host_classification_is_max_alpha_above_zero() {
+        let tf = TransferFunction::parse_channels("band:0.4:0.41 | ramp:0.9:1").unwrap();
+        let mut r = 12345u64;
+        let mut next = || {
+            r = r.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (r >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut ranges = Vec::new();
+        for _ in 0..20000 {
+            let (a, b) = (next() * 1.2 - 0.1, next() * 1.2 - 0.1);
+            let on_entry = |x: f32| (x * 1023.0).round() / 1023.0;
+            let (a, b) = if next() < 0.3 {
+                (on_entry(a), on_entry(b))
+            } else {
+                (a, b)
+            };
+            let nan = |x: f32, p: f32| if p < 0.02 { f32::NAN } else { x };
+            ranges.extend([nan(a.min(b), next()), a.max(b), b, nan(a, next())]);
+        }
+        let mut flags = vec![7u32; ranges.len() / 4];
+        classify_ranges_on_host(&ranges, 2, &tf, &mut flags);
+        let mut active = 0;
+        for (i, &f) in flags.iter().enumerate() {
+            let r = &ranges[4 * i..4 * i + 4];
+            let want = (0..2).any(|c| tf.channel(c).max_alpha(r[2 * c], r[2 * c + 1]) > 0.0);
+            assert_eq!(f, want as u32, "brick {i}: ranges {r:?}");
+            active += f as usize;
+        }
+        assert!(active > 0 && active < flags.len(), "{active} of {} active", flags.len());
     }
 }

@@ -4,8 +4,8 @@
 //! transfer-function change: the range classification (O(cells)) and a
 //! separable distance transform (three linear-time 1-D passes,
 //! `distance_rows.comp`, one-sided for octants in `distance_octant_rows.comp`),
-//! with no host round trip; on a CPU device `Builder::build` makes the
-//! transform on the host's cores instead (`build_on_host`). The march
+//! with no host round trip; on a CPU device `Builder::build` classifies
+//! and makes the transform on the host's cores instead (`build_on_host`). The march
 //! (`glsl/march/distance.comp`) then takes one O(1) step per empty region.
 //!
 //! Every cell stores its distance to the nearest cell of the other kind, so
@@ -17,7 +17,7 @@
 
 use super::bricks::GpuBricks;
 use super::builder::{Builder, RangeKind, Ranges};
-use super::classify::{Classifier, Classify};
+use super::classify::{classify_ranges_on_host, Classifier, Classify};
 use super::distance_host;
 pub use super::distance_host::{channels, reference, CAP};
 use super::method::{submit_build, BuildInput, Built, March, Method};
@@ -261,8 +261,23 @@ fn classified_map(
     octants: bool,
     location: MemoryLocation,
 ) -> Result<DistanceMap> {
-    let ctx = builder.context();
     let classifier = builder.shared::<Classifier>()?;
+    let map = unclassified_map(builder.context(), input, cells, octants, location)?;
+    let pass = timer.begin(cmd, "classify")?;
+    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &map.flags)?;
+    timer.end(cmd, pass);
+    Ok(map)
+}
+
+/// The map's buffers (flags, distances; in `location`), nothing in them
+/// yet, for the octants the input's frames need (none named: all).
+fn unclassified_map(
+    ctx: &Context,
+    input: &BuildInput,
+    cells: &GpuBricks,
+    octants: bool,
+    location: MemoryLocation,
+) -> Result<DistanceMap> {
     check_fits(ctx.info(), cells.total, octants)?;
     let bytes = cells.total * 4 * words_per_cell(octants);
     let flags = Buffer::new(ctx, "distance cell flags", cells.total * 4, STORAGE_XFER, location)?;
@@ -272,9 +287,6 @@ fn classified_map(
         o if !octants || o.is_empty() => Octants::ALL,
         o => o,
     };
-    let pass = timer.begin(cmd, "classify")?;
-    classifier.record(cmd, Classify::Range, input.gpu_volume, cells, input.gpu_tf, &flags)?;
-    timer.end(cmd, pass);
     Ok(DistanceMap {
         cell: cells.brick,
         counts: cells.counts,
@@ -288,10 +300,56 @@ fn classified_map(
     })
 }
 
+/// The map classified on the host from ranges the host sees
+/// (`classify_ranges_on_host`), or None where it cannot see them. A
+/// submission with one barrier first makes the ranges' writes, from any
+/// earlier submission, visible to the host.
+fn host_classified_map(
+    builder: &Builder,
+    input: &BuildInput,
+    cells: &GpuBricks,
+    octants: bool,
+) -> Result<Option<(DistanceMap, Timings)>> {
+    let ctx = builder.context();
+    if cells.ranges.mapped().is_none() {
+        return Ok(None);
+    }
+    let mut map = unclassified_map(ctx, input, cells, octants, MemoryLocation::GpuToCpu)?;
+    ctx.submit_and_wait(|cmd| {
+        // Ranges are computed, or copied from a series step's before.
+        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        record::barrier(ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        Ok(())
+    })?;
+    let start = std::time::Instant::now();
+    let channels = cells.channels as usize;
+    let n = map.total as usize;
+    let bytes = &cells.ranges.host()?[..8 * n * channels];
+    // Mapped memory is aligned for words; a copy where it were not.
+    let ranges: std::borrow::Cow<[f32]> = match bytemuck::try_cast_slice(bytes) {
+        Ok(words) => words.into(),
+        Err(_) => bytemuck::pod_collect_to_vec(bytes).into(),
+    };
+    let flags = &mut map.flags.host_mut()?[..4 * n];
+    match bytemuck::try_cast_slice_mut(flags) {
+        Ok(words) => classify_ranges_on_host(&ranges, channels, input.tf, words),
+        Err(_) => {
+            let mut words = vec![0u32; n];
+            classify_ranges_on_host(&ranges, channels, input.tf, &mut words);
+            flags.copy_from_slice(bytemuck::cast_slice(&words));
+        }
+    }
+    let mut timings = Timings::default();
+    timings.push("classify (host)", start.elapsed().as_secs_f64() * 1e3);
+    Ok(Some((map, timings)))
+}
+
 /// As `record`, submitted and waited for, with the transform made on the
-/// host (`distance_host::transform`) from the flags the device classified:
+/// host (`distance_host::transform`) from the flags classified on the host
+/// where it sees the ranges (`host_classified_map`), else on the device:
 /// the same map, faster on a CPU device. The buffers must be host visible
-/// (a device whose memory is the host's: `volume::host_shared`). Timings: "classify" (GPU) and "distance (host)".
+/// (a device whose memory is the host's: `volume::host_shared`). Timings:
+/// "classify (host)" or "classify" (GPU), and "distance (host)".
 pub fn build_on_host(
     builder: &Builder,
     input: &BuildInput,
@@ -299,22 +357,27 @@ pub fn build_on_host(
     octants: bool,
 ) -> Result<(DistanceMap, Timings)> {
     let ctx = builder.context();
-    let mut timer = Timer::new(ctx, 2)?;
-    let mut map = ctx.submit_and_wait(|cmd| {
-        timer.reset(cmd);
-        let map = classified_map(
-            builder,
-            cmd,
-            &mut Some(&mut timer),
-            input,
-            cells,
-            octants,
-            MemoryLocation::GpuToCpu,
-        )?;
-        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
-        Ok(map)
-    })?;
-    let mut timings = timer.results()?;
+    let (mut map, mut timings) = match host_classified_map(builder, input, cells, octants)? {
+        Some(classified) => classified,
+        None => {
+            let mut timer = Timer::new(ctx, 2)?;
+            let map = ctx.submit_and_wait(|cmd| {
+                timer.reset(cmd);
+                let map = classified_map(
+                    builder,
+                    cmd,
+                    &mut Some(&mut timer),
+                    input,
+                    cells,
+                    octants,
+                    MemoryLocation::GpuToCpu,
+                )?;
+                record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+                Ok(map)
+            })?;
+            (map, timer.results()?)
+        }
+    };
     let start = std::time::Instant::now();
     let (counts, built) = (map.counts, map.built);
     let flags = &map.flags.host()?[..4 * map.total as usize];

@@ -8,6 +8,7 @@ use lacuna::accel::{BuildInput, Builder, RangeKind};
 use lacuna::gpu::{Context, Timer};
 use lacuna::render::Mode;
 use lacuna::render::Octants;
+use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::{GpuVolume, VoxelData, VoxelType};
 use lacuna::{TransferFunction, Volume};
 
@@ -38,6 +39,25 @@ struct Built {
     phases: Vec<String>,
 }
 
+/// What a composite frame's build reads.
+fn composite_input<'a>(
+    volume: &'a Volume,
+    gpu_volume: &'a GpuVolume,
+    tf: &'a TransferFunction,
+    gpu_tf: &'a GpuTransferFunction,
+    octants: Octants,
+) -> BuildInput<'a> {
+    BuildInput {
+        volume,
+        gpu_volume,
+        tf,
+        gpu_tf,
+        mode: Mode::Composite,
+        frame: None,
+        octants,
+    }
+}
+
 /// The map of `v` under `tf` (`built`: the octants an octant map computes).
 fn build_for(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool, built: Octants) -> Built {
     let builder = Builder::new(ctx).unwrap();
@@ -45,36 +65,34 @@ fn build_for(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octant
     let lut = tf.upload(ctx).unwrap();
     let (ranges, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
     let mut timer = Timer::new(ctx, 8).unwrap();
-    let input = BuildInput {
-        volume: v,
-        gpu_volume: &gv,
-        tf,
-        gpu_tf: &lut,
-        mode: Mode::Composite,
-        frame: None,
-        octants: built,
-    };
+    let input = composite_input(v, &gv, tf, &lut, built);
     let map = ctx
         .submit_and_wait(|cmd| {
             timer.reset(cmd);
             distance::record(&builder, cmd, Some(&mut timer), &input, ranges.cells(cell)?, octants)
         })
         .unwrap();
-    let flags: Vec<u32> = bytemuck::pod_collect_to_vec(&map.flags.download(0, map.flags.size()).unwrap());
     let total = map.counts.iter().product::<u32>() as usize;
-    let flags: Vec<bool> = flags[..total].iter().map(|&f| f != 0).collect();
+    let flags: Vec<bool> = flag_words(&map.flags, total).iter().map(|&f| f != 0).collect();
     let distances = map.download().unwrap();
     // The host's transform of the device's classification (what
     // `Builder::build` makes on a CPU device) holds the same bytes.
     let (host, host_timings) = distance::build_on_host(&builder, &input, ranges.cells(cell).unwrap(), octants).unwrap();
     assert_eq!(host.built, map.built, "{}: octants built on the host", v.name);
+    // Classified on the host too (lavapipe's ranges are host visible).
+    assert_eq!(
+        flag_words(&host.flags, total),
+        flag_words(&map.flags, total),
+        "{}: host classification differs from the kernel's",
+        v.name
+    );
     assert_eq!(
         host.download().unwrap(),
         distances,
         "{}: host transform differs from the device's",
         v.name
     );
-    assert!(host_timings.get("classify").is_some() && host_timings.get("distance (host)").is_some());
+    assert!(host_timings.get("classify (host)").is_some() && host_timings.get("distance (host)").is_some());
     let timings = timer.results().unwrap();
     let phases = ["classify", "distance x", "distance y", "distance z"]
         .into_iter()
@@ -90,6 +108,86 @@ fn build_for(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octant
         flags,
         phases,
     }
+}
+
+/// A map's first `total` flag words.
+fn flag_words(flags: &lacuna::gpu::Buffer, total: usize) -> Vec<u32> {
+    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&flags.download(0, flags.size()).unwrap());
+    words[..total].to_vec()
+}
+
+/// The host's classification (`build_on_host` on lavapipe) against the
+/// kernel's, for two float channels each with its own transfer function
+/// and with regions of NaN (no data): the same flags wherever a cell's
+/// ranges are numbers, and never fewer active cells. Each channel alone
+/// makes cells active the other leaves empty, so a classifier that read
+/// one channel, or one channel's TF for both, would differ.
+#[test]
+fn host_classification_equals_the_kernels_per_channel_and_around_no_data() {
+    let ctx = gpu();
+    let dims = [36u32, 28, 20];
+    let n = dims.iter().product::<u32>() as usize;
+    let at = |i: usize| [i % 36, i / 36 % 28, i / (36 * 28)];
+    let channel = |name: &str, f: &dyn Fn([usize; 3]) -> f32| {
+        let data: Vec<f32> = (0..n).map(|i| f(at(i))).collect();
+        Volume::new(name, dims, [1.0; 3], VoxelType::F32, VoxelData::F32(data)).unwrap()
+    };
+    // Channel 1 rises along x, with a slab of NaN; channel 2 is bright in
+    // a ball, with NaN in one corner block.
+    let a = channel("x ramp", &|[x, _, z]| {
+        if (8..12).contains(&z) {
+            f32::NAN
+        } else {
+            x as f32 / 35.0
+        }
+    });
+    let b = channel("ball", &|[x, y, z]| {
+        let d = ((x as f32 - 24.0).powi(2) + (y as f32 - 10.0).powi(2) + (z as f32 - 12.0).powi(2)).sqrt();
+        if x < 6 && y < 6 {
+            f32::NAN
+        } else {
+            (1.0 - d / 10.0).max(0.0)
+        }
+    });
+    let v = Volume::join(vec![a, b]).unwrap();
+    let tf = TransferFunction::parse_channels("ramp:0.8:1 | band:0.5:0.6").unwrap();
+    let builder = Builder::new(&ctx).unwrap();
+    let gv = GpuVolume::upload(&ctx, &v).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    for cell in [2, 4] {
+        let (ranges, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
+        let cells = ranges.cells(cell).unwrap();
+        let input = composite_input(&v, &gv, &tf, &lut, Octants::ALL);
+        let device = ctx
+            .submit_and_wait(|cmd| distance::record(&builder, cmd, None, &input, cells, false))
+            .unwrap();
+        let (host, timings) = distance::build_on_host(&builder, &input, cells, false).unwrap();
+        assert!(
+            timings.get("classify (host)").is_some(),
+            "cell {cell}: classified on the device"
+        );
+        let total = cells.total as usize;
+        let (d, h) = (flag_words(&device.flags, total), flag_words(&host.flags, total));
+        let r: Vec<f32> = bytemuck::pod_collect_to_vec(&cells.ranges.download(0, cells.ranges.size()).unwrap());
+        let numbers = |b: usize| r[4 * b..4 * b + 4].iter().all(|x| !x.is_nan());
+        let mut by_channel = [0usize; 2];
+        for i in 0..total {
+            assert!(h[i] >= d[i], "cell {cell}: cell {i} active on the device only");
+            if numbers(i) {
+                assert_eq!(h[i], d[i], "cell {cell}: cell {i} ({:?})", &r[4 * i..4 * i + 4]);
+            }
+            for (c, count) in by_channel.iter_mut().enumerate() {
+                *count += (tf.channel(c).max_alpha(r[4 * i + 2 * c], r[4 * i + 2 * c + 1]) > 0.0) as usize;
+            }
+        }
+        let active = h.iter().filter(|&&f| f != 0).count();
+        assert!(
+            active > by_channel[0] && active > by_channel[1],
+            "cell {cell}: {active} active, by channel {by_channel:?}"
+        );
+        assert!(active < total, "cell {cell}: every cell active");
+    }
+    assert_clean(&ctx);
 }
 
 fn build(ctx: &Context, v: &Volume, tf: &TransferFunction, cell: u32, octants: bool) -> Built {
