@@ -303,7 +303,7 @@ fn unclassified_map(
 /// The map classified on the host from ranges the host sees
 /// (`classify_ranges_on_host`), or None where it cannot see them. A
 /// submission with one barrier first makes the ranges' writes, from any
-/// earlier submission, visible to the host.
+/// earlier submission, visible to the host (timed with the rest).
 fn host_classified_map(
     builder: &Builder,
     input: &BuildInput,
@@ -311,17 +311,18 @@ fn host_classified_map(
     octants: bool,
 ) -> Result<Option<(DistanceMap, Timings)>> {
     let ctx = builder.context();
-    if cells.ranges.mapped().is_none() {
+    if cells.ranges.mapped_coherent().is_none() {
         return Ok(None);
     }
+    input.tf.check_channels(cells.channels as usize)?;
     let mut map = unclassified_map(ctx, input, cells, octants, MemoryLocation::GpuToCpu)?;
+    let start = std::time::Instant::now();
     ctx.submit_and_wait(|cmd| {
         // Ranges are computed, or copied from a series step's before.
         record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
         record::barrier(ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     })?;
-    let start = std::time::Instant::now();
     let channels = cells.channels as usize;
     let n = map.total as usize;
     let bytes = &cells.ranges.host()?[..8 * n * channels];

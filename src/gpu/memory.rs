@@ -177,6 +177,17 @@ impl Buffer {
         self.allocation.as_mut()?.mapped_slice_mut()
     }
 
+    /// As `mapped`, where the memory is also host coherent: the device's
+    /// writes, once a barrier to host reads and a wait made them
+    /// available, read with no invalidate.
+    pub fn mapped_coherent(&self) -> Option<&[u8]> {
+        let allocation = self.allocation.as_ref()?;
+        let coherent = allocation
+            .memory_properties()
+            .contains(vk::MemoryPropertyFlags::HOST_COHERENT);
+        allocation.mapped_slice().filter(|_| coherent)
+    }
+
     /// As `mapped`, an error naming the buffer when it is not host visible.
     pub fn host(&self) -> Result<&[u8]> {
         let name = &self.name;
