@@ -302,7 +302,7 @@ fn unclassified_map(
 
 /// The map classified on the host from ranges the host sees
 /// (`classify_ranges_on_host`), or None where it cannot see them. A
-/// submission with one barrier first makes the ranges' writes, from any
+/// submission of two barriers first makes the ranges' writes, from any
 /// earlier submission, visible to the host (timed with the rest).
 fn host_classified_map(
     builder: &Builder,

@@ -14,8 +14,8 @@ pub(crate) fn pack_u8_blocks(out: &mut [u8], rows: [&[u8]; 4]) -> usize {
 /// As `pack_u8_blocks`, with non-temporal stores: for blocks scattered
 /// over the cells copy (a series step's changed cells, `cells_delta.rs`),
 /// whose lines are not in cache and would otherwise be read in before
-/// they are overwritten (nbody:256's changed blocks: about 16 ms to 10 on
-/// the EPYC host). Slower for a whole copy, which the CPU streams anyway.
+/// they are overwritten (nbody:256's changed blocks: 15-20 ms to 10-12
+/// on an EPYC host). Slower for a whole copy, which the CPU streams anyway.
 ///
 /// # Safety
 /// The calling thread must run `_mm_sfence` after it and before `out` is
