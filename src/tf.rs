@@ -429,20 +429,15 @@ impl TransferFunction {
     /// entries any interpolated lookup there can touch, widened by one entry
     /// each side for rounding (DESIGN invariant 2). O(1).
     pub fn max_alpha(&self, lo: f32, hi: f32) -> f32 {
-        entry_span(lo, hi).map_or(0.0, |(i, j)| self.max_entries(i, j))
-    }
-
-    /// Per LUT entry i, the first entry at or after it with alpha above
-    /// 0 (`LUT_SIZE` where none): `max_alpha(lo, hi) > 0` is then whether
-    /// the one for `entry_span`'s first entry lies within its last, one
-    /// lookup (`classify_ranges_on_host`).
-    pub fn next_visible(&self) -> Vec<u16> {
-        let mut next = vec![LUT_SIZE as u16; LUT_SIZE + 1];
-        for i in (0..LUT_SIZE).rev() {
-            next[i] = if self.lut[i][3] > 0.0 { i as u16 } else { next[i + 1] };
+        if lo > hi {
+            return 0.0;
         }
-        next.truncate(LUT_SIZE);
-        next
+        let lo = if lo.is_nan() { 0.0 } else { lo.clamp(0.0, 1.0) };
+        let hi = if hi.is_nan() { 1.0 } else { hi.clamp(0.0, 1.0) };
+        let scale = (LUT_SIZE - 1) as f32;
+        let i = ((lo * scale).floor() as usize).saturating_sub(1);
+        let j = ((hi * scale).ceil() as usize + 1).min(LUT_SIZE - 1);
+        self.max_entries(i, j)
     }
 
     /// The max-alpha sparse table flattened for the GPU: level k at
@@ -501,22 +496,6 @@ impl TransferFunction {
         let last = self.lut.iter().rposition(|c| c[3] > 0.0)?;
         Some([first as u32, last as u32])
     }
-}
-
-/// The LUT entries [i, j] an interpolated lookup of a value in [lo, hi]
-/// can touch, widened by one entry each side for rounding (DESIGN
-/// invariant 2), as `glsl/common/tf_range.glsl` takes them; None where
-/// lo > hi (an empty range). A NaN bound stands for the end it bounds.
-pub fn entry_span(lo: f32, hi: f32) -> Option<(usize, usize)> {
-    if lo > hi {
-        return None;
-    }
-    let lo = if lo.is_nan() { 0.0 } else { lo.clamp(0.0, 1.0) };
-    let hi = if hi.is_nan() { 1.0 } else { hi.clamp(0.0, 1.0) };
-    let scale = (LUT_SIZE - 1) as f32;
-    let i = ((lo * scale).floor() as usize).saturating_sub(1);
-    let j = ((hi * scale).ceil() as usize + 1).min(LUT_SIZE - 1);
-    Some((i, j))
 }
 
 /// A transfer function on the GPU: the LUT the marchers sample and the

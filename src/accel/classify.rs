@@ -16,7 +16,7 @@ use crate::gpu::record;
 use crate::gpu::shaders::{self, build_classify_range, build_classify_voxel};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
 use crate::prims::entry_barrier;
-use crate::tf::{entry_span, GpuTransferFunction, TransferFunction, LUT_SIZE};
+use crate::tf::{GpuTransferFunction, TransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
 use rayon::prelude::*;
 
@@ -161,23 +161,22 @@ impl super::builder::PerContext for Classifier {
 
 /// Range classification on the host (`Classify::Range`, as
 /// `glsl/build/classify_range.comp` makes it): `flags[b]` is 1 iff any
-/// channel's transfer function has a visible entry among those brick b's
-/// value range can touch (`tf::entry_span`, the kernel's f32 arithmetic),
-/// the ranges being (min, max) per brick and channel, brick-major, as
-/// `GpuBricks::ranges` holds them. So the same flags; a NaN bound counts
-/// as the end it bounds (the kernel's clamp may take either end), which
-/// can only add active bricks. For a CPU device, where a dispatch over the
-/// bricks costs more than this loop.
+/// channel's `TransferFunction::max_alpha` over brick b's value range is
+/// above 0 (the same span of LUT entries in the same f32 arithmetic, and
+/// the rule `BrickRanges::active` applies), the ranges being (min, max) per
+/// brick and channel, brick-major, as `GpuBricks::ranges` holds them. So
+/// the kernel's flags; a NaN bound counts as the end it bounds (the
+/// kernel's clamp may take either end), which can only add active bricks.
+/// For a CPU device, where a dispatch over the bricks costs more than this
+/// loop.
 pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFunction, flags: &mut [u32]) {
-    let next: Vec<Vec<u16>> = (0..channels).map(|c| tf.channel(c).next_visible()).collect();
     let per_brick = 2 * channels;
     flags
         .par_chunks_mut(4096)
         .zip(ranges.par_chunks(4096 * per_brick))
         .for_each(|(flags, ranges)| {
             for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(per_brick)) {
-                let visible =
-                    |c: usize| entry_span(r[2 * c], r[2 * c + 1]).is_some_and(|(i, j)| next[c][i] as usize <= j);
+                let visible = |c: usize| tf.channel(c).max_alpha(r[2 * c], r[2 * c + 1]) > 0.0;
                 *flag = (0..channels).any(visible) as u32;
             }
         });
@@ -187,9 +186,9 @@ pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFun
 mod tests {
     use super::*;
 
-    /// A brick is active on the host iff some channel's `max_alpha` over
-    /// its range is above 0: over ranges that start and end on, between and
-    /// beside LUT entries, empty ones (lo > hi), and NaN bounds.
+    /// Each brick's flag is its own ranges' (brick-major, two channels of
+    /// their own TFs, across the parallel chunks' edges): ranges on, between
+    /// and beside LUT entries, empty ones (lo > hi), and NaN bounds.
     #[test]
     fn host_classification_is_max_alpha_above_zero() {
         let tf = TransferFunction::parse_channels("band:0.4:0.41 | ramp:0.9:1").unwrap();

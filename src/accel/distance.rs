@@ -25,7 +25,7 @@ use super::params::{self, Param, Params, Value};
 use super::stats::Stats;
 use super::tree::{STORAGE_TEXELS, STORAGE_XFER};
 use crate::desc::Octants;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
 use crate::gpu::{
@@ -300,6 +300,15 @@ fn unclassified_map(
     })
 }
 
+/// Mapped bytes as words: in place, as mapped memory is aligned for them;
+/// a copy where it were not.
+fn words<T: bytemuck::Pod>(bytes: &[u8]) -> std::borrow::Cow<'_, [T]> {
+    match bytemuck::try_cast_slice(bytes) {
+        Ok(words) => words.into(),
+        Err(_) => bytemuck::pod_collect_to_vec(bytes).into(),
+    }
+}
+
 /// The map classified on the host from ranges the host sees
 /// (`classify_ranges_on_host`), or None where it cannot see them. A
 /// submission of two barriers first makes the ranges' writes, from any
@@ -325,21 +334,11 @@ fn host_classified_map(
     })?;
     let channels = cells.channels as usize;
     let n = map.total as usize;
-    let bytes = &cells.ranges.host()?[..8 * n * channels];
-    // Mapped memory is aligned for words; a copy where it were not.
-    let ranges: std::borrow::Cow<[f32]> = match bytemuck::try_cast_slice(bytes) {
-        Ok(words) => words.into(),
-        Err(_) => bytemuck::pod_collect_to_vec(bytes).into(),
-    };
-    let flags = &mut map.flags.host_mut()?[..4 * n];
-    match bytemuck::try_cast_slice_mut(flags) {
-        Ok(words) => classify_ranges_on_host(&ranges, channels, input.tf, words),
-        Err(_) => {
-            let mut words = vec![0u32; n];
-            classify_ranges_on_host(&ranges, channels, input.tf, &mut words);
-            flags.copy_from_slice(bytemuck::cast_slice(&words));
-        }
-    }
+    let ranges = words::<f32>(&cells.ranges.host()?[..8 * n * channels]);
+    // Mapped memory starts at a word boundary (Vulkan's map alignment).
+    let flags = bytemuck::try_cast_slice_mut(&mut map.flags.host_mut()?[..4 * n])
+        .map_err(|_| Error::Interface("distance cell flags mapped off a word boundary".into()))?;
+    classify_ranges_on_host(&ranges, channels, input.tf, flags);
     let mut timings = Timings::default();
     timings.push("classify (host)", start.elapsed().as_secs_f64() * 1e3);
     Ok(Some((map, timings)))
@@ -381,12 +380,7 @@ pub fn build_on_host(
     };
     let start = std::time::Instant::now();
     let (counts, built) = (map.counts, map.built);
-    let flags = &map.flags.host()?[..4 * map.total as usize];
-    // Mapped memory is aligned for words; a copy where it were not.
-    let flags: std::borrow::Cow<[u32]> = match bytemuck::try_cast_slice(flags) {
-        Ok(words) => words.into(),
-        Err(_) => bytemuck::pod_collect_to_vec(flags).into(),
-    };
+    let flags = words::<u32>(&map.flags.host()?[..4 * map.total as usize]);
     distance_host::transform(counts, &flags, octants, built, map.distances.host_mut()?);
     timings.push("distance (host)", start.elapsed().as_secs_f64() * 1e3);
     Ok((map, timings))
