@@ -19,7 +19,7 @@
 //! (`record_pack_cells`, `glsl/volume/cells.comp`), so neither staging nor
 //! the host's packing of 8 to 32 bytes a voxel is paid.
 
-pub(super) use super::cells_simd::{pack_u8_blocks, stream_u8_blocks};
+use super::cells_simd::pack_u8_blocks;
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
@@ -216,9 +216,8 @@ pub(super) const LAYER_BYTES: u64 = 64 << 20;
 
 /// Packs the first cells between a row's edge cells a block at a time and
 /// returns how many it packed (`cell_layers` packs the rest one by one):
-/// given the four voxel rows they read and their `out`. Unsafe: a
-/// streaming one (`stream_u8_blocks`) leaves its caller to fence.
-pub(super) type PackBlocks<T, U> = unsafe fn(&mut [U], [&[T]; 4]) -> usize;
+/// given the four voxel rows they read and their `out`.
+pub(super) type PackBlocks<T, U> = fn(&mut [U], [&[T]; 4]) -> usize;
 
 /// Fills `out`, `per_cell` items a cell for the cell layers from `first`
 /// on that `out` holds (cells x fastest, from -1), with `put(cell,
@@ -251,9 +250,7 @@ pub(super) fn cell_layers<T: Copy + Sync, U: Send>(
         let (head, rest) = out.split_at_mut(per_cell);
         let (middle, tail) = rest.split_at_mut((cw - 2) * per_cell);
         put(head, edge(0));
-        // SAFETY: the packers given here store plainly (`pack_u8_blocks`):
-        // nothing to fence.
-        let done = blocks.map_or(0, |pack| unsafe { pack(middle, [r0, r1, r2, r3]) });
+        let done = blocks.map_or(0, |pack| pack(middle, [r0, r1, r2, r3]));
         let [r0, r1, r2, r3] = [r0, r1, r2, r3].map(|r| &r[done..]);
         let windows = r0.windows(2).zip(r1.windows(2)).zip(r2.windows(2).zip(r3.windows(2)));
         for (cell, ((a, b), (c, e))) in middle[done * per_cell..].chunks_exact_mut(per_cell).zip(windows) {

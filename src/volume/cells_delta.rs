@@ -2,7 +2,8 @@
 //! (`StepDelta`): only the cells that read a changed voxel are packed
 //! again, in the memory the step before's were packed into.
 
-use super::cells::{cell_dims, cells_bytes, pack_into, stream_u8_blocks, PackBlocks, TexelKind};
+use super::cells::{cell_dims, cells_bytes, pack_into, TexelKind};
+use super::cells_simd::stream_u8_blocks;
 use super::delta::{StepDelta, SEGMENT};
 use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
@@ -43,6 +44,11 @@ fn put_corners<T: Copy>(cell: &mut [T], corners: [T; 8]) {
     cell.copy_from_slice(&corners);
 }
 
+/// As `cells::PackBlocks`, for a packer that may stream its stores
+/// (`stream_u8_blocks`): its caller fences before the blocks are touched
+/// again.
+type StreamBlocks<T, U> = unsafe fn(&mut [U], [&[T]; 4]) -> usize;
+
 /// Rows of cells a task packs before it fences its streamed stores (a
 /// fence a row cost a third of what streaming saved).
 const ROWS_PER_TASK: usize = 64;
@@ -63,7 +69,7 @@ fn cell_rows_changed<T: Copy + Sync, U: Send>(
     out: &mut [U],
     per_cell: usize,
     put: impl Fn(&mut [U], [T; 8]) + Sync,
-    blocks: Option<PackBlocks<T, U>>,
+    blocks: Option<StreamBlocks<T, U>>,
     delta: &StepDelta,
 ) {
     let [w, h, d] = dims.map(|n| n as usize);
