@@ -320,9 +320,9 @@ fn host_classified_map(
     octants: bool,
 ) -> Result<Option<(DistanceMap, Timings)>> {
     let ctx = builder.context();
-    if cells.ranges.mapped_coherent().is_none() {
+    let Some(mapped_ranges) = cells.ranges.mapped_coherent() else {
         return Ok(None);
-    }
+    };
     input.tf.check_channels(cells.channels as usize)?;
     let mut map = unclassified_map(ctx, input, cells, octants, MemoryLocation::GpuToCpu)?;
     let start = std::time::Instant::now();
@@ -334,7 +334,8 @@ fn host_classified_map(
     })?;
     let channels = cells.channels as usize;
     let n = map.total as usize;
-    let ranges = words::<f32>(&cells.ranges.host()?[..8 * n * channels]);
+    // Read after the submission: coherent memory needs no invalidate.
+    let ranges = words::<f32>(&mapped_ranges[..8 * n * channels]);
     // Mapped memory starts at a word boundary (Vulkan's map alignment).
     let flags = bytemuck::try_cast_slice_mut(&mut map.flags.host_mut()?[..4 * n])
         .map_err(|_| Error::Interface("distance cell flags mapped off a word boundary".into()))?;
