@@ -48,6 +48,8 @@ pub struct TransferFunction {
     lut: Vec<[f32; 4]>,
     /// Sparse table: `max_table[k][i]` = max alpha of entries i .. i + 2^k.
     max_table: Vec<Vec<f32>>,
+    /// `shown[i]`: how many of the entries before i have alpha above 0.
+    shown: Box<[u32; LUT_SIZE + 1]>,
     /// The transfer functions of channels 2 and up (`per_channel`); this
     /// one is channel 1's. Empty: one transfer function for every channel.
     other_channels: Vec<TransferFunction>,
@@ -71,6 +73,19 @@ fn colormap(t: f32) -> [f32; 3] {
         }
     }
     STOPS[4].1
+}
+
+/// The LUT entries `max_alpha` covers for the values [lo, hi] (lo <= hi),
+/// a NaN bound taken as the end it bounds.
+fn entries_of(lo: f32, hi: f32) -> (usize, usize) {
+    let lo = if lo.is_nan() { 0.0 } else { lo.clamp(0.0, 1.0) };
+    let hi = if hi.is_nan() { 1.0 } else { hi.clamp(0.0, 1.0) };
+    let scale = (LUT_SIZE - 1) as f32;
+    // Floor and ceiling of values in [0, scale] by truncation: `floor` and
+    // `ceil` are library calls on x86-64's baseline (no SSE4.1).
+    let (l, h) = (lo * scale, hi * scale);
+    let ceil = h as usize + ((h as usize as f32) < h) as usize;
+    ((l as usize).saturating_sub(1), (ceil + 1).min(LUT_SIZE - 1))
 }
 
 fn entry_value(i: usize) -> f32 {
@@ -104,10 +119,15 @@ impl TransferFunction {
             max_table.push(next);
             k += 1;
         }
+        let mut shown = Box::new([0u32; LUT_SIZE + 1]);
+        for (i, e) in lut.iter().enumerate() {
+            shown[i + 1] = shown[i] + (e[3] > 0.0) as u32;
+        }
         Ok(TransferFunction {
             spec,
             lut,
             max_table,
+            shown,
             other_channels: Vec::new(),
         })
     }
@@ -432,12 +452,16 @@ impl TransferFunction {
         if lo > hi {
             return 0.0;
         }
-        let lo = if lo.is_nan() { 0.0 } else { lo.clamp(0.0, 1.0) };
-        let hi = if hi.is_nan() { 1.0 } else { hi.clamp(0.0, 1.0) };
-        let scale = (LUT_SIZE - 1) as f32;
-        let i = ((lo * scale).floor() as usize).saturating_sub(1);
-        let j = ((hi * scale).ceil() as usize + 1).min(LUT_SIZE - 1);
+        let (i, j) = entries_of(lo, hi);
         self.max_entries(i, j)
+    }
+
+    /// Whether `max_alpha(lo, hi) > 0`, from a count of the entries shown
+    /// (alpha is never negative): a host classification's per-brick test.
+    pub fn visible(&self, lo: f32, hi: f32) -> bool {
+        // Without branches: an empty range's entries are looked up too.
+        let (empty, (i, j)) = (lo > hi, entries_of(lo, hi));
+        !empty & (self.shown[j + 1] > self.shown[i])
     }
 
     /// The max-alpha sparse table flattened for the GPU: level k at

@@ -175,8 +175,14 @@ pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFun
         .par_chunks_mut(4096)
         .zip(ranges.par_chunks(4096 * per_brick))
         .for_each(|(flags, ranges)| {
+            if channels == 1 {
+                for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(2)) {
+                    *flag = tf.visible(r[0], r[1]) as u32;
+                }
+                return;
+            }
             for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(per_brick)) {
-                let visible = |c: usize| tf.channel(c).max_alpha(r[2 * c], r[2 * c + 1]) > 0.0;
+                let visible = |c: usize| tf.channel(c).visible(r[2 * c], r[2 * c + 1]);
                 *flag = (0..channels).any(visible) as u32;
             }
         });

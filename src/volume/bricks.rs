@@ -81,7 +81,7 @@ impl BrickGrid {
                 channels
                     .iter()
                     .enumerate()
-                    .any(|(c, r)| tf.channel(c).max_alpha(r[b][0], r[b][1]) > 0.0)
+                    .any(|(c, r)| tf.channel(c).visible(r[b][0], r[b][1]))
             })
             .collect()
     }

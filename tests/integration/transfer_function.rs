@@ -11,6 +11,17 @@ fn invalid(spec: &str, needle: &str) {
     }
 }
 
+/// Uniform numbers in [0, 1) from a seed (an LCG: the same every run).
+fn uniform(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
 #[test]
 fn specs_parse_into_the_documented_shapes() {
     let ramp = TransferFunction::parse("ramp:0.2:0.6").unwrap();
@@ -50,13 +61,7 @@ fn max_alpha_is_conservative_over_every_interpolated_value() {
         "spike:0.0:0.001",
         "spike:1.0:0.001",
     ];
-    let mut state = 12345u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut next = uniform(12345);
     for spec in tfs {
         let tf = TransferFunction::parse(spec).unwrap();
         for _ in 0..2000 {
@@ -79,6 +84,41 @@ fn max_alpha_is_conservative_over_every_interpolated_value() {
     assert_eq!(clear.max_alpha(0.0, 0.5), 0.0, "far from the band the range is empty");
     assert_eq!(clear.max_alpha(f32::INFINITY, f32::NEG_INFINITY), 0.0, "an empty range");
     assert!(clear.max_alpha(0.595, 0.599) > 0.0, "widened by one entry at the edge");
+}
+
+/// `visible` (a count of shown entries) answers `max_alpha > 0` for any
+/// range: inside, on and beside LUT entries, empty, NaN and infinite bounds.
+#[test]
+fn visible_is_max_alpha_above_zero() {
+    let mut next = uniform(777);
+    let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.5, 1.5, 0.0, 1.0];
+    for spec in [
+        "band:0.4:0.41",
+        "spike:0.0:0.001",
+        "spike:1.0:0.001",
+        "ramp:0.3:0.6",
+        "band:0.6:0.7:0",
+    ] {
+        let tf = TransferFunction::parse(spec).unwrap();
+        let (mut shown, mut hidden) = (0, 0);
+        for n in 0..40000 {
+            let pick = |x: f32, p: f32| match p {
+                p if p < 0.05 => odd[(x * 7.0) as usize % odd.len()],
+                p if p < 0.4 => (x * 1023.0).round() / 1023.0,
+                _ => x * 1.2 - 0.1,
+            };
+            let (a, b) = (pick(next(), next()), pick(next(), next()));
+            let (lo, hi) = if n % 5 == 0 { (a, b) } else { (a.min(b), a.max(b)) };
+            let want = tf.max_alpha(lo, hi) > 0.0;
+            assert_eq!(tf.visible(lo, hi), want, "{spec}: [{lo}, {hi}]");
+            *if want { &mut shown } else { &mut hidden } += 1;
+        }
+        let all_clear = spec.ends_with(":0");
+        assert!(
+            hidden > 0 && (shown > 0) != all_clear,
+            "{spec}: {shown} shown, {hidden} hidden"
+        );
+    }
 }
 
 #[test]

@@ -96,7 +96,7 @@ impl Occupancy {
                         && ranges
                             .iter()
                             .enumerate()
-                            .any(|(c, (lo, hi))| tf.channel(c).max_alpha(lo[i], hi[i]) > 0.0)
+                            .any(|(c, (lo, hi))| tf.channel(c).visible(lo[i], hi[i]))
                 })
             })
             .collect();
