@@ -121,7 +121,6 @@ impl StepBench<'_> {
                 lit,
                 self.filter,
             )?;
-            drop(previous);
             let upload = ms_since(t);
             let mut naive: Option<Frame> = None;
             for (i, s) in self.structures.iter().enumerate() {
@@ -164,6 +163,10 @@ impl StepBench<'_> {
             if k > first {
                 loads.push(load_ms);
             }
+            // The step before's voxels freed once the new step's frames are
+            // timed, as a host frees them off the new step's path (unmapping
+            // nbody:256's 16 MB took up to 4 ms on lavapipe's host).
+            drop(previous);
             on_device = Some((gv, volume));
         }
         let load_ms = median(loads);
