@@ -8,6 +8,7 @@
 //! most of the volume repeats from step to step (nbody:256: 3 % of voxels,
 //! 14 % of 4^3 bricks change a step).
 
+use rayon::iter::Either;
 use rayon::prelude::*;
 use std::ops::RangeInclusive;
 
@@ -16,7 +17,7 @@ use std::ops::RangeInclusive;
 pub const SEGMENT: u32 = 4;
 
 /// The changed segments of each row of voxels between two steps.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StepDelta {
     dims: [u32; 3],
     /// u64 words of segment bits per row.
@@ -38,50 +39,56 @@ impl StepDelta {
     /// None where their sizes differ (`StepDelta::between` compares two
     /// volumes).
     pub fn of_texels(dims: [u32; 3], a: &[u8], b: &[u8]) -> Option<StepDelta> {
+        let row_bytes = row_bytes(dims, a.len(), b.len())?;
+        let rows = a.par_chunks(row_bytes).zip(b.par_chunks(row_bytes));
+        Some(Self::of_rows(dims, row_bytes, rows, |_, _| {}))
+    }
+
+    /// As `of_texels(dims, before, after)`, turning `before` into `after`
+    /// on the way (each row that differs copied while it is in cache): a
+    /// copy of the step before's texels (a CPU device's staging mirror)
+    /// brought up to date in the pass that compares them, where
+    /// `copy_changed` would read the changed segments again.
+    pub fn of_texels_updating(dims: [u32; 3], before: &mut [u8], after: &[u8]) -> Option<StepDelta> {
+        let row_bytes = row_bytes(dims, before.len(), after.len())?;
+        let rows = before.par_chunks_mut(row_bytes).zip(after.par_chunks(row_bytes));
+        Some(Self::of_rows(dims, row_bytes, rows, |a: &mut [u8], b| {
+            a.copy_from_slice(b)
+        }))
+    }
+
+    /// The delta of rows (a, b) of `row_bytes` (every row of a volume of
+    /// `dims`, in order), `changed` called on each pair that differs.
+    fn of_rows<'a, A: std::ops::Deref<Target = [u8]> + Send>(
+        dims: [u32; 3],
+        row_bytes: usize,
+        rows: impl IndexedParallelIterator<Item = (A, &'a [u8])>,
+        changed: impl Fn(A, &[u8]) + Sync + Send,
+    ) -> StepDelta {
         let [w, h, d] = dims.map(|n| n as usize);
-        let rows = h * d;
-        if a.len() != b.len() || rows == 0 || w == 0 || !a.len().is_multiple_of(rows * w) {
-            return None;
-        }
-        let row_bytes = a.len() / rows;
-        let texel = row_bytes / w;
-        let seg_bytes = texel * SEGMENT as usize;
-        let segments = w.div_ceil(SEGMENT as usize);
-        let words = segments.div_ceil(64);
-        let mut bits = vec![0u64; rows * words];
-        if seg_bytes == 4 {
+        let seg_bytes = row_bytes / w * SEGMENT as usize;
+        let words = w.div_ceil(SEGMENT as usize).div_ceil(64);
+        let mut bits = vec![0u64; h * d * words];
+        let mut ends = (seg_bytes == 4).then(|| [vec![0u64; h * d * words], vec![0u64; h * d * words]]);
+        let row_ends = match &mut ends {
             // 1-byte texels: with the segments' ends.
-            let mut ends = [vec![0u64; rows * words], vec![0u64; rows * words]];
-            let [first, last] = &mut ends;
-            bits.par_chunks_mut(words)
-                .zip(first.par_chunks_mut(words).zip(last.par_chunks_mut(words)))
-                .zip(a.par_chunks(row_bytes).zip(b.par_chunks(row_bytes)))
-                .for_each(|((out, (first, last)), (ra, rb))| {
-                    if ra != rb {
-                        mark_segments_u8(ra, rb, [out, first, last]);
-                    }
-                });
-            let changed = bits.iter().map(|w| w.count_ones() as u64).sum();
-            return Some(StepDelta {
-                dims,
-                words,
-                bits,
-                ends: Some(ends),
-                changed,
-            });
-        }
+            Some([first, last]) => Either::Left(first.par_chunks_mut(words).zip(last.par_chunks_mut(words)).map(Some)),
+            None => Either::Right((0..h * d).into_par_iter().map(|_| None)),
+        };
         bits.par_chunks_mut(words)
-            .zip(a.par_chunks(row_bytes).zip(b.par_chunks(row_bytes)))
-            .for_each(|(out, (ra, rb))| {
-                if ra == rb {
+            .zip(row_ends)
+            .zip(rows)
+            .for_each(|((out, ends), (ra, rb))| {
+                if *ra == *rb {
                     return;
                 }
-                // Fixed-size compares (a slice compare of a length known
-                // only at run time is a call per segment: 4x slower).
-                match seg_bytes {
-                    8 => mark_segments::<8>(ra, rb, out),
-                    16 => mark_segments::<16>(ra, rb, out),
-                    _ => {
+                match (ends, seg_bytes) {
+                    (Some((first, last)), _) => mark_segments_u8(&ra, rb, [out, first, last]),
+                    // Fixed-size compares (a slice compare of a length known
+                    // only at run time is a call per segment: 4x slower).
+                    (None, 8) => mark_segments::<8>(&ra, rb, out),
+                    (None, 16) => mark_segments::<16>(&ra, rb, out),
+                    (None, _) => {
                         for (s, (sa, sb)) in ra.chunks(seg_bytes).zip(rb.chunks(seg_bytes)).enumerate() {
                             if sa != sb {
                                 out[s / 64] |= 1 << (s % 64);
@@ -89,15 +96,16 @@ impl StepDelta {
                         }
                     }
                 }
+                changed(ra, rb);
             });
         let changed = bits.iter().map(|w| w.count_ones() as u64).sum();
-        Some(StepDelta {
+        StepDelta {
             dims,
             words,
             bits,
-            ends: None,
+            ends,
             changed,
-        })
+        }
     }
 
     /// The volume's dims.
@@ -279,6 +287,14 @@ impl StepDelta {
     }
 }
 
+/// Bytes per row of voxels of two volumes of `dims` of `a` and `b` bytes
+/// (texels of one size), or None where they differ or do not fit.
+fn row_bytes(dims: [u32; 3], a: usize, b: usize) -> Option<usize> {
+    let [w, h, d] = dims.map(|n| n as usize);
+    let rows = h * d;
+    (a == b && rows > 0 && w > 0 && a.is_multiple_of(rows * w)).then(|| a / rows)
+}
+
 /// Marks the segments of 4 bytes (1-byte texels; the last may be shorter)
 /// where rows `a` and `b` differ in `sets[0]`, and where their first and
 /// their last byte differ in `sets[1]` and `sets[2]` (a short last
@@ -436,6 +452,30 @@ mod tests {
         assert!(delta.copy_changed(&other, &mut dst));
         assert_eq!(dst[2 * (3 + 23 * 3)], before[2 * (3 + 23 * 3)]);
         assert!(!delta.copy_changed(&after[2..], &mut dst[2..]));
+    }
+
+    /// Comparing while updating finds the same delta as comparing, for
+    /// texels of 1, 2 and 4 bytes, and leaves the step before as the step
+    /// after; a size that does not fit changes nothing.
+    #[test]
+    fn the_updating_compare_equals_the_compare_and_updates() {
+        let dims = [23u32, 5, 3];
+        for texel in [1usize, 2, 4] {
+            let n = 23 * 5 * 3 * texel;
+            let before: Vec<u8> = (0..n).map(|i| (i * 7 % 251) as u8).collect();
+            let mut after = before.clone();
+            for at in [0, texel * (9 + 23 * 2), texel * (22 + 23 * 4) + texel - 1, n - 1] {
+                after[at] ^= 0x5a;
+            }
+            let want = StepDelta::of_texels(dims, &before, &after).unwrap();
+            assert!(want.any());
+            let mut updated = before.clone();
+            assert_eq!(StepDelta::of_texels_updating(dims, &mut updated, &after), Some(want));
+            assert_eq!(updated, after, "{texel}-byte texels");
+            let mut short = before[1..].to_vec();
+            assert_eq!(StepDelta::of_texels_updating(dims, &mut short, &after[1..]), None);
+            assert_eq!(short, before[1..]);
+        }
     }
 
     #[test]

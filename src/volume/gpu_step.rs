@@ -36,6 +36,9 @@ impl GpuVolume {
     /// recomputes only the value ranges of the bricks whose apron holds a
     /// changed voxel. Passing a volume these
     /// texels did not come from leaves stale texels: the delta is trusted.
+    /// Where this keeps that staging buffer from the last step (the image
+    /// copied whole: a CPU device), the delta is found by comparing it with
+    /// `volume` as it is brought up to date, and `previous` is not read.
     ///
     /// No submission reading this volume may still be pending (the host
     /// writes memory the device reads). After an error its contents are
@@ -48,49 +51,62 @@ impl GpuVolume {
         if !fits {
             return Ok(false);
         }
-        let delta = previous.and_then(|p| StepDelta::between(p, volume)).map(Arc::new);
-        let last = self.step.as_ref().map(|m| m.id);
-        self.step = Some(StepMark::new(last.zip(delta.clone())));
         let (_, _, bytes) = texels(volume);
+        // A CPU device's staging mirror of the last step's texels, where it
+        // keeps one, is compared with the step as it is brought up to date
+        // (`StepDelta::of_texels_updating`): the step before is not needed.
+        let mirrored = !self.upload_changed && self.image.mirrorable();
+        let mirror_kept = self
+            .image_mirror
+            .as_ref()
+            .is_some_and(|m| m.size() >= bytes.len() as u64);
+        let mut delta = match mirrored && mirror_kept {
+            true => None,
+            false => previous.and_then(|p| StepDelta::between(p, volume)).map(Arc::new),
+        };
         let shared = cells::host_shared(&self.ctx);
         // On a CPU device the host packs the cells copy, while the device
         // copies the image where it can (`upload_mirrored`).
-        let host_cells = |cells: &mut Option<TexelBuffer>| match cells.as_mut().filter(|_| shared) {
-            Some(copy) => match &delta {
-                Some(delta) => cells_delta::repack_changed(copy, volume, delta),
-                None => cells::repack_shared(copy, volume),
-            },
-            None => Ok(()),
-        };
+        let host_cells =
+            |cells: &mut Option<TexelBuffer>, delta: Option<&StepDelta>| match cells.as_mut().filter(|_| shared) {
+                Some(copy) => match delta {
+                    Some(delta) => cells_delta::repack_changed(copy, volume, delta),
+                    None => cells::repack_shared(copy, volume),
+                },
+                None => Ok(()),
+            };
         match delta.as_ref().filter(|_| self.upload_changed) {
             // Only the bricks that changed (nbody:256: two fifths of them).
             Some(delta) => {
                 self.image_mirror = None;
                 self.image
                     .upload_boxes_through(&bytes, &delta.boxes(UPLOAD_BRICK), &mut self.step_staging)?;
-                host_cells(&mut self.cells)?;
+                host_cells(&mut self.cells, Some(delta))?;
             }
             // The changed texels into the mirror of the last step's, where
             // the whole image is copied (a GPU without the step before at
             // hand gains nothing by keeping one).
-            None if !self.upload_changed && self.image.mirrorable() => {
-                let update = delta.as_ref().map(|delta| {
-                    |mirror: &mut [u8]| {
-                        if !delta.copy_changed(&bytes, mirror) {
-                            mirror.copy_from_slice(&bytes);
-                        }
-                    }
-                });
+            None if mirrored => {
+                let found = std::cell::OnceCell::new();
+                // Called where the mirror was kept (else it is filled anew).
+                let update = |mirror: &mut [u8]| match StepDelta::of_texels_updating(self.dims, mirror, &bytes) {
+                    Some(d) => drop(found.set(Arc::new(d))),
+                    None => mirror.copy_from_slice(&bytes),
+                };
                 let cells = &mut self.cells;
+                let meanwhile = || host_cells(cells, found.get().or(delta.as_ref()).map(|d| &**d));
                 self.image
-                    .upload_mirrored(&bytes, &mut self.image_mirror, update, || host_cells(cells))?;
+                    .upload_mirrored(&bytes, &mut self.image_mirror, Some(update), meanwhile)?;
+                delta = delta.or(found.into_inner());
             }
             None => {
                 self.image_mirror = None;
                 self.image.upload_through(&bytes, &mut self.step_staging)?;
-                host_cells(&mut self.cells)?;
+                host_cells(&mut self.cells, None)?;
             }
         }
+        let last = self.step.as_ref().map(|m| m.id);
+        self.step = Some(StepMark::new(last.zip(delta)));
         self.spacing = volume.spacing;
         self.norm = volume.norm;
         self.norms = std::array::from_fn(|c| volume.channels().nth(c).map_or([0.0; 2], |v| v.norm));
