@@ -6,6 +6,7 @@ use super::builder::{Builder, Ranges};
 use super::method::{Accel, BuildInput, Built, Structure};
 use super::mode::{activity, ModeFallback};
 use super::params::Params;
+use super::RangeKind;
 use crate::error::Result;
 use crate::gpu::{vk, Timer, Timings};
 use crate::volume::GpuVolume;
@@ -107,11 +108,28 @@ impl Builder {
     /// The per-volume ranges the structures read (each kind once): once
     /// per volume upload.
     pub fn ranges_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
+        self.ranges(&self.kinds_for(structures, volume)?, volume)
+    }
+
+    /// The kinds of ranges `structures` read.
+    fn kinds_for(&self, structures: &[(Accel, &Params)], volume: &GpuVolume) -> Result<Vec<RangeKind>> {
         let mut kinds = Vec::new();
         for (a, p) in structures {
             kinds.extend(a.method().range_kinds(p, volume, self.context().info())?);
         }
-        self.ranges(&kinds, volume)
+        Ok(kinds)
+    }
+
+    /// As `ranges_for` on a series step's input: with its voxels on the
+    /// host, which a CPU device's step ranges are made from
+    /// (`Builder::ranges_with`).
+    pub(super) fn step_ranges_for(
+        &self,
+        structures: &[(Accel, &Params)],
+        input: &BuildInput,
+    ) -> Result<(Ranges, Timings)> {
+        let kinds = self.kinds_for(structures, input.gpu_volume)?;
+        self.ranges_with(&kinds, input.gpu_volume, Some(input.volume))
     }
 }
 

@@ -4,11 +4,13 @@
 //! itself is in `method.rs`, beside the `Method` trait it calls.
 
 use super::bricks::{self, GpuBricks, RangesFrom};
+use super::bricks_host;
 use crate::error::{Error, Result};
+use crate::gpu::record::{self, Access};
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer, Timings};
 use crate::prims::brick_minmax::coarsens_exactly;
 use crate::prims::BrickMinMax;
-use crate::volume::GpuVolume;
+use crate::volume::{GpuVolume, Volume};
 use std::any::{Any, TypeId};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -85,6 +87,11 @@ fn missing(what: &str) -> Error {
         "not computed for this volume (Builder::ranges with the structure's RangeKind)",
     )
 }
+
+/// A series step's bookkeeping through `record_kinds`: which kept copies
+/// hold which step once the submission completed, and the step's voxels
+/// on the host with the timings of the passes made there.
+type StepKeep<'a> = (&'a mut Vec<(u32, u64)>, Option<(&'a Volume, &'a mut Timings)>);
 
 /// Builds structures: holds the context and what is made once per context.
 pub struct Builder {
@@ -182,13 +189,30 @@ impl Builder {
     /// builder computed them: only the bricks whose voxels changed are
     /// computed, the same ranges bit for bit.
     pub fn ranges(&self, kinds: &[RangeKind], volume: &GpuVolume) -> Result<(Ranges, Timings)> {
+        self.ranges_with(kinds, volume, None)
+    }
+
+    /// As `ranges`, with `host`, the voxels of `volume`'s step on the host:
+    /// on a CPU device a series step's changed bricks of a one-channel
+    /// unorm volume with its cells copy are then computed there
+    /// (`bricks_host`: the same ranges, faster than the device's pass on
+    /// lavapipe), timed as "PASS (host)".
+    pub fn ranges_with(
+        &self,
+        kinds: &[RangeKind],
+        volume: &GpuVolume,
+        host: Option<&Volume>,
+    ) -> Result<(Ranges, Timings)> {
         // One submission, one timed pass a kind.
         let passes = distinct(kinds)?.len() as u32;
         let mut timer = Timer::new(&self.ctx, passes)?;
         let mut kept = Vec::new();
+        let mut host_t = Timings::default();
+        let host = host.map(|h| (h, &mut host_t));
         let mut ranges = self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            self.record_kinds(cmd, Some(&mut timer), kinds, volume, Some(&mut kept))
+            let kept = Some((&mut kept, host));
+            self.record_kinds(cmd, Some(&mut timer), kinds, volume, kept)
         })?;
         // The copies kept for the next step are whole now.
         let mut step_ranges = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
@@ -198,13 +222,16 @@ impl Builder {
             }
         }
         drop(step_ranges);
-        let t = timer.results()?;
+        let mut t = timer.results()?;
+        t.extend(host_t);
         let several = ranges.cells.len() > 1;
-        if let Some((_, ms)) = &mut ranges.bricks {
-            *ms = t.phase(&size_and_pass(RangeKind::Bricks, several).1)?;
+        // A pass's time, on the device or the host.
+        let ms = |pass: String| t.get(&format!("{pass} (host)")).map_or_else(|| t.phase(&pass), Ok);
+        if let Some((_, at)) = &mut ranges.bricks {
+            *at = ms(size_and_pass(RangeKind::Bricks, several).1)?;
         }
-        for (b, ms) in &mut ranges.cells {
-            *ms = t.phase(&size_and_pass(RangeKind::Cells(b.brick), several).1)?;
+        for (b, at) in &mut ranges.cells {
+            *at = ms(size_and_pass(RangeKind::Cells(b.brick), several).1)?;
         }
         Ok((ranges, t))
     }
@@ -227,14 +254,15 @@ impl Builder {
 
     /// `record_ranges`; with `kept`, from and for a series step's kept
     /// ranges, `kept` hearing which copies hold which step once the
-    /// submission completed.
+    /// submission completed, and with the step's host voxels where given
+    /// (host passes timed there).
     fn record_kinds(
         &self,
         cmd: vk::CommandBuffer,
         mut timer: Option<&mut Timer>,
         kinds: &[RangeKind],
         volume: &GpuVolume,
-        mut kept: Option<&mut Vec<(u32, u64)>>,
+        mut kept: Option<StepKeep>,
     ) -> Result<Ranges> {
         let mut ranges = Ranges::default();
         let kinds = distinct(kinds)?;
@@ -245,10 +273,11 @@ impl Builder {
             let mut b = GpuBricks::allocate(&self.ctx, volume, size)?;
             let finer = ranges.finer(size).filter(|_| coarsens_exactly(volume));
             let step = volume.step_mark().map(|m| m.id);
-            match (finer, step, kept.as_deref_mut()) {
+            match (finer, step, kept.as_mut()) {
                 (Some(f), _, _) => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Finer(f))?,
-                (None, Some(step), Some(kept)) => {
-                    self.record_step_ranges(cmd, (timer.as_deref_mut(), &pass), &minmax, &mut b, volume)?;
+                (None, Some(step), Some((kept, host))) => {
+                    let host = host.as_mut().map(|(v, t)| (*v, &mut **t));
+                    self.record_step_ranges(cmd, (timer.as_deref_mut(), &pass), &minmax, (&mut b, host), volume)?;
                     kept.push((size, step));
                 }
                 _ => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Volume)?,
@@ -267,12 +296,25 @@ impl Builder {
         cmd: vk::CommandBuffer,
         (timer, pass): (Option<&mut Timer>, &str),
         minmax: &BrickMinMax,
-        b: &mut GpuBricks,
+        (b, host): (&mut GpuBricks, Option<(&Volume, &mut Timings)>),
         volume: &GpuVolume,
     ) -> Result<()> {
         let mut kept = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
         let at = kept.iter().position(|k| k.brick == b.brick);
-        match at.and_then(|i| Some((i, kept[i].changed_for(volume, b.brick)?))) {
+        let changed = at.and_then(|i| Some((i, kept[i].changed_for(volume, b.brick)?)));
+        if let (Some((i, changed)), Some((host, timings))) = (&changed, host) {
+            let i = *i;
+            let t = std::time::Instant::now();
+            if bricks_host::serves(volume, host)
+                && bricks_host::step_on_host(host, volume.norms[0], changed, &mut kept[i].ranges, b)
+            {
+                timings.push(format!("{pass} (host)"), t.elapsed().as_secs_f64() * 1e3);
+                let k = &mut kept[i];
+                (k.step, k.dims, k.channels, k.norms) = (0, volume.dims, volume.channels, volume.norms);
+                return Ok(());
+            }
+        }
+        match changed {
             Some((i, changed)) => {
                 let from = RangesFrom::Step {
                     ranges: &kept[i].ranges,
@@ -307,6 +349,10 @@ impl Builder {
             }
         };
         b.record_keep(cmd, &self.ctx, &kept[i].ranges);
+        if self.ctx.info().is_cpu() {
+            // A later step may read the copy on the host (`step_on_host`).
+            record::barrier(self.ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        }
         let k = &mut kept[i];
         (k.step, k.dims, k.channels, k.norms) = (0, volume.dims, volume.channels, volume.norms);
         Ok(())

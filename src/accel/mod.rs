@@ -8,6 +8,7 @@
 
 pub mod auto;
 pub mod bricks;
+mod bricks_host;
 mod build;
 pub mod builder;
 pub mod classify;

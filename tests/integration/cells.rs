@@ -457,8 +457,9 @@ fn with<T: Copy>(d: &[T], places: &[usize], change: impl Fn(T) -> T) -> Vec<T> {
 /// changed voxels, the ranges of the bricks whose apron holds one), and its
 /// cells copy and ranges (read from the cells copy, or from the image
 /// where there is none) equal a fresh upload's bit for bit, in every kind, for ranges of 4^3 cells
-/// and 8^3 bricks computed alone or together; the same step's ranges
-/// asked again are the kept ones.
+/// and 8^3 bricks computed alone or together, on the device or (given the
+/// step's voxels, on a CPU device, for unorm texels with a cells copy) on
+/// the host; the same step's ranges asked again are the kept ones.
 #[test]
 fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
     use lacuna::accel::builder::RangeKind;
@@ -479,7 +480,9 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
     {
         let manual = Some(filter);
         let after = changed_in_places(&before);
-        for kinds in sets {
+        let unorm = matches!(before.data, VoxelData::U8(_) | VoxelData::U16(_));
+        let host_made = ctx.info().is_cpu() && unorm && filter == Filter::Manual;
+        for (kinds, host) in sets.into_iter().flat_map(|k| [(k, None), (k, Some(&after))]) {
             let builder = Builder::new(&ctx).unwrap();
             let mut placed = GpuVolume::upload_step(&ctx, None, &before, Storage::Dense, false, manual).unwrap();
             builder.ranges(kinds, &placed).unwrap();
@@ -513,7 +516,14 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
             // the normalisation allows), then the same step's again (none
             // computed).
             for round in 0..2 {
-                let (got, _) = builder.ranges(kinds, &placed).unwrap();
+                let (got, timings) = builder.ranges_with(kinds, &placed, host).unwrap();
+                let on_host = timings.phases.iter().any(|(n, _)| n.ends_with("(host)"));
+                assert_eq!(
+                    on_host,
+                    host.is_some() && host_made,
+                    "{}: made on the host",
+                    before.name
+                );
                 for (i, kind) in kinds.iter().enumerate() {
                     let pick = |r: &lacuna::accel::builder::Ranges| match kind {
                         RangeKind::Cells(c) => r.cells(*c).unwrap().computed,
@@ -539,6 +549,58 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
                         _ => assert_eq!(computed, 0, "{name} {kind:?}: the same step's computed again"),
                     }
                 }
+            }
+        }
+    }
+    assert_clean(&ctx);
+}
+
+/// A series played step after step, each put in place of the one before
+/// (`upload_step`), has its cells copy and ranges (made on the device or
+/// the host) equal to a fresh upload's at every step. A CPU device, which
+/// keeps a staging mirror of the last step's texels, finds what changed
+/// without the step before at hand (given here on odd steps only).
+#[test]
+fn a_played_series_keeps_its_step_ranges_exact() {
+    use lacuna::accel::builder::RangeKind;
+    use lacuna::volume::{LoadOptions, Series, Storage};
+    let ctx = gpu();
+    let bits = |b: &lacuna::gpu::Buffer| b.download(0, b.size()).unwrap();
+    let words = |g: &GpuVolume| g.cells().map(|c| bits(c.buffer()));
+    let series = Series::open("nbody:64", &LoadOptions::default()).unwrap();
+    let manual = Some(Filter::Manual);
+    let mirrored = ctx.info().is_cpu();
+    for cell in [4, 16] {
+        let kinds = [RangeKind::Cells(cell)];
+        for host in [false, true] {
+            let builder = Builder::new(&ctx).unwrap();
+            let mut last: Option<(GpuVolume, Volume)> = None;
+            for k in 0..8 {
+                let v = series.load(k, None).unwrap();
+                let (gv, before) = last.take().unzip();
+                let before = before.filter(|_| k % 2 == 1);
+                let gv = GpuVolume::upload_step(
+                    &ctx,
+                    gv.map(|g| (g, before.as_ref())),
+                    &v,
+                    Storage::Dense,
+                    false,
+                    manual,
+                )
+                .unwrap();
+                let found = gv.step_mark().unwrap().since.is_some();
+                assert_eq!(found, k % 2 == 1 || (mirrored && k >= 2), "step {k}: what changed");
+                let (got, timings) = builder.ranges_with(&kinds, &gv, host.then_some(&v)).unwrap();
+                let on_host = timings.phases.iter().any(|(n, _)| n.ends_with("(host)"));
+                assert_eq!(on_host, found && host && mirrored, "step {k}: {timings:?}");
+                let fresh = GpuVolume::upload_step(&ctx, None, &v, Storage::Dense, false, manual).unwrap();
+                assert!(words(&gv) == words(&fresh), "step {k}: cells copies differ");
+                let (want, _) = Builder::new(&ctx).unwrap().ranges(&kinds, &fresh).unwrap();
+                assert!(
+                    bits(&got.cells(cell).unwrap().ranges) == bits(&want.cells(cell).unwrap().ranges),
+                    "step {k} cell {cell} host {host}: ranges differ"
+                );
+                last = Some((gv, v));
             }
         }
     }

@@ -96,7 +96,7 @@ impl Builder {
         let mut spent = (Timings::default(), Timings::default());
         if let Some(choice) = kept {
             let c = &choice.candidate;
-            let (ranges, ranges_t) = self.ranges_for(&[(c.accel, &c.params)], input.gpu_volume)?;
+            let (ranges, ranges_t) = self.step_ranges_for(&[(c.accel, &c.params)], input)?;
             match self.build(c.accel, input, &ranges, &c.params) {
                 Ok((structure, mut build_t)) => {
                     let now = share_of(&structure, &mut build_t)?;
@@ -135,7 +135,7 @@ impl Builder {
                 Err(e) => return Err(e),
             }
         }
-        let (ranges, ranges_t) = self.ranges_for(&[(accel, params)], input.gpu_volume)?;
+        let (ranges, ranges_t) = self.step_ranges_for(&[(accel, params)], input)?;
         let (structure, build_t) = self.build(accel, input, &ranges, params)?;
         let (mut ranges_timings, mut build_timings) = spent;
         ranges_timings.extend(ranges_t);
