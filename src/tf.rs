@@ -1,6 +1,7 @@
 //! Transfer functions: an RGBA lookup table over normalised values [0, 1],
 //! linearly interpolated between entries exactly as `glsl/common/tf.glsl`
-//! does, plus the max-alpha range query that classification relies on.
+//! does, plus the max-alpha range query that classification relies on
+//! (`max_alpha`, and `visible`: whether it is above 0).
 //!
 //! Alpha is opacity per voxel of path length; the marcher corrects it for
 //! the step size. Specs: `ramp:LO:HI[:ALPHA]`, `band:LO:HI[:ALPHA]`,

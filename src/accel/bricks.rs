@@ -12,6 +12,10 @@ use crate::volume::GpuVolume;
 /// Brick edge in voxels for the LBVH and classification.
 pub const BRICK: u32 = crate::volume::BRICK;
 
+/// Voxels each side a brick's ranges reach past it: the one-voxel apron of
+/// DESIGN invariant 2 (a sample in a brick reads its neighbours' voxels).
+pub const APRON: u32 = 1;
+
 pub struct GpuBricks {
     pub brick: u32,
     pub counts: [u32; 3],
@@ -80,14 +84,14 @@ impl GpuBricks {
                         vk::BufferUsageFlags::STORAGE_BUFFER,
                     )?;
                     let count = changed.len() as u32;
-                    minmax.record_listed(cmd, volume, (self.brick, 1), &self.ranges, (&list, count))?;
+                    minmax.record_listed(cmd, volume, (self.brick, APRON), &self.ranges, (&list, count))?;
                     self._list = Some((list, staging));
                 } else {
                     record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
                 }
             }
             _ => {
-                minmax.record(cmd, volume, self.brick, 1, &self.ranges)?;
+                minmax.record(cmd, volume, self.brick, APRON, &self.ranges)?;
                 self.computed = self.total;
             }
         }

@@ -2,11 +2,10 @@
 //! function and frame mode, classified by the mode's activity function
 //! (`accel::mode`), or marched naively in a mode it does not skip in.
 
-use super::builder::{Builder, Ranges};
+use super::builder::{Builder, RangeKind, Ranges};
 use super::method::{Accel, BuildInput, Built, Structure};
 use super::mode::{activity, ModeFallback};
 use super::params::Params;
-use super::RangeKind;
 use crate::error::Result;
 use crate::gpu::{vk, Timer, Timings};
 use crate::volume::GpuVolume;

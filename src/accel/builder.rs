@@ -192,11 +192,12 @@ impl Builder {
         self.ranges_with(kinds, volume, None)
     }
 
-    /// As `ranges`, with `host`, the voxels of `volume`'s step on the host:
-    /// on a CPU device a series step's changed bricks of a one-channel
-    /// unorm volume with its cells copy are then computed there
-    /// (`bricks_host`: the same ranges, faster than the device's pass on
-    /// lavapipe), timed as "PASS (host)".
+    /// As `ranges`, with `host`, the voxels `volume` holds (trusted, as
+    /// `replace`'s `previous`: others give wrong ranges): on a CPU device a
+    /// series step's changed bricks of a one-channel 8- or 16-bit volume
+    /// with its cells copy are then computed there (`bricks_host`: the same
+    /// ranges, faster than the device's pass on lavapipe), timed as "PASS
+    /// (host)". Anything else is made as `ranges` makes it.
     pub fn ranges_with(
         &self,
         kinds: &[RangeKind],

@@ -175,6 +175,8 @@ pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFun
         .par_chunks_mut(4096)
         .zip(ranges.par_chunks(4096 * per_brick))
         .for_each(|(flags, ranges)| {
+            // One channel without the per-channel closure: the common case,
+            // a flag a brick for nbody:256's 262144 cells in a series step.
             if channels == 1 {
                 for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(2)) {
                     *flag = tf.visible(r[0], r[1]) as u32;
@@ -193,8 +195,9 @@ mod tests {
     use super::*;
 
     /// Each brick's flag is its own ranges' (brick-major, two channels of
-    /// their own TFs, across the parallel chunks' edges): ranges on, between
-    /// and beside LUT entries, empty ones (lo > hi), and NaN bounds.
+    /// their own TFs, then one, across the parallel chunks' edges): ranges
+    /// on, between and beside LUT entries, empty ones (lo > hi), and NaN
+    /// bounds.
     #[test]
     fn host_classification_is_max_alpha_above_zero() {
         let tf = TransferFunction::parse_channels("band:0.4:0.41 | ramp:0.9:1").unwrap();
@@ -225,5 +228,20 @@ mod tests {
             active += f as usize;
         }
         assert!(active > 0 && active < flags.len(), "{active} of {} active", flags.len());
+        // One channel (its own loop): the first channel's ranges alone.
+        let first: Vec<f32> = ranges.chunks_exact(4).flat_map(|r| [r[0], r[1]]).collect();
+        let band = tf.channel(0);
+        classify_ranges_on_host(&first, 1, band, &mut flags);
+        let mut active = 0;
+        for (i, &f) in flags.iter().enumerate() {
+            let want = band.max_alpha(first[2 * i], first[2 * i + 1]) > 0.0;
+            assert_eq!(f, want as u32, "one channel, brick {i}");
+            active += f as usize;
+        }
+        assert!(
+            active > 0 && active < flags.len(),
+            "one channel: {active} of {} active",
+            flags.len()
+        );
     }
 }

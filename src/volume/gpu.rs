@@ -81,8 +81,8 @@ pub struct GpuVolume {
 }
 
 /// A dense series step's identity on the device, and where it was put in
-/// place of the step before with that step's voxels at hand, what changed
-/// since (`replace`).
+/// place of the step before with that step's voxels at hand (or, on a CPU
+/// device, the staging mirror of them), what changed since (`replace`).
 #[derive(Clone, Debug)]
 pub struct StepMark {
     /// Unique to these texels in this process.

@@ -36,9 +36,10 @@ impl GpuVolume {
     /// recomputes only the value ranges of the bricks whose apron holds a
     /// changed voxel. Passing a volume these
     /// texels did not come from leaves stale texels: the delta is trusted.
-    /// Where this keeps that staging buffer from the last step (the image
-    /// copied whole: a CPU device), the delta is found by comparing it with
-    /// `volume` as it is brought up to date, and `previous` is not read.
+    /// On a CPU device, where this keeps that staging buffer from the last
+    /// `replace` (the image copied whole, where it fits one), the delta is
+    /// found by comparing it with `volume` as it is brought up to date, and
+    /// `previous` is not read.
     ///
     /// No submission reading this volume may still be pending (the host
     /// writes memory the device reads). After an error its contents are
@@ -52,19 +53,27 @@ impl GpuVolume {
             return Ok(false);
         }
         let (_, _, bytes) = texels(volume);
-        // A CPU device's staging mirror of the last step's texels, where it
-        // keeps one, is compared with the step as it is brought up to date
-        // (`StepDelta::of_texels_updating`): the step before is not needed.
+        let last = self.step.as_ref().map(|m| m.id);
+        // A step of its own until it is in place: after an error no build
+        // takes the last step's ranges for these texels.
+        self.step = Some(StepMark::new(None));
+        let shared = cells::host_shared(&self.ctx);
         let mirrored = !self.upload_changed && self.image.mirrorable();
-        let mirror_kept = self
-            .image_mirror
-            .as_ref()
-            .is_some_and(|m| m.size() >= bytes.len() as u64);
-        let mut delta = match mirrored && mirror_kept {
+        // On a CPU device (staging memory is the host's own; elsewhere it
+        // may be write-combined, slow to read) the mirror of the last
+        // step's texels, where kept, is compared with the step as it is
+        // brought up to date (`StepDelta::of_texels_updating`): the step
+        // before is not needed.
+        let from_mirror = mirrored
+            && shared
+            && self
+                .image_mirror
+                .as_ref()
+                .is_some_and(|m| m.size() >= bytes.len() as u64);
+        let mut delta = match from_mirror {
             true => None,
             false => previous.and_then(|p| StepDelta::between(p, volume)).map(Arc::new),
         };
-        let shared = cells::host_shared(&self.ctx);
         // On a CPU device the host packs the cells copy, while the device
         // copies the image where it can (`upload_mirrored`).
         let host_cells =
@@ -89,23 +98,26 @@ impl GpuVolume {
             None if mirrored => {
                 let found = std::cell::OnceCell::new();
                 // Called where the mirror was kept (else it is filled anew).
-                let update = |mirror: &mut [u8]| match StepDelta::of_texels_updating(self.dims, mirror, &bytes) {
-                    Some(d) => drop(found.set(Arc::new(d))),
-                    None => mirror.copy_from_slice(&bytes),
+                let update = |mirror: &mut [u8]| match &delta {
+                    Some(known) if known.copy_changed(&bytes, mirror) => {}
+                    Some(_) => mirror.copy_from_slice(&bytes),
+                    None => match StepDelta::of_texels_updating(self.dims, mirror, &bytes) {
+                        Some(d) => drop(found.set(Arc::new(d))),
+                        None => mirror.copy_from_slice(&bytes),
+                    },
                 };
                 let cells = &mut self.cells;
                 let meanwhile = || host_cells(cells, found.get().or(delta.as_ref()).map(|d| &**d));
                 self.image
                     .upload_mirrored(&bytes, &mut self.image_mirror, Some(update), meanwhile)?;
-                delta = delta.or(found.into_inner());
+                delta = found.into_inner().or(delta);
             }
             None => {
                 self.image_mirror = None;
                 self.image.upload_through(&bytes, &mut self.step_staging)?;
-                host_cells(&mut self.cells, None)?;
+                host_cells(&mut self.cells, delta.as_deref())?;
             }
         }
-        let last = self.step.as_ref().map(|m| m.id);
         self.step = Some(StepMark::new(last.zip(delta)));
         self.spacing = volume.spacing;
         self.norm = volume.norm;

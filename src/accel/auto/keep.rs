@@ -84,7 +84,8 @@ impl Builder {
     /// a host whose camera moved since, and wants the choice priced for the
     /// new frame, passes None (`view` keeps it, as it keeps a choice while
     /// the camera moves). Other structures build as `ranges_for` then
-    /// `build` would.
+    /// `build` would, the ranges made with the step's voxels at hand
+    /// (`Builder::ranges_with`: on the host for a CPU device).
     pub fn build_step(
         &self,
         accel: Accel,

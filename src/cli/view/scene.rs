@@ -150,7 +150,8 @@ impl Scene {
         // The step before's voxels freed on another thread: unmapping them
         // (16 MB for nbody:256, up to 4 ms) is no part of the next frame.
         let before = std::mem::replace(&mut self.volume, volume);
-        std::thread::spawn(move || drop(before));
+        // Where no thread can be made, freed here (the closure is dropped).
+        let _ = std::thread::Builder::new().spawn(move || drop(before));
         Ok(())
     }
 
