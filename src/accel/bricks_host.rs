@@ -33,35 +33,30 @@ pub fn serves(gv: &GpuVolume, host: &Volume) -> bool {
         && matches!(host.data, VoxelData::U8(_) | VoxelData::U16(_))
 }
 
-/// `RangesFrom::Step` on the host, for a volume `serves` takes: `b`'s
-/// ranges are the step before's (`kept`) with the `changed` bricks'
-/// computed from `host` (the step's voxels, normalised by `norm`), and
-/// `kept` then holds them for the next step. False where the host does not
-/// see both buffers coherently or their sizes differ (`b`'s ranges may be
-/// written then, `kept` is not): record the device's pass instead, which
-/// writes all of `b`'s. No submission may be using either buffer.
+/// `RangesFrom::Step` on the host, for a volume `serves` takes: the
+/// `changed` bricks' ranges computed from `host` (the step's voxels,
+/// normalised by `norm`) into `kept` (the step before's, which then hold
+/// this step's for the next), then copied whole into `b`'s. False, writing
+/// nothing, where the host does not see both buffers coherently or their
+/// sizes differ: record the device's pass instead. No submission may be
+/// using either buffer.
 pub fn step_on_host(host: &Volume, norm: [f32; 2], changed: &[u32], kept: &mut Buffer, b: &mut GpuBricks) -> bool {
     let bytes = b.ranges.size() as usize;
     let coherent = |buffer: &Buffer| buffer.mapped_coherent().is_some_and(|m| m.len() >= bytes);
     if !coherent(kept) || !coherent(&b.ranges) || kept.size() != b.ranges.size() {
         return false;
     }
-    let (Some(before), Some(out)) = (kept.mapped(), b.ranges.mapped_mut()) else {
+    let (Some(kept), Some(out)) = (kept.mapped_mut(), b.ranges.mapped_mut()) else {
         return false;
     };
     // Mapped memory starts at a word boundary (Vulkan's map alignment).
-    let Ok(out) = bytemuck::try_cast_slice_mut::<u8, f32>(&mut out[..bytes]) else {
+    let Ok(ranges) = bytemuck::try_cast_slice_mut::<u8, f32>(&mut kept[..bytes]) else {
         return false;
     };
-    bytemuck::cast_slice_mut(out).copy_from_slice(&before[..bytes]);
-    if !changed_ranges(host, b.brick, norm, changed, out) {
+    if !changed_ranges(host, b.brick, norm, changed, ranges) {
         return false;
     }
-    let ranges: &[u8] = bytemuck::cast_slice(out);
-    match kept.mapped_mut() {
-        Some(kept) => kept[..bytes].copy_from_slice(ranges),
-        None => return false,
-    }
+    out[..bytes].copy_from_slice(&kept[..bytes]);
     b.computed = changed.len() as u64;
     true
 }

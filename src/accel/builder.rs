@@ -115,6 +115,12 @@ struct StepRanges {
 }
 
 impl StepRanges {
+    /// Marks the copy as `volume`'s ranges, no step's until the submission
+    /// that makes it completed (`Builder::ranges` then sets the step).
+    fn pending(&mut self, volume: &GpuVolume) {
+        (self.step, self.dims, self.channels, self.norms) = (0, volume.dims, volume.channels, volume.norms);
+    }
+
     /// The bricks of `volume` whose ranges differ from these, where these
     /// are its step's or the step before's ranges of `brick`^3 bricks.
     fn changed_for(&self, volume: &GpuVolume, brick: u32) -> Option<Vec<u32>> {
@@ -310,8 +316,7 @@ impl Builder {
                 && bricks_host::step_on_host(host, volume.norms[0], changed, &mut kept[i].ranges, b)
             {
                 timings.push(format!("{pass} (host)"), t.elapsed().as_secs_f64() * 1e3);
-                let k = &mut kept[i];
-                (k.step, k.dims, k.channels, k.norms) = (0, volume.dims, volume.channels, volume.norms);
+                kept[i].pending(volume);
                 return Ok(());
             }
         }
@@ -354,8 +359,7 @@ impl Builder {
             // A later step may read the copy on the host (`step_on_host`).
             record::barrier(self.ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
         }
-        let k = &mut kept[i];
-        (k.step, k.dims, k.channels, k.norms) = (0, volume.dims, volume.channels, volume.norms);
+        kept[i].pending(volume);
         Ok(())
     }
 }

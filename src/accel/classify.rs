@@ -175,14 +175,6 @@ pub fn classify_ranges_on_host(ranges: &[f32], channels: usize, tf: &TransferFun
         .par_chunks_mut(4096)
         .zip(ranges.par_chunks(4096 * per_brick))
         .for_each(|(flags, ranges)| {
-            // One channel without the per-channel closure: the common case,
-            // a flag a brick for nbody:256's 262144 cells in a series step.
-            if channels == 1 {
-                for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(2)) {
-                    *flag = tf.visible(r[0], r[1]) as u32;
-                }
-                return;
-            }
             for (flag, r) in flags.iter_mut().zip(ranges.chunks_exact(per_brick)) {
                 let visible = |c: usize| tf.channel(c).visible(r[2 * c], r[2 * c + 1]);
                 *flag = (0..channels).any(visible) as u32;
@@ -228,7 +220,7 @@ mod tests {
             active += f as usize;
         }
         assert!(active > 0 && active < flags.len(), "{active} of {} active", flags.len());
-        // One channel (its own loop): the first channel's ranges alone.
+        // One channel: the first channel's ranges alone.
         let first: Vec<f32> = ranges.chunks_exact(4).flat_map(|r| [r[0], r[1]]).collect();
         let band = tf.channel(0);
         classify_ranges_on_host(&first, 1, band, &mut flags);
