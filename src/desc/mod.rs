@@ -281,6 +281,16 @@ impl FrameDesc {
         self.params_for(dims, spacing, [0.0, 1.0]).map(|_| ())
     }
 
+    /// That a naive march of this frame through a `dims` box fits the
+    /// loop passes of the device `info` describes (lavapipe caps them;
+    /// `limits::check_loop_passes`). `Renderer` checks every frame with it;
+    /// auto checks it before it builds or probes anything.
+    pub fn check_loop_passes(&self, info: &crate::gpu::DeviceInfo, dims: [u32; 3]) -> Result<()> {
+        // Lit composite frames pass twice per visible sample (lattice.glsl, march_lit_run).
+        let lit = self.lighting().is_some() && self.mode == Mode::Composite;
+        crate::limits::check_loop_passes(&info.name, info.loop_pass_limit, dims, self.step, lit)
+    }
+
     /// As `params`, for a volume of `dims` voxels with `spacing` whose
     /// texels `norm` maps to values (the CPU reference's host volumes).
     pub fn params_for(&self, dims: [u32; 3], spacing: [f32; 3], norm: [f32; 2]) -> Result<RenderParams> {

@@ -189,15 +189,7 @@ impl Renderer {
         if desc.lighting().is_some() {
             volume.check_one_channel("shaded and iso frames")?;
         }
-        let info = self.ctx.info();
-        crate::limits::check_loop_passes(
-            &info.name,
-            info.loop_pass_limit,
-            volume.dims,
-            desc.step(),
-            // Lit composite frames pass twice per visible sample (lattice.glsl, march_lit_run).
-            desc.lighting().is_some() && *desc.mode() == crate::desc::Mode::Composite,
-        )?;
+        desc.check_loop_passes(self.ctx.info(), volume.dims)?;
         let mut params = desc.params(volume)?;
         params.tf_channel_step = tf.channel_step();
         params.value_bound = desc.mode().value_bound(tf.visible);

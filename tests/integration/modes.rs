@@ -418,4 +418,23 @@ fn a_march_at_the_loop_pass_limit_is_whole_and_a_finer_one_is_refused() {
         &[],
         "a step of at least 0.000855",
     );
+    // auto (the default) refuses it the same way before it builds or
+    // probes anything: its counting frames once ran into the cap and
+    // reported a naive march nobody asked for.
+    for (step, shade, least) in [("0.0005", "off", "0.000855"), ("0.0015", "on", "0.00171")] {
+        fails(
+            &[
+                "render",
+                "vessels:32",
+                "--size",
+                "8x8",
+                "--step",
+                step,
+                "--shade",
+                shade,
+            ],
+            &[],
+            &format!("a step of at least {least}"),
+        );
+    }
 }

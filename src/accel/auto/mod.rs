@@ -286,6 +286,9 @@ fn choose(
 ) -> Result<(Choice, Box<dyn Built>, Timings)> {
     let ctx = builder.context();
     let info = ctx.info();
+    // Every frame is refused past the device's loop cap: no candidate's
+    // build or counting frame is worth running then.
+    frame.check_loop_passes(info, input.volume.dims)?;
     let (all, mut notes) = choose::candidates(info, input.volume.dims, &input.mode, tree)?;
     let mut timings = Timings::default();
     let mut candidates = Vec::new();
