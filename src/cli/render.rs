@@ -411,10 +411,11 @@ pub(super) fn peak_host_bytes() -> Option<u64> {
 /// A progress bar for a stream into bricks (on a terminal, once it has
 /// taken a second).
 pub(super) fn stream_bar(what: &str) -> lacuna::volume::StreamProgress {
-    let bar = indicatif::ProgressBar::new(1);
-    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    // Hidden until the stream has taken a second (and only on a terminal):
+    // drawn from the start, it flashed on every load, streamed or not.
+    let bar = indicatif::ProgressBar::hidden();
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    bar.set_length(1);
     if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} layers, ETA {eta}") {
         bar.set_style(style.progress_chars("=> "));
     }
@@ -424,6 +425,9 @@ pub(super) fn stream_bar(what: &str) -> lacuna::volume::StreamProgress {
         if start.elapsed().as_secs_f64() > 1.0 {
             bar.set_length(total as u64);
             bar.set_position(done as u64);
+            if terminal && bar.is_hidden() && done < total {
+                bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            }
         }
         if done == total {
             bar.finish_and_clear();
