@@ -402,7 +402,7 @@ impl TransferFunction {
                 "transfer function",
                 self.spec.clone(),
                 format!(
-                    "{n} transfer functions for a volume of {channels} channel{}: give one for every channel, or one each",
+                    "{n} transfer functions for a volume of {channels} channel{}: give one for all channels, or one per channel",
                     if channels == 1 { "" } else { "s" }
                 ),
             ));

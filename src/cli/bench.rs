@@ -84,7 +84,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         return Err(Error::invalid(
             "bench",
             format!("{sources} sources"),
-            "give exactly one of: a config file, --quick, --paper, --suite hard, --compare A B",
+            "give exactly one of: a config file, --quick, --paper, --suite hard, --suite auto, --compare A B",
         ));
     }
     if let Some(paths) = &args.compare {
