@@ -546,7 +546,9 @@ impl GpuTransferFunction {
             return Err(Error::invalid(
                 "transfer function",
                 format!("{} channels", self.channels),
-                format!("the volume has {volume_channels}: give one transfer function for every channel, or one each"),
+                format!(
+                    "the volume has {volume_channels}: give one transfer function for all channels, or one per channel"
+                ),
             ));
         }
         Ok(())

@@ -413,7 +413,8 @@ pub(super) fn peak_host_bytes() -> Option<u64> {
 pub(super) fn stream_bar(what: &str) -> lacuna::volume::StreamProgress {
     // Hidden until the stream has taken a second (and only on a terminal):
     // drawn from the start, it flashed on every load, streamed or not.
-    let bar = indicatif::ProgressBar::hidden();
+    // Cleared on drop too: a stream that fails leaves no bar above its error.
+    let bar = indicatif::ProgressBar::hidden().with_finish(indicatif::ProgressFinish::AndClear);
     let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
     bar.set_length(1);
     if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} layers, ETA {eta}") {
@@ -424,10 +425,11 @@ pub(super) fn stream_bar(what: &str) -> lacuna::volume::StreamProgress {
     std::sync::Arc::new(move |done: u32, total: u32| {
         if start.elapsed().as_secs_f64() > 1.0 {
             bar.set_length(total as u64);
-            bar.set_position(done as u64);
+            // Shown before the position is set, which draws it at once.
             if terminal && bar.is_hidden() && done < total {
                 bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
             }
+            bar.set_position(done as u64);
         }
         if done == total {
             bar.finish_and_clear();
