@@ -38,6 +38,9 @@ pub fn lookup_in(table: &[[f32; 4]], v: f32) -> [f32; 4] {
     [0, 1, 2, 3].map(|c| a[c] * (1.0 - f) + b[c] * f)
 }
 
+/// How an error about the count of transfer functions ends.
+const ONE_TF_EACH: &str = "give one for all channels, or one per channel";
+
 /// LUT entries: fine enough that a spike one LUT step wide is narrower than
 /// the gap between adjacent 8-bit values (1/255).
 pub const LUT_SIZE: usize = 1024;
@@ -402,7 +405,7 @@ impl TransferFunction {
                 "transfer function",
                 self.spec.clone(),
                 format!(
-                    "{n} transfer functions for a volume of {channels} channel{}: give one for all channels, or one per channel",
+                    "{n} transfer functions for a volume of {channels} channel{}: {ONE_TF_EACH}",
                     if channels == 1 { "" } else { "s" }
                 ),
             ));
@@ -546,9 +549,7 @@ impl GpuTransferFunction {
             return Err(Error::invalid(
                 "transfer function",
                 format!("{} channels", self.channels),
-                format!(
-                    "the volume has {volume_channels}: give one transfer function for all channels, or one per channel"
-                ),
+                format!("the volume has {volume_channels}: {ONE_TF_EACH}"),
             ));
         }
         Ok(())

@@ -12,9 +12,8 @@ use crate::volume::GpuVolume;
 /// Brick edge in voxels for the LBVH and classification.
 pub const BRICK: u32 = crate::volume::BRICK;
 
-/// Voxels each side a brick's ranges reach past it: the one-voxel apron of
-/// DESIGN invariant 2 (a sample in a brick reads its neighbours' voxels).
-pub const APRON: u32 = 1;
+/// The apron of brick ranges (`volume::APRON`).
+pub const APRON: u32 = crate::volume::APRON;
 
 pub struct GpuBricks {
     pub brick: u32,

@@ -327,7 +327,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let visible = (0..n)
             .filter(|&i| tf.lookup(v.normalize(v.data.texel(i)))[3] > 0.0)
             .count();
-        let grid = BrickGrid::new(v, BRICK, 1);
+        let grid = BrickGrid::new(v, BRICK, crate::volume::APRON);
         let active = grid.active(tf).iter().filter(|a| **a).count();
         let (visible_percent, active_brick_percent) = (
             100.0 * visible as f64 / n as f64,

@@ -96,7 +96,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
             .map(|i| v.normalize(v.data.texel(i)))
             .filter(|n| !n.is_nan() && tf.lookup(*n)[3] > 0.0)
             .count();
-        let grid = BrickGrid::new(&v, BRICK, 1);
+        let grid = BrickGrid::new(&v, BRICK, lacuna::volume::APRON);
         let active = grid.active(&tf).iter().filter(|a| **a).count();
         println!("tf       {}", tf.spec);
         println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);

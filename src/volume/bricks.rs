@@ -9,6 +9,10 @@ use rayon::prelude::*;
 /// Brick edge in voxels.
 pub const BRICK: u32 = 8;
 
+/// Voxels each side a brick's ranges reach past it: the one-voxel apron of
+/// DESIGN invariant 2 (a sample in a brick reads its neighbours' voxels).
+pub const APRON: u32 = 1;
+
 #[derive(Clone, Debug)]
 pub struct BrickGrid {
     pub brick: u32,

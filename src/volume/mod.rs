@@ -26,7 +26,7 @@ mod slabs;
 mod spec;
 mod stream;
 
-pub use bricks::{BrickGrid, BRICK};
+pub use bricks::{BrickGrid, APRON, BRICK};
 pub use cells::{
     cells_bytes, cells_words, check_cells, host_shared, no_cells, record_pack_cells, TexelKind, CELLS_CONSTANT_ID,
     GRADIENT_CELLS_CONSTANT_ID, KIND_CONSTANT_ID,
