@@ -362,6 +362,10 @@ fn volume_spec_errors() {
         ("menger:abc", "SIZE"),
         ("menger:0", "zero dimension"),
         ("menger:8:2.5", "Menger level"),
+        // Finer than a voxel: every centre of a 9^3 grid lies in a level-3 hole.
+        ("menger:9:3", "9x9x9 resolves levels up to 2"),
+        ("menger:81:9", "needs at least 3^9 = 19683 voxels a side"),
+        ("menger:81x81x8:2", "resolves levels up to 1"),
         ("menger:8:x", "not a number"),
         ("nbody:8:-1", "seed"),
         ("nbody:8:1e20", "the seed must be an integer from 0 to 2^53"),

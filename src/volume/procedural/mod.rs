@@ -18,7 +18,8 @@ use std::ops::Range;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Generator {
-    /// Menger sponge (PARAM: level, default 3): empty space inside the volume.
+    /// Menger sponge (PARAM: level, default 3 or the finest the size resolves):
+    /// empty space inside the volume.
     Menger,
     /// Clustered particles splatted into a density field (PARAM: seed): ~0.15 % visible.
     Nbody,
@@ -136,9 +137,16 @@ impl Generator {
         // Layers of the volume, its parameter checked.
         let layers: Box<dyn Fn(Range<u32>) -> Vec<u8>> = match self {
             Generator::Menger => {
-                let level = param.unwrap_or(3.0);
+                let finest = menger::finest_level(dims);
+                let level = param.unwrap_or(menger::DEFAULT_LEVEL.min(finest) as f64);
                 if !((0.0..=12.0).contains(&level) && level.fract() == 0.0) {
                     return Err(bad("the Menger level must be an integer in 0..=12"));
+                }
+                if level as u32 > finest {
+                    return Err(bad(&format!(
+                        "level {level} needs at least 3^{level} = {} voxels a side; {w}x{h}x{d} resolves levels up to {finest}",
+                        3u64.pow(level as u32)
+                    )));
                 }
                 Box::new(move |z| menger::generate(dims, level as u32, time, z))
             }
