@@ -4,6 +4,7 @@
 //! runs for seconds). The device's own limits are checked by `gpu`.
 
 use crate::error::{Error, Result};
+use std::path::Path;
 
 /// Most samples one ray may take (longest ray through the box / step):
 /// 2^20, a million, ~2000x the default step's count on a 1024^3 volume.
@@ -143,6 +144,50 @@ pub fn check_loop_passes(device: &str, limit: Option<u64>, dims: [u32; 3], step:
     ))
 }
 
+/// Opens an input file after checking that it is a regular file (a FIFO
+/// would block the open, a device never end), and gives its length, so a
+/// caller checks sizes before reading anything.
+pub fn open_input(path: &Path) -> Result<(std::fs::File, u64)> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::format(
+            path,
+            "is not a regular file (a folder, device or pipe): lacuna reads input from regular files",
+        ));
+    }
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    Ok((file, meta.len()))
+}
+
+/// Reads a whole input file of at most `max` bytes: `what` (e.g. "bench
+/// config") names what it should be where it is longer. The read stops
+/// past `max` even if the file grows meanwhile.
+pub fn read_input(path: &Path, what: &str, max: u64) -> Result<Vec<u8>> {
+    let (file, len) = open_input(path)?;
+    let too_long = |len: u64| Error::format(path, format!("is {len} bytes, more than a {what} can be ({max} bytes)"));
+    if len > max {
+        return Err(too_long(len));
+    }
+    check_host(format_args!("{what} {}", path.display()), len, 1)?;
+    let mut out = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, max.saturating_add(1)), &mut out)
+        .map_err(|e| Error::io(path, e))?;
+    match out.len() as u64 > max {
+        true => Err(too_long(out.len() as u64)),
+        false => Ok(out),
+    }
+}
+
+/// `read_input` of a UTF-8 text file.
+pub fn read_input_text(path: &Path, what: &str, max: u64) -> Result<String> {
+    String::from_utf8(read_input(path, what, max)?).map_err(|e| Error::format(path, format!("is not UTF-8 text: {e}")))
+}
+
+/// The longest text input lacuna reads whole (a bench config, a transfer
+/// function, a results.json): far past any real one, and parsed within a
+/// few hundred MB.
+pub const MAX_TEXT_INPUT: u64 = 16 << 20;
+
 /// Channels a volume can have (one texel of up to four components per
 /// voxel on the GPU), and so transfer functions per frame.
 pub const MAX_CHANNELS: usize = 4;
@@ -187,6 +232,32 @@ mod tests {
         assert!(check_loop_passes("llvmpipe", Some(65535), dims, 0.0015, false).is_ok());
         // The step it names fits.
         assert!(check_loop_passes("llvmpipe", Some(65535), dims, 0.00171, true).is_ok());
+    }
+
+    #[test]
+    fn inputs_are_regular_files_read_up_to_their_cap() {
+        let dir = std::env::temp_dir().join(format!("lacuna-input-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("c.toml");
+        std::fs::write(&file, "name = 1\n").unwrap();
+        assert_eq!(read_input_text(&file, "bench config", 9).unwrap(), "name = 1\n");
+        let long = read_input(&file, "bench config", 8).unwrap_err().to_string();
+        assert!(
+            long.contains("is 9 bytes, more than a bench config can be (8 bytes)"),
+            "{long}"
+        );
+        let folder = read_input(&dir, "bench config", 8).unwrap_err().to_string();
+        assert!(folder.contains("is not a regular file"), "{folder}");
+        let device = read_input(Path::new("/dev/zero"), "bench config", 8)
+            .unwrap_err()
+            .to_string();
+        assert!(device.contains("is not a regular file"), "{device}");
+        std::fs::write(&file, [0xff, 0xfe]).unwrap();
+        assert!(read_input_text(&file, "x", 8)
+            .unwrap_err()
+            .to_string()
+            .contains("not UTF-8"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

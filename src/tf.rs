@@ -249,10 +249,13 @@ impl TransferFunction {
     /// A ParaView colormap export (feature `loaders`).
     #[cfg(feature = "loaders")]
     pub fn from_paraview_json(path: &Path) -> Result<Self> {
-        // serde_json's values take a few times the text: check before reading.
-        let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
-        crate::limits::check_host(format_args!("ParaView JSON {}", path.display()), len, 8)?;
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        // serde_json's values take up to some 40 times the text (a value
+        // for every number): check before reading.
+        let (_, len) = crate::limits::open_input(path)?;
+        let len = len.min(crate::limits::MAX_TEXT_INPUT + 1); // past the cap, read_input names it
+        crate::limits::check_host(format_args!("ParaView JSON {}", path.display()), len, 40)?;
+        let text =
+            crate::limits::read_input_text(path, "ParaView JSON transfer function", crate::limits::MAX_TEXT_INPUT)?;
         Self::from_paraview_json_str(&text, path)
     }
 
@@ -263,8 +266,8 @@ impl TransferFunction {
         let json: serde_json::Value =
             serde_json::from_str(text).map_err(|e| Error::format(path, format!("invalid JSON: {e}")))?;
         let map = match &json {
-            serde_json::Value::Array(a) => a.first().cloned().unwrap_or(serde_json::Value::Null),
-            other => other.clone(),
+            serde_json::Value::Array(a) => a.first().unwrap_or(&serde_json::Value::Null),
+            other => other,
         };
         let numbers = |key: &str, stride: usize| -> Result<Option<Vec<f64>>> {
             let Some(v) = map.get(key) else {

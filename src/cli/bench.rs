@@ -21,7 +21,7 @@ pub struct BenchArgs {
     #[arg(long, num_args = 2, value_names = ["A", "B"])]
     compare: Option<Vec<PathBuf>>,
     /// Largest relative change of a median --compare accepts.
-    #[arg(long, default_value_t = 0.2, requires = "compare")]
+    #[arg(long, default_value_t = 0.2, requires = "compare", allow_hyphen_values = true)]
     tolerance: f64,
     /// Run a suite instead: "hard" (the DESIGN hard cases for every structure; exit 1 on failure) or
     /// "auto" (bench/auto.toml, then auto's contract per data set: at least 0.95x naive, within 10 % of
@@ -228,7 +228,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
 }
 
 fn read_records(path: &Path) -> Result<Vec<lacuna::bench::Record>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = lacuna::limits::read_input_text(path, "bench results.json", lacuna::limits::MAX_TEXT_INPUT)?;
     let records: Vec<lacuna::bench::Record> =
         serde_json::from_str(&text).map_err(|e| Error::format(path, format!("not a bench results.json: {e}")))?;
     // What a run writes: positive finite times, one record per data set

@@ -66,7 +66,19 @@ impl Frame {
     }
 
     pub fn read_exr(path: &Path) -> Result<Frame> {
-        let bytes = std::fs::read(path).map_err(|e| crate::Error::io(path, e))?;
+        // The magic number before the file: a large file of anything else
+        // is refused without reading it.
+        let (file, _) = crate::limits::open_input(path)?;
+        let mut magic = Vec::new();
+        std::io::Read::read_to_end(&mut std::io::Read::take(file, 4), &mut magic)
+            .map_err(|e| crate::Error::io(path, e))?;
+        if magic != [0x76, 0x2f, 0x31, 0x01] {
+            return Err(crate::Error::format(
+                path,
+                "not an EXR file (it does not start with EXR's magic number)",
+            ));
+        }
+        let bytes = crate::limits::read_input(path, "EXR frame", u64::MAX)?;
         Self::read_exr_bytes(&bytes, path)
     }
 

@@ -23,21 +23,45 @@ pub fn load_step(path: &Path, step: u32, device: Option<&DeviceInfo>) -> Result<
 /// The time steps of a NIfTI file (its 4th dimension; 1 for a 3-D file),
 /// from its header.
 pub fn steps(path: &Path) -> Result<u32> {
-    Ok(layout(path, &header(path, open(path)?)?)?.steps)
+    let header = header(path, open(path)?)?;
+    let l = layout(path, &header)?;
+    // A time axis the data does not hold is refused here, not when a step
+    // past the data's end is asked for.
+    if l.steps > 1 {
+        let [w, h, d] = l.dims;
+        let voxel_bytes = w as u64 * h as u64 * d as u64 * l.ty.bytes() as u64;
+        let end =
+            voxel_offset(path, &header)?.saturating_add(voxel_bytes.saturating_mul(l.steps as u64 * l.channels as u64));
+        let (_, len) = crate::limits::open_input(path)?;
+        if gzipped(path)? {
+            super::check_gzip_holds(path, len, end)?;
+        } else if len < end {
+            return Err(Error::format(
+                path,
+                format!(
+                    "holds {len} bytes, but the {} time steps of {w}x{h}x{d} {} voxels ({} channel(s)) its header gives end at byte {end}",
+                    l.steps, l.ty, l.channels
+                ),
+            ));
+        }
+    }
+    Ok(l.steps)
 }
 
 /// Whether the file starts with the gzip magic.
 fn gzipped(path: &Path) -> Result<bool> {
     let mut magic = [0u8; 2];
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let (mut file, _) = crate::limits::open_input(path)?;
     let n = file.read(&mut magic).map_err(|e| Error::io(path, e))?;
     Ok(n == 2 && magic == [0x1f, 0x8b])
 }
 
 /// The file's bytes, inflated when it starts with the gzip magic.
 fn open(path: &Path) -> Result<Box<dyn Read>> {
+    // Checked as an input file (a regular one) before the open.
+    let gzip = gzipped(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    Ok(match gzipped(path)? {
+    Ok(match gzip {
         true => Box::new(Members::new(Box::new(std::io::BufReader::new(file)))),
         false => Box::new(std::io::BufReader::new(file)),
     })
@@ -134,14 +158,23 @@ fn layout(path: &Path, header: &NiftiHeader) -> Result<Layout> {
             "not a single-file NIfTI-1 (magic is not 'n+1'; .hdr/.img pairs are not supported)",
         ));
     }
-    let ty = voxel_type(path, header)?;
     let rank = header.dim[0] as usize;
     if !(1..=7).contains(&rank) {
+        // The crate swaps a header whose rank is invalid as stored, so show
+        // the value both ways (as a signed 16-bit number, as stored).
+        let read = header.dim[0];
+        let little = match header.endianness {
+            nifti::Endianness::Little => read,
+            nifti::Endianness::Big => read.swap_bytes(),
+        } as i16;
+        let big = (little as u16).swap_bytes() as i16;
         return Err(Error::format(
             path,
-            format!("NIfTI dim[0] = {rank} is not a valid rank"),
+            format!("NIfTI dim[0] is {little} read little-endian and {big} big-endian: not a valid rank (1 to 7) either way"),
         ));
     }
+    // After the rank: a header swapped for an invalid rank has a swapped type too.
+    let ty = voxel_type(path, header)?;
     // Dimensions are signed in the format; the crate reads them unsigned.
     if header.dim[1..=rank].iter().any(|&d| d == 0 || d > i16::MAX as u16) {
         return Err(Error::format(
@@ -298,7 +331,7 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
     let first = voxel_offset(path, &header)? + step as u64 * voxel_bytes;
     let gzip = gzipped(path)?;
     // A short file is found before a layer is read.
-    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let (_, len) = crate::limits::open_input(path)?;
     if gzip {
         super::check_gzip_holds(path, len, first + voxel_bytes)?;
     } else if len < first + voxel_bytes {

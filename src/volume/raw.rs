@@ -17,13 +17,17 @@ pub struct RawLayout {
 /// Parses `WxHxD` (each > 0).
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
     let parts: Vec<&str> = s.split('x').collect();
-    let bad = || Error::invalid("dimensions", s, "expected WxHxD with three positive integers");
+    let bad = |why: &str| Error::invalid("dimensions", s, why.to_string());
+    let expected = "expected WxHxD with three positive integers";
     if parts.len() != 3 {
-        return Err(bad());
+        return Err(bad(expected));
     }
     let mut dims = [0u32; 3];
     for (d, p) in dims.iter_mut().zip(&parts) {
-        *d = p.trim().parse().map_err(|_| bad())?;
+        *d = match p.trim().parse::<u64>() {
+            Ok(n) => u32::try_from(n).map_err(|_| bad(&format!("{n} is more than a side can be ({})", u32::MAX)))?,
+            Err(_) => return Err(bad(expected)),
+        };
     }
     super::check_dims(dims, s)?;
     Ok(dims)
@@ -41,11 +45,12 @@ pub fn parse_type(s: &str) -> Result<VoxelType> {
 
 /// The layout encoded in an Open SciVis file name, e.g. `skull_256x256x256_uint8.raw`.
 pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
-    let stem = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .unwrap_or("")
-        .trim_end_matches(".raw");
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    // `.raw` in any case, as the loader takes the file.
+    let stem = match name.len().checked_sub(4) {
+        Some(at) if name.is_char_boundary(at) && name[at..].eq_ignore_ascii_case(".raw") => &name[..at],
+        _ => name,
+    };
     let mut parts = stem.rsplitn(3, '_');
     let (ty, dims) = (parts.next(), parts.next());
     let (Some(ty), Some(dims)) = (ty, dims) else {
@@ -54,12 +59,8 @@ pub fn layout_from_name(path: &Path) -> Result<RawLayout> {
             "raw file name is not name_WxHxD_type.raw; give --dims WxHxD and --type",
         ));
     };
-    let dims = parse_dims(dims).map_err(|_| {
-        Error::format(
-            path,
-            format!("raw file name has no WxHxD dimensions ('{dims}'); give --dims and --type"),
-        )
-    })?;
+    let dims = parse_dims(dims)
+        .map_err(|e| Error::format(path, format!("raw file name's dimensions: {e}; give --dims and --type")))?;
     let ty = VoxelType::from_name(ty).ok_or_else(|| {
         Error::format(
             path,
@@ -81,7 +82,7 @@ pub fn load(
     };
     // Sizes first: the file's length against its layout, then memory, so a
     // wrong name or --dims is an error before gigabytes are read.
-    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let (_, len) = crate::limits::open_input(path)?;
     check_length(path, len, layout)?;
     super::check_size(layout.dims, layout.ty, &path.display().to_string(), device)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
@@ -98,7 +99,7 @@ pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Res
         Some(l) => l,
         None => layout_from_name(path)?,
     };
-    let len = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len();
+    let (_, len) = crate::limits::open_input(path)?;
     check_length(path, len, layout)?;
     let layer = layout.dims[0] as u64 * layout.dims[1] as u64 * layout.ty.bytes() as u64;
     let open = |z: u32| -> Result<Box<dyn std::io::Read>> {

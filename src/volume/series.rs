@@ -39,6 +39,7 @@ pub struct Series {
 pub struct StepNorm {
     dims: [u32; 3],
     ty: VoxelType,
+    channels: usize,
     /// Step 0's normalisation of integer texels (stored as they are).
     norm: [f32; 2],
     /// Step 0's range in source units: float texels are stored normalised
@@ -301,6 +302,7 @@ impl StepNorm {
         StepNorm {
             dims: v.dims,
             ty: v.source_type,
+            channels: v.channel_count(),
             norm,
             range: [lo, if hi > lo { hi } else { lo + 1.0 }],
         }
@@ -309,14 +311,16 @@ impl StepNorm {
     /// Normalises `step` as step 0 (its `norm`); an error naming
     /// `what` when its grid or voxel type is not step 0's.
     pub fn apply(&self, step: &mut Volume, what: &str) -> Result<()> {
-        if (step.dims, step.source_type) != (self.dims, self.ty) {
+        let channels = step.channel_count();
+        if (step.dims, step.source_type, channels) != (self.dims, self.ty, self.channels) {
             let [w, h, d] = step.dims;
             let [w0, h0, d0] = self.dims;
+            let (c, c0) = (channels, self.channels);
             return Err(Error::invalid(
                 "time step",
                 what.to_string(),
                 format!(
-                    "is {w}x{h}x{d} {}, where step 0 is {w0}x{h0}x{d0} {}: every step must share one grid and type",
+                    "is {w}x{h}x{d} {} in {c} channel(s), where step 0 is {w0}x{h0}x{d0} {} in {c0} channel(s): every step must share one grid, type and channel count",
                     step.source_type, self.ty
                 ),
             ));

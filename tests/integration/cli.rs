@@ -369,19 +369,31 @@ fn diff_reports_metrics_and_exit_codes() {
         &[],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
+    // A sparse 4 TiB file of zeros, past any host's memory: refused by its
+    // first bytes, so nothing more of it is read.
+    let not_exr = dir.path().join("zeros.exr");
+    std::fs::File::create(&not_exr).unwrap().set_len(1 << 42).unwrap();
     for args in [
         vec!["diff", a.to_str().unwrap(), small.to_str().unwrap()],
         vec!["diff", a.to_str().unwrap(), "/no/such.exr"],
         vec!["diff", a.to_str().unwrap(), heat.to_str().unwrap()],
         // A heatmap is a PNG; a name that says otherwise is refused first.
         vec!["diff", a.to_str().unwrap(), c.to_str().unwrap(), "--heatmap", "h.exr"],
+        // Input is checked before it is read: a device would never end, and
+        // a large file that is no EXR is refused by its first bytes.
+        vec!["diff", "/dev/zero", a.to_str().unwrap()],
+        vec!["diff", a.to_str().unwrap(), not_exr.to_str().unwrap()],
     ] {
         let r = lacuna(&args, &[]);
         assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
         assert_eq!(r.stderr.trim().lines().count(), 1, "{args:?}: {}", r.stderr);
-        if args.contains(&"h.exr") {
-            assert!(r.stderr.contains("a heatmap is a PNG: name it .png"), "{}", r.stderr);
-        }
+        let needle = match args.as_slice() {
+            [.., "h.exr"] => "a heatmap is a PNG: name it .png",
+            [_, "/dev/zero", _] => "/dev/zero: is not a regular file",
+            [_, _, b] if *b == not_exr.to_str().unwrap() => "not an EXR file",
+            _ => "",
+        };
+        assert!(r.stderr.contains(needle), "{args:?}: {}", r.stderr);
     }
     let r = lacuna(&["diff", a.to_str().unwrap(), small.to_str().unwrap()], &[]);
     assert!(r.stderr.contains("sizes differ"), "{}", r.stderr);
@@ -571,6 +583,13 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         "WIDTH must be > 0",
     );
     fails(&["render", "menger:16", "--tf", &p("bad.json")], &[], "invalid JSON");
+    let huge_json = p("huge.json");
+    std::fs::File::create(&huge_json).unwrap().set_len(17 << 20).unwrap();
+    fails(
+        &["render", "menger:16", "--tf", &huge_json],
+        &[],
+        "more than a ParaView JSON transfer function can be (16777216 bytes)",
+    );
     fails(
         &["render", "menger:16", "--size", "0x0"],
         &[],

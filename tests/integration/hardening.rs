@@ -231,6 +231,41 @@ fn hostile_files_are_one_line_errors() {
     // loader allocated the volume before reading).
     std::fs::write(p("empty.nii"), nifti_header([1000, 1000, 1000])).unwrap();
     fails(dir.path(), &["info", &p("empty.nii")], false, &["bytes of voxel data"]);
+    // A rank of 9 (dim[0]), invalid either way round: named as stored.
+    let mut rank9 = nifti_header([4, 4, 4]);
+    rank9[40..42].copy_from_slice(&9i16.to_le_bytes());
+    // int16, whose code swapped (1024) is a type lacuna does not read: the
+    // rank is checked first.
+    rank9[70..72].copy_from_slice(&4i16.to_le_bytes());
+    rank9[72..74].copy_from_slice(&16i16.to_le_bytes());
+    rank9.extend([0u8; 64]);
+    std::fs::write(p("rank9.nii"), rank9).unwrap();
+    fails(
+        dir.path(),
+        &["info", &p("rank9.nii")],
+        false,
+        &["NIfTI dim[0] is 9 read little-endian and 2304 big-endian"],
+    );
+    // An attached NRRD far longer than its header describes: refused
+    // from its length, before its data is read.
+    let long = p("long.nrrd");
+    std::fs::write(
+        &long,
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n",
+    )
+    .unwrap();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&long)
+        .unwrap()
+        .set_len(1 << 42) // 4 TiB, sparse: past any host's memory, so reading it would fail
+        .unwrap();
+    fails(
+        dir.path(),
+        &["info", &long],
+        false,
+        &["bytes of voxel data but 4x4x4 uint8", "needs 64"],
+    );
     // A NRRD naming /dev/zero as its detached data.
     std::fs::write(
         p("zero.nhdr"),
@@ -241,7 +276,7 @@ fn hostile_files_are_one_line_errors() {
         dir.path(),
         &["info", &p("zero.nhdr")],
         false,
-        &["holds more than the 64 bytes"],
+        &["/dev/zero: is not a regular file"],
     );
     // Fewer sizes than the dimension says: the count is named.
     std::fs::write(

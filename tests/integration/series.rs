@@ -159,7 +159,23 @@ fn steps_on_different_grids_are_refused_by_name() {
     let series = open(dir.path().join("n%d.nii").to_str().unwrap());
     let err = series.load(1, None).unwrap_err().to_string();
     assert!(
-        err.contains("n1.nii': is 4x4x2 uint8, where step 0 is 4x4x4 uint8"),
+        err.contains("n1.nii': is 4x4x2 uint8 in 1 channel(s), where step 0 is 4x4x4 uint8 in 1 channel(s)"),
+        "{err}"
+    );
+    // A step with two channels (NIfTI's fifth axis) after one with one.
+    let c = nifti_bytes(&[4, 4, 4, 1, 2], 2, 8, [1.0; 3], &[1u8; 128]);
+    std::fs::write(
+        dir.path().join("c0.nii"),
+        nifti_bytes(&[4, 4, 4], 2, 8, [1.0; 3], &[1u8; 64]),
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("c1.nii"), c).unwrap();
+    let err = open(dir.path().join("c%d.nii").to_str().unwrap())
+        .load(1, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("c1.nii': is 4x4x4 uint8 in 2 channel(s), where step 0 is 4x4x4 uint8 in 1 channel(s): every step must share one grid, type and channel count"),
         "{err}"
     );
 }
@@ -196,7 +212,8 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
         assert_eq!(u8s(&still), &data[..12]);
     }
     // Beyond time and components (a 6th dimension) is refused, as is a
-    // truncated step (dim[5], components, are channels: tests/integration/channels.rs).
+    // truncated step, when the file is opened (dim[5], components, are
+    // channels: tests/integration/channels.rs).
     let p = dir.path().join("six.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 1, 1, 2], 2, 8, [1.0; 3], &[0u8; 24])).unwrap();
     let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())
@@ -205,10 +222,14 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
     assert!(err.to_string().contains("beyond x, y, z, time and components"), "{err}");
     let p = dir.path().join("short.nii");
     std::fs::write(&p, nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data[..30])).unwrap();
-    let series = open(p.to_str().unwrap());
-    assert!(series.load(1, None).is_ok());
-    let err = series.load(2, None).unwrap_err();
+    let err = Series::open(p.to_str().unwrap(), &LoadOptions::default())
+        .err()
+        .unwrap();
     assert!(matches!(err, Error::Format { .. }), "{err}");
+    assert!(
+        err.to_string().contains("holds 382 bytes, but the 3 time steps"),
+        "{err}"
+    );
 }
 
 /// Every structure equals naive on steps where the visible set moved.

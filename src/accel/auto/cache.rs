@@ -152,8 +152,12 @@ fn file_for(folder: &Path, info: &DeviceInfo) -> PathBuf {
     folder.join(format!("cost-model-{h:016x}.txt"))
 }
 
+/// A cache file's most bytes: a few hundred lines of kernel costs are far
+/// less; a longer file is not lacuna's, and is measured anew.
+const MAX_CACHE_BYTES: u64 = 1 << 20;
+
 fn read(path: &Path) -> Result<HashMap<String, KernelCost>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::limits::read_input_text(path, "cost model cache", MAX_CACHE_BYTES)?;
     let mut lines = text.lines();
     if lines.next() != Some(HEADER) {
         return Err(Error::invalid(

@@ -5,13 +5,16 @@
 //! on a `time` axis last.
 
 use super::decode::{decode, VoxelType};
-use super::{StreamTo, Volume};
+use super::Volume;
 use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
+
+mod bricks;
+pub use bricks::load_step_bricks;
 
 fn nrrd_type(s: &str) -> Option<VoxelType> {
     Some(match s {
@@ -67,8 +70,45 @@ pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
 
 /// Time step `step` of a NRRD (step 0 of one without a time axis).
 pub fn load_step(path: &Path, step: u32, device: Option<&DeviceInfo>) -> Result<Volume> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // The header first, from the file's head: a file that is no NRRD, or
+    // longer than its header says, is refused before the rest is read.
+    let head = head(path)?;
+    let limit = match header(path, &head, true) {
+        Ok(h) if h.ended || head.len() < HEAD_BYTES => read_limit(path, &h, head.len())?,
+        Err(e) if holds_header(&head) || !head.starts_with(b"NRRD") => return Err(e),
+        // A header longer than the head: the file is read whole.
+        _ => u64::MAX,
+    };
+    let bytes = read_at_most(path, limit)?;
     stepped(path, parse(path, &bytes, true, device, Some(step)))
+}
+
+/// The bytes of `path` a load reads, from its header `h` and the length
+/// of the head it came from: the head for a detached header; else the
+/// header and the data it describes (gzip's at most about twice), and
+/// attached raw data longer than that is refused from the file's length.
+fn read_limit(path: &Path, h: &Header, head: usize) -> Result<u64> {
+    if h.data_file.is_some() {
+        return Ok(head as u64);
+    }
+    super::check_dims(h.dims, &path.display().to_string())?;
+    let wanted = h.skip.saturating_add(h.block().saturating_mul(h.axes.steps as u64));
+    let data = match h.gzip {
+        true => wanted.saturating_mul(2).saturating_add(1 << 16),
+        false => wanted,
+    };
+    let limit = (h.offset as u64).saturating_add(data);
+    let (_, len) = crate::limits::open_input(path)?;
+    match !h.gzip && len > limit {
+        true => Err(short_data(path, h, len - h.offset as u64 - h.skip)),
+        false => Ok(limit),
+    }
+}
+
+/// Whether `head` holds a whole header: the file is shorter than a head,
+/// or the header's blank line is in it.
+fn holds_header(head: &[u8]) -> bool {
+    head.len() < HEAD_BYTES || head.windows(2).any(|w| w == b"\n\n") || head.windows(4).any(|w| w == b"\r\n\r\n")
 }
 
 /// The volume `parse` read for the step asked for.
@@ -78,17 +118,17 @@ fn stepped(path: &Path, parsed: Result<(Option<Volume>, u32)>) -> Result<Volume>
 
 /// How many time steps a NRRD holds (1 without a time axis); reads its header.
 pub fn steps(path: &Path) -> Result<u32> {
-    // Headers are short: the first 64 KiB hold one, else read it all.
+    // Headers are short: the first 64 KiB hold one, else the first 16 MiB.
     let head = head(path)?;
     match parse(path, &head, true, None, None) {
         Ok((_, steps)) => Ok(steps),
-        Err(_)
-            if head.len() == HEAD_BYTES
-                && !head.windows(2).any(|w| w == b"\n\n")
-                && !head.windows(4).any(|w| w == b"\r\n\r\n") =>
-        {
-            let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-            parse(path, &bytes, true, None, None).map(|v| v.1)
+        Err(_) if !holds_header(&head) => {
+            let (file, _) = crate::limits::open_input(path)?;
+            let mut longer = Vec::new();
+            file.take(crate::limits::MAX_TEXT_INPUT)
+                .read_to_end(&mut longer)
+                .map_err(|e| Error::io(path, e))?;
+            parse(path, &longer, true, None, None).map(|v| v.1)
         }
         Err(e) => Err(e),
     }
@@ -201,7 +241,8 @@ struct Header {
 impl Header {
     /// Bytes of one step (every channel).
     fn block(&self) -> u64 {
-        self.dims.iter().map(|&d| d as u64).product::<u64>() * self.ty.bytes() as u64 * self.axes.channels as u64
+        let voxels = self.dims.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64));
+        voxels.saturating_mul(self.ty.bytes() as u64 * self.axes.channels as u64)
     }
 }
 
@@ -421,7 +462,7 @@ fn short_data(source: &Path, h: &Header, len: u64) -> Error {
 
 /// The first 64 KiB of `path`, where a header is read from (headers are short).
 fn head(path: &Path) -> Result<Vec<u8>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let (file, _) = crate::limits::open_input(path)?;
     let mut head = Vec::new();
     file.take(HEAD_BYTES as u64)
         .read_to_end(&mut head)
@@ -442,99 +483,17 @@ pub fn streamed_layout(path: &Path) -> Option<([u32; 3], VoxelType)> {
     (whole && h.axes.channels == 1 && (!h.gzip || cfg!(feature = "loaders"))).then_some((h.dims, h.ty))
 }
 
-/// Step `step` of a NRRD streamed into bricks as `to` says (`slabs.rs`):
-/// raw data read from its first needed layer on, gzip data inflated on the
-/// fly, so the host never holds the dense volume. A NRRD with channels (or
-/// a header past 64 KiB) loads whole.
-pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume> {
-    if streamed_layout(path).is_none() {
-        return load_step(path, step, None);
-    }
-    let h = header(path, &head(path)?, true)?;
-    super::check_file_step(path, step, h.axes.steps)?;
-    // Sizes before arithmetic on them: as the dense load checks them.
-    super::check_dims(h.dims, &path.display().to_string())?;
-    let too_big = || Error::format(path, "NRRD data is larger than a file can be");
-    let all = h.block().checked_mul(h.axes.steps as u64).ok_or_else(too_big)?;
-    let (source, start) = match &h.data_file {
-        Some(data_path) => (data_path.clone(), 0),
-        None => (path.to_path_buf(), h.offset as u64),
-    };
-    let end = start
-        .checked_add(h.skip)
-        .and_then(|b| b.checked_add(all))
-        .ok_or_else(too_big)?;
-    // A short (or long) file is found before a layer is read.
-    let len = std::fs::metadata(&source).map_err(|e| Error::io(&source, e))?.len();
-    match h.gzip {
-        true => super::check_gzip_holds(&source, len.saturating_sub(start), end - start)?,
-        false if len != end => return Err(short_data(&source, &h, len.saturating_sub(start + h.skip))),
-        false => {}
-    }
-    let layer = h.dims[0] as u64 * h.dims[1] as u64 * h.ty.bytes() as u64;
-    let first = h.skip + h.block() * step as u64;
-    // Gzip data is whole where a stream reaches the step's last layer: the
-    // steps after it inflate and the data ends there (its trailer's CRC
-    // checked), as the dense load requires.
-    let rest = all - h.block() * (step as u64 + 1);
-    let tail = |reader: &mut dyn Read| -> Result<()> {
-        let more = std::io::copy(&mut reader.take(rest + 1), &mut std::io::sink())
-            .map_err(|e| Error::format(&source, format!("corrupt gzip data: {e}")))?;
-        match more == rest {
-            true => Ok(()),
-            false => Err(short_data(&source, &h, h.skip + all - rest + more)),
-        }
-    };
-    let open = |z: u32| -> Result<Box<dyn Read + '_>> {
-        let mut file = std::fs::File::open(&source).map_err(|e| Error::io(&source, e))?;
-        let at = first + z as u64 * layer;
-        match h.gzip {
-            false => {
-                std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(start + at))
-                    .map_err(|e| Error::io(&source, e))?;
-                Ok(Box::new(std::io::BufReader::new(file)))
-            }
-            true => inflating(&source, file, start, at),
-        }
-    };
-    let file = super::slabs::SlabFile {
-        path: &source,
-        dims: h.dims,
-        ty: h.ty,
-        little: h.little,
-        open: &open,
-        tail: if h.gzip { Some(&tail) } else { None },
-        slab_bytes: super::slabs::SLAB_BYTES,
-    };
-    super::slabs::stream(&file, to, path.display().to_string(), h.spacing)
-}
-
-/// `file`'s gzip data from byte `start` on, inflated, its first `skip`
-/// inflated bytes passed over.
-#[cfg(feature = "loaders")]
-fn inflating<'a>(source: &Path, mut file: std::fs::File, start: u64, skip: u64) -> Result<Box<dyn Read + 'a>> {
-    std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(start)).map_err(|e| Error::io(source, e))?;
-    let mut inflated = flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file));
-    let passed = std::io::copy(&mut (&mut inflated).take(skip), &mut std::io::sink())
-        .map_err(|e| Error::format(source, format!("corrupt gzip data: {e}")))?;
-    if passed < skip {
-        return Err(Error::format(
-            source,
-            format!("holds {passed} bytes of inflated data before the layers asked for, at byte {skip}"),
-        ));
-    }
-    Ok(Box::new(inflated))
-}
-
-#[cfg(not(feature = "loaders"))]
-fn inflating<'a>(source: &Path, _: std::fs::File, _: u64, _: u64) -> Result<Box<dyn Read + 'a>> {
-    inflate(source, &[], 0).map(|_| -> Box<dyn Read + 'a> { Box::new(std::io::empty()) })
-}
-
 /// Reads `path`, or fails (without reading on) when it holds more than
 /// `limit` bytes; its exact length is then checked by `decode`.
 fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let (file, len) = crate::limits::open_input(path)?;
+    if len > limit {
+        return Err(Error::format(
+            path,
+            format!("holds {len} bytes, more than the {limit} bytes the NRRD header describes"),
+        ));
+    }
+    crate::limits::check_host(format_args!("NRRD file {}", path.display()), len, 1)?;
     let mut out = Vec::new();
     file.take(limit.saturating_add(1))
         .read_to_end(&mut out)
