@@ -294,13 +294,14 @@ impl BenchConfig {
     /// config's name), whose stem names the run when the config does not.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
         let mut c: BenchConfig = toml::from_str(text).map_err(|e| {
-            Error::format(
-                origin,
-                format!(
-                    "invalid bench config: {}",
-                    e.to_string().lines().collect::<Vec<_>>().join(" ")
-                ),
-            )
+            // The place as a line and column, not the parser's drawing of it.
+            let at = e.span().map_or(String::new(), |span| {
+                let before = text.get(..span.start).unwrap_or(text);
+                let line = before.matches('\n').count() + 1;
+                let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+                format!(" at line {line}, column {column}")
+            });
+            Error::format(origin, format!("invalid bench config{at}: {}", e.message().trim()))
         })?;
         if c.name.is_empty() {
             let stem = Path::new(origin.split(' ').next().unwrap_or(origin)).file_stem();
@@ -321,7 +322,7 @@ impl BenchConfig {
     }
 
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::limits::read_input_text(path, "bench config", crate::limits::MAX_TEXT_INPUT)?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -385,9 +386,18 @@ impl BenchConfig {
         if self.datasets.is_empty() || self.structures.is_empty() {
             return bad("needs at least one [[dataset]] and one [[structure]]");
         }
+        // Results are keyed by data set label and structure: a label twice
+        // would write a results.json that --compare refuses.
+        let mut datasets = std::collections::HashSet::new();
         for d in &self.datasets {
-            d.label(self)
+            let label = d
+                .label(self)
                 .map_err(|e| Error::format(origin, format!("data set '{}': look: {e}", d.volume)))?;
+            if !datasets.insert(label.clone()) {
+                return bad(&format!(
+                    "data set '{label}' appears twice (data sets are told apart by volume, look, ert and storage, not by transfer function alone)"
+                ));
+            }
         }
         let mut labels = std::collections::HashSet::new();
         for s in &self.structures {
@@ -404,8 +414,8 @@ impl BenchConfig {
             if !(e.reference_step.is_finite() && e.reference_step > 0.0) {
                 return bad(&format!("error sweep reference_step {} must be > 0", e.reference_step));
             }
-            if e.frames == 0 {
-                return bad("error sweep frames must be at least 1");
+            if e.frames == 0 || e.frames > most {
+                return bad(&format!("error sweep frames must be in 1..={most}, not {}", e.frames));
             }
             if let Some(wanted) = &e.datasets {
                 let labels = self

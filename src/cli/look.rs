@@ -18,10 +18,10 @@ pub struct LookArgs {
     #[arg(long, value_name = "MODE")]
     pub mode: Option<String>,
     /// Iso values for --mode iso, normalised to [0, 1] as TF specs: V[,V2,...] (up to 4).
-    #[arg(long, value_name = "V[,V2,...]")]
+    #[arg(long, value_name = "V[,V2,...]", allow_hyphen_values = true)]
     pub iso: Option<String>,
     /// Iso surface colour R,G,B in [0, 1] (default: the TF's colour at the value).
-    #[arg(long, value_name = "R,G,B")]
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true)]
     pub iso_color: Option<String>,
     /// Gradient (Blinn-Phong) shading of composite frames (iso surfaces are always lit).
     #[arg(long, value_enum, value_name = "on|off")]
@@ -30,10 +30,10 @@ pub struct LookArgs {
     #[arg(long, value_name = "AZ,EL", allow_hyphen_values = true)]
     pub light: Option<String>,
     /// Ambient, diffuse and specular weights and the shininess (default 0.1,0.7,0.2,10 as VTK).
-    #[arg(long, value_name = "KA,KD,KS,N")]
+    #[arg(long, value_name = "KA,KD,KS,N", allow_hyphen_values = true)]
     pub phong: Option<String>,
     /// Opacity times a ramp of the gradient magnitude from 0 at LO to 1 at HI (normalised value per unit length).
-    #[arg(long, value_name = "LO:HI")]
+    #[arg(long, value_name = "LO:HI", allow_hyphen_values = true)]
     pub gradient_opacity: Option<String>,
     /// Keep A x + B y + C z + D >= 0 in voxel coordinates; repeatable (up to 6).
     #[arg(long, value_name = "A,B,C,D", allow_hyphen_values = true)]

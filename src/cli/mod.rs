@@ -28,7 +28,7 @@ pub struct VolumeArgs {
     /// A file (.raw, .nrrd, .nhdr, .nii, .nii.gz), a printf pattern of files (run_%04d_64x64x64_float32.raw: a time series) or NAME:SIZE[:PARAM] (menger, nbody, vessels, turbulence, shells).
     pub volume: String,
     /// Dimensions of a raw file whose name does not give them (WxHxD).
-    #[arg(long, requires = "voxel_type", value_parser = parse_dims)]
+    #[arg(long, requires = "voxel_type", value_parser = parse_dims, allow_hyphen_values = true)]
     pub dims: Option<[u32; 3]>,
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64 (also int8, uint32, int32).
     #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]

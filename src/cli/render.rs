@@ -205,20 +205,19 @@ pub(super) fn frames(
     desc: &FrameDesc,
     args: &RenderArgs,
 ) -> Result<(Frame, Timings)> {
-    let mut frames = Vec::new();
-    for _ in 0..args.warmup + args.repeat {
-        frames.push(renderer.render(scene, desc)?);
+    // Only the last frame's pixels are kept: a long --repeat holds one
+    // frame and each run's timings.
+    let mut last = None;
+    let mut times = Vec::with_capacity(args.repeat as usize);
+    for run in 0..args.warmup + args.repeat {
+        let (frame, t) = renderer.render(scene, desc)?;
+        if run >= args.warmup {
+            times.push(t);
+        }
+        last = Some(frame);
     }
-    let timings = Timings::median(
-        &frames[args.warmup as usize..]
-            .iter()
-            .map(|f| f.1.clone())
-            .collect::<Vec<_>>(),
-    );
-    let frame = frames
-        .pop()
-        .map(|f| f.0)
-        .ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
+    let timings = Timings::median(&times);
+    let frame = last.ok_or_else(|| Error::invalid("repeat", "0", "must be at least 1"))?;
     Ok((frame, timings))
 }
 

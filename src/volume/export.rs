@@ -222,7 +222,14 @@ pub fn raw_path(out: &Path, dims: [u32; 3], ty: VoxelType) -> Result<PathBuf> {
         return Ok(out.to_path_buf());
     }
     // Suggest the name with its own stem, dropping a wrong `_WxHxD_type`.
-    let bare = &name[..name.len() - 4];
+    let mut bare = &name[..name.len() - 4];
+    // A doubled extension (`v.raw.raw`) is one.
+    while bare.len() >= 4
+        && bare.is_char_boundary(bare.len() - 4)
+        && bare[bare.len() - 4..].eq_ignore_ascii_case(".raw")
+    {
+        bare = &bare[..bare.len() - 4];
+    }
     let parts: Vec<&str> = bare.rsplitn(3, '_').collect();
     let stem = match parts.as_slice() {
         [ty, dims, stem] if VoxelType::from_name(ty).is_some() && super::parse_dims(dims).is_ok() => *stem,

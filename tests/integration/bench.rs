@@ -519,7 +519,20 @@ fn bad_bench_input_is_one_line() {
         (
             "noframes",
             ("frames = 1\naccel", "frames = 0\naccel"),
-            "error sweep frames must be at least 1",
+            "error sweep frames must be in 1..=100000, not 0",
+        ),
+        (
+            "manyframes",
+            ("frames = 1\naccel", "frames = 4000000000\naccel"),
+            "error sweep frames must be in 1..=100000, not 4000000000",
+        ),
+        (
+            "twodatasets",
+            (
+                "volume = \"nbody:8\"\n",
+                "volume = \"nbody:8\"\n[[dataset]]\nvolume = \"nbody:8\"\ntf = \"ramp:0.5:1\"\n",
+            ),
+            "data set 'nbody:8' appears twice",
         ),
         (
             "refstep",
@@ -549,7 +562,10 @@ fn bad_bench_input_is_one_line() {
         (vec!["bench", "--quick", "--paper"], "give exactly one of"),
         (vec!["bench", "--suite", "soft"], "expected hard or auto"),
         (vec!["bench", "/no/such.toml"], "/no/such.toml"),
-        (vec!["bench", bad.to_str().unwrap()], "unknown field"),
+        (
+            vec!["bench", bad.to_str().unwrap()],
+            "invalid bench config at line 8, column 1: unknown field `bogus`",
+        ),
         (vec!["bench", dup.to_str().unwrap()], "appears twice"),
         (
             vec!["bench", "--quick", "--frames", "0"],
@@ -558,6 +574,12 @@ fn bad_bench_input_is_one_line() {
         (vec!["bench", "--quick", "--rounds", "1"], "rounds must be at least 2"),
         (vec!["bench", "--quick", "--ert", "1.5"], "ert must be in (0, 1]"),
         (vec!["bench", "--compare", "/no/a.json", "/no/b.json"], "/no/a.json"),
+        // Input files are checked before they are read: a device never ends.
+        (vec!["bench", "/dev/zero"], "/dev/zero: is not a regular file"),
+        (
+            vec!["bench", "--compare", "/dev/zero", "/dev/zero"],
+            "/dev/zero: is not a regular file",
+        ),
         (vec!["bench", "--quick", "--compare", "a", "b"], "give exactly one of"),
         (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
         (vec!["bench", "--quick", "--size", "100000x100000"], "1..=16384 pixels"),

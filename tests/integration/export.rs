@@ -395,7 +395,7 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
          uint16 holds every value",
         (first * 47 % 105) * 3
     );
-    let cases: [(&[&str], &str); 20] = [
+    let cases: [(&[&str], &str); 21] = [
         (
             &["nbody:9", "{out}/v", "--time", "64"],
             "invalid time '64': nbody:9 has 64 steps, 0 to 63",
@@ -425,6 +425,10 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
             "beyond float32's largest magnitude 3.4028235e38; a raw file cannot hold it",
         ),
         (&["menger:9", "{out}/sponge.raw"], "must be sponge_9x9x9_uint8.raw"),
+        (
+            &["menger:9", "{out}/sponge_9x9x9_uint8.raw.raw"],
+            "must be sponge_9x9x9_uint8.raw (",
+        ),
         (&["menger:9", "{out}/sponge.nrrd"], "export writes raw files, not .nrrd"),
         (
             &["menger:9", "{out}/sponge.NII.GZ"],
