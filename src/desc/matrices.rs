@@ -167,13 +167,24 @@ impl CameraMatrices {
         let mut rays = Rays::orthographic([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
         if self.is_perspective() {
             let w_row = self.projection.row(3).truncate();
-            // The point of the pixel's ray (through the view origin) where clip w = 1.
+            let eye = view_to_world.transform_point3(DVec3::ZERO);
+            // The pixel's ray (through the view origin) at clip w = `depth`,
+            // the eye's distance from the volume's origin (1 where that is
+            // 0): so each point stands as far from the eye in f32 at any
+            // scale, and a frame is the same at any spacing. At w = 1 a
+            // volume of 1e7 units a voxel put every point within the eye's
+            // rounding, and no ray had a direction.
+            let eye_model = if identity {
+                eye
+            } else {
+                world_to_model.transform_point3(eye)
+            };
+            let depth = Some(eye_model.length()).filter(|d| d.is_normal()).unwrap_or(1.0);
             let unit = |ndc: DVec2| {
                 let a = unproject(ndc, near_z);
-                a / w_row.dot(a)
+                a * (depth / w_row.dot(a))
             };
             let [c0, c1, c2] = corners.map(unit);
-            let eye = view_to_world.transform_point3(DVec3::ZERO);
             rays.base = v3(to_voxel_point(view_to_world.transform_point3(c0)));
             rays.du = v3(to_voxel_vector(view_to_world.transform_vector3((c1 - c0) / w)));
             rays.dv = v3(to_voxel_vector(view_to_world.transform_vector3((c2 - c0) / h)));

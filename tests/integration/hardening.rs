@@ -326,3 +326,29 @@ fn a_closed_pipe_ends_output_quietly() {
     assert!(stderr.is_empty(), "{stderr}");
     assert!(!out.status.success(), "lacuna wrote to a closed pipe and succeeded");
 }
+
+/// A perspective frame is the same at any physical scale: its rays were
+/// formed one world unit from the eye, which at 1e7 units a voxel lay
+/// within f32's rounding of the eye, so no ray had a direction and the
+/// march ran into llvmpipe's loop cap ("take a coarser step").
+#[test]
+fn a_perspective_frame_is_the_same_at_every_spacing() {
+    let dir = tempfile::tempdir().unwrap();
+    let data: Vec<u8> = (0..16u32 * 16 * 16).map(|i| ((i * 37) % 251) as u8).collect();
+    let frame = |spacing: f32, accel: &str| {
+        let volume = dir.path().join(format!("v{spacing:e}.nii"));
+        std::fs::write(&volume, common::nifti_bytes(&[16, 16, 16], 2, 8, [spacing; 3], &data)).unwrap();
+        let out = dir.path().join(format!("f{spacing:e}-{accel}.exr"));
+        let args = ["--perspective", "40", "--camera", "35,25", "--accel", accel];
+        common::render_ok(volume.to_str().unwrap(), &out, &args);
+        lacuna::frame::Frame::read_exr(&out).unwrap()
+    };
+    let unit = frame(1.0, "naive");
+    assert!(unit.pixels.iter().any(|p| p[3] > 0.1), "the volume is not in view");
+    for spacing in [1e-10, 1e-3, 1e3, 1e7, 1e25] {
+        for accel in ["naive", "grid"] {
+            let d = lacuna::frame::diff(&unit, &frame(spacing, accel)).unwrap();
+            assert_eq!(d.differing, 0, "spacing {spacing}, {accel}: {d}");
+        }
+    }
+}
