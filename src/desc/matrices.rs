@@ -10,8 +10,10 @@
 //!
 //! Rays, computed in f64 and handed to the shaders in f32 voxel space:
 //! - perspective (the projection's last row is not (0, 0, 0, 1)): rays start at
-//!   the view-space origin (the eye) and pass through the pixel centres on the
-//!   *unit plane*, where clip w = 1 (view depth 1), not the near plane;
+//!   the view-space origin (the eye) and pass through the pixel centres on a
+//!   plane of constant clip w, as far from the eye as the volume's origin
+//!   (not the near plane), so their directions keep f32's precision at any
+//!   scale;
 //! - orthographic: rays start on the view-space plane z = 0 (the eye plane)
 //!   and run from the near towards the far plane.
 //!
@@ -168,18 +170,17 @@ impl CameraMatrices {
         if self.is_perspective() {
             let w_row = self.projection.row(3).truncate();
             let eye = view_to_world.transform_point3(DVec3::ZERO);
-            // The pixel's ray (through the view origin) at clip w = `depth`,
-            // the eye's distance from the volume's origin (1 where that is
-            // 0): so each point stands as far from the eye in f32 at any
-            // scale, and a frame is the same at any spacing. At w = 1 a
-            // volume of 1e7 units a voxel put every point within the eye's
-            // rounding, and no ray had a direction.
-            let eye_model = if identity {
-                eye
-            } else {
-                world_to_model.transform_point3(eye)
-            };
-            let depth = Some(eye_model.length()).filter(|d| d.is_normal()).unwrap_or(1.0);
+            // The pixel's ray (through the view origin) at clip w = `depth`:
+            // the w of a point as far from the eye as the volume's origin
+            // (1 where that is the eye), so in voxel space the points stand
+            // as far from the eye as the eye from the origin, at any scale
+            // of spacing, model or view. At w = 1 a volume of 1e7 units a
+            // voxel put every point within the eye's rounding, and no ray
+            // had a direction.
+            let origin = self.view.transform_point3(self.model.transform_point3(DVec3::ZERO));
+            let depth = Some(origin.length() * w_row.length())
+                .filter(|d| d.is_normal())
+                .unwrap_or(1.0);
             let unit = |ndc: DVec2| {
                 let a = unproject(ndc, near_z);
                 a * (depth / w_row.dot(a))
@@ -228,5 +229,47 @@ impl CameraMatrices {
         rays.voxel_to_ndc = Some(ndc_to_voxel.inverse().as_mat4().to_cols_array_2d());
         rays.far_depth = far_z as f32;
         Ok(rays)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The centre pixel's ray direction and its point's distance from the eye, in voxel space.
+    fn centre_ray(m: &CameraMatrices, spacing: f32) -> (Vec3, f32) {
+        let r = m.rays([spacing; 3], 2, 2).unwrap();
+        let (base, du, dv, eye) = (
+            Vec3::from(r.base),
+            Vec3::from(r.du),
+            Vec3::from(r.dv),
+            Vec3::from(r.eye_or_dir),
+        );
+        let along = base + du + dv - eye;
+        (along / along.length(), along.length())
+    }
+
+    #[test]
+    fn perspective_rays_keep_their_direction_at_any_scale_of_spacing_model_or_view() {
+        let projection = perspective(0.5, 1.0, 0.1, 1e3);
+        let look = |eye: DVec3, at: DVec3| glam::dcamera::rh::view::look_at_mat4(eye, at, DVec3::Y);
+        let eye = DVec3::new(40.0, 25.0, 60.0);
+        let at = DVec3::splat(8.0);
+        let unit = CameraMatrices::new(look(eye, at), projection);
+        let (dir, _) = centre_ray(&unit, 1.0);
+        for k in [1e-10, 1e-3, 1e3, 1e7, 1e25] {
+            // The same scene in physical units k times larger, by the
+            // spacing, by a model scale, and by both.
+            let far = CameraMatrices::new(look(eye * k, at * k), projection);
+            let scaled = far.with_model(DMat4::from_scale(DVec3::splat(k)));
+            let both = CameraMatrices::new(look(eye * k * k, at * k * k), projection)
+                .with_model(DMat4::from_scale(DVec3::splat(k)));
+            for (what, m, spacing) in [("spacing", far, k), ("model", scaled, 1.0), ("both", both, k)] {
+                let (d, apart) = centre_ray(&m, spacing as f32);
+                assert!(d.abs_diff_eq(dir, 1e-5), "{what} x {k}: {d} against {dir}");
+                // As far from the eye as the eye from the origin (74 voxels).
+                assert!(apart > 10.0, "{what} x {k}: the point is {apart} voxels from the eye");
+            }
+        }
     }
 }

@@ -490,7 +490,7 @@ fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>> {
     if len > limit {
         return Err(Error::format(
             path,
-            format!("holds {len} bytes, more than the {limit} bytes the NRRD header describes"),
+            format!("holds {len} bytes, more than the {limit} bytes the NRRD header allows for"),
         ));
     }
     crate::limits::check_host(format_args!("NRRD file {}", path.display()), len, 1)?;
