@@ -246,6 +246,27 @@ fn hostile_files_are_one_line_errors() {
         false,
         &["NIfTI dim[0] is 9 read little-endian and 2304 big-endian"],
     );
+    // Spacings past f32's range (0 or inf as the volume keeps them), and
+    // a zero direction: named by the field the file gives them in.
+    for (name, field, needle) in [
+        (
+            "tiny.nrrd",
+            "spacings: 1e-300 1 1",
+            "NRRD spacings must be three positive numbers within f32's range, not 1e-300 1 1",
+        ),
+        ("huge.nrrd", "spacings: 1 1e308 1", "within f32's range, not 1 1e308 1"),
+        (
+            "flat.nrrd",
+            "space directions: (0,0,0) (0,1,0) (0,0,1)",
+            "NRRD space directions' lengths must be three positive numbers within f32's range, not 0 1 1",
+        ),
+    ] {
+        let mut bytes =
+            format!("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\n{field}\nencoding: raw\n\n").into_bytes();
+        bytes.extend([0u8; 64]);
+        std::fs::write(p(name), bytes).unwrap();
+        fails(dir.path(), &["info", &p(name)], false, &[needle]);
+    }
     // An attached NRRD far longer than its header describes: refused
     // from its length, before its data is read.
     let long = p("long.nrrd");

@@ -318,9 +318,32 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
     } else {
         vec![1.0; 3]
     };
+    // Checked as f32, as the volume keeps them (1e-300 would be 0, 1e308 inf).
+    let field = if get("spacings").is_some() {
+        "spacings"
+    } else {
+        "space directions' lengths"
+    };
     let spacing = match spacing.as_slice() {
-        [x, y, z] if [x, y, z].iter().all(|v| v.is_finite() && **v > 0.0) => [*x as f32, *y as f32, *z as f32],
-        _ => return Err(Error::format(path, "NRRD spacings must be three positive numbers")),
+        [x, y, z] if [x, y, z].iter().all(|v| (**v as f32).is_finite() && **v as f32 > 0.0) => {
+            [*x as f32, *y as f32, *z as f32]
+        }
+        other => {
+            let given: Vec<String> = other
+                .iter()
+                .map(|v| match *v == 0.0 || (1e-6..1e15).contains(&v.abs()) {
+                    true => v.to_string(),
+                    false => format!("{v:e}"),
+                })
+                .collect();
+            return Err(Error::format(
+                path,
+                format!(
+                    "NRRD {field} must be three positive numbers within f32's range, not {}",
+                    given.join(" ")
+                ),
+            ));
+        }
     };
 
     let skip: u64 = get("byte skip").map_or(Ok(0), |s| {
