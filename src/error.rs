@@ -110,6 +110,16 @@ impl Error {
     }
 }
 
+/// A number as a message or a report writes it: as `Display` does (the
+/// shortest text that reads back), in exponent form where that would run
+/// to many digits (1e300, 1.5e-30).
+pub fn number(v: f64) -> String {
+    match v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
+        true => format!("{v:e}"),
+        false => format!("{v}"),
+    }
+}
+
 /// The most characters of input an error echoes, and of a whole message:
 /// a 100 MB header line is named, not printed.
 const ECHOED_INPUT: usize = 200;
@@ -168,6 +178,17 @@ impl<T> VkContext<T> for std::result::Result<T, ash::vk::Result> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_print_as_written_or_in_exponent_form_past_many_digits() {
+        assert_eq!(number(250.0), "250");
+        assert_eq!(number(-0.5), "-0.5");
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(1e300), "1e300");
+        assert_eq!(number(-1e300), "-1e300");
+        assert_eq!(number(1.5e-30), "1.5e-30");
+        assert_eq!(number(f64::INFINITY), "inf");
+    }
     use ash::vk;
 
     #[test]

@@ -7,13 +7,10 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Staging, Timer};
 use crate::prims::brick_minmax::{brick_counts, coarsens_exactly, BrickMinMax};
 use crate::prims::entry_barrier;
-use crate::volume::GpuVolume;
+use crate::volume::{GpuVolume, APRON};
 
 /// Brick edge in voxels for the LBVH and classification.
 pub const BRICK: u32 = crate::volume::BRICK;
-
-/// The apron of brick ranges (`volume::APRON`).
-pub const APRON: u32 = crate::volume::APRON;
 
 pub struct GpuBricks {
     pub brick: u32,

@@ -11,8 +11,9 @@
 //! scaled and normalised by the same float operations
 //! (`glsl/prims/brick_minmax.comp`, `take_cells`; tests/integration/cells.rs).
 
-use super::bricks::{GpuBricks, APRON};
+use super::bricks::GpuBricks;
 use crate::gpu::Buffer;
+use crate::volume::APRON;
 use crate::volume::{GpuVolume, Volume, VoxelData};
 use rayon::prelude::*;
 

@@ -123,7 +123,7 @@ impl Classifier {
                     counts: [c[0], c[1], c[2], bricks.total as u32],
                     lo: volume.norms.map(|n| n[0]),
                     scale: volume.norms.map(|n| n[1]),
-                    apron: if apron { super::bricks::APRON } else { 0 },
+                    apron: if apron { crate::volume::APRON } else { 0 },
                     groups_x: groups[0],
                     lut_size: LUT_SIZE as u32,
                     channels: volume.channels,

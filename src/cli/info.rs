@@ -2,6 +2,7 @@
 
 use super::{context, tf_for, VolumeArgs};
 use clap::Args;
+use lacuna::error::number;
 use lacuna::volume::{BrickGrid, PoolLayout, Storage, BRICK, POOL_BRICK};
 use lacuna::{Result, TransferFunction};
 use std::process::ExitCode;
@@ -34,7 +35,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     );
     println!("type     {}", v.source_type);
     println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
-    println!("values   {} .. {}", value(v.value_range[0]), value(v.value_range[1]));
+    println!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1]));
     let d = v.no_data;
     if d.total() > 0 {
         println!(
@@ -109,30 +110,4 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// A value as `Display` writes it (the shortest that reads back), in
-/// exponent form where that would run to many digits (1e300, 1e-30).
-fn value(v: impl Into<f64>) -> String {
-    let v: f64 = v.into();
-    match v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
-        true => format!("{v:e}"),
-        false => format!("{v}"),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::value;
-
-    #[test]
-    fn values_print_as_written_or_in_exponent_form_past_many_digits() {
-        assert_eq!(value(250.0), "250");
-        assert_eq!(value(-0.5), "-0.5");
-        assert_eq!(value(0.0), "0");
-        assert_eq!(value(1e300), "1e300");
-        assert_eq!(value(-1e300), "-1e300");
-        assert_eq!(value(1.5e-30), "1.5e-30");
-        assert_eq!(value(f64::INFINITY), "inf");
-    }
 }

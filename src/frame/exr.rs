@@ -68,11 +68,8 @@ impl Frame {
     pub fn read_exr(path: &Path) -> Result<Frame> {
         // The magic number before the file: a large file of anything else
         // is refused without reading it.
-        let (file, _) = crate::limits::open_input(path)?;
-        let mut magic = Vec::new();
-        std::io::Read::read_to_end(&mut std::io::Read::take(file, 4), &mut magic)
-            .map_err(|e| crate::Error::io(path, e))?;
-        if magic != [0x76, 0x2f, 0x31, 0x01] {
+        let (mut file, _) = crate::limits::open_input(path)?;
+        if !exr::meta::magic_number::is_exr(&mut file).unwrap_or(false) {
             return Err(crate::Error::format(
                 path,
                 "not an EXR file (it does not start with EXR's magic number)",

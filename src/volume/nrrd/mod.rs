@@ -123,11 +123,7 @@ pub fn steps(path: &Path) -> Result<u32> {
     match parse(path, &head, true, None, None) {
         Ok((_, steps)) => Ok(steps),
         Err(_) if !holds_header(&head) => {
-            let (file, _) = crate::limits::open_input(path)?;
-            let mut longer = Vec::new();
-            file.take(crate::limits::MAX_TEXT_INPUT)
-                .read_to_end(&mut longer)
-                .map_err(|e| Error::io(path, e))?;
+            let longer = first_bytes(path, crate::limits::MAX_TEXT_INPUT)?;
             parse(path, &longer, true, None, None).map(|v| v.1)
         }
         Err(e) => Err(e),
@@ -329,13 +325,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
             [*x as f32, *y as f32, *z as f32]
         }
         other => {
-            let given: Vec<String> = other
-                .iter()
-                .map(|v| match *v == 0.0 || (1e-6..1e15).contains(&v.abs()) {
-                    true => v.to_string(),
-                    false => format!("{v:e}"),
-                })
-                .collect();
+            let given: Vec<String> = other.iter().map(|v| crate::error::number(*v)).collect();
             return Err(Error::format(
                 path,
                 format!(
@@ -485,11 +475,14 @@ fn short_data(source: &Path, h: &Header, len: u64) -> Error {
 
 /// The first 64 KiB of `path`, where a header is read from (headers are short).
 fn head(path: &Path) -> Result<Vec<u8>> {
+    first_bytes(path, HEAD_BYTES as u64)
+}
+
+/// The first `n` bytes of `path` (all of a shorter file).
+fn first_bytes(path: &Path, n: u64) -> Result<Vec<u8>> {
     let (file, _) = crate::limits::open_input(path)?;
     let mut head = Vec::new();
-    file.take(HEAD_BYTES as u64)
-        .read_to_end(&mut head)
-        .map_err(|e| Error::io(path, e))?;
+    file.take(n).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
     Ok(head)
 }
 
