@@ -471,7 +471,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &params)?;

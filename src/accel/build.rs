@@ -28,7 +28,7 @@ impl Builder {
         if !accel.method().marches(&input.mode) {
             return Ok((fallback(accel, params, input), Timings::default()));
         }
-        if let Some(frame) = input.frame.filter(|f| !f.mode().same_classification(&input.mode)) {
+        if let Some(frame) = input.frames.iter().find(|f| !f.mode().same_classification(&input.mode)) {
             return Err(crate::error::Error::invalid(
                 "build frame",
                 frame.mode().name(),

@@ -32,11 +32,11 @@ impl March {
 
 /// What a build reads: the volume and transfer function on the host (for
 /// host-built structures) and on the GPU, the mode of the frames it is
-/// for (what "empty" means: `accel::mode`), and optionally such a frame
-/// itself (camera, step, early termination, filter, size), which `auto`
-/// prices its candidates on (None: the default orbit at 512x512), and the
-/// ray direction octants of the frames it will serve (octant distance maps
-/// compute only those: `Octants::ALL` where unknown).
+/// for (what "empty" means: `accel::mode`), optionally such frames
+/// themselves (camera, step, early termination, filter, size), which `auto`
+/// prices its candidates on, and the ray direction octants of the frames it
+/// will serve (octant distance maps compute only those: `Octants::ALL`
+/// where unknown).
 #[derive(Clone, Copy)]
 pub struct BuildInput<'a> {
     pub volume: &'a Volume,
@@ -44,7 +44,12 @@ pub struct BuildInput<'a> {
     pub tf: &'a TransferFunction,
     pub gpu_tf: &'a GpuTransferFunction,
     pub mode: Mode,
-    pub frame: Option<&'a FrameDesc>,
+    /// The frames the structure will march (camera, size, step, early
+    /// termination, filter, mode), the first the one a build for another
+    /// mode's classification is checked against; auto prices its candidates
+    /// on up to four of them, evenly spread (`auto::choose::PRICED_VIEWS`). Empty:
+    /// none named (auto prices on the default orbit at 512x512).
+    pub frames: &'a [FrameDesc],
     /// The ray direction octants the frames marched with the structure
     /// will have (`FrameDesc::octants`). An octant map marches a frame with
     /// other octants exactly, cell by cell on those (`DistanceMap`).

@@ -67,6 +67,17 @@ pub struct Counts {
 }
 
 impl Counts {
+    /// These counts and `other`'s together.
+    pub fn plus(&self, other: &Counts) -> Counts {
+        Counts {
+            rays: self.rays + other.rays,
+            samples: self.samples + other.samples,
+            steps: self.steps + other.steps,
+            regions: self.regions + other.regions,
+            ray_samples: self.ray_samples + other.ray_samples,
+        }
+    }
+
     /// These counts scaled from the probed tiles to the whole frame.
     pub fn scaled(&self, factor: f64) -> [f64; 4] {
         [self.rays, self.samples, self.steps, self.regions].map(|c| c as f64 * factor)

@@ -14,7 +14,7 @@ use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
 use super::schedule::{schedule, spread, warm_up};
 use super::series::{StepBench, StepRecord};
-use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedAs, MarchedKind, Params, Structure};
+use crate::accel::{Accel, BuildInput, Builder, CostModel, MarchedKind, Params, Structure};
 use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
@@ -318,7 +318,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             tf,
             gpu_tf: &lut,
             mode,
-            frame: Some(&first),
+            frames: &views,
             // Every view of the orbit marches the structures built once.
             octants: FrameDesc::octants_of(&views, v.dims, v.spacing)?,
         };
@@ -437,13 +437,15 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 ));
             }
             // A structure that found nothing to skip, or does not skip in
-            // the frames' mode, says so.
-            let fell_back = |m: &MarchedAs| matches!(m.kind, MarchedKind::NothingToSkip | MarchedKind::ModeFallback);
-            if let Some(m) = run.structure.marched_as_reason().filter(fell_back) {
-                out.notes.push(format!(
-                    "{} - {}: marched with the naive kernel ({})",
-                    loaded.spec, s.label, m.reason
-                ));
+            // the frames' mode, says so; auto says what it chose and why.
+            if let Some(m) = run.structure.marched_as_reason() {
+                let note = match m.kind {
+                    MarchedKind::NothingToSkip | MarchedKind::ModeFallback => {
+                        format!("marched with the naive kernel ({})", m.reason)
+                    }
+                    MarchedKind::Choice => format!("chose {} ({})", m.label, m.reason),
+                };
+                out.notes.push(format!("{} - {}: {note}", loaded.spec, s.label));
             }
             if unstable {
                 out.notes.push(format!(

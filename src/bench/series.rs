@@ -130,7 +130,7 @@ impl StepBench<'_> {
                     tf: self.tf,
                     gpu_tf: self.lut,
                     mode: *self.desc.mode(),
-                    frame: Some(self.desc),
+                    frames: std::slice::from_ref(self.desc),
                     octants: self.desc.octants(volume.dims, volume.spacing)?,
                 };
                 let step = builders[i].build_step(s.accel, &s.params, choices[i].as_ref(), &input)?;

@@ -147,7 +147,7 @@ pub(super) fn build_and_render(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
-        frame: Some(desc),
+        frames: std::slice::from_ref(desc),
         octants: desc.octants(volume.dims, volume.spacing)?,
     };
     let (mut structure, build) = build(&builder, args, &input, params)?;

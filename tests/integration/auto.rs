@@ -53,7 +53,7 @@ fn build_with(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
-        frame: Some(desc),
+        frames: std::slice::from_ref(desc),
         octants: Octants::ALL,
     };
     builder.build(auto, &input, &ranges, &params).unwrap().0
@@ -186,7 +186,7 @@ fn probe_counts_are_the_lattices_samples() {
         tf: &empty,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let (map, _) = builder.build(distance, &input, &ranges, &params).unwrap();
@@ -332,7 +332,7 @@ fn auto_equals_naive_in_every_look_storage_and_channel_count() {
                 tf: &tf,
                 gpu_tf: &p.lut,
                 mode,
-                frame: Some(&view),
+                frames: std::slice::from_ref(&view),
                 octants: Octants::ALL,
             };
             let s = fx.builder.build(auto, &input, &p.ranges, &untimed).unwrap().0;
@@ -493,7 +493,7 @@ fn naive_counts_derived_from_a_structures_march_are_naives_own() {
                     tf: &tf,
                     gpu_tf: &lut,
                     mode: *desc.mode(),
-                    frame: Some(&desc),
+                    frames: std::slice::from_ref(&desc),
                     octants: Octants::ALL,
                 };
                 let (s, _) = builder.build(accel, &input, &ranges, &params).unwrap();

@@ -60,7 +60,7 @@ fn frame(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, &accel.defaults()).unwrap();

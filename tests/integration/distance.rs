@@ -62,7 +62,7 @@ fn composite_input<'a>(
         tf,
         gpu_tf,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants,
     }
 }

@@ -51,7 +51,7 @@ fn occludes_with(accel: &str) {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let naive_accel = common::accel("naive");

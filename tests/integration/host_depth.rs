@@ -146,7 +146,7 @@ fn iso_depth_in_the_host_buffer_is_the_references_ndc_depth_for_every_structure(
             tf: &tf,
             gpu_tf: &lut,
             mode: iso,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         let s = builder.build(a, &input, &ranges, &a.defaults()).unwrap().0;

@@ -54,7 +54,7 @@ fn fixture(names: &[&str]) -> Fixture {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let structures = wanted

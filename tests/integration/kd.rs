@@ -174,7 +174,7 @@ fn cpu_and_gpu_trees_are_tight_disjoint_and_covering() {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         for (kd, collapse) in params.into_iter().flat_map(|kd| [(kd, false), (kd, true)]) {

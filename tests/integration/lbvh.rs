@@ -75,7 +75,7 @@ fn gpu_lbvh_with(builder: &Builder, v: &Volume, tf: &TransferFunction, params: &
         tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let (s, t) = builder.build(common::accel("lbvh"), &scene, &ranges, params).unwrap();
@@ -278,7 +278,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             tf: &tf,
             gpu_tf: &lut,
             mode: Mode::Composite,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);

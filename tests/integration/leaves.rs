@@ -62,7 +62,7 @@ fn with_input<T>(
         tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     f(&builder, &input, &ranges)

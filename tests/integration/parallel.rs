@@ -149,7 +149,7 @@ fn rendered_in_parts(
             tf,
             gpu_tf: &lut,
             mode: *desc.mode(),
-            frame: Some(&part_desc),
+            frames: std::slice::from_ref(&part_desc),
             octants: Octants::ALL,
         };
         let mut frames: Vec<(Accel, Frame)> = Vec::new();

@@ -273,7 +273,7 @@ fn a_structure_outside_the_table_builds_records_and_renders_exactly() {
         tf: &tf,
         gpu_tf: &lut,
         mode: Mode::Composite,
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     // Submitted by the default `Method::build`, and recorded into ours.

@@ -315,7 +315,7 @@ fn frames_split_into_bands_equal_the_whole_frame() {
             tf: &tf,
             gpu_tf: &lut,
             mode: lacuna::render::Mode::Composite,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         let (structure, _) = builder.build(accel, &input, &ranges, &params).unwrap();

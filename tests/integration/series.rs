@@ -284,7 +284,7 @@ fn auto_keeps_its_choice_across_steps_while_the_active_share_holds() {
             tf: &tf,
             gpu_tf: &p.lut,
             mode: *view.mode(),
-            frame: Some(view),
+            frames: std::slice::from_ref(view),
             octants: Octants::ALL,
         };
         let step = fx.builder.build_step(accel, params, last, &input).unwrap();

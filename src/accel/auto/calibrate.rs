@@ -170,7 +170,7 @@ pub fn calibrate(
             tf: &tf,
             gpu_tf: &lut,
             mode,
-            frame: None,
+            frames: &[],
             octants: Octants::ALL,
         };
         let first_probe = probes.len();

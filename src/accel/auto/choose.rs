@@ -14,7 +14,7 @@ use super::super::naive::NAIVE;
 use super::super::params::Params;
 use super::super::probe::Counts;
 use super::super::probe::TIME_TILES;
-use crate::desc::Mode;
+use crate::desc::{FrameDesc, Mode};
 use crate::error::Result;
 use crate::gpu::DeviceInfo;
 
@@ -41,6 +41,21 @@ pub const OCTANT_CELLS: u64 = 1 << 18;
 /// tiles: the model's predictions were within about 20 % of the frames
 /// measured on lavapipe (`docs/results/auto.md`).
 pub const CLOSE: f64 = 0.3;
+/// The most views of a build's frames auto prices its candidates on
+/// (`priced_views`). A structure built once for an orbit marches every
+/// view, and on ch2 at ERT off the octant map at cell 4 and at cell 8 tied
+/// on the first view of `--suite auto`'s orbit where cell 8 was 10 to 15 %
+/// faster on the other three (`docs/results/auto.md`): priced on the first
+/// view alone, the choice was a coin toss that cost the orbit 15 %.
+pub const PRICED_VIEWS: usize = 4;
+
+/// The views of `frames` auto prices on: all of them up to
+/// [`PRICED_VIEWS`], else that many spread evenly from the first.
+pub fn priced_views(frames: &[FrameDesc]) -> Vec<FrameDesc> {
+    let n = frames.len().min(PRICED_VIEWS);
+    (0..n).map(|i| frames[i * frames.len() / n]).collect()
+}
+
 /// A skipping structure predicted less than this much faster than naive
 /// marching is timed against it before it is chosen: a wrong prediction
 /// must not leave the default slower than naive.
@@ -211,10 +226,13 @@ pub fn candidates(info: &DeviceInfo, dims: [u32; 3], mode: &Mode, tree: bool) ->
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Priced {
     pub label: String,
+    /// Summed over the priced views' probe tiles.
     pub counts: Counts,
-    /// Predicted milliseconds for the whole frame.
+    /// Predicted milliseconds for a whole frame: the mean over the priced
+    /// views.
     pub predicted: f64,
-    /// Milliseconds on the probe tiles, when timed.
+    /// Milliseconds on the probe tiles of every priced view together,
+    /// when timed.
     pub trial: Option<f64>,
 }
 
@@ -324,6 +342,33 @@ pub fn range_kinds(candidates: &[Candidate]) -> Result<Vec<RangeKind>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_orbit_is_priced_on_up_to_four_views_spread_evenly() {
+        let orbit = |n: usize| -> Vec<FrameDesc> {
+            (0..n)
+                .map(|i| {
+                    let az = 360.0 * i as f64 / n as f64;
+                    let ortho = crate::desc::Projection::Orthographic;
+                    FrameDesc::builder(8, 8).orbit(az, 20.0, ortho).build().unwrap()
+                })
+                .collect()
+        };
+        for (n, want) in [
+            (1, vec![0]),
+            (3, vec![0, 1, 2]),
+            (4, vec![0, 1, 2, 3]),
+            (6, vec![0, 1, 3, 4]),
+            (12, vec![0, 3, 6, 9]),
+        ] {
+            let frames = orbit(n);
+            let got: Vec<usize> = priced_views(&frames)
+                .iter()
+                .map(|v| frames.iter().position(|f| f == v).unwrap())
+                .collect();
+            assert_eq!(got, want, "{n} views");
+        }
+    }
 
     fn priced(times: &[f64]) -> Vec<Priced> {
         times

@@ -15,9 +15,11 @@
 //! frame's tiles, or on the whole frame where it is predicted to take only
 //! a few milliseconds (`choose::to_time`, `choose::trial_tiles`).
 //!
-//! The frame is the one the build is for (`BuildInput::frame`: camera,
+//! The frames are those the build is for (`BuildInput::frames`: camera,
 //! step, early termination, sample filter, size, mode), so the choice
-//! accounts for all of them. Re-made on every build, i.e. every transfer
+//! accounts for all of them; a build for several views (an orbit) is
+//! priced and timed on up to `choose::PRICED_VIEWS` of them, the probe
+//! tiles shared among them. Re-made on every build, i.e. every transfer
 //! function change; a new time step keeps it while it holds (`keep.rs`,
 //! `Builder::build_step`). See `docs/structures.md`, "auto".
 
@@ -49,7 +51,7 @@ use std::time::Instant;
 const TRIAL_ROUNDS: usize = 3;
 
 /// The size of the frame auto prices candidates on when the build names
-/// none (`BuildInput::frame` None): the default orbit at this size.
+/// none (`BuildInput::frames` empty): the default orbit at this size.
 pub const DEFAULT_FRAME: u32 = 512;
 
 /// What auto chose and why.
@@ -246,14 +248,14 @@ impl Method for AutoMethod {
         ranges: &Ranges,
         p: &Params,
     ) -> Result<(Box<dyn Built>, Timings)> {
-        let frame = match input.frame {
-            Some(f) => *f,
-            None => FrameDesc::builder(DEFAULT_FRAME, DEFAULT_FRAME)
+        let views = match input.frames.is_empty() {
+            true => vec![FrameDesc::builder(DEFAULT_FRAME, DEFAULT_FRAME)
                 .mode(input.mode)
-                .build()?,
+                .build()?],
+            false => choose::priced_views(input.frames),
         };
         let tree = choose::prices_tree(builder.context().info(), p.choice("tree")?);
-        let (choice, inner, timings) = choose(builder, input, ranges, &frame, p.choice("trial")?, tree)?;
+        let (choice, inner, timings) = choose(builder, input, ranges, &views, p.choice("trial")?, tree)?;
         Ok((Box::new(Chosen { choice, inner }), timings))
     }
 }
@@ -261,6 +263,22 @@ impl Method for AutoMethod {
 /// auto's choice, where `s` is auto's build.
 pub fn choice_of(s: &Structure) -> Option<&Choice> {
     s.built_as::<Chosen>().map(|c| &c.choice)
+}
+
+/// One probe of `tiles` tiles per view (every tile at `u32::MAX`). Not
+/// fewer per view: the probe's blocks of tiles lie on a grid from the
+/// frame's corner, and a sparser grid left ch2's few blocks mostly on its
+/// background, where naive marching looked fastest.
+fn probes_of<'a>(
+    builder: &Builder,
+    input: &BuildInput<'a>,
+    views: &[FrameDesc],
+    tiles: u32,
+) -> Result<Vec<FrameProbe<'a>>> {
+    views
+        .iter()
+        .map(|v| FrameProbe::new(builder, input.gpu_volume, input.tf, v, tiles))
+        .collect()
 }
 
 /// `items` without those whose `cut` is true (the two run in step).
@@ -280,7 +298,7 @@ fn choose(
     builder: &Builder,
     input: &BuildInput,
     ranges: &Ranges,
-    frame: &FrameDesc,
+    views: &[FrameDesc],
     trial: &str,
     tree: bool,
 ) -> Result<(Choice, Box<dyn Built>, Timings)> {
@@ -288,7 +306,9 @@ fn choose(
     let info = ctx.info();
     // Every frame is refused past the device's loop cap: no candidate's
     // build or counting frame is worth running then.
-    frame.check_loop_passes(info, input.volume.dims)?;
+    for view in views {
+        view.check_loop_passes(info, input.volume.dims)?;
+    }
     let (all, mut notes) = choose::candidates(info, input.volume.dims, &input.mode, tree)?;
     let mut timings = Timings::default();
     let mut candidates = Vec::new();
@@ -317,33 +337,37 @@ fn choose(
     let mut whole_frames = false;
     let mut for_tree = false;
     if built.len() > 1 {
-        let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, COUNT_TILES)?;
         let start = Instant::now();
+        let probes = probes_of(builder, input, views, COUNT_TILES)?;
         // Naive's counts come with the other candidates' (their counting
         // frames derive them): naive's own march is the dearest to count.
         let naive = |s: &Structure| s.marched_as().is_naive();
         let others = built.iter().any(|s| !naive(s));
         let counted: Vec<&Structure> = built.iter().filter(|s| !(others && naive(s))).collect();
-        probe.prepare(&counted, true)?;
-        let mut counts: Vec<Option<Counts>> = vec![None; built.len()];
-        let mut derived = None;
+        probes[0].prepare(&counted, true)?;
+        // Per candidate, per view.
+        let mut counts: Vec<Vec<Option<Counts>>> = vec![vec![None; probes.len()]; built.len()];
+        let mut derived: Vec<Option<Counts>> = vec![None; probes.len()];
         let mut cut = vec![false; built.len()];
-        for (i, s) in built.iter().enumerate().filter(|(_, s)| !naive(s)) {
-            match probe.count_both(s) {
-                Ok((own, from)) => {
-                    counts[i] = Some(own);
-                    derived = derived.or(from);
+        'candidates: for (i, s) in built.iter().enumerate().filter(|(_, s)| !naive(s)) {
+            for (v, probe) in probes.iter().enumerate() {
+                match probe.count_both(s) {
+                    Ok((own, from)) => {
+                        counts[i][v] = Some(own);
+                        derived[v] = derived[v].or(from);
+                    }
+                    // A device's loop cap cut its march on the probed tiles:
+                    // its frame would be refused, so it is no candidate.
+                    Err(Error::LoopCap { groups, .. }) => {
+                        cut[i] = true;
+                        notes.push(format!(
+                            "{}: its counting frame ran into the device's loop cap in {groups} SIMD group(s), so it is left out",
+                            candidates[i].label
+                        ));
+                        continue 'candidates;
+                    }
+                    Err(e) => return Err(e),
                 }
-                // A device's loop cap cut its march on the probed tiles:
-                // its frame would be refused, so it is no candidate.
-                Err(Error::LoopCap { groups, .. }) => {
-                    cut[i] = true;
-                    notes.push(format!(
-                        "{}: its counting frame ran into the device's loop cap in {groups} SIMD group(s), so it is left out",
-                        candidates[i].label
-                    ));
-                }
-                Err(e) => return Err(e),
             }
         }
         candidates = without_cut(std::mem::take(&mut candidates), &cut);
@@ -352,14 +376,20 @@ fn choose(
         let counts = built
             .iter()
             .zip(counts)
-            .map(|(s, c)| match (c, derived) {
-                (Some(c), _) => Ok(c),
-                (None, Some(n)) => Ok(n),
-                (None, None) => probe.count(s),
+            .map(|(s, per_view)| {
+                let per_view = per_view.into_iter().zip(&derived).zip(&probes);
+                per_view
+                    .map(|((c, d), probe)| match (c, d) {
+                        (Some(c), _) => Ok(c),
+                        (None, Some(n)) => Ok(*n),
+                        (None, None) => probe.count(s),
+                    })
+                    .collect::<Result<Vec<_>>>()
             })
             .collect::<Result<Vec<_>>>()?;
         timings.push("count", start.elapsed().as_secs_f64() * 1e3);
         let table = builder.shared::<CostTable>()?;
+        let frame = &views[0];
         let constants = frame.kernel_constants(input.gpu_volume);
         let start = Instant::now();
         let mut calibrated = false;
@@ -378,10 +408,15 @@ fn choose(
             if !model.contains(&source) {
                 model.push(source);
             }
+            let predicted = counts
+                .iter()
+                .zip(&probes)
+                .map(|(c, probe)| cost.predict(c.scaled(probe.scale())))
+                .sum::<f64>();
             priced.push(Priced {
                 label: c.label.clone(),
-                counts: *counts,
-                predicted: cost.predict(counts.scaled(probe.scale())),
+                counts: counts.iter().fold(Counts::default(), |a, c| a.plus(c)),
+                predicted: predicted / probes.len() as f64,
                 trial: None,
             });
         }
@@ -401,14 +436,18 @@ fn choose(
         if !timed.is_empty() {
             let start = Instant::now();
             let tiles = choose::trial_tiles(&priced, &timed);
-            let probe = FrameProbe::new(builder, input.gpu_volume, input.tf, frame, tiles)?;
+            let probes = probes_of(builder, input, views, tiles)?;
             // Small frames are whole at any wish.
-            whole_frames = probe.whole_frame();
-            let pairs: Vec<(&FrameProbe, &Structure)> = timed.iter().map(|&i| (&probe, &built[i])).collect();
-            probe.prepare(&pairs.iter().map(|p| p.1).collect::<Vec<_>>(), false)?;
+            whole_frames = probes.iter().all(FrameProbe::whole_frame);
+            let pairs: Vec<(&FrameProbe, &Structure)> = timed
+                .iter()
+                .flat_map(|&i| probes.iter().map(move |p| (p, i)))
+                .map(|(p, i)| (p, &built[i]))
+                .collect();
+            probes[0].prepare(&timed.iter().map(|&i| &built[i]).collect::<Vec<_>>(), false)?;
             let times = time_interleaved(ctx, &pairs, TRIAL_ROUNDS, Statistic::Least)?;
-            for (&i, t) in timed.iter().zip(times) {
-                priced[i].trial = Some(t);
+            for (&i, t) in timed.iter().zip(times.chunks(probes.len())) {
+                priced[i].trial = Some(t.iter().sum());
             }
             timings.push("trial", start.elapsed().as_secs_f64() * 1e3);
         }

@@ -143,7 +143,7 @@ pub fn run(ctx: &Context, only: &Selection, mut on_case: impl FnMut(&str)) -> Re
                 tf: &tf,
                 gpu_tf: &lut,
                 mode: *views[0].mode(),
-                frame: Some(&views[0]),
+                frames: &views[..1],
                 octants: FrameDesc::octants_of(&views, v.dims, v.spacing)?,
             };
             let mut structures = Vec::new();

@@ -208,7 +208,7 @@ impl Scene {
             tf: &self.tf,
             gpu_tf: &self.lut,
             mode: self.mode,
-            frame: Some(desc),
+            frames: std::slice::from_ref(desc),
             octants,
         };
         match &self.ranges {

@@ -139,7 +139,7 @@ impl Fixture {
             tf: p.tf,
             gpu_tf: &p.lut,
             mode: p.mode,
-            frame: None,
+            frames: &[],
             octants,
         };
         self.builder.build(accel, &scene, &p.ranges, params).unwrap().0

@@ -114,7 +114,7 @@ pub fn try_render_with(
         tf,
         gpu_tf: &lut,
         mode: *desc.mode(),
-        frame: None,
+        frames: &[],
         octants: Octants::ALL,
     };
     let (structure, _) = builder.build(accel, &input, &ranges, params).unwrap();
