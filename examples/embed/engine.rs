@@ -72,6 +72,9 @@ pub struct Rendered {
     pub timings: Timings,
     /// Validation messages (with `validate`).
     pub validation: Vec<String>,
+    /// Command buffers lacuna submitted on the engine's queue: none, as it
+    /// only records (`Context::submissions`).
+    pub lacuna_submissions: u64,
 }
 
 struct Device {
@@ -263,7 +266,9 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
     let size = settings.size;
     // SAFETY: the handles were created above with what `enabled` says and
     // outlive the context (dropped at the end of this function); lacuna only
-    // records here, so it never submits on the engine's queue.
+    // records here, so it never submits on the engine's queue (the test
+    // checks `Context::submissions`), and the engine submits lacuna's
+    // commands to a queue of `host.family`, the family adopted.
     let ctx = unsafe {
         Context::adopt(AdoptInfo {
             entry: settings.validate.then(|| host.entry.clone()),
@@ -562,6 +567,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             depth: bytemuck::pod_collect_to_vec(depth_out.bytes()),
             timings: timer.results().map_err(err)?,
             validation: ctx.take_validation_messages().iter().map(|m| m.to_string()).collect(),
+            lacuna_submissions: ctx.submissions(),
         })
     });
     unsafe {

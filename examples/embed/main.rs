@@ -34,12 +34,13 @@ fn main() {
     let volume = rendered.volume.pixels.iter().filter(|p| p[3] > 0.0).count();
     let lit = rendered.mesh.pixels.iter().filter(|p| p[3] > 0.0).count();
     println!(
-        "wrote {} ({}x{}): cube {cube} pixels ({lit} lit), volume {volume} pixels; build classify {}, march {}",
+        "wrote {} ({}x{}): cube {cube} pixels ({lit} lit), volume {volume} pixels; build classify {}, march {}; lacuna's own submissions {}",
         out.display(),
         settings.size,
         settings.size,
         ms("classify"),
-        ms("march")
+        ms("march"),
+        rendered.lacuna_submissions
     );
     if !rendered.validation.is_empty() {
         for m in &rendered.validation {

@@ -276,19 +276,40 @@ impl serde::Serialize for Accel {
     }
 }
 
-/// A built structure with the entry that built it.
+/// A built structure with the entry that built it. Read through its
+/// methods: its kernel, bindings and mode must stay those it was built with.
 pub struct Structure {
-    pub accel: Accel,
-    pub params: Params,
+    pub(crate) accel: Accel,
+    pub(crate) params: Params,
     /// The mode of the frames it was built for (None: any, as naive).
-    pub mode: Option<Mode>,
-    pub built: Box<dyn Built>,
+    pub(crate) mode: Option<Mode>,
+    pub(crate) built: Box<dyn Built>,
     /// What a recorded build's command buffer still reads (the activity
     /// LUT of a mode's build and its staging).
     pub(crate) _keep: Option<Box<dyn Any>>,
 }
 
 impl Structure {
+    /// The entry that built it.
+    pub fn accel(&self) -> Accel {
+        self.accel
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The mode of the frames it was built for (None: any, as naive).
+    pub fn mode(&self) -> Option<&Mode> {
+        self.mode.as_ref()
+    }
+
+    /// Its built data: what its kernel binds and reads.
+    pub fn built(&self) -> &dyn Built {
+        self.built.as_ref()
+    }
+
     /// A frame of `mode` can use this structure: it was built for frames
     /// that classify alike (`Mode::same_classification`).
     pub fn check_mode(&self, mode: &Mode) -> Result<()> {

@@ -384,11 +384,11 @@ pub(super) fn describe(
     let meta = &mut frame.metadata;
     meta.insert("volume".into(), volume.name.clone());
     meta.insert("tf".into(), tf.spec.clone());
-    meta.insert("accel".into(), structure.accel.to_string());
+    meta.insert("accel".into(), structure.accel().to_string());
     if let Some(m) = structure.marched_as_reason() {
         meta.insert("marched_as".into(), m.label);
     }
-    for (k, v) in structure.params.describe() {
+    for (k, v) in structure.params().describe() {
         meta.insert(k.to_string(), v);
     }
     for (k, v) in desc.describe(scene.volume) {

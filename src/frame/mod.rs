@@ -41,6 +41,12 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// A frame of `pixels`, row-major.
+    ///
+    /// # Panics
+    /// When `pixels` does not hold `width x height` pixels (a caller's
+    /// programming error; frames read from files are checked as they are
+    /// decoded).
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Self {
         assert_eq!(pixels.len(), width as usize * height as usize);
         Frame {

@@ -52,6 +52,8 @@ pub(crate) struct Inner {
     pub(crate) info: DeviceInfo,
     /// Every kernel made on this context (`Kernel` borrows their objects).
     pub(crate) kernels: KernelCache,
+    /// Submissions lacuna made on the queue (`Context::submissions`).
+    submissions: std::sync::atomic::AtomicU64,
     owned: bool,
 }
 
@@ -140,7 +142,14 @@ impl Context {
     /// - `host.enabled` is what the device was created with;
     /// - `queue` is of `queue_family`, and no other thread uses `queue` while a
     ///   lacuna convenience call (`submit_and_wait`: uploads, `build`,
-    ///   `render`, downloads) runs, since lacuna submits on it then;
+    ///   `render`, downloads) runs, since lacuna submits on it then (the
+    ///   `record_*` forms and `Renderer::new` submit nothing:
+    ///   [`Context::submissions`]);
+    /// - every command buffer given to a `record_*` call is submitted to a
+    ///   queue of `queue_family`: lacuna's buffers and images are exclusive
+    ///   to that family, it records no ownership transfers, and its timers'
+    ///   timestamps are that family's;
+    /// - `entry`, when given, is the loader `instance` was created with;
     /// - lacuna's objects are not in use by pending host work when dropped.
     pub unsafe fn adopt(host: AdoptInfo) -> Result<Self> {
         if let Some(missing) = missing_requirement(&host.instance, host.physical_device, &host.device, &host.enabled) {
@@ -167,6 +176,15 @@ impl Context {
             ));
         }
         let messenger = match &host.entry {
+            // ash stands a panicking stub in for a command the instance
+            // lacks, and a panic there aborts: probe it first.
+            Some(entry) if !has_debug_utils(entry, &host.instance) => {
+                return Err(Error::invalid(
+                    "adopted instance",
+                    "given with its entry",
+                    "lacuna's validation messenger needs VK_EXT_debug_utils enabled on the instance; pass entry: None without it",
+                ))
+            }
             Some(entry) => Some(Messenger::new(entry, &host.instance)?),
             None => None,
         };
@@ -247,6 +265,7 @@ impl Context {
                 messenger,
                 info,
                 kernels: KernelCache::default(),
+                submissions: Default::default(),
                 owned,
             }),
         })
@@ -301,7 +320,7 @@ impl Context {
         &self.inner.info
     }
 
-    fn format_properties(&self, format: vk::Format) -> vk::FormatProperties {
+    pub(crate) fn format_properties(&self, format: vk::Format) -> vk::FormatProperties {
         unsafe {
             self.inner
                 .instance
@@ -353,6 +372,14 @@ impl Context {
 
     pub(crate) fn allocator(&self) -> MutexGuard<'_, Allocator> {
         self.inner.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// How many command buffers lacuna has submitted on the queue (its
+    /// convenience calls: uploads, `build`, `render`, downloads). The
+    /// `record_*` forms submit nothing: a host can check that its recording
+    /// left this unchanged.
+    pub fn submissions(&self) -> u64 {
+        self.inner.submissions.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Records commands with `record`, submits them and waits for completion.
@@ -410,6 +437,9 @@ impl Context {
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
             let submitted = {
                 let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
+                self.inner
+                    .submissions
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
             };
             if let Err(e) = submitted {
@@ -431,6 +461,12 @@ impl Context {
         unsafe { device.free_command_buffers(*pool, &[cmd]) };
         result
     }
+}
+
+/// Whether `instance` has `VK_EXT_debug_utils`'s messenger command.
+fn has_debug_utils(entry: &ash::Entry, instance: &ash::Instance) -> bool {
+    let name = c"vkCreateDebugUtilsMessengerEXT";
+    unsafe { entry.get_instance_proc_addr(instance.handle(), name.as_ptr()) }.is_some()
 }
 
 impl Drop for Inner {

@@ -154,6 +154,13 @@ impl Image3d {
         let info = ctx.info();
         let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
         let bytes = check_image3d(info, extent, texel_bytes)?;
+        // Sampling 16-bit unorm formats, for one, is optional in Vulkan.
+        let needed = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::TRANSFER_DST;
+        if !ctx.format_properties(format).optimal_tiling_features.contains(needed) {
+            return Err(Error::Unsupported(format!(
+                "{dims}: this device cannot sample images of format {format:?} (no SAMPLED_IMAGE and TRANSFER_DST in its optimal-tiling features)"
+            )));
+        }
         let device = ctx.device();
         let create = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_3D)

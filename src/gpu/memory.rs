@@ -107,15 +107,17 @@ impl Buffer {
 
     /// A host-visible staging buffer holding `data`.
     pub(super) fn staging(ctx: &Context, name: &str, data: &[u8]) -> Result<Buffer> {
-        let mut staging = Buffer::new(
-            ctx,
-            name,
-            data.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        copy_to_mapped(&mut staging.host_mut()?[..data.len()], data);
-        Ok(staging)
+        Buffer::host_written(ctx, name, data, vk::BufferUsageFlags::TRANSFER_SRC)
+    }
+
+    /// A host-visible (and coherent) buffer of `usage` holding `data`,
+    /// written through its mapping: nothing is recorded or submitted, and a
+    /// later submission sees the write. For small buffers the device reads
+    /// little of; others belong in device memory (`with_data`).
+    pub fn host_written(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
+        let mut buffer = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        copy_to_mapped(&mut buffer.host_mut()?[..data.len()], data);
+        Ok(buffer)
     }
 
     /// As `with_data`, recorded into `cmd` instead of submitted: the copy
@@ -202,8 +204,22 @@ impl Buffer {
             .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
     }
 
+    /// Bytes `[offset, offset + len)`, or an error naming the buffer when
+    /// it does not hold them.
+    fn check_range(&self, offset: u64, len: u64) -> Result<()> {
+        match offset.checked_add(len) {
+            Some(end) if end <= self.size => Ok(()),
+            _ => Err(Error::invalid(
+                "buffer range",
+                format!("{len} bytes at {offset}"),
+                format!("buffer '{}' holds {} bytes", self.name, self.size),
+            )),
+        }
+    }
+
     /// Copies `data` to byte `offset` through a staging buffer and waits.
     pub fn upload(&self, offset: u64, data: &[u8]) -> Result<()> {
+        self.check_range(offset, data.len() as u64)?;
         let mut done = 0u64;
         while done < data.len() as u64 {
             let n = (data.len() as u64 - done).min(STAGING_CHUNK);
@@ -226,6 +242,8 @@ impl Buffer {
     /// Assumes prior GPU writes were made visible to transfer reads (a
     /// submission boundary with `submit_and_wait` does that).
     pub fn download(&self, offset: u64, len: u64) -> Result<Vec<u8>> {
+        // Within the buffer: no larger than memory the device holds.
+        self.check_range(offset, len)?;
         let mut out = Vec::with_capacity(len as usize);
         while (out.len() as u64) < len {
             let done = out.len() as u64;

@@ -105,6 +105,13 @@ pub fn image_barrier(
 /// group along each axis, checked against `maxComputeWorkGroupCount`.
 pub fn groups_for(info: &DeviceInfo, what: &str, threads: [u32; 3], local: [u32; 3]) -> Result<[u32; 3]> {
     let mut groups = [0; 3];
+    if local.contains(&0) {
+        return Err(crate::error::Error::invalid(
+            "workgroup size",
+            format!("{local:?}"),
+            format!("{what}: every axis needs at least one invocation"),
+        ));
+    }
     for a in 0..3 {
         groups[a] = threads[a].div_ceil(local[a]);
         let limit = [

@@ -10,7 +10,8 @@ pub struct Timer {
     ctx: Context,
     pool: vk::QueryPool,
     capacity: u32,
-    passes: Vec<(String, u32)>,
+    /// Each pass: its name, first query and whether it was ended.
+    passes: Vec<(String, u32, bool)>,
     open: Option<usize>,
 }
 
@@ -21,7 +22,7 @@ pub struct Pass(usize);
 impl Timer {
     /// A timer for up to `max_passes` passes per recording.
     pub fn new(ctx: &Context, max_passes: u32) -> Result<Self> {
-        let capacity = max_passes.max(1) * 2;
+        let capacity = max_passes.clamp(1, u32::MAX / 2) * 2;
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(capacity);
@@ -57,9 +58,20 @@ impl Timer {
         };
     }
 
-    /// Opens pass `name`; passes do not nest.
+    /// Opens pass `name`; passes do not nest (opening one while another is
+    /// open is an error). On a queue without timestamps nothing is
+    /// written, and `results` is empty.
     pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Pass> {
-        assert!(self.open.is_none(), "timer pass opened while another is open");
+        if let Some(open) = self.open {
+            return Err(Error::invalid(
+                "timer pass",
+                name,
+                format!(
+                    "opened while pass '{}' is open: passes do not nest",
+                    self.passes[open].0
+                ),
+            ));
+        }
         let first = self.passes.len() as u32 * 2;
         if first + 2 > self.capacity {
             return Err(Error::invalid(
@@ -68,15 +80,25 @@ impl Timer {
                 format!("more than {} passes in one recording", self.capacity / 2),
             ));
         }
-        self.write(cmd, first);
-        self.passes.push((name.to_string(), first));
+        if self.supported() {
+            self.write(cmd, first);
+        }
+        self.passes.push((name.to_string(), first, false));
         self.open = Some(self.passes.len() - 1);
         Ok(Pass(self.passes.len() - 1))
     }
 
+    /// Closes `pass`, the open one; any other pass (an earlier recording's,
+    /// or one already closed) is left as it is, and `results` names a pass
+    /// that was never closed.
     pub fn end(&mut self, cmd: vk::CommandBuffer, pass: Pass) {
-        assert_eq!(self.open, Some(pass.0), "timer pass ended out of order");
-        self.write(cmd, self.passes[pass.0].1 + 1);
+        if self.open != Some(pass.0) {
+            return;
+        }
+        if self.supported() {
+            self.write(cmd, self.passes[pass.0].1 + 1);
+        }
+        self.passes[pass.0].2 = true;
         self.open = None;
     }
 
@@ -86,6 +108,10 @@ impl Timer {
         let mut timings = Timings::default();
         if self.passes.is_empty() || !self.supported() {
             return Ok(timings);
+        }
+        // Its end query was never written: waiting for it would not return.
+        if let Some((name, ..)) = self.passes.iter().find(|p| !p.2) {
+            return Err(Error::invalid("timer pass", name, "was opened and never closed"));
         }
         let n = self.passes.len() as u32 * 2;
         let mut ticks = vec![0u64; n as usize];
@@ -104,7 +130,7 @@ impl Timer {
         } else {
             (1u64 << info.timestamp_valid_bits) - 1
         };
-        for (name, first) in &self.passes {
+        for (name, first, _) in &self.passes {
             let start = ticks[*first as usize] & mask;
             let end = ticks[*first as usize + 1] & mask;
             // Wraps around once at most within a pass.

@@ -245,7 +245,13 @@ pub fn render(
     traversals: &[Traversal],
     options: &WhittedOptions,
 ) -> Result<RenderStats> {
-    assert!(!traversals.is_empty(), "at least one traversal");
+    if traversals.is_empty() {
+        return Err(crate::error::Error::invalid(
+            "octree traversals",
+            "none",
+            "give at least one to render with",
+        ));
+    }
     let res = options.resolution;
     let corners = res + 1;
     let shading = Shading {

@@ -1,8 +1,8 @@
 //! Stream compaction by flag: the indices i with flags[i] != 0, in order, and
 //! their count.
 
-use super::entry_barrier;
 use super::scan::{Scan, ScanScratch};
+use super::{check_elements, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_compact as k};
@@ -57,11 +57,7 @@ impl Compact {
         count: &Buffer,
         scratch: &CompactScratch,
     ) -> Result<()> {
-        assert!(
-            n <= scratch.capacity,
-            "compaction of {n} flags with scratch for {}",
-            scratch.capacity
-        );
+        check_elements("compaction", n, scratch.capacity, &[flags, indices])?;
         let device = self.ctx.device();
         entry_barrier(device, cmd);
         unsafe { device.cmd_fill_buffer(cmd, count.raw, 0, 4, 0) };

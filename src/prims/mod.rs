@@ -56,3 +56,26 @@ pub fn check_range(info: &crate::gpu::DeviceInfo, what: &str, bytes: u64) -> cra
         info.max_storage_buffer_range,
     )
 }
+
+/// Checks a primitive's `n` 32-bit elements against its scratch's
+/// `capacity` and the size of each buffer in `buffers` it reads or writes.
+pub fn check_elements(what: &'static str, n: u64, capacity: u64, buffers: &[&crate::gpu::Buffer]) -> crate::Result<()> {
+    use crate::error::Error;
+    if n > capacity {
+        return Err(Error::invalid(
+            what,
+            format!("of {n} elements"),
+            format!("its scratch holds {capacity}"),
+        ));
+    }
+    for b in buffers {
+        if b.size() < n.saturating_mul(4) {
+            return Err(Error::invalid(
+                what,
+                format!("of {n} elements"),
+                format!("buffer '{}' holds {} bytes", b.name(), b.size()),
+            ));
+        }
+    }
+    Ok(())
+}

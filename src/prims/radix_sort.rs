@@ -4,7 +4,7 @@
 use super::layout::BlockLayout;
 use super::layout::BLOCK;
 use super::scan::{Scan, ScanScratch};
-use super::{check_range, entry_barrier};
+use super::{check_elements, check_range, entry_barrier};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_radix_hist, prims_radix_scatter};
@@ -100,11 +100,7 @@ impl RadixSort {
         if !(1..=32).contains(&key_bits) {
             return Err(Error::invalid("key bits", key_bits.to_string(), "must be in 1..=32"));
         }
-        assert!(
-            n <= scratch.capacity,
-            "sort of {n} elements with scratch for {}",
-            scratch.capacity
-        );
+        check_elements("sort", n, scratch.capacity, &[keys, vals])?;
         let device = self.ctx.device();
         entry_barrier(device, cmd);
         if n <= 1 {

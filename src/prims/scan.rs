@@ -3,7 +3,7 @@
 //! then added back.
 
 use super::layout::{BlockLayout, BLOCK};
-use super::{check_range, entry_barrier};
+use super::{check_elements, check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self};
 use crate::gpu::shaders::{self, prims_scan_add, prims_scan_blocks};
@@ -68,11 +68,7 @@ impl Scan {
     /// Records an exclusive scan of `data[0..n]` in place (see the barrier
     /// convention in `prims`).
     pub fn record(&self, cmd: vk::CommandBuffer, data: &Buffer, n: u64, scratch: &ScanScratch) -> Result<()> {
-        assert!(
-            n <= scratch.capacity,
-            "scan of {n} elements with scratch for {}",
-            scratch.capacity
-        );
+        check_elements("scan", n, scratch.capacity, &[data])?;
         entry_barrier(self.ctx.device(), cmd);
         self.level(cmd, data, n, scratch, 0)
     }

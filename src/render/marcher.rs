@@ -153,7 +153,9 @@ impl Renderer {
             Output::ImageAndDepth(image, d) => {
                 image.check(width, height)?;
                 d.check(&self.ctx, width, height)?;
-                let depth = Binding::StorageRange(d.buffer, d.offset, d.size);
+                // Exactly the frame's depths: a larger range could pass the
+                // device's maxStorageBufferRange (or, at WHOLE_SIZE, the buffer).
+                let depth = Binding::StorageRange(d.buffer, d.offset, width as u64 * height as u64 * 4);
                 (Some(image.variant()?), Binding::StorageImage(image.view), depth, true)
             }
         };
@@ -262,35 +264,39 @@ impl Renderer {
         let push = structure.built.push();
         let mut timer = timer;
         let pass = timer.begin(cmd, "march")?;
-        if let Some(d) = desc.depth() {
-            let limits = render_depth_limit::Bindings {
-                params: Binding::Storage(&target.params),
-                depth_image: Binding::SampledIn(d.view, self.depth_sampler, d.layout),
-            };
-            let depth_groups = self
-                .depth_limit
-                .groups("depth limits", [target.width, target.height, 1])?;
-            self.depth_limit.dispatch(cmd, &limits.list(), &[], depth_groups)?;
-        }
-        // An earlier frame's march reads the LUT this one rewrites.
-        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
-        self.opacity.dispatch(
-            cmd,
-            &build_opacity_lut::Bindings {
-                raw: Binding::Storage(&tf.lut),
-                lut: Binding::Storage(target.lut.buffer()),
+        // The pass is closed whatever fails, so the timer stays usable.
+        let recorded = (|| -> Result<()> {
+            if let Some(d) = desc.depth() {
+                let limits = render_depth_limit::Bindings {
+                    params: Binding::Storage(&target.params),
+                    depth_image: Binding::SampledIn(d.view, self.depth_sampler, d.layout),
+                };
+                let depth_groups = self
+                    .depth_limit
+                    .groups("depth limits", [target.width, target.height, 1])?;
+                self.depth_limit.dispatch(cmd, &limits.list(), &[], depth_groups)?;
             }
-            .list(),
-            bytemuck::bytes_of(&lut_push),
-            lut_groups,
-        )?;
-        // The LUT and the depth limits, written above, are read by the march.
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
-        // A band: workgroup rows [first, first + count).
-        let [first, count] = rows.unwrap_or([0, groups[1]]);
-        let rows = count.min(groups[1].saturating_sub(first));
-        kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1])?;
+            // An earlier frame's march reads the LUT this one rewrites.
+            record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
+            self.opacity.dispatch(
+                cmd,
+                &build_opacity_lut::Bindings {
+                    raw: Binding::Storage(&tf.lut),
+                    lut: Binding::Storage(target.lut.buffer()),
+                }
+                .list(),
+                bytemuck::bytes_of(&lut_push),
+                lut_groups,
+            )?;
+            // The LUT and the depth limits, written above, are read by the march.
+            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+            // A band: workgroup rows [first, first + count).
+            let [first, count] = rows.unwrap_or([0, groups[1]]);
+            let rows = count.min(groups[1].saturating_sub(first));
+            kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1])
+        })();
         timer.end(cmd, pass);
+        recorded?;
         // The march status (`RenderTarget::cut_groups`) is read by the host.
         record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
         Ok(())

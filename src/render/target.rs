@@ -11,16 +11,19 @@ use crate::gpu::{vk, Buffer, Context, MemoryLocation, TexelBuffer};
 /// per-pixel depth limits after it), the frame's LUT (corrected for its
 /// step, then raw: `glsl/common/tf.glsl`), and, when the frame goes to a
 /// buffer, the RGBA f32 frame buffer and optionally a host-visible readback.
+///
+/// Its fields are read through methods: the march writes what they say,
+/// so they do not change after it is made.
 pub struct RenderTarget {
-    pub width: u32,
-    pub height: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     /// RGBA f32 premultiplied, row-major; None for a target of host images.
-    pub frame: Option<Buffer>,
+    pub(crate) frame: Option<Buffer>,
     /// An iso frame's depth, f32 per pixel (`HostDepthOut` says what it
     /// holds); 16 bytes, never written, for a target of host images.
-    pub depth: Buffer,
-    pub params: Buffer,
-    pub lut: TexelBuffer,
+    pub(crate) depth: Buffer,
+    pub(crate) params: Buffer,
+    pub(crate) lut: TexelBuffer,
     /// The SIMD groups of the last frame whose march a driver's loop cap
     /// may have cut short (`cut_groups`); host-visible.
     status: Buffer,
@@ -126,6 +129,32 @@ impl HostImage {
 }
 
 impl RenderTarget {
+    /// The frame size it was made for.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The RGBA f32 frame buffer (premultiplied, row-major); None for a
+    /// target of host images.
+    pub fn frame(&self) -> Option<&Buffer> {
+        self.frame.as_ref()
+    }
+
+    /// The depth buffer (one f32 per pixel; see `HostDepthOut`).
+    pub fn depth(&self) -> &Buffer {
+        &self.depth
+    }
+
+    /// The frame's LUT as the last recorded frame wrote it (corrected for
+    /// its step, then raw).
+    pub fn lut(&self) -> &TexelBuffer {
+        &self.lut
+    }
+
     /// A target writing its own frame buffer, with a host-visible readback
     /// (`Renderer::record_readback`, `read`). Checks the frame against
     /// `maxStorageBufferRange` and the dispatch limits.

@@ -408,7 +408,8 @@ fn gcd(a: u64, b: u64) -> u64 {
 /// A one-texel buffer bound in place of a volume's cells copy where it has
 /// none: the kernels' `VOLUME_CELLS` constant keeps them from reading it.
 pub fn no_cells(ctx: &Context) -> Result<TexelBuffer> {
-    let buffer = Buffer::with_data(ctx, "no cells", &[0u8; 16], vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
+    // Written through its mapping: `record_*` calls make one, and submit nothing.
+    let buffer = Buffer::host_written(ctx, "no cells", &[0u8; 16], vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER)?;
     TexelBuffer::new(ctx, buffer, vk::Format::R32G32B32A32_UINT)
 }
 

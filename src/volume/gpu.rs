@@ -9,12 +9,13 @@
 
 use super::cells::{self, TexelKind};
 use super::filter::Filter;
+use super::gpu_pool::{brick_table, check_pool, plan_pool, pool_image_texels, BRICK_TABLE_FORMAT, BRICK_TABLE_USAGE};
 use super::gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 use super::gradient_cells;
 use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, HostPool, Volume, VoxelData, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
-use crate::gpu::{check_image3d, check_image3d_of, vk, Buffer, Context, Image3d, Kernel, Staging, TexelBuffer};
+use crate::gpu::{check_image3d, vk, Buffer, Context, Image3d, Kernel, Staging, TexelBuffer};
 use std::borrow::Cow;
 
 /// The gradient's texel format (x, y, z, unused).
@@ -115,64 +116,20 @@ fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
     unsafe { ctx.device().create_sampler(&info, None) }.vk("vkCreateSampler")
 }
 
-/// The pool of `volume`'s texels (`bytes`, `texel` bytes each), after its
-/// image, allocation, heap and host memory checks.
-fn plan_pool(
-    ctx: &Context,
-    volume: &Volume,
-    (texel, bytes): (u64, &[u8]),
-    edge: u32,
-    limits: PoolLimits,
-    keep: Option<BrickBox>,
-) -> Result<PoolLayout> {
-    let device = PoolLimits::of(ctx.info());
-    let limits = PoolLimits {
-        max_image_dim: limits.max_image_dim.min(device.max_image_dim),
-        max_image_bytes: limits.max_image_bytes.min(device.max_image_bytes),
-        max_table_entries: limits.max_table_entries.min(device.max_table_entries),
-    };
-    let layout = PoolLayout::plan_kept(bytes, volume.dims, texel, edge, limits, keep)?;
-    check_pool(ctx, volume, &layout)?;
-    Ok(layout)
-}
-
-/// The pool's images against the device's image limits, and all of them
-/// with the table against the device-local heap.
-fn check_pool(ctx: &Context, volume: &Volume, layout: &PoolLayout) -> Result<()> {
-    let texel = layout.texel_bytes;
-    let info = ctx.info();
-    if info.device_local_bytes > 0 {
-        let total = layout.pool_bytes() + layout.table_bytes();
-        info.check(
-            format!("brick pool of {} ({total} bytes)", volume.name),
-            "device-local heap size",
-            total,
-            info.device_local_bytes,
-        )?;
-    }
-    for k in 0..layout.images.len() {
-        let what = format!("brick pool image {k} of {}", volume.name);
-        check_image3d_of(ctx.info(), &what, layout.extent(k), texel)?;
-    }
-    Ok(())
-}
-
-/// Pool image `k`'s texels, after the host memory check.
-fn pool_image_texels(layout: &PoolLayout, k: usize, bytes: &[u8]) -> Result<Vec<u8>> {
-    let mut pool = crate::limits::zeroed::<u8>(format_args!("brick pool image {k}"), layout.image_bytes(k))?;
-    layout.fill(k, bytes, &mut pool);
-    Ok(pool)
-}
-
 /// The image format, texel size and bytes of a volume (R8/R16 kept
 /// native; several channels interleaved, `channels.rs`).
-pub(super) fn texels(volume: &Volume) -> (vk::Format, u64, Cow<'_, [u8]>) {
+pub(super) fn texels(volume: &Volume) -> Result<(vk::Format, u64, Cow<'_, [u8]>)> {
     let (kind, n) = (channels::common_kind(volume), volume.channel_count());
-    (
-        channels::format(kind, n),
-        channels::texel_bytes(kind, n),
-        channels::texel_data(volume),
-    )
+    let texel = channels::texel_bytes(kind, n);
+    // A volume streamed into bricks is made whole here: checked first.
+    if let VoxelData::Bricks(_) = &volume.data {
+        let what = format_args!(
+            "{} made dense for its upload (upload_as keeps it in bricks)",
+            volume.name
+        );
+        crate::limits::check_host(what, volume.data.len() as u64, texel)?;
+    }
+    Ok((channels::format(kind, n), texel, channels::texel_data(volume)))
 }
 
 /// The storage `storage` means for `volume` on this device: auto is dense
@@ -207,7 +164,7 @@ impl GpuVolume {
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
             return Self::upload_bricks(ctx, volume, edge);
         }
-        let (format, texel, bytes) = texels(volume);
+        let (format, texel, bytes) = texels(volume)?;
         let image = Image3d::with_data(ctx, &volume.name, format, volume.dims, texel, &bytes)?;
         Self::with_images(ctx, volume, vec![image], None)
     }
@@ -241,7 +198,7 @@ impl GpuVolume {
         if let VoxelData::Bricks(host) = &volume.data {
             return Self::upload_host_pool(ctx, volume, host, edge);
         }
-        let (format, texel, bytes) = texels(volume);
+        let (format, texel, bytes) = texels(volume)?;
         let layout = plan_pool(ctx, volume, (texel, &bytes), edge, limits, keep)?;
         // One image's texels on the host at a time.
         let mut images = Vec::with_capacity(layout.images.len());
@@ -256,7 +213,7 @@ impl GpuVolume {
                 &pool,
             )?);
         }
-        Self::with_images(ctx, volume, images, Some(&layout))
+        Self::with_images(ctx, volume, images, Some((&layout, brick_table(ctx, &layout)?)))
     }
 
     /// A volume streamed into bricks (`HostPool`): its slots copied into
@@ -284,7 +241,7 @@ impl GpuVolume {
                 |z, _, out| host.fill(k, z, out),
             )?);
         }
-        Self::with_images(ctx, volume, images, Some(layout))
+        Self::with_images(ctx, volume, images, Some((layout, brick_table(ctx, layout)?)))
     }
 
     /// As `upload`, recorded into `cmd`: leaves the image in
@@ -301,7 +258,7 @@ impl GpuVolume {
         volume: &Volume,
         storage: Storage,
     ) -> Result<(Self, Staging)> {
-        let (format, texel, bytes) = texels(volume);
+        let (format, texel, bytes) = texels(volume)?;
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
             let layout = plan_pool(ctx, volume, (texel, &bytes), edge, PoolLimits::of(ctx.info()), None)?;
             let mut images = Vec::with_capacity(layout.images.len());
@@ -313,9 +270,11 @@ impl GpuVolume {
                 images.push(image);
                 staged.push(staging);
             }
-            let gv = Self::with_images(ctx, volume, images, Some(&layout))?;
-            let first = staged.remove(0);
-            return Ok((gv, staged.into_iter().fold(first, Staging::join)));
+            let table = bytemuck::cast_slice(&layout.table);
+            let (table, staging) = Buffer::record_with_data(ctx, cmd, "brick table", table, BRICK_TABLE_USAGE)?;
+            let table = TexelBuffer::new(ctx, table, BRICK_TABLE_FORMAT)?;
+            let gv = Self::with_images(ctx, volume, images, Some((&layout, table)))?;
+            return Ok((gv, staged.into_iter().fold(staging, Staging::join)));
         }
         let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
         Ok((Self::with_images(ctx, volume, vec![image], None)?, staging))
@@ -326,21 +285,13 @@ impl GpuVolume {
         ctx: &Context,
         volume: &Volume,
         mut images: Vec<Image3d>,
-        pool: Option<&PoolLayout>,
+        pool: Option<(&PoolLayout, TexelBuffer)>,
     ) -> Result<Self> {
         let image = images.remove(0);
         let format = image.format;
-        let brick_table = match pool {
-            Some(layout) => {
-                let buffer = Buffer::with_data(
-                    ctx,
-                    "brick table",
-                    bytemuck::cast_slice(&layout.table),
-                    vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER,
-                )?;
-                TexelBuffer::new(ctx, buffer, vk::Format::R32G32_UINT)?
-            }
-            None => super::cells::no_cells(ctx)?,
+        let (pool, brick_table) = match pool {
+            Some((layout, table)) => (Some(layout), table),
+            None => (None, super::cells::no_cells(ctx)?),
         };
         let mut gv = GpuVolume {
             ctx: ctx.clone(),

@@ -52,7 +52,7 @@ impl GpuVolume {
         if !fits {
             return Ok(false);
         }
-        let (_, _, bytes) = texels(volume);
+        let (_, _, bytes) = texels(volume)?;
         let last = self.step.as_ref().map(|m| m.id);
         // A step of its own until it is in place: after an error no build
         // takes the last step's ranges for these texels.

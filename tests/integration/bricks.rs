@@ -427,3 +427,36 @@ fn a_volume_of_one_value_is_one_texel() {
     assert_clean(&ctx);
     assert_clean(&fx.ctx);
 }
+
+#[test]
+fn a_recorded_bricked_upload_submits_nothing_and_renders_as_the_uploaded_one() {
+    let ctx = gpu();
+    let v = load("vessels:40");
+    let tf = tf_of(&v);
+    let storage = Storage::Bricks { edge: 8 };
+    let uploaded = GpuVolume::upload_as(&ctx, &v, storage).unwrap();
+    // One submission, this test's: the recorded upload (pool images and
+    // brick table) adds none of its own.
+    let before = ctx.submissions();
+    let (recorded, staging) = ctx
+        .submit_and_wait(|cmd| GpuVolume::record_upload_as(&ctx, cmd, &v, storage))
+        .unwrap();
+    drop(staging);
+    assert_eq!(ctx.submissions(), before + 1);
+    assert!(recorded.pool.is_some(), "recorded in bricks");
+    let renderer = lacuna::render::Renderer::new(&ctx).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    for az in [30.0, 200.0] {
+        let desc = FrameDesc::builder(48, 48)
+            .orbit(az, 20.0, lacuna::render::Projection::Orthographic)
+            .filter(Filter::Manual)
+            .build()
+            .unwrap();
+        let naive = Structure::naive();
+        let a = crate::common::frame(&renderer, &naive, &uploaded, &lut, &desc);
+        let b = crate::common::frame(&renderer, &naive, &recorded, &lut, &desc);
+        assert!(a.pixels.iter().any(|p| p[3] > 0.1), "the frame shows the volume");
+        assert_same("recorded bricks", &[a], &[b]);
+    }
+    assert_clean(&ctx);
+}

@@ -35,6 +35,12 @@ fn occludes_with(accel: &str) {
     };
     let r = engine::run(&settings).unwrap();
     assert!(r.validation.is_empty(), "{}", r.validation.join("\n"));
+    // Nothing submitted behind the engine's back: creating lacuna's
+    // objects, uploading, building and marching were only recorded.
+    assert_eq!(
+        r.lacuna_submissions, 0,
+        "{accel}: lacuna submitted on the engine's queue"
+    );
     assert!(r.timings.phase("march").is_ok());
 
     // lacuna's own render (its own context, naive marching) of the same camera.

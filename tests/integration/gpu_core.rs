@@ -178,17 +178,31 @@ fn host_device(
     v12: vk::PhysicalDeviceVulkan12Features<'static>,
     v13: vk::PhysicalDeviceVulkan13Features<'static>,
 ) -> HostDevice {
+    host_device_on(true, exts, v12, v13)
+}
+
+/// As `host_device`; `validated` false: an instance with no layer and no
+/// extension (no `VK_EXT_debug_utils`).
+fn host_device_on(
+    validated: bool,
+    exts: &[&std::ffi::CStr],
+    v12: vk::PhysicalDeviceVulkan12Features<'static>,
+    v13: vk::PhysicalDeviceVulkan13Features<'static>,
+) -> HostDevice {
     let entry = unsafe { ash::Entry::load() }.unwrap();
     let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
     let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
     let inst_exts = [ash::ext::debug_utils::NAME.as_ptr()];
     let sync = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&sync);
-    let info = vk::InstanceCreateInfo::default()
-        .application_info(&app)
-        .enabled_layer_names(&layers)
-        .enabled_extension_names(&inst_exts)
-        .push_next(&mut features);
+    let info = vk::InstanceCreateInfo::default().application_info(&app);
+    let info = match validated {
+        true => info
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&inst_exts)
+            .push_next(&mut features),
+        false => info,
+    };
     let instance = unsafe { entry.create_instance(&info, None) }.unwrap();
     let pd = unsafe { instance.enumerate_physical_devices() }.unwrap()[0];
     let family = unsafe { instance.get_physical_device_queue_family_properties(pd) }
@@ -248,6 +262,86 @@ impl HostDevice {
             self.instance.destroy_instance(None);
         }
     }
+}
+
+#[test]
+fn adopting_with_a_messenger_on_an_instance_without_debug_utils_is_an_error() {
+    let (v12, v13) = required_features();
+    let host = host_device_on(false, &REQUIRED_EXTENSIONS, v12, v13);
+    // ash would call a panicking stand-in for the missing command, which
+    // aborts the process: lacuna refuses before that.
+    let err = host.adopt().err().unwrap();
+    assert!(err.to_string().contains("VK_EXT_debug_utils"), "{err}");
+    // Without an entry, no messenger: adopted, and usable.
+    let ctx = unsafe {
+        Context::adopt(AdoptInfo {
+            entry: None,
+            instance: host.instance.clone(),
+            physical_device: host.pd,
+            device: host.device.clone(),
+            queue: host.queue,
+            queue_family: host.family,
+            enabled: host.enabled.clone(),
+        })
+    }
+    .unwrap();
+    assert_eq!(chained_copies(&ctx, true)[1], 2654435761);
+    drop(ctx);
+    host.destroy();
+}
+
+#[test]
+fn timer_misuse_is_an_error_not_a_panic() {
+    let ctx = gpu();
+    let mut timer = Timer::new(&ctx, 4).unwrap();
+    // A pass opened inside another, and a pass never closed.
+    let err = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            let _outer = timer.begin(cmd, "outer")?;
+            timer.begin(cmd, "inner").map(|_| ())
+        })
+        .unwrap_err();
+    assert!(err.to_string().contains("passes do not nest"), "{err}");
+    ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let _never_closed = timer.begin(cmd, "open")?;
+        Ok(())
+    })
+    .unwrap();
+    let err = timer.results().unwrap_err();
+    assert!(err.to_string().contains("never closed"), "{err}");
+    // After a reset the timer works again.
+    ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let p = timer.begin(cmd, "whole")?;
+        timer.end(cmd, p);
+        Ok(())
+    })
+    .unwrap();
+    assert!(timer.results().unwrap().phase("whole").is_ok());
+    assert_clean(&ctx);
+}
+
+#[test]
+fn buffer_ranges_past_the_end_are_an_error() {
+    let ctx = gpu();
+    let b = storage(&ctx, "four words", &[1, 2, 3, 4]);
+    let out_of_range = |e: Error| {
+        matches!(
+            e,
+            Error::Invalid {
+                what: "buffer range",
+                ..
+            }
+        )
+    };
+    for (offset, len) in [(0, 17), (16, 1), (u64::MAX, 2)] {
+        assert!(out_of_range(b.download(offset, len).unwrap_err()), "{offset} {len}");
+    }
+    assert!(out_of_range(b.upload(12, &[0u8; 8]).unwrap_err()));
+    assert_eq!(b.download(4, 8).unwrap(), [2u8, 0, 0, 0, 3, 0, 0, 0]);
+    assert_clean(&ctx);
 }
 
 #[test]

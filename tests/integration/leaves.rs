@@ -79,7 +79,7 @@ fn collapsed_trees(ctx: &lacuna::gpu::Context, v: &Volume, tf: &TransferFunction
                     let structure = builder.build(a, input, ranges, p).unwrap().0;
                     let naively = structure.marched_as().is_naive();
                     // The naive kernel binds nothing of a structure.
-                    assert_eq!(structure.built.bindings().is_empty(), naively, "{a}");
+                    assert_eq!(structure.built().bindings().is_empty(), naively, "{a}");
                     (structure.stats().unwrap().unwrap(), naively)
                 };
                 let (collapsed, naively) = build(&a.params(&[("collapse", "on")]).unwrap());

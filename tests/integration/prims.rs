@@ -191,6 +191,37 @@ fn block_layouts_are_checked() {
 }
 
 #[test]
+fn primitives_refuse_more_elements_than_their_scratch_or_buffers_hold() {
+    let ctx = gpu();
+    let (sort, scan, compact) = (
+        RadixSort::new(&ctx).unwrap(),
+        Scan::new(&ctx).unwrap(),
+        Compact::new(&ctx).unwrap(),
+    );
+    let (sort_scratch, scan_scratch, compact_scratch) = (
+        sort.scratch(8).unwrap(),
+        scan.scratch(8).unwrap(),
+        compact.scratch(8).unwrap(),
+    );
+    let four = buffer(&ctx, &[1, 2, 3, 4]);
+    let eight = buffer(&ctx, &[0; 8]);
+    let count = buffer(&ctx, &[0]);
+    // Past the scratch (a panic before), and past a buffer.
+    for (n, buffer) in [(9, "scratch holds 8"), (5, "buffer 'test' holds 16 bytes")] {
+        let errs = [
+            ctx.submit_and_wait(|cmd| sort.record(cmd, &four, &eight, n, 32, &sort_scratch)),
+            ctx.submit_and_wait(|cmd| scan.record(cmd, &four, n, &scan_scratch)),
+            ctx.submit_and_wait(|cmd| compact.record(cmd, &four, n, &eight, &count, &compact_scratch)),
+        ];
+        for err in errs {
+            let err = err.unwrap_err();
+            assert!(err.to_string().contains(buffer), "{n}: {err}");
+        }
+    }
+    assert_clean(&ctx);
+}
+
+#[test]
 fn radix_sort_rejects_bad_key_bits() {
     let ctx = gpu();
     let sort = RadixSort::new(&ctx).unwrap();

@@ -182,7 +182,7 @@ fn the_frame_lut_is_corrected_for_the_step_on_the_gpu() {
         ctx.submit_and_wait(|cmd| renderer.record(cmd, None, &target, scene, &s, out))
             .unwrap();
         let gpu_lut: Vec<[f32; 4]> =
-            bytemuck::pod_collect_to_vec(&target.lut.buffer().download(0, target.lut.buffer().size()).unwrap());
+            bytemuck::pod_collect_to_vec(&target.lut().buffer().download(0, target.lut().buffer().size()).unwrap());
         // One channel's two tables (the buffer has room for every channel's).
         let (corrected, raw) = gpu_lut[..2 * lacuna::tf::LUT_SIZE].split_at(lacuna::tf::LUT_SIZE);
         assert_eq!(raw, tf.lut(), "the raw half");

@@ -532,7 +532,18 @@ impl Method for LbvhMethod {
     ) -> Result<Box<dyn Built>> {
         let lbvh = builder.shared::<LbvhBuilder>()?;
         let classifier = builder.shared::<Classifier>()?;
-        let model = p.switch("collapse")?.then(|| builder.cost_model()).transpose()?;
+        // Measuring the model submits: a recorded build must not, so it
+        // must have been measured (or given) beforehand.
+        let model = match p.switch("collapse")? {
+            true => Some(builder.made::<CostModel>().map(|m| *m).ok_or_else(|| {
+                Error::invalid(
+                    "recorded LBVH build",
+                    "with collapse on",
+                    "call builder.cost_model() (or set_cost_model) once before recording: measuring it submits",
+                )
+            })?),
+            false => None,
+        };
         let input = LbvhInput {
             classifier: &classifier,
             mode: Classify::from_params(p)?,

@@ -235,7 +235,7 @@ impl Scene {
     /// also the copy to host memory that `frame` reads.
     pub fn record(&mut self, cmd: vk::CommandBuffer, canvas: &Canvas, desc: &FrameDesc, readback: bool) -> Result<()> {
         let (w, h) = (canvas.extent.width, canvas.extent.height);
-        if self.target.as_ref().map(|t| (t.width, t.height)) != Some((w, h)) {
+        if self.target.as_ref().map(|t| (t.width(), t.height())) != Some((w, h)) {
             self.target = Some(RenderTarget::new(&self.ctx, w, h)?);
         }
         let Some(target) = &self.target else {
@@ -251,8 +251,7 @@ impl Scene {
             .record(cmd, Some(&mut self.timer), target, scene, desc, Output::Buffer)?;
         let device = self.ctx.device();
         let frame_buffer = target
-            .frame
-            .as_ref()
+            .frame()
             .ok_or_else(|| Error::Unsupported("the viewer's render target has no frame buffer".into()))?
             .raw;
         // The previous frame's blit read the canvas; the whole frame is

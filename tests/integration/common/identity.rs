@@ -267,11 +267,11 @@ pub fn check_kernel(what: &str, s: &Structure, mode: &Mode, kernels: Kernels) ->
     match s.marched_as_reason() {
         None => true,
         Some(m) => {
-            let fallback = m.kind == MarchedKind::ModeFallback && !s.accel.method().marches(mode);
+            let fallback = m.kind == MarchedKind::ModeFallback && !s.accel().method().marches(mode);
             assert!(
                 m.kind == MarchedKind::Choice || fallback || kernels == Kernels::Reported,
                 "{what}: {} marched as {} ({}) where its own kernel should have",
-                s.accel,
+                s.accel(),
                 m.label,
                 m.reason
             );
