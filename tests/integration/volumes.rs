@@ -223,6 +223,37 @@ fn nrrd_errors_name_what_is_wrong() {
         nrrd_header("uchar", dims, "raw", "data file: nowhere.raw\n").as_bytes(),
     );
     assert!(matches!(load(&p), Err(Error::Io { .. })));
+    // A field given twice (in either spelling) is refused, not the last
+    // one taken; so are the skips lacuna would otherwise misread.
+    for (extra, message) in [
+        ("sizes: 4 4 4\n\n", "gives the field 'sizes' twice"),
+        ("byte skip: 0\nbyteskip: 0\n\n", "gives the field 'byteskip' twice"),
+        ("line skip: 2\n\n", "'line skip' is not supported"),
+        ("byte skip: -1\n\n", "'byte skip: -1'"),
+        ("byte skip: -7\n\n", "must be >= 0, not '-7'"),
+    ] {
+        let p = dir.path().join("fields.nrrd");
+        let mut bytes = nrrd_header("uchar", dims, "raw", extra).into_bytes();
+        bytes.extend([0u8; 64]);
+        write(&p, &bytes);
+        expect_format(load(&p), message);
+    }
+}
+
+#[test]
+fn nrrd_field_names_read_in_every_spelling() {
+    let dir = tempfile::tempdir().unwrap();
+    let dims = [6, 5, 4];
+    let data = encode(&pattern(dims), VoxelType::I16, true);
+    // "byteskip" and "Byte Skip" are "byte skip": three bytes before the data.
+    for field in ["byteskip: 3", "Byte Skip: 3", "byte  skip: 3"] {
+        let p = dir.path().join("skip.nrrd");
+        let mut bytes = nrrd_header("short", dims, "raw", &format!("{field}\nline skip: 0\n\n")).into_bytes();
+        bytes.extend([9u8; 3]);
+        bytes.extend(&data);
+        write(&p, &bytes);
+        assert_pattern(&load(&p).unwrap(), dims);
+    }
 }
 
 fn nifti_bytes(dims: [u32; 3], datatype: i16, bitpix: i16, pixdim: [f32; 3], data: &[u8]) -> Vec<u8> {

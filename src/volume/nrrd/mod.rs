@@ -242,6 +242,14 @@ impl Header {
     }
 }
 
+/// A header field's name as fields are compared: lower case, no spaces.
+fn field_key(name: &str) -> String {
+    name.chars()
+        .filter(|c| !c.is_whitespace())
+        .flat_map(char::to_lowercase)
+        .collect()
+}
+
 /// Parses the header of `bytes` (a detached data file is allowed where
 /// `detached` says so).
 fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
@@ -276,9 +284,18 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         let Some((k, v)) = line.split_once(':') else {
             return Err(Error::format(path, format!("NRRD header line without ':': '{line}'")));
         };
-        fields.insert(k.trim().to_lowercase(), v.trim().to_string());
+        // Field names compare without case and spaces, so the format's
+        // spellings ("byte skip" and "byteskip", "data file" and
+        // "datafile") are one field; each may be given once.
+        let name = k.trim().to_lowercase();
+        if fields.insert(field_key(&name), v.trim().to_string()).is_some() {
+            return Err(Error::format(
+                path,
+                format!("NRRD header gives the field '{name}' twice (a field may be given once)"),
+            ));
+        }
     }
-    let get = |k: &str| fields.get(k).map(String::as_str);
+    let get = |k: &str| fields.get(&field_key(k)).map(String::as_str);
     let require = |k: &str| get(k).ok_or_else(|| Error::format(path, format!("NRRD header has no '{k}' field")));
 
     let ty_name = require("type")?;
@@ -336,10 +353,25 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         }
     };
 
-    let skip: u64 = get("byte skip").map_or(Ok(0), |s| {
-        s.parse()
-            .map_err(|_| Error::format(path, "NRRD 'byte skip' must be >= 0"))
+    let skip: u64 = get("byte skip").map_or(Ok(0), |s| match s.parse::<i64>() {
+        Ok(n) if n >= 0 => Ok(n as u64),
+        Ok(-1) => Err(Error::format(
+            path,
+            "NRRD 'byte skip: -1' (the data at the file's end) is not supported: give the data's byte offset",
+        )),
+        _ => Err(Error::format(path, format!("NRRD 'byte skip' must be >= 0, not '{s}'"))),
     })?;
+    // Lines of the data file before its data (a foreign header): its bytes
+    // would have to be scanned for line ends; refused, never ignored.
+    match get("line skip").map(str::parse::<u64>) {
+        None | Some(Ok(0)) => {}
+        Some(_) => {
+            return Err(Error::format(
+                path,
+                "NRRD 'line skip' is not supported: give the data's offset as 'byte skip'",
+            ))
+        }
+    }
     let gzip = match require("encoding")? {
         "raw" => false,
         "gzip" | "gz" => true,
@@ -350,7 +382,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
             ))
         }
     };
-    let data_file = match get("data file").or_else(|| get("datafile")) {
+    let data_file = match get("data file") {
         Some(name) => {
             if !detached {
                 return Err(Error::format(
