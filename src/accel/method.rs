@@ -45,10 +45,10 @@ pub struct BuildInput<'a> {
     pub gpu_tf: &'a GpuTransferFunction,
     pub mode: Mode,
     /// The frames the structure will march (camera, size, step, early
-    /// termination, filter, mode), the first the one a build for another
-    /// mode's classification is checked against; auto prices its candidates
-    /// on up to four of them, evenly spread (`auto::choose::PRICED_VIEWS`). Empty:
-    /// none named (auto prices on the default orbit at 512x512).
+    /// termination, filter, mode), each of a mode that classifies as `mode`
+    /// does (else the build is an error); auto prices its candidates on up
+    /// to four of them, evenly spread (`auto::choose::PRICED_VIEWS`).
+    /// Empty: none named (auto prices on the default orbit at 512x512).
     pub frames: &'a [FrameDesc],
     /// The ray direction octants the frames marched with the structure
     /// will have (`FrameDesc::octants`). An octant map marches a frame with

@@ -311,7 +311,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let first = settings(0)?;
         let mode = *first.mode();
 
-        // auto prices its candidates on the first view.
+        // auto prices its candidates on up to four of the views.
         let scene = BuildInput {
             volume: v,
             gpu_volume: &gv,

@@ -13,11 +13,14 @@ pub struct Timer {
     /// Each pass: its name, first query and whether it was ended.
     passes: Vec<(String, u32, bool)>,
     open: Option<usize>,
+    /// Recordings so far (`reset`): a pass handle of an earlier one closes
+    /// nothing.
+    recording: u64,
 }
 
-/// Handle of a pass opened with [`Timer::begin`].
+/// Handle of a pass opened with [`Timer::begin`] (its index and recording).
 #[derive(Clone, Copy, Debug)]
-pub struct Pass(usize);
+pub struct Pass(usize, u64);
 
 impl Timer {
     /// A timer for up to `max_passes` passes per recording.
@@ -33,6 +36,7 @@ impl Timer {
             capacity,
             passes: Vec::new(),
             open: None,
+            recording: 0,
         })
     }
 
@@ -45,6 +49,7 @@ impl Timer {
     pub fn reset(&mut self, cmd: vk::CommandBuffer) {
         self.passes.clear();
         self.open = None;
+        self.recording += 1;
         unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
     }
 
@@ -85,14 +90,14 @@ impl Timer {
         }
         self.passes.push((name.to_string(), first, false));
         self.open = Some(self.passes.len() - 1);
-        Ok(Pass(self.passes.len() - 1))
+        Ok(Pass(self.passes.len() - 1, self.recording))
     }
 
     /// Closes `pass`, the open one; any other pass (an earlier recording's,
     /// or one already closed) is left as it is, and `results` names a pass
     /// that was never closed.
     pub fn end(&mut self, cmd: vk::CommandBuffer, pass: Pass) {
-        if self.open != Some(pass.0) {
+        if self.open != Some(pass.0) || pass.1 != self.recording {
             return;
         }
         if self.supported() {

@@ -58,6 +58,7 @@ impl Compact {
         scratch: &CompactScratch,
     ) -> Result<()> {
         check_elements("compaction", n, scratch.capacity, &[flags, indices])?;
+        check_elements("compaction count", 1, 1, &[count])?;
         let device = self.ctx.device();
         entry_barrier(device, cmd);
         unsafe { device.cmd_fill_buffer(cmd, count.raw, 0, 4, 0) };

@@ -507,3 +507,66 @@ fn naive_counts_derived_from_a_structures_march_are_naives_own() {
     assert_eq!(checked, (3 * 8 + 7) * 4);
     assert_clean(&ctx);
 }
+
+#[test]
+fn an_orbit_is_priced_as_the_mean_of_its_views_and_timed_on_each() {
+    let ctx = gpu();
+    // Nominal constants: a prediction is a function of the counts alone.
+    let builder = common::builder(&ctx);
+    let v = load("vessels:48");
+    let tf = TransferFunction::parse(v.default_tf.as_deref().unwrap()).unwrap();
+    let gv = GpuVolume::upload(&ctx, &v).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let auto = common::accel("auto");
+    let view = |az: f64| {
+        FrameDesc::builder(64, 64)
+            .orbit(az, 20.0, lacuna::render::Projection::Orthographic)
+            .build()
+            .unwrap()
+    };
+    let views = [view(30.0), view(210.0)];
+    let priced = |frames: &[FrameDesc], trial: &str| -> auto::Choice {
+        let params = auto.params(&[("trial", trial)]).unwrap();
+        let (ranges, _) = builder.ranges_for(&[(auto, &params)], &gv).unwrap();
+        let input = BuildInput {
+            volume: &v,
+            gpu_volume: &gv,
+            tf: &tf,
+            gpu_tf: &lut,
+            mode: Mode::Composite,
+            frames,
+            octants: Octants::ALL,
+        };
+        choice(&builder.build(auto, &input, &ranges, &params).unwrap().0).clone()
+    };
+    let (a, b) = (priced(&views[..1], "off"), priced(&views[1..], "off"));
+    let both = priced(&views, "off");
+    assert_eq!((a.views, both.views), (1, 2));
+    assert_eq!(both.priced.len(), a.priced.len());
+    // Each candidate's counts are its two views' counts, its prediction
+    // their mean: no view's counts went to another candidate.
+    for ((pa, pb), p) in a.priced.iter().zip(&b.priced).zip(&both.priced) {
+        assert_eq!((&pa.label, &pb.label), (&p.label, &p.label));
+        assert_eq!(p.counts.samples, pa.counts.samples + pb.counts.samples, "{}", p.label);
+        assert_eq!(p.counts.steps, pa.counts.steps + pb.counts.steps, "{}", p.label);
+        assert_eq!(p.counts.rays, pa.counts.rays + pb.counts.rays, "{}", p.label);
+        let mean = (pa.predicted + pb.predicted) / 2.0;
+        assert!(
+            (p.predicted - mean).abs() <= 1e-9 * mean,
+            "{}: {} against {mean}",
+            p.label,
+            p.predicted
+        );
+    }
+    // The views differ, so the test tells them apart.
+    assert!(a
+        .priced
+        .iter()
+        .zip(&b.priced)
+        .any(|(x, y)| x.counts.samples != y.counts.samples));
+    // Timed: every candidate on both views, said so.
+    let timed = priced(&views, "always");
+    assert!(timed.priced.iter().all(|p| p.trial.is_some_and(|t| t > 0.0)));
+    assert!(timed.reason().contains("of 2 views, summed"), "{}", timed.reason());
+    assert_clean(&ctx);
+}

@@ -303,18 +303,21 @@ fn timer_misuse_is_an_error_not_a_panic() {
         })
         .unwrap_err();
     assert!(err.to_string().contains("passes do not nest"), "{err}");
-    ctx.submit_and_wait(|cmd| {
-        timer.reset(cmd);
-        let _never_closed = timer.begin(cmd, "open")?;
-        Ok(())
-    })
-    .unwrap();
+    let stale = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            timer.begin(cmd, "open")
+        })
+        .unwrap();
     let err = timer.results().unwrap_err();
     assert!(err.to_string().contains("never closed"), "{err}");
-    // After a reset the timer works again.
+    // After a reset the timer works again; the last recording's handle
+    // (the same index) closes nothing of this one.
     ctx.submit_and_wait(|cmd| {
         timer.reset(cmd);
         let p = timer.begin(cmd, "whole")?;
+        timer.end(cmd, stale);
+        assert!(timer.begin(cmd, "nested").is_err(), "the stale handle closed the pass");
         timer.end(cmd, p);
         Ok(())
     })

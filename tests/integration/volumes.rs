@@ -248,7 +248,9 @@ fn nrrd_field_names_read_in_every_spelling() {
     // "byteskip" and "Byte Skip" are "byte skip": three bytes before the data.
     for field in ["byteskip: 3", "Byte Skip: 3", "byte  skip: 3"] {
         let p = dir.path().join("skip.nrrd");
-        let mut bytes = nrrd_header("short", dims, "raw", &format!("{field}\nline skip: 0\n\n")).into_bytes();
+        // Comments and key:=value pairs may repeat: they are no fields.
+        let extra = format!("{field}\nline skip: 0\n# a\n# a\nk:=1\nk:=1\n\n");
+        let mut bytes = nrrd_header("short", dims, "raw", &extra).into_bytes();
         bytes.extend([9u8; 3]);
         bytes.extend(&data);
         write(&p, &bytes);

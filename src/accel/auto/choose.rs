@@ -44,7 +44,7 @@ pub const CLOSE: f64 = 0.3;
 /// The most views of a build's frames auto prices its candidates on
 /// (`priced_views`). A structure built once for an orbit marches every
 /// view, and on ch2 at ERT off the octant map at cell 4 and at cell 8 tied
-/// on the first view of `--suite auto`'s orbit where cell 8 was 10 to 15 %
+/// on the first view of `--suite auto`'s orbit where cell 8 was 7 to 15 %
 /// faster on the other three (`docs/results/auto.md`): priced on the first
 /// view alone, the choice was a coin toss that cost the orbit 15 %.
 pub const PRICED_VIEWS: usize = 4;

@@ -18,8 +18,8 @@
 //! The frames are those the build is for (`BuildInput::frames`: camera,
 //! step, early termination, sample filter, size, mode), so the choice
 //! accounts for all of them; a build for several views (an orbit) is
-//! priced and timed on up to `choose::PRICED_VIEWS` of them, the probe
-//! tiles shared among them. Re-made on every build, i.e. every transfer
+//! priced and timed on up to `choose::PRICED_VIEWS` of them, each probed
+//! with a whole frame's tiles. Re-made on every build, i.e. every transfer
 //! function change; a new time step keeps it while it holds (`keep.rs`,
 //! `Builder::build_step`). See `docs/structures.md`, "auto".
 
@@ -71,6 +71,9 @@ pub struct Choice {
     pub timed_for_tree: bool,
     /// Whether that trial timed whole frames (else a sample of the tiles).
     pub timed_whole_frames: bool,
+    /// The views it was priced and timed on (`choose::priced_views`): the
+    /// predictions are their mean, the trial times their sum.
+    pub views: usize,
     /// Where the kernel constants came from (one per distinct source).
     pub model: Vec<String>,
     /// Candidates left out, and why.
@@ -115,16 +118,22 @@ impl Choice {
             .iter()
             .map(|p| format!("{} {}", p.label, ms(p.predicted)))
             .collect();
-        let mut line = format!("predicted ms: {}", predicted.join(", "));
+        let per = match self.views {
+            1 => String::new(),
+            n => format!(" (a frame, the mean of {n} views)"),
+        };
+        let mut line = format!("predicted ms{per}: {}", predicted.join(", "));
         if self.timed {
             let timed: Vec<String> = self
                 .priced
                 .iter()
                 .filter_map(|p| p.trial.map(|t| format!("{} {}", p.label, ms(t))))
                 .collect();
-            let on = match self.timed_whole_frames {
-                true => "whole frames",
-                false => "the probe tiles",
+            let on = match (self.timed_whole_frames, self.views) {
+                (true, 1) => "whole frames".to_string(),
+                (false, 1) => "the probe tiles".to_string(),
+                (true, n) => format!("whole frames of {n} views, summed"),
+                (false, n) => format!("the probe tiles of {n} views, summed"),
             };
             let why = match self.timed_for_tree {
                 true => "the tree against the best",
@@ -423,6 +432,9 @@ fn choose(
         if calibrated {
             timings.push("calibrate", start.elapsed().as_secs_f64() * 1e3);
         }
+        // Each probe holds two frames' worth of output: freed before the
+        // trial's are made.
+        drop(probes);
         let close = match trial {
             "off" => Vec::new(),
             t => choose::to_time(&priced, t == "always"),
@@ -476,6 +488,7 @@ fn choose(
         timed,
         timed_for_tree: for_tree,
         timed_whole_frames: whole_frames,
+        views: views.len(),
         model,
         notes,
         candidate: candidates.swap_remove(pick),
