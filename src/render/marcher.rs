@@ -38,6 +38,14 @@ pub struct Renderer {
     no_cells: TexelBuffer,
 }
 
+/// Pixel rows `[first_row, first_row + rows)` of a frame, one submission's
+/// share of it (`Renderer::bands`, `Renderer::record_band`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Band {
+    pub first_row: u32,
+    pub rows: u32,
+}
+
 /// What the march writes: the kernel's output variant (None: the frame
 /// buffer), the resource, and the workgroup rows `[first, count]` (None: all).
 struct Destination<'a> {
@@ -114,8 +122,8 @@ impl Renderer {
     /// host's descriptor sets are untouched, but a host compute pipeline
     /// must be bound again.
     ///
-    /// One dispatch: split frames of many samples into submissions of your
-    /// own (`render` marches in bands of rows).
+    /// One dispatch: a frame of many samples is split into submissions of
+    /// your own with `bands` and `record_band` (as `render` marches).
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -124,6 +132,82 @@ impl Renderer {
         scene: Scene,
         desc: &FrameDesc,
         output: Output,
+    ) -> Result<()> {
+        self.record_rows(cmd, timer, target, scene, desc, output, None)
+    }
+
+    /// The bands of rows a frame splits into so that none marches more
+    /// than `max_samples` samples (rays x the longest ray's samples; `render`
+    /// takes `limits::MAX_SAMPLES_PER_SUBMIT`): submit each band's
+    /// `record_band` on its own, so no submission runs long enough for a
+    /// driver's watchdog. Every band but the last starts and ends on a
+    /// workgroup row (8 pixel rows); together they cover the frame once.
+    pub fn bands(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<Vec<Band>> {
+        let (_, height) = desc.size();
+        let rows = self.band_rows(scene, desc, max_samples)?;
+        let local = self.kernel(scene.structure.march(), desc, scene.volume)?.local_size()[1];
+        let groups = height.div_ceil(local);
+        Ok((0..groups)
+            .step_by(rows as usize)
+            .map(|g| Band {
+                first_row: g * local,
+                rows: (rows.min(groups - g) * local).min(height - g * local),
+            })
+            .collect())
+    }
+
+    /// As `record`, marching only `band`'s rows of the frame (one of
+    /// `bands`); the rest of the output is left as it was. The barriers and
+    /// state are `record`'s, so bands recorded one after another (in one
+    /// command buffer or several) write the whole frame, the same as one
+    /// `record` bit for bit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_band(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        target: &RenderTarget,
+        scene: Scene,
+        desc: &FrameDesc,
+        output: Output,
+        band: Band,
+    ) -> Result<()> {
+        let local = self.kernel(scene.structure.march(), desc, scene.volume)?.local_size()[1];
+        let (_, height) = desc.size();
+        let end = band.first_row.checked_add(band.rows).filter(|&e| e <= height);
+        if !band.first_row.is_multiple_of(local) || band.rows == 0 || end.is_none() {
+            return Err(Error::invalid(
+                "band",
+                format!("rows {} + {}", band.first_row, band.rows),
+                format!("a band of a {height}-row frame starts on a multiple of {local} (Renderer::bands)"),
+            ));
+        }
+        let rows = [band.first_row / local, band.rows.div_ceil(local)];
+        self.record_rows(cmd, timer, target, scene, desc, output, Some(rows))
+    }
+
+    /// Workgroup rows per band of at most `max_samples` samples.
+    fn band_rows(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<u32> {
+        let (width, height) = desc.size();
+        let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
+        let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
+        let groups = kernel.groups("frame", [width, height, 1])?;
+        // Rays in one row of workgroups; at least one row per band.
+        let row_rays = width as u64 * kernel.local_size()[1] as u64;
+        Ok((max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32)
+    }
+
+    /// `record` of workgroup rows `[first, count]` (None: all).
+    #[allow(clippy::too_many_arguments)]
+    fn record_rows(
+        &self,
+        cmd: vk::CommandBuffer,
+        timer: Option<&mut Timer>,
+        target: &RenderTarget,
+        scene: Scene,
+        desc: &FrameDesc,
+        output: Output,
+        rows: Option<[u32; 2]>,
     ) -> Result<()> {
         let (width, height) = desc.size();
         if (width, height) != (target.width, target.height) {
@@ -164,7 +248,7 @@ impl Renderer {
             output,
             depth,
             write_depth,
-            rows: None,
+            rows,
         };
         self.record_frame(cmd, timer, target, scene, desc, to)
     }
@@ -360,12 +444,9 @@ impl Renderer {
         let (width, height) = desc.size();
         let target = RenderTarget::new(&self.ctx, width, height)?;
         let with_depth = desc.writes_depth();
-        let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
         let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
-        // Rays in one row of workgroups; at least one row per band.
-        let row_rays = target.width as u64 * kernel.local_size()[1] as u64;
-        let rows_per_band = (max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32;
+        let rows_per_band = self.band_rows(scene, desc, max_samples)?;
         let mut timings = Timings::default();
         let mut first = 0;
         let mut bands = 0u32;

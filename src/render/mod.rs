@@ -13,5 +13,5 @@ pub use crate::desc::{
     Iso, Light, LookSpec, Mode, Octants, Orbit, Projection, Rays, Shading, DEFAULT_STEP, ERT_OFF, MAX_CLIP,
 };
 pub use crate::gpu::shaders::blocks::RenderParams;
-pub use marcher::{Renderer, Scene};
+pub use marcher::{Band, Renderer, Scene};
 pub use target::{HostDepthOut, HostImage, Output, RenderTarget};

@@ -336,6 +336,34 @@ fn frames_split_into_bands_equal_the_whole_frame() {
         assert_eq!(names, ["march", "readback"], "{name}");
         assert!(whole.pixels.iter().any(|p| p[3] > 0.0), "{name}: something visible");
         assert_eq!(diff(&whole, &banded).unwrap().differing, 0, "{name}");
+        // A host's bands: each recorded and submitted on its own.
+        let bands = renderer.bands(scene, &s, budget).unwrap();
+        let rows: Vec<(u32, u32)> = bands.iter().map(|b| (b.first_row, b.rows)).collect();
+        assert_eq!(rows, [(0, 8), (8, 8), (16, 8), (24, 8), (32, 8)], "{name}");
+        let target = lacuna::render::RenderTarget::new(&ctx, 72, 40).unwrap();
+        for band in bands {
+            ctx.submit_and_wait(|cmd| {
+                renderer.record_band(cmd, None, &target, scene, &s, lacuna::render::Output::Buffer, band)
+            })
+            .unwrap();
+        }
+        ctx.submit_and_wait(|cmd| renderer.record_readback(cmd, &target))
+            .unwrap();
+        assert_eq!(
+            diff(&whole, &target.read().unwrap()).unwrap().differing,
+            0,
+            "{name}: host bands"
+        );
+        // A band off the workgroup rows, or past the frame, is an error.
+        for (first_row, rows) in [(4, 8), (32, 16), (0, 0)] {
+            let band = lacuna::render::Band { first_row, rows };
+            let err = ctx
+                .submit_and_wait(|cmd| {
+                    renderer.record_band(cmd, None, &target, scene, &s, lacuna::render::Output::Buffer, band)
+                })
+                .unwrap_err();
+            assert!(err.to_string().contains("Renderer::bands"), "{err}");
+        }
     }
     common::assert_clean(&ctx);
 }
