@@ -531,21 +531,42 @@ impl TransferFunction {
 
 /// A transfer function on the GPU: the LUT the marchers sample and the
 /// max-alpha table classification queries. Uploads wait, so both are visible
-/// to compute reads when `upload` returns.
+/// to compute reads when `upload` returns. Read through its methods: the
+/// kernels index its buffers by what its fields say.
 pub struct GpuTransferFunction {
-    pub lut: Buffer,
-    pub max_table: Buffer,
+    pub(crate) lut: Buffer,
+    pub(crate) max_table: Buffer,
     /// `TransferFunction::visible_entries` of channel 1 (MIP and MinIP of
     /// one channel skip by it).
-    pub visible: Option<[u32; 2]>,
+    pub(crate) visible: Option<[u32; 2]>,
     /// Transfer functions held, channel after channel (1: one for every
     /// channel of the volume).
-    pub channels: u32,
+    pub(crate) channels: u32,
     /// Entries of one channel's max table (`tf_range.glsl`).
-    pub max_stride: u32,
+    pub(crate) max_stride: u32,
 }
 
 impl GpuTransferFunction {
+    /// The LUT the marchers sample (RGBA f32 entries, channel after channel).
+    pub fn lut(&self) -> &Buffer {
+        &self.lut
+    }
+
+    /// The max-alpha table classification queries.
+    pub fn max_table(&self) -> &Buffer {
+        &self.max_table
+    }
+
+    /// `TransferFunction::visible_entries` of channel 1.
+    pub fn visible(&self) -> Option<[u32; 2]> {
+        self.visible
+    }
+
+    /// Transfer functions held (1: one for every channel of the volume).
+    pub fn channels(&self) -> u32 {
+        self.channels
+    }
+
     /// An error unless it suits `volume` (`TransferFunction::check_channels`).
     pub fn check_channels(&self, volume_channels: u32) -> Result<()> {
         if self.channels != 1 && self.channels != volume_channels {
