@@ -53,6 +53,7 @@ impl Builder {
                 accel,
                 params: params.clone(),
                 mode: Some(input.mode),
+                volume: Some(input.built_over()),
                 built,
                 _keep: None,
             },
@@ -99,6 +100,7 @@ impl Builder {
             accel,
             params: params.clone(),
             mode: Some(input.mode),
+            volume: Some(input.built_over()),
             built,
             _keep: keep,
         })
@@ -138,6 +140,7 @@ fn fallback(accel: Accel, params: &Params, input: &BuildInput) -> Structure {
         accel,
         params: params.clone(),
         mode: Some(input.mode),
+        volume: Some(input.built_over()),
         built: Box::new(ModeFallback::new(accel, &input.mode)),
         _keep: None,
     }

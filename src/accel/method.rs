@@ -56,6 +56,13 @@ pub struct BuildInput<'a> {
     pub octants: Octants,
 }
 
+impl BuildInput<'_> {
+    /// The grid and channel count a structure built from this is for.
+    pub(crate) fn built_over(&self) -> ([u32; 3], u32) {
+        (self.gpu_volume.dims, self.gpu_volume.channels)
+    }
+}
+
 /// When a built structure is marched by another entry's kernel: which, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MarchedAs {
@@ -283,6 +290,9 @@ pub struct Structure {
     pub(crate) params: Params,
     /// The mode of the frames it was built for (None: any, as naive).
     pub(crate) mode: Option<Mode>,
+    /// The grid and channel count of the volume it was built over (None:
+    /// any, as naive).
+    pub(crate) volume: Option<([u32; 3], u32)>,
     pub(crate) built: Box<dyn Built>,
     /// What a recorded build's command buffer still reads (the activity
     /// LUT of a mode's build and its staging).
@@ -321,6 +331,27 @@ impl Structure {
                     "the {} structure was built for {} frames: build it with the frame's mode",
                     self.accel,
                     built.name()
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// A frame of `volume` can use this structure: it was built over a
+    /// volume of the same grid and channels (its regions index voxels, and
+    /// its classification covers those channels). Another volume would
+    /// march a wrong image, or read past the structure's buffers.
+    pub fn check_volume(&self, volume: &crate::volume::GpuVolume) -> Result<()> {
+        match self.volume {
+            Some((dims, channels)) if (dims, channels) != (volume.dims, volume.channels) => Err(Error::invalid(
+                "volume",
+                format!(
+                    "{}x{}x{} of {} channel(s)",
+                    volume.dims[0], volume.dims[1], volume.dims[2], volume.channels
+                ),
+                format!(
+                    "the {} structure was built over {}x{}x{} of {channels}: build it over the volume it renders",
+                    self.accel, dims[0], dims[1], dims[2]
                 ),
             )),
             _ => Ok(()),

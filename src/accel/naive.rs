@@ -64,6 +64,7 @@ impl Structure {
             accel: NAIVE,
             params: Params::default(),
             mode: None,
+            volume: None,
             built: Box::new(NoData),
             _keep: None,
         }

@@ -304,6 +304,7 @@ impl Renderer {
             }
         };
         structure.check_mode(desc.mode())?;
+        structure.check_volume(volume)?;
         let kernel = self.kernels.get(
             structure.march(),
             variant,

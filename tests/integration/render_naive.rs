@@ -367,3 +367,50 @@ fn frames_split_into_bands_equal_the_whole_frame() {
     }
     common::assert_clean(&ctx);
 }
+
+#[test]
+fn a_structure_renders_only_the_volume_grid_it_was_built_over() {
+    use lacuna::accel::{BuildInput, Builder, Structure};
+    use lacuna::render::{Renderer, Scene};
+    use lacuna::volume::{GpuVolume, LoadOptions};
+    let ctx = gpu();
+    let load = |spec: &str| Volume::load(spec, &LoadOptions::default()).unwrap();
+    let (small, large) = (load("vessels:32"), load("vessels:40"));
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let (gv_small, gv_large) = (
+        GpuVolume::upload(&ctx, &small).unwrap(),
+        GpuVolume::upload(&ctx, &large).unwrap(),
+    );
+    let builder = Builder::new(&ctx).unwrap();
+    let accel: Accel = "grid".parse().unwrap();
+    let params = accel.defaults();
+    let (ranges, _) = builder.ranges_for(&[(accel, &params)], &gv_small).unwrap();
+    let input = BuildInput {
+        volume: &small,
+        gpu_volume: &gv_small,
+        tf: &tf,
+        gpu_tf: &lut,
+        mode: lacuna::render::Mode::Composite,
+        frames: &[],
+        octants: Octants::ALL,
+    };
+    let (grid, _) = builder.build(accel, &input, &ranges, &params).unwrap();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let desc = settings(32, 30.0, 20.0, Projection::Orthographic).build().unwrap();
+    let scene = |structure, volume| Scene {
+        structure,
+        volume,
+        tf: &lut,
+    };
+    // Its own volume renders; another grid is refused, naming both.
+    renderer.render(scene(&grid, &gv_small), &desc).unwrap();
+    let err = renderer.render(scene(&grid, &gv_large), &desc).unwrap_err();
+    assert!(
+        err.to_string().contains("40x40x40") && err.to_string().contains("built over 32x32x32"),
+        "{err}"
+    );
+    // Naive marching has no structure: any volume.
+    renderer.render(scene(&Structure::naive(), &gv_large), &desc).unwrap();
+    common::assert_clean(&ctx);
+}

@@ -117,6 +117,7 @@ impl Builder {
                                     accel,
                                     params: params.clone(),
                                     mode: Some(input.mode),
+                                    volume: Some(input.built_over()),
                                     built: Box::new(chosen),
                                     _keep: None,
                                 },
