@@ -392,24 +392,40 @@ impl GpuVolume {
         self.gradient_cells.as_ref()
     }
 
-    /// As `add_gradient`, recorded into `cmd` (see `record_upload`); None
-    /// when it is already there.
+    /// As `add_gradient`, recorded into `cmd` (see `record_upload`); the
+    /// staging to keep, None when no image was recorded. The gradient's
+    /// cells copy is made too where the device shares the host's memory
+    /// (a CPU device: written through its mapping, nothing recorded or
+    /// submitted); elsewhere lit frames read the gradient image, the same
+    /// frames bit for bit.
     pub fn record_add_gradient(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
-        if self.gradient.is_some() {
+        let wants_cells = self.cells.is_some()
+            && self.gradient_cells.is_none()
+            && cells::host_shared(&self.ctx)
+            && gradient_cells::check_gradient_cells(self.ctx.info(), self.dims).is_ok();
+        if self.gradient.is_some() && !wants_cells {
             return Ok(None);
         }
         let texels = self.gradient_texels(volume)?;
-        let (image, staging) = Image3d::record_with_data(
-            &self.ctx,
-            cmd,
-            "gradient",
-            GRADIENT_FORMAT,
-            self.dims,
-            GRADIENT_TEXEL_BYTES,
-            bytemuck::cast_slice(&texels),
-        )?;
-        self.gradient = Some(image);
-        Ok(Some(staging))
+        let mut staging = None;
+        if self.gradient.is_none() {
+            let bytes = bytemuck::cast_slice(&texels);
+            let (image, kept) = Image3d::record_with_data(
+                &self.ctx,
+                cmd,
+                "gradient",
+                GRADIENT_FORMAT,
+                self.dims,
+                GRADIENT_TEXEL_BYTES,
+                bytes,
+            )?;
+            self.gradient = Some(image);
+            staging = Some(kept);
+        }
+        if wants_cells {
+            self.gradient_cells = Some(gradient_cells::upload_gradient_cells(&self.ctx, &texels, self.dims)?);
+        }
+        Ok(staging)
     }
 
     pub(super) fn gradient_texels(&self, volume: &Volume) -> Result<Vec<[half::f16; 4]>> {

@@ -606,3 +606,49 @@ fn a_played_series_keeps_its_step_ranges_exact() {
     }
     assert_clean(&ctx);
 }
+
+#[test]
+fn a_recorded_gradient_submits_nothing_and_lights_as_the_uploaded_one() {
+    let ctx = gpu();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let tf = TransferFunction::parse("ramp:0.2:0.9").unwrap();
+    let v = &volumes()[0];
+    let mut uploaded = GpuVolume::upload(&ctx, v).unwrap();
+    uploaded.prepare(v, true, Some(Filter::Manual)).unwrap();
+    let mut recorded = GpuVolume::upload(&ctx, v).unwrap();
+    recorded.prepare(v, false, Some(Filter::Manual)).unwrap();
+    assert!(recorded.gradient_view().is_none());
+    // One submission, this test's own.
+    let before = ctx.submissions();
+    let staging = ctx.submit_and_wait(|cmd| recorded.record_add_gradient(cmd, v)).unwrap();
+    assert!(staging.is_some(), "the gradient image was recorded");
+    assert_eq!(ctx.submissions(), before + 1);
+    // On a device that shares the host's memory (lavapipe) the cells copy
+    // is made as add_gradient makes it; elsewhere it would need a copy.
+    let shared = lacuna::volume::host_shared(&ctx);
+    assert_eq!(
+        recorded.gradient_cells().is_some(),
+        uploaded.gradient_cells().is_some() && shared
+    );
+    assert!(!shared || recorded.gradient_cells().is_some(), "lavapipe: made");
+    for mode in [Mode::Composite, Mode::Iso(Iso::new(&[0.45]).unwrap())] {
+        let desc = FrameDesc::builder(40, 32)
+            .orbit(30.0, 20.0, Projection::Orthographic)
+            .filter(Filter::Manual)
+            .mode(mode)
+            .shading(matches!(mode, Mode::Composite).then(Shading::default))
+            .build()
+            .unwrap();
+        let a = frame(&ctx, &renderer, &uploaded, v, &tf, &desc);
+        let b = frame(&ctx, &renderer, &recorded, v, &tf, &desc);
+        assert!(a.pixels.iter().filter(|p| p[3] > 0.0).count() > 50, "{mode:?}: visible");
+        let bits = |f: &Frame| f.pixels.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&a) == bits(&b), "{mode:?}: the recorded gradient lights otherwise");
+    }
+    // Once there, nothing more to record.
+    assert!(ctx
+        .submit_and_wait(|cmd| recorded.record_add_gradient(cmd, v))
+        .unwrap()
+        .is_none());
+    assert_clean(&ctx);
+}
