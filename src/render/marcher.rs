@@ -133,7 +133,8 @@ impl Renderer {
         desc: &FrameDesc,
         output: Output,
     ) -> Result<()> {
-        self.record_rows(cmd, timer, target, scene, desc, output, None)
+        let to = self.destination(target, desc, output)?;
+        self.record_frame(cmd, timer, target, scene, desc, to)
     }
 
     /// The bands of rows a frame splits into so that none marches more
@@ -144,8 +145,9 @@ impl Renderer {
     /// workgroup row (8 pixel rows); together they cover the frame once.
     pub fn bands(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<Vec<Band>> {
         let (_, height) = desc.size();
-        let rows = self.band_rows(scene, desc, max_samples)?;
-        let local = self.kernel(scene.structure.march(), desc, scene.volume)?.local_size()[1];
+        let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
+        let rows = band_rows(&kernel, scene, desc, max_samples)?;
+        let local = kernel.local_size()[1];
         let groups = height.div_ceil(local);
         Ok((0..groups)
             .step_by(rows as usize)
@@ -182,33 +184,14 @@ impl Renderer {
                 format!("a band of a {height}-row frame starts on a multiple of {local} (Renderer::bands)"),
             ));
         }
-        let rows = [band.first_row / local, band.rows.div_ceil(local)];
-        self.record_rows(cmd, timer, target, scene, desc, output, Some(rows))
+        let mut to = self.destination(target, desc, output)?;
+        to.rows = Some([band.first_row / local, band.rows.div_ceil(local)]);
+        self.record_frame(cmd, timer, target, scene, desc, to)
     }
 
-    /// Workgroup rows per band of at most `max_samples` samples.
-    fn band_rows(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<u32> {
-        let (width, height) = desc.size();
-        let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
-        let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
-        let groups = kernel.groups("frame", [width, height, 1])?;
-        // Rays in one row of workgroups; at least one row per band.
-        let row_rays = width as u64 * kernel.local_size()[1] as u64;
-        Ok((max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32)
-    }
-
-    /// `record` of workgroup rows `[first, count]` (None: all).
-    #[allow(clippy::too_many_arguments)]
-    fn record_rows(
-        &self,
-        cmd: vk::CommandBuffer,
-        timer: Option<&mut Timer>,
-        target: &RenderTarget,
-        scene: Scene,
-        desc: &FrameDesc,
-        output: Output,
-        rows: Option<[u32; 2]>,
-    ) -> Result<()> {
+    /// Where a frame of `desc` on `target` goes, its whole rows: after the
+    /// checks that it fits.
+    fn destination<'a>(&self, target: &'a RenderTarget, desc: &FrameDesc, output: Output) -> Result<Destination<'a>> {
         let (width, height) = desc.size();
         if (width, height) != (target.width, target.height) {
             return Err(Error::invalid(
@@ -243,14 +226,13 @@ impl Renderer {
                 (Some(image.variant()?), Binding::StorageImage(image.view), depth, true)
             }
         };
-        let to = Destination {
+        Ok(Destination {
             variant,
             output,
             depth,
             write_depth,
-            rows,
-        };
-        self.record_frame(cmd, timer, target, scene, desc, to)
+            rows: None,
+        })
     }
 
     /// `record`, writing `to`.
@@ -447,7 +429,7 @@ impl Renderer {
         let with_depth = desc.writes_depth();
         let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
-        let rows_per_band = self.band_rows(scene, desc, max_samples)?;
+        let rows_per_band = band_rows(&kernel, scene, desc, max_samples)?;
         let mut timings = Timings::default();
         let mut first = 0;
         let mut bands = 0u32;
@@ -488,6 +470,17 @@ impl Renderer {
         };
         Ok((frame, timings, bands))
     }
+}
+
+/// Workgroup rows per band of at most `max_samples` samples, for `kernel`
+/// marching `desc`.
+fn band_rows(kernel: &Kernel, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<u32> {
+    let (width, height) = desc.size();
+    let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
+    let groups = kernel.groups("frame", [width, height, 1])?;
+    // Rays in one row of workgroups; at least one row per band.
+    let row_rays = width as u64 * kernel.local_size()[1] as u64;
+    Ok((max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32)
 }
 
 impl Drop for Renderer {
