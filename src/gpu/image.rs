@@ -12,11 +12,11 @@ use gpu_allocator::MemoryLocation;
 /// A sampled 3D image (one channel) with its view.
 pub struct Image3d {
     ctx: Context,
-    pub raw: vk::Image,
-    pub view: vk::ImageView,
+    pub(crate) raw: vk::Image,
+    pub(crate) view: vk::ImageView,
     allocation: Option<Allocation>,
-    pub format: vk::Format,
-    pub extent: [u32; 3],
+    pub(crate) format: vk::Format,
+    pub(crate) extent: [u32; 3],
     /// Bytes a texel of `format` takes in the uploads' data.
     texel_bytes: u64,
 }
@@ -304,6 +304,26 @@ fn copy_region(offset: u64, ([x, y, z], [w, h, d]): TexelBox) -> vk::BufferImage
 }
 
 impl Image3d {
+    /// The image, to bind or barrier in the caller's own commands; the
+    /// `Image3d` still owns it.
+    pub fn raw(&self) -> vk::Image {
+        self.raw
+    }
+
+    /// Its view of the whole image.
+    pub fn view(&self) -> vk::ImageView {
+        self.view
+    }
+
+    pub fn format(&self) -> vk::Format {
+        self.format
+    }
+
+    /// Texels along x, y and z.
+    pub fn extent(&self) -> [u32; 3] {
+        self.extent
+    }
+
     /// Whether the image's texels fit one staging buffer, as
     /// `upload_mirrored` takes them.
     pub(crate) fn mirrorable(&self) -> bool {

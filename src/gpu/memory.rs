@@ -40,7 +40,7 @@ pub(crate) fn copy_to_mapped(dst: &mut [u8], src: &[u8]) {
 
 pub struct Buffer {
     ctx: Context,
-    pub raw: vk::Buffer,
+    pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
     size: u64,
     name: String,
@@ -160,6 +160,12 @@ impl Buffer {
         let buffer = Buffer::upload_target(ctx, name, data.len() as u64, usage)?;
         buffer.upload(0, data)?;
         Ok(buffer)
+    }
+
+    /// The handle, to bind or barrier in the caller's own commands; the
+    /// buffer still owns it.
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
     }
 
     pub fn size(&self) -> u64 {

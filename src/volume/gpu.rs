@@ -21,28 +21,30 @@ use std::borrow::Cow;
 /// The gradient's texel format (x, y, z, unused).
 const GRADIENT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
+/// Its fields are read through methods (`dims()`, `image()`, ...): the
+/// kernels trust them to describe the memory it owns.
 pub struct GpuVolume {
     pub(super) ctx: Context,
     /// The volume's texels: the dense image, or the brick pool.
-    pub image: Image3d,
+    pub(crate) image: Image3d,
     /// Nearest filtering: every `texelFetch` user binds this one.
-    pub sampler: vk::Sampler,
+    pub(crate) sampler: vk::Sampler,
     /// Linear filtering, clamp to edge; None where the format lacks
     /// `SAMPLED_IMAGE_FILTER_LINEAR` on this device.
     linear: Option<vk::Sampler>,
-    pub dims: [u32; 3],
-    pub spacing: [f32; 3],
+    pub(crate) dims: [u32; 3],
+    pub(crate) spacing: [f32; 3],
     /// Texel normalisation, as `Volume::norm` (channel 1's).
-    pub norm: [f32; 2],
+    pub(crate) norm: [f32; 2],
     /// How many channels each texel holds (`Volume::channel_count`).
-    pub channels: u32,
+    pub(crate) channels: u32,
     /// Each channel's texel normalisation (unused channels: [0, 0]).
-    pub norms: [[f32; 2]; MAX_CHANNELS],
+    pub(crate) norms: [[f32; 2]; MAX_CHANNELS],
     /// It holds NaN voxels (no data): the march kernels test samples for
     /// NaN, and only the manual filter samples it.
-    pub has_nan: bool,
+    pub(crate) has_nan: bool,
     /// How texels are stored (the march kernels' `VOLUME_KIND`).
-    pub kind: TexelKind,
+    pub(crate) kind: TexelKind,
     /// The gradient shaded and iso frames read (`add_gradient`).
     pub(super) gradient: Option<Image3d>,
     /// The cells copy the manual filter reads (`add_cells`).

@@ -12,6 +12,7 @@ mod export;
 mod filter;
 mod gpu;
 mod gpu_cells;
+mod gpu_fields;
 mod gpu_pool;
 mod gpu_step;
 mod gradient;

@@ -173,7 +173,7 @@ fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
         // One binding for the whole copy, and one of about three rows.
         let row = (v.dims[0] as u64 + 1) * kind.bytes_per_voxel();
         for range in [u64::MAX, 3 * row + 1] {
-            let image = (gv.image.view, gv.sampler);
+            let image = (gv.image().view(), gv.sampler());
             let mut timer = lacuna::gpu::Timer::new(&ctx, 1).unwrap();
             let got = ctx
                 .submit_and_wait(|cmd| {
@@ -288,9 +288,14 @@ fn a_step_put_in_place_renders_as_its_fresh_upload() {
         placed.prepare(v, true, Some(Filter::Manual)).unwrap();
         let mut fresh = GpuVolume::upload(&ctx, v).unwrap();
         fresh.prepare(v, true, Some(Filter::Manual)).unwrap();
-        assert_eq!((placed.norm, placed.has_nan), (fresh.norm, fresh.has_nan), "{}", v.name);
         assert_eq!(
-            (placed.spacing, placed.has_nan),
+            (placed.norm(), placed.has_nan()),
+            (fresh.norm(), fresh.has_nan()),
+            "{}",
+            v.name
+        );
+        assert_eq!(
+            (placed.spacing(), placed.has_nan()),
             (v.spacing, v.no_data_total() > 0),
             "{}",
             v.name

@@ -66,7 +66,7 @@ fn occludes_with(accel: &str) {
         .unwrap()
         .0;
     let size = settings.size;
-    let m = settings.camera.matrices(gv.dims, gv.spacing, size, size).unwrap();
+    let m = settings.camera.matrices(gv.dims(), gv.spacing(), size, size).unwrap();
     let view = FrameDesc::builder(size, size)
         .camera(Camera::Matrices(m))
         .filter(Filter::Manual)

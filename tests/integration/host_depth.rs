@@ -126,7 +126,7 @@ fn iso_depth_in_the_host_buffer_is_the_references_ndc_depth_for_every_structure(
             distance: None,
         },
     };
-    let m = orbit.matrices(gv.dims, gv.spacing, SIZE, SIZE).unwrap();
+    let m = orbit.matrices(gv.dims(), gv.spacing(), SIZE, SIZE).unwrap();
     let desc = FrameDesc::builder(SIZE, SIZE)
         .camera(Camera::Matrices(m))
         .filter(Filter::Manual)

@@ -153,7 +153,7 @@ fn matrices_render_the_orbit_cameras_images_bit_for_bit() {
     let f = fixture(&["naive"]);
     for camera in cameras() {
         let (orbit, _) = f.renderer.render(f.scene(0), &view(Camera::Orbit(camera))).unwrap();
-        let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+        let m = camera.matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
         let (host, _) = f.renderer.render(f.scene(0), &view(Camera::Matrices(m))).unwrap();
         assert!(
             orbit.pixels.iter().any(|p| p[3] > 0.1),
@@ -285,7 +285,7 @@ fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, 
 fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
     let f = fixture(&["naive", "grid", "lbvh"]);
     let camera = cameras()[3];
-    let m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let m = camera.matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
     let view = view(Camera::Matrices(m)).to_builder().step(0.7).build().unwrap();
     let frame = f.frame(0, &view);
     let values: Vec<f32> = frame.pixels.iter().flatten().copied().collect();
@@ -317,7 +317,7 @@ fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
 #[test]
 fn a_host_image_of_another_format_or_size_is_refused_by_name() {
     let f = fixture(&["naive"]);
-    let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let m = cameras()[0].matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
     let view = view(Camera::Matrices(m));
     let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
     let image = |format, width| HostImage {
@@ -414,7 +414,7 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
         DVec4::new(0.0, 0.0, 1.0, 1.0),
     );
     for (camera, reverse_z, depth) in [(cameras()[0], false, 0.5f32), (cameras()[3], true, 0.9985)] {
-        let mut m = camera.matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+        let mut m = camera.matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
         if reverse_z {
             m.projection = reverse * m.projection;
             m = m.with_reverse_z(true);
@@ -470,7 +470,7 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
 #[test]
 fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
     let f = fixture(&["naive"]);
-    let m = cameras()[0].matrices(f.gv.dims, f.gv.spacing, SIZE, SIZE).unwrap();
+    let m = cameras()[0].matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
     let frame = || FrameDesc::builder(SIZE, SIZE).camera(Camera::Matrices(m));
     let refused = |b: lacuna::render::FrameBuilder, needle: &str| {
         let err = b.build().unwrap_err().to_string();
@@ -522,10 +522,10 @@ fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
         .unwrap()
         .params(&f.gv)
         .unwrap();
-    assert_eq!((p.step, p.ert, p.image, p.dims), (0.25, 0.9, [SIZE, SIZE], f.gv.dims));
+    assert_eq!((p.step, p.ert, p.image, p.dims), (0.25, 0.9, [SIZE, SIZE], f.gv.dims()));
     assert_eq!(
         (p.norm, p.lut_size, p.depth_limits),
-        (f.gv.norm, lacuna::tf::LUT_SIZE as u32, 0)
+        (f.gv.norm(), lacuna::tf::LUT_SIZE as u32, 0)
     );
     let d = frame().build().unwrap();
     assert_eq!(

@@ -282,7 +282,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
             octants: Octants::ALL,
         };
         let naive = common::frame(&renderer, &Structure::naive(), &gv, &lut, &settings);
-        let m = camera.matrices(gv.dims, gv.spacing, w, h).unwrap();
+        let m = camera.matrices(gv.dims(), gv.spacing(), w, h).unwrap();
         let view = FrameDesc::builder(w, h).camera(Camera::Matrices(m)).build().unwrap();
         for collapse in [false, true] {
             let params = lbvh

@@ -71,7 +71,7 @@ fn every_mode_matches_the_cpu_reference_on_masked_data() {
         let v = masked(spec);
         assert!(v.no_data.nan > 0 && v.no_data.pos_inf > 0 && v.no_data.neg_inf > 0);
         let gv = GpuVolume::upload(&ctx, &v).unwrap();
-        assert!(gv.has_nan);
+        assert!(gv.has_nan());
         assert!(gv.sampler_for(Filter::Hardware).is_err());
         let tf = TransferFunction::parse(v.default_tf.as_ref().unwrap()).unwrap();
         for (mode, shading) in modes() {

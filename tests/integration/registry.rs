@@ -191,7 +191,7 @@ impl Method for FullGrid {
         params: &Params,
     ) -> Result<Box<dyn Built>> {
         let edge = params.int("edge")?;
-        let counts = input.gpu_volume.dims.map(|d| d.div_ceil(edge));
+        let counts = input.gpu_volume.dims().map(|d| d.div_ceil(edge));
         let cells = counts.iter().map(|&c| c as u64).product::<u64>();
         // The grid kernel reads a cell's flag as a texel (R32UI).
         let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
@@ -208,7 +208,7 @@ impl Method for FullGrid {
             builder
                 .context()
                 .device()
-                .cmd_fill_buffer(cmd, flags.buffer().raw, 0, vk::WHOLE_SIZE, 1)
+                .cmd_fill_buffer(cmd, flags.buffer().raw(), 0, vk::WHOLE_SIZE, 1)
         };
         // ALL_TRANSFER, not CLEAR, as the source stage (see the README's validation notes).
         record::barrier(

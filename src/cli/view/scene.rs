@@ -253,7 +253,7 @@ impl Scene {
         let frame_buffer = target
             .frame()
             .ok_or_else(|| Error::Unsupported("the viewer's render target has no frame buffer".into()))?
-            .raw;
+            .raw();
         // The previous frame's blit read the canvas; the whole frame is
         // written, so its old contents are discarded.
         record::image_barrier(
