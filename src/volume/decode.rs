@@ -111,13 +111,23 @@ pub(super) fn source_units((lo, hi): (f64, f64)) -> [f64; 2] {
 
 /// Wide values normalised as f32 over the finite range `(lo, hi)`; NaN and
 /// infinities kept as they are (`Volume::new` stores them as no data).
+///
+/// A range wider than f64 holds (-1e308 to 1e308) is taken at half scale,
+/// and one so narrow its reciprocal overflows (subnormal values) is
+/// divided by instead: either would otherwise turn finite voxels into NaN.
 pub(super) fn normalizer((lo, hi): (f64, f64)) -> impl Fn(f64) -> f32 {
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
+    let wide = hi > lo && (hi - lo).is_infinite();
+    let narrow = hi > lo && scale.is_infinite();
     move |v: f64| {
-        if v.is_finite() {
-            ((v - lo) * scale) as f32
-        } else {
+        if !v.is_finite() {
             v as f32
+        } else if wide {
+            ((v * 0.5 - lo * 0.5) / (hi * 0.5 - lo * 0.5)) as f32
+        } else if narrow {
+            ((v - lo) / (hi - lo)) as f32
+        } else {
+            ((v - lo) * scale) as f32
         }
     }
 }
@@ -182,4 +192,22 @@ pub fn decode(
 fn source_range(bytes: &[u8], ty: VoxelType, little: bool) -> [f64; 2] {
     // The finite values' range (NaN and infinities are no data).
     source_units(finite_range(wide_values(bytes, ty, little)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normalizer;
+
+    #[test]
+    fn ranges_past_f64_and_subnormal_ranges_normalise_to_finite_values() {
+        let wide = normalizer((-1e308, 1e308));
+        assert_eq!([wide(-1e308), wide(0.0), wide(1e308)], [0.0, 0.5, 1.0]);
+        let narrow = normalizer((1e-320, 5e-318));
+        let (lo, hi) = (narrow(1e-320), narrow(5e-318));
+        assert!((lo, hi) == (0.0, 1.0), "{lo} {hi}");
+        assert!((narrow(2.5e-318) - 0.5).abs() < 0.01);
+        let plain = normalizer((2.0, 6.0));
+        assert_eq!([plain(2.0), plain(3.0), plain(6.0)], [0.0, 0.25, 1.0]);
+        assert!(plain(f64::NAN).is_nan() && wide(f64::INFINITY) == f32::INFINITY);
+    }
 }

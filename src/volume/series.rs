@@ -339,10 +339,23 @@ impl StepNorm {
         let [lo0, hi0] = self.range;
         let [lo, hi] = step.value_range;
         match hi > lo {
-            true => [((lo0 - lo) / (hi - lo)) as f32, ((hi - lo) / (hi0 - lo0)) as f32],
+            true => [
+                span_ratio([lo, lo0], [lo, hi]) as f32,
+                span_ratio([lo, hi], [lo0, hi0]) as f32,
+            ],
             // Texels all 0: the offset alone carries the value.
-            false => [(-(lo - lo0) / (hi0 - lo0)) as f32, 1.0],
+            false => [span_ratio([lo, lo0], [lo0, hi0]) as f32, 1.0],
         }
+    }
+}
+
+/// `(a1 - a0) / (b1 - b0)`, at half scale where a difference overflows
+/// f64 (values from -1e308 to 1e308), which would otherwise give NaN.
+fn span_ratio(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let ratio = (a[1] - a[0]) / (b[1] - b[0]);
+    match ratio.is_nan() || (a[1] - a[0]).is_infinite() {
+        true => (a[1] * 0.5 - a[0] * 0.5) / (b[1] * 0.5 - b[0] * 0.5),
+        false => ratio,
     }
 }
 

@@ -101,6 +101,38 @@ fn float_steps_are_mapped_onto_the_first_steps_range() {
     assert_eq!(value(&s1, 7), 1.0);
 }
 
+/// float64 steps whose range overflows f64's differences (-1e308 to
+/// 1e308) or is subnormal map onto finite texels and norms, not NaN.
+#[test]
+fn float64_steps_at_the_ends_of_f64_normalise_to_finite_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let wide: Vec<f64> = (0..8).map(|i| if i < 4 { 1e308 } else { -1e308 }).collect();
+    let tiny: Vec<f64> = (0..8).map(|i| i as f64 * 1e-320).collect();
+    for (k, values) in [(0, &wide), (1, &wide), (2, &tiny)] {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(dir.path().join(format!("e{k}_2x2x2_float64.raw")), bytes).unwrap();
+    }
+    let series = open(dir.path().join("e%d_2x2x2_float64.raw").to_str().unwrap());
+    let value = |v: &Volume, i: usize| v.normalize(v.data.texel(i));
+    for k in [0, 1] {
+        let step = series.load(k, None).unwrap();
+        assert!(step.norm.iter().all(|n| n.is_finite()), "step {k}: {:?}", step.norm);
+        assert_eq!((step.no_data_total(), step.value_range), (0, [-1e308, 1e308]));
+        assert_eq!([value(&step, 0), value(&step, 7)], [1.0, 0.0], "step {k}");
+    }
+    // A subnormal range alone (within a wide series, its offset in step 0's
+    // units is past f32: left alone).
+    let alone = Volume::load(
+        dir.path().join("e2_2x2x2_float64.raw").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        (alone.no_data_total(), value(&alone, 0), value(&alone, 7)),
+        (0, 0.0, 1.0)
+    );
+}
+
 #[test]
 fn bad_patterns_and_steps_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
