@@ -1,7 +1,7 @@
 //! `lacuna export`: any volume lacuna loads or generates as an Open
 //! SciVis-named raw file in its source units, for VTK, ParaView and others.
 
-use super::{load_volume, parse_dims, parse_type};
+use super::{parse_dims, parse_type};
 use clap::Args;
 use lacuna::volume::{check_raw_out, parse_export_type, write_raw, LoadOptions, RawLayout, Series, VoxelType};
 use lacuna::Result;
@@ -32,15 +32,12 @@ pub struct ExportArgs {
 pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     // The output's folder is checked before a (possibly long) load.
     check_raw_out(&args.out)?;
-    let volume = match args.time {
-        0 => load_volume(&args.volume, args.dims, args.source_type)?,
-        k => {
-            let raw = args.dims.zip(args.source_type).map(|(dims, ty)| RawLayout { dims, ty });
-            let series = Series::open(&args.volume, &LoadOptions { raw })?;
-            series.check_step(k)?;
-            series.load(k, None)?
-        }
-    };
+    // Every volume opens as a series (one step where it has no time axis),
+    // so a file pattern's step 0 is read as its other steps are.
+    let raw = args.dims.zip(args.source_type).map(|(dims, ty)| RawLayout { dims, ty });
+    let series = Series::open(&args.volume, &LoadOptions { raw })?;
+    series.check_step(args.time)?;
+    let volume = series.load(args.time, None)?;
     let written = write_raw(&volume, &args.out, args.ty)?;
     println!("{}", written.path.display());
     let [sx, sy, sz] = volume.spacing;

@@ -74,12 +74,6 @@ impl VolumeArgs {
     }
 }
 
-/// Loads a volume spec; `dims` and `ty` (given together) are a raw file's layout.
-pub fn load_volume(spec: &str, dims: Option<[u32; 3]>, ty: Option<VoxelType>) -> Result<Volume> {
-    let raw = dims.zip(ty).map(|(dims, ty)| RawLayout { dims, ty });
-    Volume::load_within(spec, &LoadOptions { raw }, None)
-}
-
 /// A headless context; `validate` adds validation with synchronization validation.
 pub fn context(validate: bool) -> Result<Context> {
     let mut options = ContextOptions::from_env();

@@ -248,6 +248,25 @@ fn export_time_writes_that_step_of_a_series() {
         let back = load(&dir.path().join(format!("step{k}_20x20x20_uint8.raw")));
         assert_eq!(u8s(&back), u8s(step), "step {k}");
     }
+    // A file pattern's steps, step 0 by default as `--time 0`.
+    let files = tempfile::tempdir().unwrap();
+    for k in 0..2u8 {
+        std::fs::write(
+            files.path().join(format!("run_{k:04}_4x2x2_uint8.raw")),
+            [k * 10 + 1; 16],
+        )
+        .unwrap();
+    }
+    let pattern = files.path().join("run_%04d_4x2x2_uint8.raw");
+    for (k, time) in [(0u8, None), (0, Some("0")), (1, Some("1"))] {
+        let stem = dir.path().join(format!("file{k}"));
+        let mut args = vec!["export", pattern.to_str().unwrap(), stem.to_str().unwrap()];
+        args.extend(time.map(|t| ["--time", t]).into_iter().flatten());
+        let r = lacuna(&args, &[]);
+        assert_eq!(r.code, 0, "{args:?}: {}", r.stderr);
+        let back = load(&dir.path().join(format!("file{k}_4x2x2_uint8.raw")));
+        assert_eq!(u8s(&back), [k * 10 + 1; 16], "{args:?}");
+    }
 }
 
 #[test]
