@@ -116,8 +116,10 @@ impl Error {
 /// A number as a message or a report writes it: as `Display` does (the
 /// shortest text that reads back), in exponent form where that would run
 /// to many digits (1e300, 1.5e-30).
-pub fn number(v: f64) -> String {
-    match v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
+/// An f32 prints as f32 (its shortest text), not widened.
+pub fn number<T: Copy + Into<f64> + std::fmt::Display + std::fmt::LowerExp>(v: T) -> String {
+    let w: f64 = v.into();
+    match w != 0.0 && w.is_finite() && !(1e-6..1e15).contains(&w.abs()) {
         true => format!("{v:e}"),
         false => format!("{v}"),
     }
@@ -191,6 +193,10 @@ mod tests {
         assert_eq!(number(-1e300), "-1e300");
         assert_eq!(number(1.5e-30), "1.5e-30");
         assert_eq!(number(f64::INFINITY), "inf");
+        assert_eq!(
+            (number(1e38f32), number(1e-38f32), number(0.1f32)),
+            ("1e38".into(), "1e-38".into(), "0.1".into())
+        );
     }
     use ash::vk;
 

@@ -49,7 +49,10 @@ struct Lighting {
 // The lighting of a ray along `dir` (voxel space).
 Lighting lighting_for(vec3 dir) {
     Lighting lt;
-    precise vec3 view = normalize(-dir * params.spacing);
+    // The spacing relative to the shortest side: the spacing itself
+    // overflows (or underflows) normalize's square at 1e20 (1e-20) a voxel.
+    precise vec3 relative = params.spacing / min(min(params.spacing.x, params.spacing.y), params.spacing.z);
+    precise vec3 view = normalize(-dir * relative);
     lt.l = params.headlight != 0u ? view : params.light;
     precise vec3 h = normalize(lt.l + view);
     lt.h = h;

@@ -215,8 +215,8 @@ impl CameraMatrices {
         if !finite_rays {
             return Err(Error::invalid(
                 "camera",
-                format!("{self:?}"),
-                "forms no finite rays (degenerate matrices)",
+                "view and projection matrices",
+                format!("form no finite rays for a volume of spacing {spacing}: degenerate matrices, or a spacing f32 cannot hold"),
             ));
         }
         // NDC (with depth) to voxel space, for rays that end at a host depth.

@@ -167,10 +167,13 @@ impl Orbit {
                     half[1] = half[1].max(corner.dot(up).abs());
                 }
                 let pixel = (2.0 * half[0] / w).max(2.0 * half[1] / h).max(f64::MIN_POSITIVE);
-                // The eye plane (where orthographic rays start) in front of the volume.
-                let far = 2.0 * (radius + 1.0);
-                let p = orthographic(pixel * w / 2.0, pixel * h / 2.0, 0.0, far);
-                (centre + to_eye * (radius + 1.0), p)
+                // The eye plane (where orthographic rays start) a unit in
+                // front of the volume, or a radius where the volume is
+                // smaller: a unit in front of a 1e-9 box put the rays'
+                // origins 1e9 voxels out, where f32 no longer resolves a step.
+                let gap = radius + radius.min(1.0);
+                let p = orthographic(pixel * w / 2.0, pixel * h / 2.0, 0.0, 2.0 * gap);
+                (centre + to_eye * gap, p)
             }
             Projection::Perspective { fov_deg, distance } => {
                 let half_fov = (fov_deg / 2.0).to_radians();

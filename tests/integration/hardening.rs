@@ -373,3 +373,54 @@ fn a_perspective_frame_is_the_same_at_every_spacing() {
         }
     }
 }
+
+/// An orthographic frame, unlit and lit, is the same at every uniform
+/// spacing within f32 rounding: its eye plane sat a fixed unit in front of
+/// the volume, 1e9 voxels out at 1e-9 a voxel (the frame went transparent),
+/// and the lit view direction's square overflowed at 1e20 (shading went flat).
+#[test]
+fn an_orthographic_frame_is_the_same_at_every_spacing() {
+    let dir = tempfile::tempdir().unwrap();
+    let data: Vec<u8> = (0..16u32 * 16 * 16).map(|i| ((i * 37) % 251) as u8).collect();
+    let frame = |spacing: f32, shade: &str| {
+        let volume = dir.path().join(format!("v{spacing:e}.nii"));
+        std::fs::write(&volume, common::nifti_bytes(&[16, 16, 16], 2, 8, [spacing; 3], &data)).unwrap();
+        let out = dir.path().join(format!("o{spacing:e}-{shade}.exr"));
+        let args = ["--camera", "35,25", "--accel", "naive", "--shade", shade];
+        common::render_ok(volume.to_str().unwrap(), &out, &args);
+        lacuna::frame::Frame::read_exr(&out).unwrap()
+    };
+    for shade in ["off", "on"] {
+        let unit = frame(1.0, shade);
+        assert!(unit.pixels.iter().any(|p| p[3] > 0.1), "the volume is not in view");
+        for spacing in [1e-9, 1e-5, 1e5, 1e20] {
+            let d = lacuna::frame::diff(&unit, &frame(spacing, shade)).unwrap();
+            assert!(d.max_abs < 1e-5, "spacing {spacing}, shade {shade}: {d}");
+        }
+    }
+}
+
+/// A spacing past f32 once multiplied by the dims, or a voxel a million
+/// times longer than it is wide, is an error naming the spacing.
+#[test]
+fn spacings_past_f32_or_too_uneven_are_errors() {
+    let data = [7u8; 8 * 8 * 8];
+    for (spacing, why) in [
+        (
+            [1e38f32, 1e-38, 1.0],
+            "'1e38 x 1e-38 x 1': the volume's physical size (dims x spacing) is past f32",
+        ),
+        (
+            [2e6, 1.0, 1.0],
+            "'2000000 x 1 x 1': a voxel's longest side may be at most 1e6 times its shortest",
+        ),
+    ] {
+        let bytes = common::nifti_bytes(&[8, 8, 8], 2, 8, spacing, &data);
+        let err = lacuna::Volume::from_nifti_bytes("s.nii", &bytes)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(err, format!("invalid spacing {why}"));
+    }
+    let bytes = common::nifti_bytes(&[8, 8, 8], 2, 8, [1e6, 1.0, 1.0], &data);
+    assert!(lacuna::Volume::from_nifti_bytes("s.nii", &bytes).is_ok());
+}

@@ -222,7 +222,8 @@ impl<'a> Tracer<'a> {
     /// As `light_sample` in `glsl/common/light.glsl`.
     fn light(&self, pos: Vec3, dir: Vec3, c: [f32; 4]) -> [f32; 4] {
         let p = self.p;
-        let spacing = Vec3::from(p.spacing);
+        // Relative to the shortest side, as the shader takes it.
+        let spacing = Vec3::from(p.spacing) / p.spacing.into_iter().fold(f32::INFINITY, f32::min);
         // The gradient texels are in physical units already.
         let g = self.sample_gradient(pos);
         let d = g.dot(g);
