@@ -6,9 +6,11 @@
 //! spatial and the object median, after Whang et al.'s Octree-R).
 
 use super::node::{axis_bit, Node};
+use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -115,12 +117,65 @@ fn child_box(b: &Box3, split: [f32; 3], i: u32) -> Box3 {
     c
 }
 
+/// What a build may spend: the bytes of its nodes, object references and
+/// the object lists it holds while it splits. Deep trees grow like 8^depth
+/// where objects overlap many cells, so the build stops once past it.
+struct Budget {
+    limit: u64,
+    spent: AtomicU64,
+    over: AtomicBool,
+}
+
+impl Budget {
+    /// Spends `bytes`; false (and remembered) once past the limit.
+    fn spend(&self, bytes: u64) -> bool {
+        let spent = self.spent.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        if spent > self.limit {
+            self.over.store(true, Ordering::Relaxed);
+        }
+        !self.over.load(Ordering::Relaxed)
+    }
+}
+
 impl Octree {
     /// Builds over object boxes inside `root` (which must contain them).
     pub fn build(root: Box3, objects: &[Box3], options: OctreeOptions) -> Octree {
+        let budget = Budget {
+            limit: u64::MAX,
+            spent: AtomicU64::new(0),
+            over: AtomicBool::new(false),
+        };
+        Self::build_with(root, objects, options, &budget)
+    }
+
+    /// As `build`, spending at most `max_bytes` on nodes, references and
+    /// the lists held while splitting (checked as it goes, so a tree too
+    /// deep to hold is an error before it takes the host's memory).
+    pub fn build_within(root: Box3, objects: &[Box3], options: OctreeOptions, max_bytes: u64) -> Result<Octree> {
+        let budget = Budget {
+            limit: max_bytes,
+            spent: AtomicU64::new(0),
+            over: AtomicBool::new(false),
+        };
+        let octree = Self::build_with(root, objects, options, &budget);
+        if budget.over.load(Ordering::Relaxed) {
+            return Err(Error::invalid(
+                "max depth",
+                options.max_depth.to_string(),
+                format!(
+                    "the octree of {} objects outgrew {max_bytes} bytes (nodes, references and lists) before depth {}: take a smaller --max-depth",
+                    objects.len(),
+                    options.max_depth
+                ),
+            ));
+        }
+        Ok(octree)
+    }
+
+    fn build_with(root: Box3, objects: &[Box3], options: OctreeOptions, budget: &Budget) -> Octree {
         let start = Instant::now();
         let all: Vec<u32> = (0..objects.len() as u32).collect();
-        let tree = subdivide(&root, all, objects, 0, &options);
+        let tree = subdivide(&root, all, objects, 0, &options, budget);
         let mut octree = Octree {
             nodes: vec![Node::default()],
             refs: Vec::new(),
@@ -164,8 +219,17 @@ impl Octree {
     }
 }
 
-fn subdivide(b: &Box3, objs: Vec<u32>, boxes: &[Box3], depth: u32, o: &OctreeOptions) -> Tree {
-    if objs.len() as u32 <= o.max_objects || depth >= o.max_depth {
+fn subdivide(b: &Box3, objs: Vec<u32>, boxes: &[Box3], depth: u32, o: &OctreeOptions, budget: &Budget) -> Tree {
+    // A leaf's references, or an interior node's eight children (each a
+    // `Tree` now and a `Node` when flattened, whose vector may double) and
+    // their object lists (at most eight of this node's).
+    let leaf = objs.len() as u32 <= o.max_objects || depth >= o.max_depth;
+    let child = (std::mem::size_of::<Tree>() + 2 * std::mem::size_of::<Node>()) as u64;
+    let bytes = match leaf {
+        true => 4 * objs.len() as u64,
+        false => 8 * (child + 4 * objs.len() as u64),
+    };
+    if !budget.spend(bytes) || leaf {
         return Tree::Leaf(objs);
     }
     let split = match o.mode {
@@ -179,7 +243,7 @@ fn subdivide(b: &Box3, objs: Vec<u32>, boxes: &[Box3], depth: u32, o: &OctreeOpt
             .copied()
             .filter(|&k| cb.overlaps(&boxes[k as usize]))
             .collect();
-        subdivide(&cb, inside, boxes, depth + 1, o)
+        subdivide(&cb, inside, boxes, depth + 1, o, budget)
     };
     // Parallel where there is enough work per child to pay for it.
     let children: Vec<Tree> = if objs.len() > 2048 {

@@ -17,7 +17,7 @@ const BATCH: usize = 1 << 20;
 
 /// The trace pipelines, once per context.
 pub struct TraceKernels {
-    ctx: Context,
+    pub(crate) ctx: Context,
     kernels: Vec<(Traversal, Kernel)>,
 }
 

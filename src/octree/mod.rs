@@ -27,6 +27,15 @@ impl Octree {
     pub fn for_scene(scene: &TraceScene, options: OctreeOptions) -> Octree {
         Octree::build(scene.root_box(), &scene.boxes, options)
     }
+
+    /// As `for_scene`, an error once the build would take more than `max_bytes`.
+    pub fn for_scene_within(
+        scene: &TraceScene,
+        options: OctreeOptions,
+        max_bytes: u64,
+    ) -> crate::error::Result<Octree> {
+        Octree::build_within(scene.root_box(), &scene.boxes, options, max_bytes)
+    }
 }
 
 /// Traces one ray on the CPU: the reference the GPU tracer must match.

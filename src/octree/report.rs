@@ -40,14 +40,19 @@ pub fn run(
     traversals: &[Traversal],
     options: &WhittedOptions,
 ) -> Result<(Row, Option<Frame>)> {
-    let tree = Octree::for_scene(
-        traced,
-        OctreeOptions {
-            mode,
-            max_depth,
-            max_objects: 1,
-        },
-    );
+    // The GPU holds the nodes and the references in a storage buffer each;
+    // the CPU tracer keeps them in host memory: a quarter of it, at most
+    // 4 GiB (16 times what a GPU's 128 MiB buffers hold).
+    let max_bytes = match backend {
+        Backend::Gpu(kernels) => 2 * kernels.ctx.info().max_storage_buffer_range,
+        Backend::Cpu => (crate::limits::available_memory() / 4).min(4 << 30),
+    };
+    let build = OctreeOptions {
+        mode,
+        max_depth,
+        max_objects: 1,
+    };
+    let tree = Octree::for_scene_within(traced, build, max_bytes)?;
     let stats = match backend {
         Backend::Gpu(kernels) => {
             let mut gpu = GpuTracer::new(kernels, &tree, traced)?;

@@ -236,3 +236,36 @@ fn octree_builds_follow_havrans_rules_and_statistics() {
         }
     }
 }
+
+/// A build past its byte budget stops as it goes and is an error naming
+/// the depth; within it, the tree is `build`'s. The CLI budgets a GPU tree
+/// by `maxStorageBufferRange`, so a depth whose tree would take gigabytes
+/// of host memory (tetra's four overlapping objects split to the last
+/// level) is one line, not an abort.
+#[test]
+fn an_octree_past_its_budget_is_an_error_not_an_abort() {
+    let traced = TraceScene::new(&reduced(SpdScene::Tree));
+    let whole = Octree::for_scene(&traced, options(Mode::Center, 5));
+    let within = Octree::for_scene_within(&traced, options(Mode::Center, 5), u64::MAX).unwrap();
+    assert_eq!((within.nodes, within.refs), (whole.nodes.clone(), whole.refs));
+    let bytes = (whole.nodes.len() * std::mem::size_of::<lacuna::octree::Node>()) as u64;
+    let err = Octree::for_scene_within(&traced, options(Mode::Center, 5), bytes / 2)
+        .unwrap_err()
+        .to_string();
+    assert!(err.starts_with("invalid max depth '5': the octree of "), "{err}");
+    assert!(err.ends_with("take a smaller --max-depth"), "{err}");
+    common::fails(
+        &[
+            "octree",
+            "tetra",
+            "--size",
+            "1",
+            "--resolution",
+            "16",
+            "--max-depth",
+            "9",
+        ],
+        &[],
+        "invalid max depth '9': the octree of 4 objects outgrew",
+    );
+}
