@@ -226,6 +226,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     // The device first: the volume's size is checked against its limits
     // from the spec or header, before any voxel is read or made.
     let ctx = context(args.validate)?;
+    // The frame's size too: auto's probes and the load come before its target.
+    let (width, height) = desc.size();
+    lacuna::render::RenderTarget::check_size(ctx.info(), width, height)?;
     let series = args.volume.series()?;
     let clock = std::time::Instant::now();
     let volume = series.load_stored(
@@ -257,7 +260,6 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     };
 
     let info = ctx.info();
-    let (width, height) = desc.size();
     println!(
         "device  {} ({}), subTexelPrecisionBits {}",
         info.name, info.driver, info.sub_texel_precision_bits

@@ -7,6 +7,15 @@ use std::path::{Path, PathBuf};
 /// through, as `>` would), and an error where that exists and is no regular
 /// file: the rename would put a file in a device's, pipe's or folder's place.
 fn output_target(path: &Path) -> Result<PathBuf> {
+    // `o.exr/` names a folder (its file name reads as `o.exr`): refused
+    // here, before the work whose output the rename could not place.
+    if path.as_os_str().to_string_lossy().ends_with(std::path::is_separator) {
+        return Err(Error::invalid(
+            "output path",
+            path.display().to_string(),
+            "ends in a separator, so it names a folder: give a file name",
+        ));
+    }
     let target = match std::fs::symlink_metadata(path) {
         // A dangling link names the file to create, beside the link.
         Ok(m) if m.file_type().is_symlink() => match std::fs::canonicalize(path) {
@@ -99,6 +108,16 @@ mod tests {
             assert!(e.contains("not a regular file"), "{e}");
         }
         assert!(folder.is_dir());
+        // A name ending in a separator names a folder, existing or not.
+        for name in ["new.exr/", "out.exr/"] {
+            let e = check_parent(&PathBuf::from(format!("{}/{name}", dir.display())))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.ends_with("ends in a separator, so it names a folder: give a file name"),
+                "{e}"
+            );
+        }
         // A link to a file: the file gets the bytes, the link stays a link.
         let file = dir.join("real.txt");
         std::fs::write(&file, b"old").unwrap();

@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::gpu::record;
 use crate::gpu::shaders::blocks::RenderParams;
-use crate::gpu::{vk, Buffer, Context, MemoryLocation, TexelBuffer};
+use crate::gpu::{vk, Buffer, Context, DeviceInfo, MemoryLocation, TexelBuffer};
 
 /// The per-frame-size buffers of a frame: its parameter block (with the
 /// per-pixel depth limits after it), the frame's LUT (corrected for its
@@ -173,7 +173,10 @@ impl RenderTarget {
         Self::create(ctx, width, height, false, false)
     }
 
-    fn create(ctx: &Context, width: u32, height: u32, frame: bool, readback: bool) -> Result<Self> {
+    /// Checks a frame of `width` x `height` against the device's limits, as
+    /// creating a target does: callers check it before work that comes
+    /// first (loading a volume, auto's probes).
+    pub fn check_size(info: &DeviceInfo, width: u32, height: u32) -> Result<()> {
         if width == 0 || height == 0 {
             return Err(Error::invalid(
                 "size",
@@ -181,9 +184,7 @@ impl RenderTarget {
                 "width and height must be > 0",
             ));
         }
-        let info = ctx.info();
-        let pixels = width as u64 * height as u64;
-        let bytes = pixels * 16;
+        let bytes = width as u64 * height as u64 * 16;
         info.check(
             format!("frame {width}x{height} ({bytes} bytes)"),
             "maxStorageBufferRange",
@@ -192,6 +193,14 @@ impl RenderTarget {
         )?;
         let local = crate::gpu::shaders::MARCH_NAIVE.local_size_with(&[]);
         record::groups_for(info, "frame", [width, height, 1], local)?;
+        Ok(())
+    }
+
+    fn create(ctx: &Context, width: u32, height: u32, frame: bool, readback: bool) -> Result<Self> {
+        let info = ctx.info();
+        Self::check_size(info, width, height)?;
+        let pixels = width as u64 * height as u64;
+        let bytes = pixels * 16;
         let buffer = |name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation| {
             Buffer::new(ctx, name, size, usage, location)
         };

@@ -596,6 +596,12 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         "width and height must be > 0",
     );
     fails(&["render", "menger:16", "--size", "big"], &[], "expected WxH");
+    // Checked before auto's probes, which named their own buffer.
+    fails(
+        &["render", "menger:16", "--size", "16384x16384"],
+        &[],
+        "error: frame 16384x16384 (4294967296 bytes) exceeds the device limit maxStorageBufferRange",
+    );
     fails(&["render", "menger:16", "--step", "0"], &[], "invalid step '0'");
     fails(&["render", "menger:16", "--step", "-1"], &[], "invalid step '-1'");
     fails(&["render", "menger:16", "--step", "NaN"], &[], "invalid step 'NaN'");

@@ -215,6 +215,50 @@ fn look_keys_and_flags_match_render() {
     assert!(Frame::read_exr(&b).unwrap().pixels.iter().any(|p| p[3] > 0.5));
 }
 
+/// On two channels, the keys that would shade (L) or reach iso (the mode
+/// key's fourth press) skip that look with a note, not end the session:
+/// M five times goes mip, minip, average, (iso skipped) composite, mip.
+/// A frame too large for the device is refused before its canvas.
+#[test]
+fn keys_skip_looks_the_volume_cannot_show() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("two.exr");
+    let args = [
+        "view",
+        "menger:16+nbody:16",
+        "--size",
+        "32x32",
+        "--validate",
+        "--keys",
+        "l,m,m,m,m,m",
+        "--frames",
+        "2",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ];
+    let r = lacuna_windowed(&args);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    let notes: Vec<&str> = r.stderr.lines().collect();
+    assert_eq!(notes.len(), 2, "{}", r.stderr);
+    for (note, look) in notes.iter().zip(["'composite · shaded'", "'iso 0.5'"]) {
+        assert!(
+            note.starts_with(&format!(
+                "note: look skipped: invalid look {look}: shaded and iso frames take one channel"
+            )),
+            "{note}"
+        );
+    }
+    assert_eq!(Frame::read_exr(&shot).unwrap().metadata["mode"], "mip");
+    let big = lacuna_windowed(&["view", "menger:16", "--size", "16384x16384", "--frames", "1"]);
+    assert_eq!(big.code, 2, "{}", big.stderr);
+    assert!(
+        big.stderr
+            .starts_with("error: frame 16384x16384 (4294967296 bytes) exceeds the device limit maxStorageBufferRange"),
+        "{}",
+        big.stderr
+    );
+}
+
 #[test]
 fn bad_view_input_is_one_line_before_any_window() {
     let dir = tempfile::tempdir().unwrap();

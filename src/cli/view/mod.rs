@@ -5,13 +5,14 @@
 
 mod controls;
 mod host;
+mod keys;
 mod look;
 mod scene;
 
 use super::args::{AccelParser, FrameArgs, ModelArgs};
 use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
-use controls::{Change, Controls, Shape};
+use controls::Controls;
 use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
@@ -202,6 +203,8 @@ impl App<'_> {
         })?;
         let host = Host::new(&window, self.args.validate)?;
         let ctx = host.adopt(self.args.validate)?;
+        // The frame's size against the device's limits, before the canvas.
+        lacuna::render::RenderTarget::check_size(ctx.info(), width, height)?;
         let builder = self.args.model.builder(&ctx)?;
         let scene = Scene::new(
             builder,
@@ -458,51 +461,6 @@ impl Viewer {
         self.scene.describe(&mut frame, &desc)?;
         frame.write(path, format)?;
         println!("wrote {}", path.display());
-        Ok(())
-    }
-
-    /// Presses the scripted keys up to the next `frame` (`--keys`).
-    fn press_pending(&mut self) -> Result<()> {
-        while let Some(key) = self.pending_keys.pop_front() {
-            if key == FRAME_KEY {
-                break;
-            }
-            self.key(&key);
-            if let Some(e) = self.key_result.take() {
-                return Err(e);
-            }
-        }
-        Ok(())
-    }
-
-    /// Applies a key: a new TF or structure is rebuilt now. True to quit.
-    fn key(&mut self, name: &str) -> bool {
-        let before = (self.controls.presets.clone(), self.controls.preset);
-        let change = self.controls.key(name, self.modifiers.shift_key());
-        self.key_result = self.apply(change, before).err();
-        change.quit
-    }
-
-    fn apply(&mut self, change: Change, before: (Vec<Shape>, usize)) -> Result<()> {
-        if change.tf {
-            // A TF the keys made invalid, or a JSON file that no longer
-            // reads, is reported and the current one kept.
-            match TransferFunction::parse(&self.controls.tf_spec()) {
-                Ok(tf) => self.scene.set_tf(tf)?,
-                Err(e) => {
-                    eprintln!("note: transfer function not changed: {e}");
-                    (self.controls.presets, self.controls.preset) = before;
-                }
-            }
-        }
-        if change.structure && self.scene.accel.name() != self.controls.accel.name() {
-            self.scene.set_accel(self.controls.accel);
-        } else if change.structure {
-            self.scene.set_mode(self.controls.look.mode);
-        }
-        if change.screenshot {
-            self.shots += 1;
-        }
         Ok(())
     }
 

@@ -1,0 +1,94 @@
+//! What the viewer's keys do (`--keys` scripts them): a new TF or
+//! structure is rebuilt at once; a look the volume cannot show is skipped.
+
+use super::controls::{Change, Shape};
+use super::{Viewer, FRAME_KEY};
+use lacuna::{Error, Result, TransferFunction};
+
+impl Viewer {
+    /// Presses the scripted keys up to the next `frame` (`--keys`).
+    pub(super) fn press_pending(&mut self) -> Result<()> {
+        while let Some(key) = self.pending_keys.pop_front() {
+            if key == FRAME_KEY {
+                break;
+            }
+            self.key(&key);
+            if let Some(e) = self.key_result.take() {
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies a key: a new TF or structure is rebuilt now. True to quit.
+    pub(super) fn key(&mut self, name: &str) -> bool {
+        let before = (self.controls.presets.clone(), self.controls.preset);
+        let look = self.controls.look.clone();
+        let shift = self.modifiers.shift_key();
+        let change = self.controls.key(name, shift);
+        // A look this volume cannot show is skipped: the key is pressed
+        // again (the mode key's next mode; a toggle's way back).
+        let mut refused = None;
+        for _ in 0..8 {
+            match self.look_fits() {
+                Ok(()) => break,
+                Err(e) => refused = refused.or(Some(e)),
+            }
+            if self.controls.look == look {
+                break;
+            }
+            self.controls.key(name, shift);
+        }
+        if let Some(e) = refused {
+            eprintln!("note: look skipped: {e}");
+        }
+        if self.look_fits().is_err() {
+            self.controls.look = look;
+        }
+        self.key_result = self.apply(change, before).err();
+        change.quit
+    }
+
+    /// Whether the controls' look can be drawn on this volume: a key that
+    /// asks for one it cannot (shading on several channels) is refused in
+    /// the viewer, as `render` refuses the flag, not the session ended.
+    fn look_fits(&self) -> Result<()> {
+        let volume = &self.scene.volume;
+        let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
+        if desc.lighting().is_some() && volume.channel_count() > 1 {
+            return Err(Error::invalid(
+                "look",
+                self.controls.look.describe(),
+                format!(
+                    "shaded and iso frames take one channel, and {} has {}",
+                    volume.name,
+                    volume.channel_count()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn apply(&mut self, change: Change, before: (Vec<Shape>, usize)) -> Result<()> {
+        if change.tf {
+            // A TF the keys made invalid, or a JSON file that no longer
+            // reads, is reported and the current one kept.
+            match TransferFunction::parse(&self.controls.tf_spec()) {
+                Ok(tf) => self.scene.set_tf(tf)?,
+                Err(e) => {
+                    eprintln!("note: transfer function not changed: {e}");
+                    (self.controls.presets, self.controls.preset) = before;
+                }
+            }
+        }
+        if change.structure && self.scene.accel.name() != self.controls.accel.name() {
+            self.scene.set_accel(self.controls.accel);
+        } else if change.structure {
+            self.scene.set_mode(self.controls.look.mode);
+        }
+        if change.screenshot {
+            self.shots += 1;
+        }
+        Ok(())
+    }
+}
