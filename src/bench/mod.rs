@@ -23,25 +23,63 @@ pub use run::{BenchOutput, RunOptions};
 pub use schedule::{schedule, warm_up, Slot, WarmedUp};
 
 use crate::error::{Error, Result};
-use crate::frame::write_atomically;
+use crate::frame::{check_parent, write_atomically};
 use std::path::Path;
 
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| Error::io(path, e)))
 }
 
-/// Writes every output of a run into `dir` (created if needed). Returns the
-/// paths written.
-pub fn write_outputs(dir: &Path, out: &BenchOutput) -> Result<Vec<String>> {
+/// Writes every output of a run, and the `extra` files (name, text), into
+/// `dir` (created if needed). Returns the paths written. All or nothing:
+/// they are written into a staging folder inside `dir` and moved into
+/// place once every one is whole, so a full disk leaves the last run's
+/// files as they were, not half of a new set.
+pub fn write_outputs(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) -> Result<Vec<String>> {
+    let created = !dir.exists();
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let stage = dir.join(format!(".lacuna-bench-{}.tmp", std::process::id()));
+    let staged = std::fs::create_dir(&stage)
+        .map_err(|e| Error::io(&stage, e))
+        .and_then(|_| write_into(&stage, out, extra));
+    let moved = staged.and_then(|names| {
+        // Every place checked before the first move: a folder where a file
+        // goes is found while nothing has moved.
+        for name in &names {
+            let to = dir.join(name);
+            if let Some(folder) = to.parent() {
+                std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
+            }
+            check_parent(&to)?;
+        }
+        names
+            .iter()
+            .map(|name| {
+                let to = dir.join(name);
+                std::fs::rename(stage.join(name), &to).map_err(|e| Error::io(&to, e))?;
+                Ok(to.display().to_string())
+            })
+            .collect::<Result<Vec<_>>>()
+    });
+    let _ = std::fs::remove_dir_all(&stage);
+    if moved.is_err() && created {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    moved
+}
+
+/// Writes the outputs into `dir`; returns their names relative to it.
+fn write_into(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) -> Result<Vec<String>> {
     let json = |v: &dyn erased::Json| v.to_json();
     let mut written = Vec::new();
     let mut put = |name: &str, text: String| -> Result<()> {
-        let p = dir.join(name);
-        write_text(&p, &text)?;
-        written.push(p.display().to_string());
+        write_text(&dir.join(name), &text)?;
+        written.push(name.to_string());
         Ok(())
     };
+    for (name, text) in extra {
+        put(name, text.clone())?;
+    }
     put("results.json", json(&out.records))?;
     put("results.csv", tables::records_csv(&out.records))?;
     put("table1.md", tables::table1_md(&out.records))?;
@@ -69,19 +107,19 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput) -> Result<Vec<String>> {
             "fig4-build-rate.svg",
             "fig4-build-rate.png",
         ]
-        .map(|f| dir.join(f).display().to_string()),
+        .map(String::from),
     );
     if !out.errors.is_empty() {
         plots::error_figure(&out.errors, &dir.join("error"))?;
-        written.extend(["error.svg", "error.png"].map(|f| dir.join(f).display().to_string()));
+        written.extend(["error.svg", "error.png"].map(String::from));
     }
     if !out.frames.is_empty() {
         let frames = dir.join("frames");
         std::fs::create_dir_all(&frames).map_err(|e| Error::io(&frames, e))?;
         for (name, frame) in &out.frames {
-            let p = frames.join(run::slug(name)).with_extension("exr");
-            frame.write_exr(&p)?;
-            written.push(p.display().to_string());
+            let file = format!("frames/{}.exr", run::slug(name).display());
+            frame.write_exr(&dir.join(&file))?;
+            written.push(file);
         }
     }
     Ok(written)

@@ -1,6 +1,6 @@
 //! `lacuna bench`: the paper's comparison, speed against error, the hard-case suite.
 
-use super::{context, validation_verdict};
+use super::{check_parent, context, validation_verdict};
 use clap::Args;
 use lacuna::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -174,7 +174,13 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             recalibrate: args.model.recalibrate,
         },
     )?;
-    let written = bench::write_outputs(&out_dir, &output)?;
+    // auto's contract, written with the run's other files.
+    let contract = auto_suite.then(|| bench::contract::markdown(&bench::contract::verdicts(&output.records)));
+    let extra: Vec<(&str, String)> = contract
+        .iter()
+        .map(|(table, _)| ("contract.md", table.clone()))
+        .collect();
+    let written = bench::write_outputs(&out_dir, &output, &extra)?;
     println!("device {} ({})", ctx.info().name, ctx.info().driver);
     println!(
         "config {}: {}x{}, {} views x {} interleaved rounds, step {}, ERT {}, filter {}, {} interleaved builds per structure, \
@@ -214,12 +220,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         println!("note: {note}");
     }
     let mut contract_held = true;
-    if auto_suite {
-        let (table, passed) = bench::contract::markdown(&bench::contract::verdicts(&output.records));
-        let path = out_dir.join("contract.md");
-        bench::write_text(&path, &table)?;
+    if let Some((table, passed)) = contract {
         println!("{table}");
-        println!("wrote {}", path.display());
+        println!("wrote {}", out_dir.join("contract.md").display());
         contract_held = passed;
     }
     println!("wrote {} files to {}", written.len(), out_dir.display());
@@ -278,12 +281,14 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
 
 /// Refuses an output folder that is (or lies under) a file before the run,
 /// not after it: the nearest part of it that exists must be a folder.
+/// That folder must take a new file too (read-only or full: found now).
 fn check_out_dir(dir: &Path) -> Result<()> {
     match dir.ancestors().find(|p| p.as_os_str().is_empty() || p.exists()) {
         Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => Err(Error::io(
             p,
             std::io::Error::new(std::io::ErrorKind::AlreadyExists, "exists and is not a folder"),
         )),
-        _ => Ok(()),
+        Some(p) => check_parent(&p.join("results.json")),
+        None => Ok(()),
     }
 }

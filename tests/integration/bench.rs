@@ -641,3 +641,58 @@ fn warm_up_runs_until_two_consecutive_times_agree_and_reports_the_cap() {
     // An error in a run stops the warm-up with it.
     assert!(warm_up(1, 5, 0.05, |_| Err(lacuna::Error::invalid("x", "y", "z"))).is_err());
 }
+
+/// A run's files are written all or none: where one cannot be placed (a
+/// folder stands where table1.md goes), the last run's results.json is
+/// left as it was, no new file appears and no staging folder is left. An
+/// output folder under a file is refused before the run.
+#[test]
+fn bench_outputs_are_all_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("one.toml");
+    std::fs::write(
+        &config,
+        "name = \"x\"\nsize = [8, 8]\nframes = 1\nrounds = 2\nwarmup = 0\nbuilds = 1\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"grid\"\naccel = \"grid\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("table1.md")).unwrap();
+    std::fs::write(out.join("results.json"), "old").unwrap();
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 2, "{stdout}{stderr}");
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("table1.md: exists and is not a regular file"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(out.join("results.json")).unwrap(), "old");
+    let mut names: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["results.json", "table1.md"]);
+    // Once the folder is gone the same run writes the whole set.
+    std::fs::remove_dir(out.join("table1.md")).unwrap();
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    assert!(std::fs::read_to_string(out.join("results.json"))
+        .unwrap()
+        .starts_with('['));
+    assert!(out.join("table1.md").is_file() && out.join("fig3-fps.png").is_file());
+    let under_file = out.join("results.json").join("deeper");
+    let (code, _, stderr) = lacuna(&["bench", config.to_str().unwrap(), "--out", under_file.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("exists and is not a folder"), "{stderr}");
+}
