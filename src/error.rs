@@ -139,8 +139,8 @@ fn clipped(text: String, max: usize) -> String {
 }
 
 /// Input echoed in a message stays on its line: control characters (a
-/// newline in a spec or a header) are escaped.
-fn one_line(text: String) -> String {
+/// newline in a spec, a header or a file name) are escaped.
+pub fn one_line(text: String) -> String {
     if !text.contains(char::is_control) {
         return text;
     }

@@ -108,7 +108,9 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             if echo {
-                eprintln!("error: {e}");
+                // One line whatever a path or value held (a newline in a
+                // file name would start a second).
+                eprintln!("error: {}", lacuna::error::one_line(e.to_string()));
             }
             ExitCode::from(2)
         }

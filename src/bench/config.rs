@@ -301,7 +301,9 @@ impl BenchConfig {
                 let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
                 format!(" at line {line}, column {column}")
             });
-            Error::format(origin, format!("invalid bench config{at}: {}", e.message().trim()))
+            // The parser's message may run over lines ("invalid array\nexpected `]`").
+            let message = e.message().trim().replace('\n', ": ");
+            Error::format(origin, format!("invalid bench config{at}: {message}"))
         })?;
         if c.name.is_empty() {
             let stem = Path::new(origin.split(' ').next().unwrap_or(origin)).file_stem();

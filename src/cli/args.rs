@@ -18,10 +18,10 @@ pub struct FrameArgs {
     #[arg(long, default_value_t = Angles::default(), allow_hyphen_values = true)]
     pub camera: Angles,
     /// Perspective projection with this vertical field of view (degrees); default orthographic.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub perspective: Option<f64>,
     /// Perspective eye distance from the centre, in bounding-sphere radii (default: fit).
-    #[arg(long, requires = "perspective")]
+    #[arg(long, requires = "perspective", allow_hyphen_values = true)]
     pub distance: Option<f64>,
     /// Sample step in voxels.
     #[arg(long, default_value_t = DEFAULT_STEP, allow_hyphen_values = true)]
@@ -164,6 +164,7 @@ impl Args for StructureArgs {
                 Arg::new(p.param.name)
                     .long(p.param.name)
                     .value_name("VALUE")
+                    .allow_hyphen_values(true)
                     .help(p.help())
                     .help_heading("Structure parameters"),
             );

@@ -87,6 +87,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             "give exactly one of: a config file, --quick, --paper, --suite hard, --suite auto, --compare A B",
         ));
     }
+    check_unused(args)?;
     if let Some(paths) = &args.compare {
         return compare(&paths[0], &paths[1], args.tolerance);
     }
@@ -277,6 +278,45 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
         100.0 * tolerance
     );
     Ok(if ok { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// Refuses an option the chosen source does not read, naming it: a run's
+/// protocol options mean nothing to --compare (which runs nothing) or to
+/// the hard suite (whose cases fix their own frames), and --look and
+/// --case choose among the hard suite's.
+fn check_unused(args: &BenchArgs) -> Result<()> {
+    let protocol = [
+        ("--out", args.out.is_some()),
+        ("--frames", args.frames.is_some()),
+        ("--size", args.size.is_some()),
+        ("--builds", args.builds.is_some()),
+        ("--warmup", args.warmup.is_some()),
+        ("--rounds", args.rounds.is_some()),
+        ("--ert", args.ert.is_some()),
+        ("--filter", args.filter.is_some()),
+        ("--frames-out", args.frames_out),
+    ];
+    let hard = args.suite.as_deref() == Some("hard");
+    let (given, why) = if args.compare.is_some() {
+        let mut unused = protocol.to_vec();
+        unused.extend([("--recalibrate", args.model.recalibrate), ("--validate", args.validate)]);
+        (unused, "--compare reads two results.json and runs nothing")
+    } else if hard {
+        (
+            protocol.to_vec(),
+            "the hard suite's cases fix their own frames and write no files",
+        )
+    } else {
+        let unused = vec![("--look", !args.look.is_empty()), ("--case", !args.case.is_empty())];
+        (
+            unused,
+            "it chooses among the hard suite's looks and cases (--suite hard)",
+        )
+    };
+    match given.iter().find(|(_, on)| *on) {
+        Some((flag, _)) => Err(Error::invalid("option", *flag, why)),
+        None => Ok(()),
+    }
 }
 
 /// Refuses an output folder that is (or lies under) a file before the run,

@@ -35,8 +35,11 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     );
     println!("type     {}", v.source_type);
     println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
-    println!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1]));
     let d = v.no_data;
+    match d.total() == v.voxel_count() {
+        true => println!("values   none (every voxel is no data)"),
+        false => println!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1])),
+    }
     if d.total() > 0 {
         println!(
             "no data  {} voxels ({:.3} %): {} NaN, {} +inf, {} -inf (transparent; ranges ignore them)",

@@ -34,7 +34,7 @@ pub struct VolumeArgs {
     #[arg(long = "type", id = "voxel_type", value_name = "TYPE", requires = "dims", value_parser = parse_type)]
     pub voxel_type: Option<VoxelType>,
     /// Time step of a series (a file pattern, a NIfTI time axis, or a generator's animation), from 0.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub time: u32,
     /// Voxel storage on the device: dense (one 3D image), bricks (a pool of the bricks that vary and a page table; constant bricks are not stored) or auto (dense while it fits the device's limits).
     #[arg(long, default_value_t = Storage::Auto)]

@@ -30,7 +30,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub(super) model: ModelArgs,
     /// Image size WxH.
-    #[arg(long, default_value = "1024x1024", value_parser = render::parse_size)]
+    #[arg(long, default_value = "1024x1024", value_parser = render::parse_size, allow_hyphen_values = true)]
     pub(super) size: (u32, u32),
     #[command(flatten)]
     pub(super) frame: FrameArgs,

@@ -106,8 +106,13 @@ impl Mode {
                 ))
             }
         };
-        if iso.is_some() {
-            return Err(Error::invalid("iso", name, "iso values need --mode iso"));
+        if let Some(iso) = iso {
+            let values: Vec<String> = iso.values().iter().map(|v| v.to_string()).collect();
+            return Err(Error::invalid(
+                "iso",
+                values.join(","),
+                format!("iso values need --mode iso, not --mode {name}"),
+            ));
         }
         Ok(mode)
     }

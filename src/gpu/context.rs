@@ -27,10 +27,27 @@ pub struct ContextOptions {
 impl ContextOptions {
     /// Options from the environment: `LACUNA_VALIDATE=1`, `LACUNA_DEVICE`.
     pub fn from_env() -> Self {
-        let validation = std::env::var("LACUNA_VALIDATE").is_ok_and(|v| !v.is_empty() && v != "0");
         ContextOptions {
-            validation,
+            validation: switched_on(std::env::var("LACUNA_VALIDATE").ok().as_deref()),
             device: None,
+        }
+    }
+}
+
+/// An environment switch: off where unset, empty, 0, false, no or off (any case).
+fn switched_on(value: Option<&str>) -> bool {
+    value.is_some_and(|v| !["", "0", "false", "no", "off"].contains(&v.trim().to_ascii_lowercase().as_str()))
+}
+
+#[cfg(test)]
+mod switch_tests {
+    #[test]
+    fn only_a_value_that_means_yes_switches_on() {
+        for off in [None, Some(""), Some("0"), Some("false"), Some("No"), Some(" OFF ")] {
+            assert!(!super::switched_on(off), "{off:?}");
+        }
+        for on in [Some("1"), Some("true"), Some("yes"), Some("on")] {
+            assert!(super::switched_on(on), "{on:?}");
         }
     }
 }

@@ -544,6 +544,11 @@ fn bad_bench_input_is_one_line() {
             ("[error]\n", "[error]\ndatasets = [\"nothere:9\"]\n"),
             "error sweep data set 'nothere:9' is none of the [[dataset]] labels: nbody:8",
         ),
+        (
+            "unclosed",
+            ("size = [8, 8]", "size = [8, 8"),
+            "invalid array: expected `]`",
+        ),
     ];
     let mut fault_cases = Vec::new();
     for (name, (from, to), needle) in faults {
@@ -581,6 +586,19 @@ fn bad_bench_input_is_one_line() {
             "/dev/zero: is not a regular file",
         ),
         (vec!["bench", "--quick", "--compare", "a", "b"], "give exactly one of"),
+        // Options the source does not read.
+        (
+            vec!["bench", "--compare", "a", "b", "--frames", "3"],
+            "invalid option '--frames': --compare reads two results.json and runs nothing",
+        ),
+        (
+            vec!["bench", "--suite", "hard", "--rounds", "3"],
+            "invalid option '--rounds': the hard suite's cases fix their own frames",
+        ),
+        (
+            vec!["bench", "--suite", "auto", "--look", "mip"],
+            "invalid option '--look': it chooses among the hard suite's looks and cases",
+        ),
         (vec!["bench", "--quick", "--size", "0x4"], "width and height"),
         (vec!["bench", "--quick", "--size", "100000x100000"], "1..=16384 pixels"),
     ];

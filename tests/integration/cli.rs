@@ -596,6 +596,28 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         "width and height must be > 0",
     );
     fails(&["render", "menger:16", "--size", "big"], &[], "expected WxH");
+    // Negative numbers reach their own checks, not "unexpected argument".
+    fails(
+        &["render", "menger:16", "--size", "-64x64"],
+        &[],
+        "invalid size '-64x64'",
+    );
+    fails(
+        &["render", "menger:16", "--time", "-1"],
+        &[],
+        "invalid value '-1' for '--time <TIME>'",
+    );
+    fails(
+        &["render", "menger:16", "--accel", "grid", "--cell", "-4"],
+        &[],
+        "invalid cell '-4'",
+    );
+    // A newline in a file name is escaped: the error stays one line.
+    fails(
+        &["info", "/no/such\nvolume_8x8x8_uint8.raw"],
+        &[],
+        "/no/such\\nvolume_8x8x8_uint8.raw: No such file",
+    );
     // Checked before auto's probes, which named their own buffer.
     fails(
         &["render", "menger:16", "--size", "16384x16384"],

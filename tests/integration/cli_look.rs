@@ -136,7 +136,10 @@ fn bad_look_input_is_one_line_and_leaves_no_file() {
     r(&["--mode", "iso", "--iso", ""], "expected V[,V2,...]");
     r(&["--mode", "iso", "--iso", "0.1,0.2,0.3,0.4,0.5"], "1 to 4 values");
     r(&["--iso", "0.5"], "need --mode iso");
-    r(&["--mode", "mip", "--iso", "0.5"], "need --mode iso");
+    r(
+        &["--mode", "mip", "--iso", "0.5"],
+        "invalid iso '0.5': iso values need --mode iso, not --mode mip",
+    );
     r(&["--iso-color", "1,0,0"], "needs --mode iso");
     r(&["--mode", "iso", "--iso", "0.5", "--iso-color", "2,0,0"], "[0, 1]");
     r(&["--mode", "mip", "--shade", "on"], "not mip");

@@ -43,6 +43,19 @@ fn raw_float_files_with_nan_and_infinities_load_and_count_them() {
         r.stdout
     );
     assert!(r.stdout.contains("values   -1 .. 2"), "{}", r.stdout);
+    // A volume with no value at all says so, not "0 .. 0".
+    let none = dir.path().join("none_2x2x2_float32.raw");
+    std::fs::write(
+        &none,
+        [f32::NAN; 8].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    let r = lacuna(&["info", none.to_str().unwrap()], &[]);
+    assert!(
+        r.stdout.contains("values   none (every voxel is no data)\n"),
+        "{}",
+        r.stdout
+    );
     // Rendering it works; the hardware filter is refused with a reason.
     let out = dir.path().join("f.exr");
     let ok = lacuna(

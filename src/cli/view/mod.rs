@@ -48,7 +48,7 @@ pub struct ViewArgs {
     #[arg(long)]
     json: Option<PathBuf>,
     /// Window (and frame) size WxH.
-    #[arg(long, default_value = "512x512", value_parser = render::parse_size)]
+    #[arg(long, default_value = "512x512", value_parser = render::parse_size, allow_hyphen_values = true)]
     size: (u32, u32),
     #[command(flatten)]
     frame: FrameArgs,
