@@ -51,24 +51,27 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         );
     }
     // The pool's slot grid follows the device's 3D image limit.
+    // What --storage (auto by default) resolves to here; with dense, what
+    // bricks of the default edge would keep, where they fit the volume.
     match context(false) {
         Ok(ctx) => {
             let limits = lacuna::volume::PoolLimits::of(ctx.info());
-            let edge = match args.volume.storage {
-                Storage::Bricks { edge } => edge,
-                _ => POOL_BRICK,
-            };
-            let storage = Storage::Bricks { edge };
-            match PoolLayout::of_volume(&v, edge, limits) {
-                Ok(pool) => println!(
-                    "storage  {} (--storage {storage}, on {})",
-                    pool.stats(),
-                    ctx.info().name
-                ),
-                Err(e) => println!("storage  --storage {storage} does not fit {}: {e}", ctx.info().name),
+            let asked = args.volume.storage;
+            let device = &ctx.info().name;
+            match lacuna::volume::resolve_storage(&ctx, &v, asked) {
+                Storage::Bricks { edge } => match PoolLayout::of_volume(&v, edge, limits) {
+                    Ok(pool) => println!("storage  {} (--storage {asked}, on {device})", pool.stats()),
+                    Err(e) => println!("storage  --storage {asked} does not fit {device}: {e}"),
+                },
+                _ => {
+                    println!("storage  dense (--storage {asked}, on {device})");
+                    if let Ok(pool) = PoolLayout::of_volume(&v, POOL_BRICK, limits) {
+                        println!("         {} (with --storage {})", pool.stats(), Storage::BRICKS);
+                    }
+                }
             }
         }
-        Err(e) => println!("storage  bricked storage not planned: {e}"),
+        Err(e) => println!("storage  not planned: {e}"),
     }
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {

@@ -383,6 +383,18 @@ fn render_and_info_report_the_pool_and_match_dense() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stdout.contains("storage  bricks of 16^3: "), "{}", r.stdout);
     assert!(r.stdout.contains(" constant; pool "), "{}", r.stdout);
+    // Without --storage: what auto resolves to, and what bricks would keep;
+    // a volume shorter than the default brick is dense, with no complaint.
+    let r = lacuna(&["info", "vessels:48"], &[]);
+    assert!(r.stdout.contains("storage  dense (--storage auto, on "), "{}", r.stdout);
+    assert!(r.stdout.contains("         bricks of 16^3: 27 stored"), "{}", r.stdout);
+    assert!(r.stdout.contains("(with --storage bricks)\n"), "{}", r.stdout);
+    let r = lacuna(&["info", "menger:9"], &[]);
+    assert!(
+        r.stdout.contains("storage  dense (--storage auto") && !r.stdout.contains("does not fit"),
+        "{}",
+        r.stdout
+    );
     fails(
         &["render", "vessels:32", "--storage", "sparse"],
         &[],
