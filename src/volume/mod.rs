@@ -224,7 +224,6 @@ fn check_gzip_holds(path: &std::path::Path, compressed: u64, needed: u64) -> Res
     Ok(())
 }
 
-/// Checks dims are non-zero and their product fits memory indexing.
 /// The longest voxel side over the shortest, at most: past it a ray's
 /// steps along the short axes underflow what f32 resolves along the long one.
 pub const MAX_SPACING_RATIO: f32 = 1e6;
@@ -249,6 +248,7 @@ pub fn check_spacing(dims: [u32; 3], spacing: [f32; 3]) -> Result<()> {
     Ok(())
 }
 
+/// Checks dims are non-zero and their product fits memory indexing.
 pub fn check_dims(dims: [u32; 3], what: &str) -> Result<u64> {
     if dims.contains(&0) {
         return Err(Error::invalid(

@@ -238,6 +238,18 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
                 .read_to_end(&mut data)
                 .map_err(|e| unreadable(path, e))?;
         }
+        // A short block of a step of several is named by its step (and
+        // channel): the file ends before it.
+        if data.len() as u64 != voxel_bytes && (steps > 1 || channels > 1) {
+            let [w, h, d] = dims;
+            return Err(Error::format(
+                path,
+                format!(
+                    "ends before time step {step} of {steps} (channel {c} of {channels}): it holds {} of that block's {voxel_bytes} bytes ({w}x{h}x{d} {ty})",
+                    data.len()
+                ),
+            ));
+        }
         at = start + data.len() as u64;
         blocks.push(data);
     }

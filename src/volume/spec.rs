@@ -39,6 +39,14 @@ impl VolumeSpec {
             ));
         }
         check_raw_options(spec, options)?;
+        if options.raw.is_some() && spec.contains('+') && !path.exists() {
+            return Err(Error::invalid(
+                "volume",
+                spec,
+                "is no file, and with --dims and --type a spec names one raw file, so '+' joins no channels: \
+                 give each channel's layout in its file name (NAME_WxHxD_TYPE.raw) to join them",
+            ));
+        }
         if options.raw.is_some() || path.exists() {
             return Ok(VolumeSpec::File(path.to_path_buf()));
         }

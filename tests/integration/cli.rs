@@ -612,6 +612,12 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         &[],
         "invalid cell '-4'",
     );
+    // --dims and --type describe one raw file: '+' joins no channels then.
+    fails(
+        &["info", "a.nii+b.raw", "--dims", "8x8x8", "--type", "uint8"],
+        &[],
+        "invalid volume 'a.nii+b.raw': is no file, and with --dims and --type a spec names one raw file",
+    );
     // A newline in a file name is escaped: the error stays one line.
     fails(
         &["info", "/no/such\nvolume_8x8x8_uint8.raw"],

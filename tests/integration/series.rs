@@ -262,6 +262,18 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
         err.to_string().contains("holds 382 bytes, but the 3 time steps"),
         "{err}"
     );
+    // A .nii.gz is checked when the step is read: the missing step is named.
+    let p = dir.path().join("short.nii.gz");
+    std::fs::write(&p, gzip(&nifti_bytes(&[3, 2, 2, 3], 2, 8, [1.0; 3], &data[..30]))).unwrap();
+    let series = open(p.to_str().unwrap());
+    assert_eq!(u8s(&series.load(1, None).unwrap()), &data[12..24]);
+    let err = series.load(2, None).unwrap_err().to_string();
+    assert!(
+        err.ends_with(
+            "ends before time step 2 of 3 (channel 0 of 1): it holds 6 of that block's 12 bytes (3x2x2 uint8)"
+        ),
+        "{err}"
+    );
 }
 
 /// Every structure equals naive on steps where the visible set moved.
