@@ -39,6 +39,8 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) ->
     let created = !dir.exists();
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let stage = dir.join(format!(".lacuna-bench-{}.tmp", std::process::id()));
+    // Left by a killed run whose process id this one reuses.
+    let _ = std::fs::remove_dir_all(&stage);
     let staged = std::fs::create_dir(&stage)
         .map_err(|e| Error::io(&stage, e))
         .and_then(|_| write_into(&stage, out, extra));
@@ -118,6 +120,14 @@ fn write_into(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) -> Result
         std::fs::create_dir_all(&frames).map_err(|e| Error::io(&frames, e))?;
         for (name, frame) in &out.frames {
             let file = format!("frames/{}.exr", run::slug(name).display());
+            // Two labels that slug alike would overwrite one frame.
+            if written.contains(&file) {
+                return Err(Error::invalid(
+                    "frame name",
+                    file,
+                    format!("two runs' labels make it (one is '{name}')"),
+                ));
+            }
             frame.write_exr(&dir.join(&file))?;
             written.push(file);
         }

@@ -107,6 +107,14 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
         Some(k) => Backend::Gpu(k),
         None => Backend::Cpu,
     };
+    // The tree's byte budget: it is built in host memory, a quarter of it
+    // at most 4 GiB (16 times what 128 MiB buffers hold); the GPU holds
+    // nodes and references in a storage buffer each.
+    let host = (lacuna::limits::available_memory() / 4).min(4 << 30);
+    let max_bytes = match &ctx {
+        Some(ctx) => host.min(2 * ctx.info().max_storage_buffer_range),
+        None => host,
+    };
     let options = WhittedOptions {
         resolution: args.resolution,
         max_depth: 5,
@@ -130,7 +138,7 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
             kinds.clone()
         };
         for (m, d) in configs {
-            let (row, image) = report::run(&backend, scene, &traced, m, d, &all_kinds, &options)?;
+            let (row, image) = report::run(&backend, max_bytes, scene, &traced, m, d, &all_kinds, &options)?;
             if !args.all {
                 println!("{}", report::format_counts(scene.kind, &row.counts, default_size));
                 print!("{}", report::format_row(&row));

@@ -140,12 +140,15 @@ impl Budget {
 impl Octree {
     /// Builds over object boxes inside `root` (which must contain them).
     pub fn build(root: Box3, objects: &[Box3], options: OctreeOptions) -> Octree {
+        let start = Instant::now();
         let budget = Budget {
             limit: u64::MAX,
             spent: AtomicU64::new(0),
             over: AtomicBool::new(false),
         };
-        Self::build_with(root, objects, options, &budget)
+        let all: Vec<u32> = (0..objects.len() as u32).collect();
+        let tree = subdivide(&root, all, objects, 0, &options, &budget);
+        Self::flattened(tree, root, options, start)
     }
 
     /// As `build`, spending at most `max_bytes` on nodes, references and
@@ -157,25 +160,25 @@ impl Octree {
             spent: AtomicU64::new(0),
             over: AtomicBool::new(false),
         };
-        let octree = Self::build_with(root, objects, options, &budget);
+        let start = Instant::now();
+        let all: Vec<u32> = (0..objects.len() as u32).collect();
+        let tree = subdivide(&root, all, objects, 0, &options, &budget);
+        // Checked before the tree is flattened: that would spend as much again.
         if budget.over.load(Ordering::Relaxed) {
             return Err(Error::invalid(
                 "max depth",
                 options.max_depth.to_string(),
                 format!(
-                    "the octree of {} objects outgrew {max_bytes} bytes (nodes, references and lists) before depth {}: take a smaller --max-depth",
+                    "the octree of {} objects outgrew {max_bytes} bytes (nodes, references and lists) before depth {}: take a smaller max depth",
                     objects.len(),
                     options.max_depth
                 ),
             ));
         }
-        Ok(octree)
+        Ok(Self::flattened(tree, root, options, start))
     }
 
-    fn build_with(root: Box3, objects: &[Box3], options: OctreeOptions, budget: &Budget) -> Octree {
-        let start = Instant::now();
-        let all: Vec<u32> = (0..objects.len() as u32).collect();
-        let tree = subdivide(&root, all, objects, 0, &options, budget);
+    fn flattened(tree: Tree, root: Box3, options: OctreeOptions, start: Instant) -> Octree {
         let mut octree = Octree {
             nodes: vec![Node::default()],
             refs: Vec::new(),

@@ -17,7 +17,7 @@ const BATCH: usize = 1 << 20;
 
 /// The trace pipelines, once per context.
 pub struct TraceKernels {
-    pub(crate) ctx: Context,
+    ctx: Context,
     kernels: Vec<(Traversal, Kernel)>,
 }
 

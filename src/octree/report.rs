@@ -29,10 +29,13 @@ pub enum Backend<'a> {
     Cpu,
 }
 
-/// Builds the octree for (`mode`, `max_depth`) and renders `scene` with
-/// every traversal in `traversals` (the first one's image is returned).
+/// Builds the octree for (`mode`, `max_depth`) within `max_bytes`
+/// (`Octree::build_within`) and renders `scene` with every traversal in
+/// `traversals` (the first one's image is returned).
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     backend: &Backend,
+    max_bytes: u64,
     scene: &Scene,
     traced: &TraceScene,
     mode: Mode,
@@ -40,13 +43,6 @@ pub fn run(
     traversals: &[Traversal],
     options: &WhittedOptions,
 ) -> Result<(Row, Option<Frame>)> {
-    // The GPU holds the nodes and the references in a storage buffer each;
-    // the CPU tracer keeps them in host memory: a quarter of it, at most
-    // 4 GiB (16 times what a GPU's 128 MiB buffers hold).
-    let max_bytes = match backend {
-        Backend::Gpu(kernels) => 2 * kernels.ctx.info().max_storage_buffer_range,
-        Backend::Cpu => (crate::limits::available_memory() / 4).min(4 << 30),
-    };
     let build = OctreeOptions {
         mode,
         max_depth,

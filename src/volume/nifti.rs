@@ -245,7 +245,9 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
             return Err(Error::format(
                 path,
                 format!(
-                    "ends before time step {step} of {steps} (channel {c} of {channels}): it holds {} of that block's {voxel_bytes} bytes ({w}x{h}x{d} {ty})",
+                    "ends before time step {step} (0 to {}) of channel {} of {channels}: it holds {} of that block's {voxel_bytes} bytes ({w}x{h}x{d} {ty})",
+                    steps - 1,
+                    c + 1,
                     data.len()
                 ),
             ));

@@ -304,7 +304,9 @@ impl StepNorm {
             ty: v.source_type,
             channels: v.channel_count(),
             norm,
-            range: [lo, if hi > lo { hi } else { lo + 1.0 }],
+            // One unit above, or as far above as |lo| where a unit is
+            // lost to rounding (|lo| past 2^53).
+            range: [lo, if hi > lo { hi } else { lo + lo.abs().max(1.0) }],
         }
     }
 
@@ -326,6 +328,22 @@ impl StepNorm {
             ));
         }
         step.norm = self.norm_for(step);
+        // A subnormal step in a series spanning f64 maps onto step 0's
+        // range only by an offset past f32: an error, not NaN texels.
+        if !step.norm.iter().all(|n| n.is_finite()) {
+            let [lo, hi] = step.value_range;
+            return Err(Error::invalid(
+                "time step",
+                what.to_string(),
+                format!(
+                    "its values ({} .. {}) cannot be mapped onto step 0's range ({} .. {}) in f32",
+                    crate::error::number(lo),
+                    crate::error::number(hi),
+                    crate::error::number(self.range[0]),
+                    crate::error::number(self.range[1])
+                ),
+            ));
+        }
         Ok(())
     }
 
@@ -353,7 +371,7 @@ impl StepNorm {
 /// f64 (values from -1e308 to 1e308), which would otherwise give NaN.
 fn span_ratio(a: [f64; 2], b: [f64; 2]) -> f64 {
     let ratio = (a[1] - a[0]) / (b[1] - b[0]);
-    match ratio.is_nan() || (a[1] - a[0]).is_infinite() {
+    match (a[1] - a[0]).is_infinite() || (b[1] - b[0]).is_infinite() {
         true => (a[1] * 0.5 - a[0] * 0.5) / (b[1] * 0.5 - b[0] * 0.5),
         false => ratio,
     }

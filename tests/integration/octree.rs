@@ -253,7 +253,7 @@ fn an_octree_past_its_budget_is_an_error_not_an_abort() {
         .unwrap_err()
         .to_string();
     assert!(err.starts_with("invalid max depth '5': the octree of "), "{err}");
-    assert!(err.ends_with("take a smaller --max-depth"), "{err}");
+    assert!(err.ends_with("take a smaller max depth"), "{err}");
     common::fails(
         &[
             "octree",

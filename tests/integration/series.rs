@@ -120,8 +120,20 @@ fn float64_steps_at_the_ends_of_f64_normalise_to_finite_values() {
         assert_eq!((step.no_data_total(), step.value_range), (0, [-1e308, 1e308]));
         assert_eq!([value(&step, 0), value(&step, 7)], [1.0, 0.0], "step {k}");
     }
-    // A subnormal range alone (within a wide series, its offset in step 0's
-    // units is past f32: left alone).
+    // A step spanning half of step 0's range maps onto its upper half.
+    let half: Vec<u8> = (0..8)
+        .flat_map(|i| (if i < 4 { 1e308f64 } else { 0.0 }).to_le_bytes())
+        .collect();
+    std::fs::write(dir.path().join("e1_2x2x2_float64.raw"), half).unwrap();
+    let step = series.load(1, None).unwrap();
+    assert_eq!([value(&step, 0), value(&step, 7)], [1.0, 0.5], "{:?}", step.norm);
+    // A subnormal step in it would need an offset past f32: an error.
+    let err = series.load(2, None).unwrap_err().to_string();
+    assert!(
+        err.contains("cannot be mapped onto step 0's range (-1e308 .. 1e308) in f32"),
+        "{err}"
+    );
+    // A subnormal range alone normalises.
     let alone = Volume::load(
         dir.path().join("e2_2x2x2_float64.raw").to_str().unwrap(),
         &LoadOptions::default(),
@@ -270,7 +282,7 @@ fn a_nifti_time_axis_loads_one_step_at_a_time() {
     let err = series.load(2, None).unwrap_err().to_string();
     assert!(
         err.ends_with(
-            "ends before time step 2 of 3 (channel 0 of 1): it holds 6 of that block's 12 bytes (3x2x2 uint8)"
+            "ends before time step 2 (0 to 2) of channel 1 of 1: it holds 6 of that block's 12 bytes (3x2x2 uint8)"
         ),
         "{err}"
     );

@@ -52,9 +52,12 @@ impl Viewer {
     /// Whether the controls' look can be drawn on this volume: a key that
     /// asks for one it cannot (shading on several channels) is refused in
     /// the viewer, as `render` refuses the flag, not the session ended.
+    /// Only that: the frame's other errors surface where it is drawn.
     fn look_fits(&self) -> Result<()> {
         let volume = &self.scene.volume;
-        let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
+        let Ok(desc) = self.controls.desc(volume.dims, volume.spacing, self.filter) else {
+            return Ok(());
+        };
         if desc.lighting().is_some() && volume.channel_count() > 1 {
             return Err(Error::invalid(
                 "look",
