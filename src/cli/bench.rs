@@ -302,9 +302,11 @@ fn check_unused(args: &BenchArgs) -> Result<()> {
         unused.extend([("--recalibrate", args.model.recalibrate), ("--validate", args.validate)]);
         (unused, "--compare reads two results.json and runs nothing")
     } else if hard {
+        let mut unused = protocol.to_vec();
+        unused.push(("--recalibrate", args.model.recalibrate));
         (
-            protocol.to_vec(),
-            "the hard suite's cases fix their own frames and write no files",
+            unused,
+            "the hard suite's cases fix their own frames, price auto with nominal constants and write no files",
         )
     } else {
         let unused = vec![("--look", !args.look.is_empty()), ("--case", !args.case.is_empty())];

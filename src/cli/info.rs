@@ -64,7 +64,11 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
                     Err(e) => println!("storage  --storage {asked} does not fit {device}: {e}"),
                 },
                 _ => {
-                    println!("storage  dense (--storage {asked}, on {device})");
+                    // Asked for, dense must fit the device (auto checked it).
+                    match lacuna::volume::check_dense(ctx.info(), &v) {
+                        Ok(_) => println!("storage  dense (--storage {asked}, on {device})"),
+                        Err(e) => println!("storage  --storage {asked} does not fit {device}: {e}"),
+                    }
                     if let Ok(pool) = PoolLayout::of_volume(&v, POOL_BRICK, limits) {
                         println!("         {} (with --storage {})", pool.stats(), Storage::BRICKS);
                     }

@@ -134,6 +134,13 @@ pub(super) fn texels(volume: &Volume) -> Result<(vk::Format, u64, Cow<'_, [u8]>)
     Ok((channels::format(kind, n), texel, channels::texel_data(volume)))
 }
 
+/// Checks `volume`'s dense image (every channel) against `info`'s limits;
+/// returns its bytes.
+pub fn check_dense(info: &crate::gpu::DeviceInfo, volume: &Volume) -> Result<u64> {
+    let (kind, n) = (channels::common_kind(volume), volume.channel_count());
+    check_image3d(info, volume.dims, channels::texel_bytes(kind, n))
+}
+
 /// The storage `storage` means for `volume` on this device: auto is dense
 /// while the dense image fits the device's limits.
 pub fn resolve_storage(ctx: &Context, volume: &Volume, storage: Storage) -> Storage {
@@ -142,13 +149,10 @@ pub fn resolve_storage(ctx: &Context, volume: &Volume, storage: Storage) -> Stor
         return Storage::Bricks { edge: host.layout.edge };
     }
     match storage {
-        Storage::Auto => {
-            let (kind, n) = (channels::common_kind(volume), volume.channel_count());
-            match check_image3d(ctx.info(), volume.dims, channels::texel_bytes(kind, n)) {
-                Ok(_) => Storage::Dense,
-                Err(_) => Storage::BRICKS,
-            }
-        }
+        Storage::Auto => match check_dense(ctx.info(), volume) {
+            Ok(_) => Storage::Dense,
+            Err(_) => Storage::BRICKS,
+        },
         s => s,
     }
 }

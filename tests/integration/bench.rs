@@ -596,6 +596,10 @@ fn bad_bench_input_is_one_line() {
             "invalid option '--rounds': the hard suite's cases fix their own frames",
         ),
         (
+            vec!["bench", "--suite", "hard", "--recalibrate"],
+            "invalid option '--recalibrate': the hard suite's cases fix their own frames, price auto with nominal constants",
+        ),
+        (
             vec!["bench", "--suite", "auto", "--look", "mip"],
             "invalid option '--look': it chooses among the hard suite's looks and cases",
         ),

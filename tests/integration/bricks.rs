@@ -389,6 +389,16 @@ fn render_and_info_report_the_pool_and_match_dense() {
     assert!(r.stdout.contains("storage  dense (--storage auto, on "), "{}", r.stdout);
     assert!(r.stdout.contains("         bricks of 16^3: 27 stored"), "{}", r.stdout);
     assert!(r.stdout.contains("(with --storage bricks)\n"), "{}", r.stdout);
+    // Dense asked for is checked against the device too.
+    let dir = tempfile::tempdir().unwrap();
+    let long = dir.path().join("long_5000x1x1_uint8.raw");
+    std::fs::write(&long, [1u8; 5000]).unwrap();
+    let r = lacuna(&["info", long.to_str().unwrap(), "--storage", "dense"], &[]);
+    assert!(
+        r.stdout.contains("storage  --storage dense does not fit ") && r.stdout.contains("maxImageDimension3D"),
+        "{}",
+        r.stdout
+    );
     let r = lacuna(&["info", "menger:9"], &[]);
     assert!(
         r.stdout.contains("storage  dense (--storage auto") && !r.stdout.contains("does not fit"),
