@@ -37,6 +37,8 @@ pub struct SourceValues<'a> {
     stored_min: f64,
     lo: f64,
     scale: f64,
+    /// `scale` is half the range's (the range overflows f64's differences).
+    halves: bool,
     source_type: VoxelType,
     integer: bool,
     /// How far a reconstructed float value may lie from the source value.
@@ -47,11 +49,15 @@ impl<'a> SourceValues<'a> {
     pub fn new(volume: &'a Volume) -> Self {
         let (smin, smax) = volume.data.stored_range();
         let [lo, hi] = volume.value_range;
-        let scale = if smax > smin { (hi - lo) / (smax - smin) } else { 0.0 };
+        // A range past f64's differences (-1e308 to 1e308) is taken at half
+        // scale, and each value rebuilt as lo + x + x.
+        let halves = (hi - lo).is_infinite();
+        let span = if halves { hi * 0.5 - lo * 0.5 } else { hi - lo };
+        let scale = if smax > smin { span / (smax - smin) } else { 0.0 };
         // Float data hold the source values to f32 precision: half an ulp of
         // [0, 1] is at most 2^-25 of the range; allow twice that.
         let tolerance = match volume.data.texel_bytes() {
-            4 => (hi - lo).abs() * (-24f64).exp2(),
+            4 => span.abs() * (-24f64).exp2() * if halves { 2.0 } else { 1.0 },
             _ => 0.0,
         };
         SourceValues {
@@ -60,6 +66,7 @@ impl<'a> SourceValues<'a> {
             stored_min: smin,
             lo,
             scale,
+            halves,
             source_type: volume.source_type,
             integer: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64),
             tolerance,
@@ -78,7 +85,13 @@ impl<'a> SourceValues<'a> {
     #[inline]
     pub fn get(&self, i: usize) -> f64 {
         let stored = self.data.stored_at(i);
-        let value = self.lo + (stored - self.stored_min) * self.scale;
+        let value = match self.halves {
+            true => {
+                let half = (stored - self.stored_min) * self.scale;
+                (self.lo + half) + half
+            }
+            false => self.lo + (stored - self.stored_min) * self.scale,
+        };
         if self.integer {
             value.round()
         } else {

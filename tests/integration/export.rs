@@ -405,6 +405,8 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
     write_source(input.path(), "neg", DIMS, VoxelType::I16, &values(-2.0, 1.0));
     write_source(input.path(), "frac", DIMS, VoxelType::F32, &values(0.0, 0.5));
     write_source(input.path(), "huge", DIMS, VoxelType::F64, &values(0.0, 1e300));
+    // A range past f64's differences: the values are rebuilt finite.
+    write_source(input.path(), "wide", DIMS, VoxelType::F64, &values(-1e308, 1.9e306));
     // 105 values 0, 3, .., 312, shuffled: the first above 255 in x-fastest
     // order is named.
     let first = (0..105u32).find(|i| (i * 47 % 105) * 3 > 255).unwrap();
@@ -414,7 +416,7 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
          uint16 holds every value",
         (first * 47 % 105) * 3
     );
-    let cases: [(&[&str], &str); 21] = [
+    let cases: [(&[&str], &str); 22] = [
         (
             &["nbody:9", "{out}/v", "--time", "64"],
             "invalid time '64': nbody:9 has 64 steps, 0 to 63",
@@ -442,6 +444,10 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
         (
             &["{in}/huge_7x5x3_float64.raw", "{out}/v"],
             "beyond float32's largest magnitude 3.4028235e38; a raw file cannot hold it",
+        ),
+        (
+            &["{in}/wide_7x5x3_float64.raw", "{out}/v"],
+            "invalid voxel '(0, 0, 0)': -1e308, beyond float32's largest magnitude",
         ),
         (&["menger:9", "{out}/sponge.raw"], "must be sponge_9x9x9_uint8.raw"),
         (
