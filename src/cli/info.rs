@@ -50,9 +50,9 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
             d.neg_inf
         );
     }
-    // The pool's slot grid follows the device's 3D image limit.
-    // What --storage (auto by default) resolves to here; with dense, what
-    // bricks of the default edge would keep, where they fit the volume.
+    // What --storage (auto by default) resolves to on this device (the
+    // pool's slot grid follows its 3D image limit); with dense, what bricks
+    // of the default edge would keep, where they fit the volume.
     match context(false) {
         Ok(ctx) => {
             let limits = lacuna::volume::PoolLimits::of(ctx.info());

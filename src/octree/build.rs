@@ -141,13 +141,7 @@ impl Octree {
     /// Builds over object boxes inside `root` (which must contain them).
     pub fn build(root: Box3, objects: &[Box3], options: OctreeOptions) -> Octree {
         let start = Instant::now();
-        let budget = Budget {
-            limit: u64::MAX,
-            spent: AtomicU64::new(0),
-            over: AtomicBool::new(false),
-        };
-        let all: Vec<u32> = (0..objects.len() as u32).collect();
-        let tree = subdivide(&root, all, objects, 0, &options, &budget);
+        let (tree, _) = subdivide_all(root, objects, &options, u64::MAX);
         Self::flattened(tree, root, options, start)
     }
 
@@ -155,16 +149,10 @@ impl Octree {
     /// the lists held while splitting (checked as it goes, so a tree too
     /// deep to hold is an error before it takes the host's memory).
     pub fn build_within(root: Box3, objects: &[Box3], options: OctreeOptions, max_bytes: u64) -> Result<Octree> {
-        let budget = Budget {
-            limit: max_bytes,
-            spent: AtomicU64::new(0),
-            over: AtomicBool::new(false),
-        };
         let start = Instant::now();
-        let all: Vec<u32> = (0..objects.len() as u32).collect();
-        let tree = subdivide(&root, all, objects, 0, &options, &budget);
+        let (tree, over) = subdivide_all(root, objects, &options, max_bytes);
         // Checked before the tree is flattened: that would spend as much again.
-        if budget.over.load(Ordering::Relaxed) {
+        if over {
             return Err(Error::invalid(
                 "max depth",
                 options.max_depth.to_string(),
@@ -220,6 +208,19 @@ impl Octree {
             }
         }
     }
+}
+
+/// The tree over every object, and whether it went past `limit` bytes
+/// (then cut short: leaves where the budget ran out).
+fn subdivide_all(root: Box3, objects: &[Box3], options: &OctreeOptions, limit: u64) -> (Tree, bool) {
+    let budget = Budget {
+        limit,
+        spent: AtomicU64::new(0),
+        over: AtomicBool::new(false),
+    };
+    let all: Vec<u32> = (0..objects.len() as u32).collect();
+    let tree = subdivide(&root, all, objects, 0, options, &budget);
+    (tree, budget.over.load(Ordering::Relaxed))
 }
 
 fn subdivide(b: &Box3, objs: Vec<u32>, boxes: &[Box3], depth: u32, o: &OctreeOptions, budget: &Budget) -> Tree {

@@ -111,24 +111,25 @@ pub(super) fn source_units((lo, hi): (f64, f64)) -> [f64; 2] {
 
 /// Wide values normalised as f32 over the finite range `(lo, hi)`; NaN and
 /// infinities kept as they are (`Volume::new` stores them as no data).
-///
-/// A range wider than f64 holds (-1e308 to 1e308) is taken at half scale,
-/// and one so narrow its reciprocal overflows (subnormal values) is
-/// divided by instead: either would otherwise turn finite voxels into NaN.
+/// A range whose difference or reciprocal overflows (-1e308 to 1e308, or
+/// subnormal values) is divided by `span_ratio`, which would otherwise turn
+/// finite voxels into NaN.
 pub(super) fn normalizer((lo, hi): (f64, f64)) -> impl Fn(f64) -> f32 {
     let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
-    let wide = hi > lo && (hi - lo).is_infinite();
-    let narrow = hi > lo && scale.is_infinite();
-    move |v: f64| {
-        if !v.is_finite() {
-            v as f32
-        } else if wide {
-            ((v * 0.5 - lo * 0.5) / (hi * 0.5 - lo * 0.5)) as f32
-        } else if narrow {
-            ((v - lo) / (hi - lo)) as f32
-        } else {
-            ((v - lo) * scale) as f32
-        }
+    let exact = !(hi - lo).is_infinite() && scale.is_finite();
+    move |v: f64| match (v.is_finite(), exact) {
+        (false, _) => v as f32,
+        (true, true) => ((v - lo) * scale) as f32,
+        (true, false) => span_ratio([lo, v], [lo, hi]) as f32,
+    }
+}
+
+/// `(a1 - a0) / (b1 - b0)`, at half scale where a difference overflows
+/// f64 (values from -1e308 to 1e308), which would otherwise give NaN.
+pub(super) fn span_ratio(a: [f64; 2], b: [f64; 2]) -> f64 {
+    match (a[1] - a[0]).is_infinite() || (b[1] - b[0]).is_infinite() {
+        true => (a[1] * 0.5 - a[0] * 0.5) / (b[1] * 0.5 - b[0] * 0.5),
+        false => (a[1] - a[0]) / (b[1] - b[0]),
     }
 }
 

@@ -12,6 +12,7 @@
 //! range clamp, as the sampler clamps. Every step must have step 0's
 //! dimensions and voxel type.
 
+use super::decode::span_ratio;
 use super::procedural::{self, Generator};
 #[cfg(feature = "loaders")]
 use super::spec::is_nifti;
@@ -364,16 +365,6 @@ impl StepNorm {
             // Texels all 0: the offset alone carries the value.
             false => [span_ratio([lo, lo0], [lo0, hi0]) as f32, 1.0],
         }
-    }
-}
-
-/// `(a1 - a0) / (b1 - b0)`, at half scale where a difference overflows
-/// f64 (values from -1e308 to 1e308), which would otherwise give NaN.
-fn span_ratio(a: [f64; 2], b: [f64; 2]) -> f64 {
-    let ratio = (a[1] - a[0]) / (b[1] - b[0]);
-    match (a[1] - a[0]).is_infinite() || (b[1] - b[0]).is_infinite() {
-        true => (a[1] * 0.5 - a[0] * 0.5) / (b[1] * 0.5 - b[0] * 0.5),
-        false => ratio,
     }
 }
 

@@ -686,6 +686,7 @@ fn bench_outputs_are_all_or_nothing() {
         "--out",
         out.to_str().unwrap(),
         "--quiet",
+        "--validate",
     ]);
     assert_eq!(code, 2, "{stdout}{stderr}");
     assert!(
@@ -707,6 +708,7 @@ fn bench_outputs_are_all_or_nothing() {
         "--out",
         out.to_str().unwrap(),
         "--quiet",
+        "--validate",
     ]);
     assert_eq!(code, 0, "{stdout}{stderr}");
     assert!(std::fs::read_to_string(out.join("results.json"))

@@ -264,6 +264,7 @@ fn an_octree_past_its_budget_is_an_error_not_an_abort() {
             "16",
             "--max-depth",
             "9",
+            "--validate",
         ],
         &[],
         "invalid max depth '9': the octree of 4 objects outgrew",

@@ -249,7 +249,15 @@ fn keys_skip_looks_the_volume_cannot_show() {
         );
     }
     assert_eq!(Frame::read_exr(&shot).unwrap().metadata["mode"], "mip");
-    let big = lacuna_windowed(&["view", "menger:16", "--size", "16384x16384", "--frames", "1"]);
+    let big = lacuna_windowed(&[
+        "view",
+        "menger:16",
+        "--size",
+        "16384x16384",
+        "--frames",
+        "1",
+        "--validate",
+    ]);
     assert_eq!(big.code, 2, "{}", big.stderr);
     assert!(
         big.stderr
