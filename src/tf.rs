@@ -45,6 +45,8 @@ const ONE_TF_EACH: &str = "give one for all channels, or one per channel";
 /// the gap between adjacent 8-bit values (1/255).
 pub const LUT_SIZE: usize = 1024;
 
+/// A transfer function: RGBA over normalised values [0, 1], sampled into a
+/// LUT of `LUT_SIZE` entries, with the tables classification asks of it.
 #[derive(Clone, Debug)]
 pub struct TransferFunction {
     /// The spec it was made from.

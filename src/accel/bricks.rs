@@ -12,6 +12,8 @@ use crate::volume::{GpuVolume, APRON};
 /// Brick edge in voxels for the LBVH and classification.
 pub const BRICK: u32 = crate::volume::BRICK;
 
+/// The volume's bricks on the device: per brick and channel the value range
+/// over the brick and its apron, which classification reads.
 pub struct GpuBricks {
     pub brick: u32,
     pub counts: [u32; 3],

@@ -20,6 +20,9 @@ use crate::tf::{GpuTransferFunction, TransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
 use rayon::prelude::*;
 
+/// How a brick is found active: by its value range against the transfer
+/// function (exact, conservative), or voxel by voxel (the paper's rule,
+/// with or without the apron; not exact).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Classify {

@@ -21,6 +21,8 @@ use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Texe
 /// Default cell edge in voxels.
 pub const CELL: u32 = 16;
 
+/// A macro-cell grid (`--accel grid`): one flag or value range per cell,
+/// marched with a 3D DDA.
 pub struct Grid {
     pub cell: u32,
     pub counts: [u32; 3],

@@ -13,6 +13,8 @@ use crate::error::Result;
 use crate::gpu::shaders::{self, march_hybrid};
 use crate::gpu::{Binding, Bound, Timer, Timings};
 
+/// A shallow k-d tree whose leaves are marched through the macro-cell grid
+/// (`--accel hybrid`).
 pub struct Hybrid {
     pub tree: GpuTree,
     pub grid: Grid,

@@ -13,6 +13,7 @@ fn spread(v: u32) -> u32 {
     v
 }
 
+/// The 30-bit Morton code of `c` (10 bits an axis, x highest).
 pub fn morton3(c: [u32; 3]) -> u32 {
     (spread(c[0]) << 2) | (spread(c[1]) << 1) | spread(c[2])
 }

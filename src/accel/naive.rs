@@ -9,6 +9,7 @@ use crate::desc::Mode;
 use crate::error::Result;
 use crate::gpu::{shaders, vk, Bound, Timer};
 
+/// Naive marching (`--accel naive`): every lattice sample, the reference.
 pub struct Naive;
 
 /// The naive entry (what a tree of one leaf covering the volume, or `auto`

@@ -25,6 +25,8 @@ use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, Timer, Timings};
 use crate::spatial::octree_node::{axis_bit, Node};
 use crate::spatial::{Sat3, Traversal};
 
+/// An octree over active bricks on the device, with the traversal it is
+/// marched by (`--accel octree-84` ... `octree-rev`).
 pub struct VolumeOctree {
     pub traversal: Traversal,
     pub nodes: Buffer,

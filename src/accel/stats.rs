@@ -2,6 +2,8 @@
 
 use std::fmt;
 
+/// What a built structure holds: classified units, active ones, nodes,
+/// leaves and height.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Stats {

@@ -52,6 +52,8 @@ impl Structure {
     }
 }
 
+/// A tree node as the march reads it: its box in voxels, and in the fourth
+/// words the two children (interior) or -1 and the leaf's payload (a leaf).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Node {

@@ -30,6 +30,7 @@ impl Row {
     }
 }
 
+/// One data set's fastest structure in each of two runs.
 pub struct Fastest {
     pub dataset: String,
     pub a: String,
@@ -49,6 +50,7 @@ impl Fastest {
     }
 }
 
+/// Two bench runs' records side by side (`lacuna bench --compare A B`).
 pub struct Comparison {
     pub rows: Vec<Row>,
     /// Per data set, the fastest structure of each run.

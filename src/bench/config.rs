@@ -11,11 +11,14 @@ use crate::volume::{Filter, Storage};
 use serde::Deserialize;
 use std::path::Path;
 
+/// The `--quick` config (`bench/quick.toml`).
 pub const QUICK: &str = include_str!("../../bench/quick.toml");
+/// The paper's config (`--paper`, `bench/paper.toml`).
 pub const PAPER: &str = include_str!("../../bench/paper.toml");
 /// auto's contract (`lacuna bench --suite auto`).
 pub const AUTO: &str = include_str!("../../bench/auto.toml");
 
+/// A bench config (TOML): the protocol, the structures and the data sets.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BenchConfig {
@@ -129,6 +132,7 @@ fn default_rounds() -> u32 {
 /// marked unstable.
 pub const UNSTABLE_SPREAD: f64 = 1.5;
 
+/// One data set of a bench config: its volume, transfer function and look.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DatasetConfig {
@@ -213,6 +217,8 @@ pub struct StructureConfig {
     pub params: std::collections::BTreeMap<String, toml::Value>,
 }
 
+/// A speed-against-error sweep: steps and ERT thresholds against a fine
+/// reference.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ErrorConfig {

@@ -26,6 +26,7 @@ use crate::error::{Error, Result};
 use crate::frame::{check_parent, write_atomically};
 use std::path::Path;
 
+/// Writes `text` to `path` whole or not at all (through a temporary file).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     write_atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| Error::io(path, e)))
 }

@@ -5,6 +5,7 @@ use crate::gpu::timings::median;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// The run a record belongs to: config, device, frame size and protocol.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Setup {
     pub config: String,
@@ -28,6 +29,7 @@ pub struct Setup {
     pub cost_model: Option<crate::accel::CostModel>,
 }
 
+/// Frame times in milliseconds over a record's timed frames.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FrameTimes {
     pub median_ms: f64,
@@ -64,6 +66,7 @@ pub struct Warmup {
     pub capped: bool,
 }
 
+/// A frame's error against naive marching's (or a reference's).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ImageError {
     pub rmse: f64,
@@ -84,6 +87,8 @@ impl From<crate::frame::DiffStats> for ImageError {
     }
 }
 
+/// One structure on one data set: build, frame times and error
+/// (`results.json`, `results.csv`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Record {
     #[serde(flatten)]
@@ -145,6 +150,7 @@ fn manual() -> String {
     "manual".into()
 }
 
+/// One point of a speed-against-error sweep.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ErrorPoint {
     #[serde(flatten)]

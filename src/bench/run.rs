@@ -36,6 +36,7 @@ pub struct BenchOutput {
     pub steps: Vec<StepRecord>,
 }
 
+/// How `run` reports and what it keeps.
 pub struct RunOptions {
     pub quiet: bool,
     pub keep_frames: bool,
@@ -213,6 +214,8 @@ struct Run {
     first: Option<Frame>,
 }
 
+/// Runs a bench config on `ctx`'s device: every structure on every data
+/// set, timed interleaved, each frame diffed against naive's.
 pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<BenchOutput> {
     let structures = timing_order(
         config

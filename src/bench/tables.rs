@@ -202,6 +202,7 @@ pub fn records_csv(records: &[Record]) -> String {
     out
 }
 
+/// The speed-against-error sweep as a Markdown table.
 pub fn errors_md(points: &[ErrorPoint]) -> String {
     let mut out = String::from(
         "Speed against error: time per frame and error against a fine reference (naive, step = reference, no early termination, manual filter, no jitter)\n\n| data set | filter | jitter | step | ERT | ms (median) | rmse | psnr dB | max_abs |\n|---|---|---|---|---|---|---|---|---|\n",
@@ -223,6 +224,7 @@ pub fn errors_md(points: &[ErrorPoint]) -> String {
     out
 }
 
+/// The speed-against-error sweep as CSV.
 pub fn errors_csv(points: &[ErrorPoint]) -> String {
     let mut out = String::from(
         "dataset,accel,filter,jitter,step,ert,frame_median_ms,frame_min_ms,frame_max_ms,reference_step,rmse,psnr,max_abs\n",

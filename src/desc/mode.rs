@@ -8,6 +8,7 @@ use crate::tf::LUT_SIZE;
 /// The specialization constant ids of the mode and of composite shading
 /// (`MARCH_MODE`, `MARCH_SHADE` in `glsl/common/lattice.glsl`).
 pub const MODE_CONSTANT_ID: u32 = 17;
+/// `constant_id` of `MARCH_SHADE`.
 pub const SHADE_CONSTANT_ID: u32 = 18;
 /// `constant_id` of `MARCH_SHININESS` (`glsl/common/light.glsl`): the
 /// whole Phong exponent of lit frames, 0 for pow.

@@ -7,6 +7,7 @@ use super::matrices::{orthographic, perspective, CameraMatrices};
 use crate::error::{Error, Result};
 use glam::{BVec3, DMat4, DVec3, DVec4, UVec3, Vec3};
 
+/// An orbit camera's projection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
     /// Zoomed so the projected volume box fills the viewport (the paper's setup).

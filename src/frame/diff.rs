@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 #[cfg(feature = "frames")]
 use std::path::Path;
 
+/// How two frames differ, over every pixel's RGBA.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct DiffStats {
@@ -52,6 +53,7 @@ pub fn pixel_diff(a: [f32; 4], b: [f32; 4]) -> f64 {
     (0..4).map(|c| channel_diff(a[c], b[c])).fold(0.0, f64::max)
 }
 
+/// Compares two frames of the same size (an error otherwise).
 pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
     if (a.width, a.height) != (b.width, b.height) {
         return Err(Error::invalid(

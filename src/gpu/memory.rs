@@ -38,6 +38,7 @@ pub(crate) fn copy_to_mapped(dst: &mut [u8], src: &[u8]) {
     });
 }
 
+/// A Vulkan buffer and its memory, freed on drop.
 pub struct Buffer {
     ctx: Context,
     pub(crate) raw: vk::Buffer,

@@ -52,6 +52,7 @@ impl Access {
     };
 }
 
+/// The one mip level and layer of a colour image.
 pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     aspect_mask: vk::ImageAspectFlags::COLOR,
     base_mip_level: 0,

@@ -6,6 +6,8 @@ use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 
+/// GPU timestamps around named passes of recorded work, read back as
+/// `Timings` once the work completed.
 pub struct Timer {
     ctx: Context,
     pool: vk::QueryPool,

@@ -17,6 +17,8 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// Named phases and their milliseconds (GPU timestamps, or wall time for
+/// host phases).
 #[derive(Clone, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Timings {

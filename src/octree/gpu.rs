@@ -47,6 +47,8 @@ impl TraceKernels {
     }
 }
 
+/// An SPD scene's octree and rays on the device, traced by each traversal's
+/// kernel.
 pub struct GpuTracer<'k> {
     kernels: &'k TraceKernels,
     nodes: Buffer,

@@ -10,6 +10,7 @@ use crate::scene::{ConeFrame, Scene, Shape};
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
 
+/// Primitive kinds as the trace kernels read them.
 pub const SPHERE: u32 = 0;
 pub const CONE: u32 = 1;
 pub const POLYGON: u32 = 2;
@@ -62,6 +63,7 @@ pub struct TraceResult {
     pub pad: [u32; 2],
 }
 
+/// A `TraceResult`'s primitive when the ray hit nothing.
 pub const MISS: u32 = u32::MAX;
 
 impl TraceResult {

@@ -46,6 +46,7 @@ impl Tracer for CpuTracer<'_> {
     }
 }
 
+/// What a Whitted ray tracing of an SPD scene traces and returns.
 #[derive(Clone, Copy, Debug)]
 pub struct WhittedOptions {
     /// Image edge in pixels (the SPD's is 512).
@@ -127,6 +128,7 @@ impl TraversalTotals {
     }
 }
 
+/// What a Whitted tracing counted, and its image when asked for.
 #[derive(Clone, Debug)]
 pub struct RenderStats {
     pub counts: RayCounts,

@@ -11,6 +11,7 @@ use crate::gpu::shaders::{self, prims_brick_minmax as k, prims_ranges_coarsen as
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 use crate::volume::GpuVolume;
 
+/// Per-brick value ranges (apron included) of a volume on the device.
 pub struct BrickMinMax {
     ctx: Context,
     coarsen: Kernel,

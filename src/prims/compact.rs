@@ -8,12 +8,14 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_compact as k};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
+/// Stream compaction on the device: the indices of flagged elements, in order.
 pub struct Compact {
     ctx: Context,
     kernel: Kernel,
     scan: Scan,
 }
 
+/// Device memory a `Compact` of up to `capacity` elements needs.
 pub struct CompactScratch {
     capacity: u64,
     offsets: Buffer,

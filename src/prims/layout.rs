@@ -10,6 +10,8 @@ use crate::gpu::DeviceInfo;
 /// Elements per workgroup of the block-wise primitives.
 pub const BLOCK: u64 = 1024;
 
+/// How the scan and sort kernels cut their input: `width` invocations a
+/// workgroup, `items` elements each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BlockLayout {
     pub width: u32,

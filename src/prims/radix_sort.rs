@@ -10,8 +10,10 @@ use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_radix_hist, prims_radix_scatter};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
+/// Key bits each pass of the radix sort orders.
 pub const BITS_PER_PASS: u32 = 4;
 
+/// A stable LSD radix sort of u32 keys with u32 payloads on the device.
 pub struct RadixSort {
     ctx: Context,
     hist: Kernel,

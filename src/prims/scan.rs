@@ -9,6 +9,7 @@ use crate::gpu::record::{self};
 use crate::gpu::shaders::{self, prims_scan_add, prims_scan_blocks};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
+/// An exclusive prefix sum of u32 on the device.
 pub struct Scan {
     ctx: Context,
     blocks: Kernel,

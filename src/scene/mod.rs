@@ -142,6 +142,7 @@ impl Material {
     }
 }
 
+/// One object of a scene: its shape and material index.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Object {
     pub shape: Shape,
@@ -160,6 +161,8 @@ pub struct View {
     pub resolution: u32,
 }
 
+/// An SPD scene (Haines' procedural database): view, lights, materials and
+/// objects.
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub kind: SpdScene,

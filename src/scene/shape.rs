@@ -3,6 +3,7 @@
 use super::math::normalize;
 use glam::DVec3;
 
+/// The shape of a scene object.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     Sphere {

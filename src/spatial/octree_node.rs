@@ -13,6 +13,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+/// An octree node as the traversals read it: its box, split point, and
+/// children or primitive list in `info`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Node {

@@ -36,6 +36,7 @@ use super::octree_node::{axis_bit, Node};
 use std::fmt;
 use std::str::FromStr;
 
+/// The octree traversal algorithms compared.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Traversal {
     /// Glassner 1984: point location from the root for every leaf.
@@ -82,6 +83,7 @@ impl FromStr for Traversal {
     }
 }
 
+/// What a traversal visited for one ray.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
     pub steps: u32,
@@ -89,6 +91,8 @@ pub struct Counters {
     pub empty_leaves: u32,
 }
 
+/// The smallest direction component in magnitude a traversal divides by
+/// (`safe_dir` raises smaller ones to it).
 pub const TINY: f32 = 1e-20;
 const BIG: f32 = 3.4e38;
 /// Iteration guard for the point-stepping traversals.

@@ -13,6 +13,7 @@ pub const BRICK: u32 = 8;
 /// DESIGN invariant 2 (a sample in a brick reads its neighbours' voxels).
 pub const APRON: u32 = 1;
 
+/// A volume's value range per brick (apron included), per channel.
 #[derive(Clone, Debug)]
 pub struct BrickGrid {
     pub brick: u32,

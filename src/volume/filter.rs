@@ -6,6 +6,7 @@
 
 use crate::error::{Error, Result};
 
+/// How a sample is interpolated from the voxels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Filter {
     /// Trilinear from eight `texelFetch` in f32: the same on every device.

@@ -33,6 +33,7 @@ pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
     Ok(dims)
 }
 
+/// The voxel type named `s` (`--type`).
 pub fn parse_type(s: &str) -> Result<VoxelType> {
     VoxelType::from_name(s).ok_or_else(|| {
         Error::invalid(

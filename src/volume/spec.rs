@@ -16,6 +16,7 @@ pub struct LoadOptions {
     pub raw: Option<RawLayout>,
 }
 
+/// Where a volume comes from: a file or a generator.
 #[derive(Clone, Debug, PartialEq)]
 pub enum VolumeSpec {
     File(PathBuf),

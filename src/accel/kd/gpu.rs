@@ -26,6 +26,8 @@ use crate::prims::{entry_barrier, RadixSort};
 use crate::tf::{GpuTransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
 
+/// Builds k-d trees on the device from Morton-ordered bricks (Zellmann et
+/// al. 2019); its kernels are made once and reused for every build.
 pub struct KdGpuBuilder {
     ctx: Context,
     tight: Kernel,

@@ -24,6 +24,7 @@ use crate::error::Result;
 /// A box of voxel footprints: `[lo, hi)` per axis.
 pub type IBox = [[i32; 3]; 2];
 
+/// Voxel footprints in box `b` (0 when it is empty).
 pub fn volume(b: &IBox) -> i64 {
     (0..3).map(|a| (b[1][a] - b[0][a]).max(0) as i64).product()
 }
@@ -42,6 +43,7 @@ pub enum Depth {
     Deep,
 }
 
+/// What shapes a k-d tree: halting rule, leaf size and the GPU builder's bins.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct KdParams {
@@ -109,6 +111,7 @@ impl KdParams {
     }
 }
 
+/// The axis along which box `b` is longest (the lowest on ties).
 pub fn longest_axis(b: &IBox) -> usize {
     let e = [0, 1, 2].map(|a| b[1][a] - b[0][a]);
     if e[0] >= e[1] && e[0] >= e[2] {

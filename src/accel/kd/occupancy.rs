@@ -10,11 +10,15 @@ use crate::tf::TransferFunction;
 use crate::volume::Volume;
 use rayon::prelude::*;
 
+/// Edge, in voxel footprints, of the bricks that each keep a summed-volume
+/// table.
 pub const SVT_BRICK: i32 = 32;
 
 /// A brick index, its origin, and a box clipped to it in local coordinates.
 type Clipped = (usize, [i32; 3], [i32; 3], [i32; 3]);
 
+/// Active voxel footprints as per-brick summed-volume tables: the count in
+/// any box in O(bricks it touches), which the CPU k-d builder splits on.
 pub struct Occupancy {
     pub dims: [i32; 3],
     counts: [i32; 3],

@@ -72,6 +72,8 @@ pub struct HierarchyScratch {
     sort: SortScratch,
 }
 
+/// Builds linear BVHs over active bricks on the device (Karras 2012); its
+/// kernels are made once and reused for every build.
 pub struct LbvhBuilder {
     ctx: Context,
     compact: Compact,

@@ -6,6 +6,8 @@ use crate::render::{Camera, FrameDesc, LookSpec, Projection, Rays};
 use crate::volume::{LoadOptions, StepNorm, VoxelData, VoxelType};
 use crate::Volume;
 
+/// One hard case of `--suite hard`: a volume, a transfer function and the
+/// views every structure must render as naive does.
 pub struct HardCase {
     pub name: &'static str,
     pub volume: Volume,

@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 use rayon::prelude::*;
 use std::ops::Range;
 
+/// The built-in volume generators (`NAME:SIZE[:PARAM]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Generator {
     /// Menger sponge (PARAM: level, default 3 or the finest the size resolves):
