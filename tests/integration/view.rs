@@ -267,13 +267,74 @@ fn keys_skip_looks_the_volume_cannot_show() {
     );
 }
 
+/// Scripted Esc or Q ends the session where it is pressed; Shift+Tab is
+/// the previous structure; each S press writes a numbered pair, apart from
+/// the --screenshot file.
+#[test]
+fn scripted_quit_shift_tab_and_numbered_screenshots() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("v.exr");
+    let r = lacuna_windowed(&[
+        "view",
+        "nbody:16",
+        "--size",
+        "32x32",
+        "--validate",
+        "--accel",
+        "grid",
+        "--keys",
+        "Tab,Shift+Tab,s,frame,s",
+        "--frames",
+        "2",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    ok(&r, "view with S twice");
+    assert!(
+        r.stdout.contains("frames 2:") && r.stdout.contains("(grid)"),
+        "{}",
+        r.stdout
+    );
+    for name in ["v.exr", "v-1.exr", "v-1.png", "v-2.exr", "v-2.png"] {
+        assert!(
+            dir.path().join(name).is_file(),
+            "{name}: {:?}",
+            std::fs::read_dir(dir.path()).unwrap().collect::<Vec<_>>()
+        );
+    }
+    let last = dir.path().join("v-2.exr");
+    let diff = crate::common::lacuna(
+        &["diff", shot.to_str().unwrap(), last.to_str().unwrap(), "--max-abs", "0"],
+        &[],
+    );
+    assert_eq!(
+        diff.code, 0,
+        "the last S press is the last frame: {}{}",
+        diff.stdout, diff.stderr
+    );
+    // Q after the second frame ends the session before --frames' fifth.
+    let q = lacuna_windowed(&[
+        "view",
+        "nbody:16",
+        "--size",
+        "32x32",
+        "--validate",
+        "--keys",
+        "frame,frame,q",
+        "--frames",
+        "5",
+    ]);
+    ok(&q, "view --keys frame,frame,q");
+    assert!(q.stdout.starts_with("frames 2:"), "{}", q.stdout);
+}
+
 #[test]
 fn bad_view_input_is_one_line_before_any_window() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("shot.tiff");
     let missing = dir.path().join("no/such/dir/shot.exr");
     let json = dir.path().join("missing.json");
-    let cases: [(Vec<&str>, &str); 7] = [
+    let cases: [(Vec<&str>, &str); 9] = [
         (
             vec!["view", "nbody:16", "--keys", "t,Teleport"],
             "invalid key 'Teleport': expected one of:",
@@ -294,6 +355,24 @@ fn bad_view_input_is_one_line_before_any_window() {
             "no/such/dir",
         ),
         (vec!["view", "nbody:16", "--frames", "0"], "invalid frames '0'"),
+        // Keys that would never show.
+        (
+            vec!["view", "nbody:16", "--keys", "frame,m", "--frames", "1"],
+            "invalid keys 'frame,m': its last keys show from frame 2, but --frames 1 ends the session first",
+        ),
+        (
+            vec![
+                "view",
+                "nbody:16",
+                "--keys",
+                "q",
+                "--frames",
+                "1",
+                "--screenshot",
+                "x.exr",
+            ],
+            "invalid keys 'q': ends the session before --frames' last frame",
+        ),
         (
             vec!["view", "nbody:16", "--json", json.to_str().unwrap()],
             "missing.json",

@@ -39,6 +39,9 @@ const OWN_KEYS: &[&str] = &[
     ">",
 ];
 
+/// The `--keys` name of Shift+Tab (the previous structure).
+pub const SHIFT_TAB: &str = "Shift+Tab";
+
 /// Every key name `Controls::key` acts on.
 pub fn keys() -> Vec<&'static str> {
     OWN_KEYS.iter().chain(look::KEYS).copied().collect()
@@ -55,15 +58,17 @@ pub fn script_key(name: &str) -> std::result::Result<String, std::convert::Infal
 
 /// Every key name as `--keys` takes it, listed for an error.
 pub fn script_names() -> String {
-    let names: Vec<&str> = keys().into_iter().map(|k| if k == "," { "Comma" } else { k }).collect();
+    let mut names: Vec<&str> = keys().into_iter().map(|k| if k == "," { "Comma" } else { k }).collect();
+    names.push(SHIFT_TAB);
     names.join(", ")
 }
 
 /// Whether `Controls::key` acts on `name`.
 pub fn known_key(name: &str) -> bool {
-    keys()
-        .iter()
-        .any(|k| *k == name || (k.len() == 1 && k.eq_ignore_ascii_case(name)))
+    name == SHIFT_TAB
+        || keys()
+            .iter()
+            .any(|k| *k == name || (k.len() == 1 && k.eq_ignore_ascii_case(name)))
 }
 
 /// A transfer function the keys can reshape, or one they cannot (a JSON file).
@@ -76,12 +81,17 @@ pub enum Shape {
         b: f32,
         alpha: Option<f32>,
     },
+    /// One shape per channel (`A|B`): the arrows reshape every window.
+    Channels(Vec<Shape>),
     /// Any other spec (a ParaView JSON path): switched to, not reshaped.
     Fixed(String),
 }
 
 impl Shape {
     pub fn parse(spec: &str) -> Shape {
+        if spec.contains('|') {
+            return Shape::Channels(spec.split('|').map(Shape::parse).collect());
+        }
         let parts: Vec<&str> = spec.split(':').collect();
         let num = |i: usize| parts.get(i).and_then(|s| s.parse::<f32>().ok());
         let kind = ["ramp", "band", "spike"].into_iter().find(|k| parts[0] == *k);
@@ -111,12 +121,25 @@ impl Shape {
                 }
                 s
             }
+            Shape::Channels(shapes) => shapes.iter().map(Shape::spec).collect::<Vec<_>>().join("|"),
             Shape::Fixed(spec) => spec.clone(),
+        }
+    }
+
+    /// Whether the arrows can reshape it: a window, or channels with one.
+    fn reshapes(&self) -> bool {
+        match self {
+            Shape::Window { .. } => true,
+            Shape::Channels(shapes) => shapes.iter().any(Shape::reshapes),
+            Shape::Fixed(_) => false,
         }
     }
 
     /// Moves the window by `d` (a spike's centre; a ramp's or band's both ends).
     fn shift(&mut self, d: f32) {
+        if let Shape::Channels(shapes) = self {
+            shapes.iter_mut().for_each(|s| s.shift(d));
+        }
         if let Shape::Window { kind, a, b, .. } = self {
             let round = |v: f32| (v * 1000.0).round() / 1000.0;
             *a = round(*a + d);
@@ -128,6 +151,9 @@ impl Shape {
 
     /// Widens the window by `d` (a spike's width; a ramp's or band's span, about its middle).
     fn widen(&mut self, d: f32) {
+        if let Shape::Channels(shapes) = self {
+            shapes.iter_mut().for_each(|s| s.widen(d));
+        }
         if let Shape::Window { kind, a, b, .. } = self {
             let round = |v: f32| (v * 1000.0).round() / 1000.0;
             if *kind == "spike" {
@@ -153,6 +179,8 @@ pub struct Change {
     /// The time step changed: load it, upload it, rebuild.
     pub time: bool,
     pub quit: bool,
+    /// Why the key changed nothing the frame shows (a `note:`), if so.
+    pub ignored: Option<&'static str>,
 }
 
 /// The viewer's state.
@@ -265,12 +293,12 @@ impl Controls {
             "ArrowLeft" | "ArrowRight" => {
                 let d = if key == "ArrowLeft" { -TF_NUDGE } else { TF_NUDGE };
                 self.presets[self.preset].shift(d);
-                change.tf = matches!(self.presets[self.preset], Shape::Window { .. });
+                change.tf = self.reshape_note(&mut change);
             }
             "ArrowUp" | "ArrowDown" => {
                 let d = if key == "ArrowUp" { TF_NUDGE } else { -TF_NUDGE };
                 self.presets[self.preset].widen(d);
-                change.tf = matches!(self.presets[self.preset], Shape::Window { .. });
+                change.tf = self.reshape_note(&mut change);
             }
             "t" | "T" => {
                 self.preset = (self.preset + 1) % self.presets.len();
@@ -287,6 +315,8 @@ impl Controls {
                         }
                     }
                     change.tf = true;
+                } else {
+                    change.ignored = Some("no ParaView JSON file was given (--json)");
                 }
             }
             "Tab" => {
@@ -300,16 +330,21 @@ impl Controls {
                     Some(_) => None,
                     None => Some(ERT),
                 };
+                if !matches!(self.look.mode, lacuna::render::Mode::Composite) {
+                    change.ignored =
+                        Some("early termination ends composite rays only: it shows once M returns to composite");
+                }
             }
-            "[" | "]" => {
-                let i = STEPS.iter().position(|s| *s >= self.step).unwrap_or(STEPS.len() - 1);
-                let i = if key == "[" {
-                    i.saturating_sub(1)
-                } else {
-                    (i + 1).min(STEPS.len() - 1)
-                };
-                self.step = STEPS[i];
-            }
+            // The next listed step finer or coarser than this one, which
+            // need not be listed (`--step`); none past the list's ends.
+            "[" => match STEPS.iter().rev().find(|s| **s < self.step) {
+                Some(finer) => self.step = *finer,
+                None => change.ignored = Some("the step is as fine as the keys make it"),
+            },
+            "]" => match STEPS.iter().find(|s| **s > self.step) {
+                Some(coarser) => self.step = *coarser,
+                None => change.ignored = Some("the step is as coarse as the keys make it"),
+            },
             "p" | "P" => {
                 std::mem::swap(&mut self.other_projection, &mut self.orbit.projection);
             }
@@ -330,9 +365,23 @@ impl Controls {
                 change.structure = self.look.key(nudge, &self.orbit).rebuild;
             }
             "Escape" | "q" | "Q" => change.quit = true,
-            _ => change.structure = self.look.key(key, &self.orbit).rebuild,
+            _ => {
+                let look = self.look.key(key, &self.orbit);
+                change.structure = look.rebuild;
+                change.ignored = look.ignored;
+            }
         }
         change
+    }
+
+    /// Whether the arrows' reshaping changed the TF; else why not, in `change`.
+    fn reshape_note(&self, change: &mut Change) -> bool {
+        let reshapes = self.presets[self.preset].reshapes();
+        if !reshapes {
+            change.ignored =
+                Some("the arrows reshape a ramp, band or spike, not this transfer function (T cycles to one)");
+        }
+        reshapes
     }
 
     /// The frame for a volume of `dims` voxels with `spacing`: `render`'s
@@ -503,6 +552,50 @@ mod tests {
         assert_eq!(c.ert, Some(ERT));
         c.key("e", false);
         assert_eq!(c.ert, None);
+    }
+
+    #[test]
+    fn step_keys_go_to_the_next_listed_step_from_any_step() {
+        // (start, key, step after, whether the key did anything)
+        for (start, key, after, acted) in [
+            (8.0, "[", 4.0, true),
+            (8.0, "]", 8.0, false),
+            (0.05, "]", 0.125, true),
+            (0.05, "[", 0.05, false),
+            (0.3, "]", 0.5, true),
+            (0.3, "[", 0.25, true),
+            (0.5, "]", 1.0, true),
+            (0.125, "[", 0.125, false),
+            (4.0, "]", 4.0, false),
+        ] {
+            let mut c = controls("ramp:0.3:1");
+            c.step = start;
+            let change = c.key(key, false);
+            assert_eq!((c.step, change.ignored.is_none()), (after, acted), "{start} {key}");
+        }
+    }
+
+    #[test]
+    fn arrows_reshape_every_channels_window_and_say_when_they_cannot() {
+        let mut c = controls("ramp:0.3:1|spike:0.5:0.05:0.8");
+        assert!(c.key("ArrowRight", false).tf);
+        assert_eq!(c.tf_spec(), "ramp:0.32:1.02|spike:0.52:0.05:0.8");
+        assert!(c.key("ArrowUp", false).tf);
+        assert_eq!(c.tf_spec(), "ramp:0.3:1.04|spike:0.52:0.07:0.8");
+        let mut json = controls("cool.json");
+        let change = json.key("ArrowLeft", false);
+        assert!(!change.tf && change.ignored.is_some());
+        let mut none = Controls::new(
+            &FrameDesc::builder(8, 8).build().unwrap(),
+            "ramp:0.3:1",
+            Accel::naive(),
+            None,
+        );
+        assert!(none.key("j", false).ignored.is_some(), "no --json");
+        none.key("m", false);
+        let ert = none.key("e", false);
+        assert_eq!(none.ert, Some(ERT), "kept for composite");
+        assert!(ert.ignored.is_some(), "mip frames do not terminate early");
     }
 
     #[test]

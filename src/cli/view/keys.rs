@@ -1,20 +1,24 @@
 //! What the viewer's keys do (`--keys` scripts them): a new TF or
 //! structure is rebuilt at once; a look the volume cannot show is skipped.
 
-use super::controls::{Change, Shape};
+use super::controls::{Change, Shape, SHIFT_TAB};
 use super::{Viewer, FRAME_KEY};
 use lacuna::{Error, Result, TransferFunction};
 
 impl Viewer {
-    /// Presses the scripted keys up to the next `frame` (`--keys`).
+    /// Presses the scripted keys up to the next `frame` (`--keys`); a
+    /// quitting key (Esc, Q) ends the session there (`self.quit`).
     pub(super) fn press_pending(&mut self) -> Result<()> {
         while let Some(key) = self.pending_keys.pop_front() {
             if key == FRAME_KEY {
                 break;
             }
-            self.key(&key);
+            self.quit |= self.key(&key);
             if let Some(e) = self.key_result.take() {
                 return Err(e);
+            }
+            if self.quit {
+                self.pending_keys.clear();
             }
         }
         Ok(())
@@ -24,8 +28,14 @@ impl Viewer {
     pub(super) fn key(&mut self, name: &str) -> bool {
         let before = (self.controls.presets.clone(), self.controls.preset);
         let look = self.controls.look.clone();
-        let shift = self.modifiers.shift_key();
+        let (name, shift) = match name {
+            SHIFT_TAB => ("Tab", true),
+            name => (name, self.modifiers.shift_key()),
+        };
         let change = self.controls.key(name, shift);
+        if let Some(why) = change.ignored {
+            eprintln!("note: key {name}: {why}");
+        }
         // A look this volume cannot show is skipped: the key is pressed
         // again (the mode key's next mode; a toggle's way back).
         let mut refused = None;

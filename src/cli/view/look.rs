@@ -46,7 +46,8 @@ pub struct LookControls {
 pub struct LookChange {
     /// The mode or the iso value: the structure is built for it.
     pub rebuild: bool,
-    pub acted: bool,
+    /// Why the key did nothing (a `note:` for the user), if it did not.
+    pub ignored: Option<&'static str>,
 }
 
 impl LookControls {
@@ -68,10 +69,7 @@ impl LookControls {
 
     /// Applies `key` with the camera at `orbit`.
     pub fn key(&mut self, key: &str, orbit: &Orbit) -> LookChange {
-        let mut change = LookChange {
-            rebuild: false,
-            acted: true,
-        };
+        let mut change = LookChange::default();
         match key {
             "m" | "M" => {
                 let i = MODES.iter().position(|m| *m == self.mode.name()).unwrap_or(0);
@@ -100,7 +98,9 @@ impl LookControls {
             "l" | "L" => self.shade = !self.shade,
             "x" | "X" => self.jitter = !self.jitter,
             // The command line's planes may leave no room for another.
-            "c" | "C" if self.plane.is_none() && self.clip.planes().len() == MAX_CLIP => change.acted = false,
+            "c" | "C" | "v" | "V" if self.plane.is_none() && self.clip.planes().len() == MAX_CLIP => {
+                change.ignored = Some("the command line gives six clip planes already, the most a frame takes")
+            }
             "c" | "C" => {
                 self.plane = match self.plane {
                     Some(_) => None,
@@ -111,7 +111,6 @@ impl LookControls {
                     }),
                 }
             }
-            "v" | "V" if self.plane.is_none() && self.clip.planes().len() == MAX_CLIP => change.acted = false,
             "v" | "V" => {
                 let offset = self.plane.map_or(0.0, |p| p.offset);
                 self.plane = Some(ViewPlane {
@@ -124,10 +123,10 @@ impl LookControls {
                 let d = if key == "PageUp" { PLANE_NUDGE } else { -PLANE_NUDGE };
                 match &mut self.plane {
                     Some(p) => p.offset += d,
-                    None => change.acted = false,
+                    None => change.ignored = Some("no clip plane is shown (C shows one)"),
                 }
             }
-            _ => change.acted = false,
+            _ => change.ignored = Some("not a look key"),
         }
         change
     }
@@ -143,10 +142,20 @@ impl LookControls {
             elevation_deg: p.elevation_deg,
             ..Orbit::default()
         };
-        // An orthographic orbit's rays run along the view direction.
+        // An orthographic orbit's rays run along the view direction, in
+        // voxel space: the world's direction over the spacing. A plane
+        // facing the camera in the world has the world direction for its
+        // normal, which in voxel space is the direction times the spacing
+        // twice over (relative to the shortest side, which f32 squares
+        // at any spacing).
         let dir = Camera::Orbit(facing).rays(dims, spacing, 1, 1)?.eye_or_dir;
-        let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-        let n = dir.map(|c| c / len);
+        let shortest = spacing.iter().fold(f64::INFINITY, |m, s| m.min(*s as f64));
+        let world = std::array::from_fn::<f64, 3, _>(|a| {
+            let r = spacing[a] as f64 / shortest;
+            dir[a] as f64 * r * r
+        });
+        let len = world.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let n = world.map(|c| (c / len) as f32);
         let centre = dims.map(|d| d as f32 / 2.0);
         let d = -(n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2]) - p.offset;
         Ok(Some([n[0], n[1], n[2], d]))
@@ -225,7 +234,7 @@ mod tests {
         let mut l = look();
         let dims = [40, 30, 20];
         assert_eq!(l.plane_equation(dims, [1.0; 3]).unwrap(), None);
-        assert!(!l.key("PageUp", &Orbit::default()).acted, "no plane to move");
+        assert!(l.key("PageUp", &Orbit::default()).ignored.is_some(), "no plane to move");
         let head_on = Orbit {
             azimuth_deg: 0.0,
             elevation_deg: 0.0,
@@ -250,6 +259,28 @@ mod tests {
         assert!((turned[0] + 1.0).abs() < 1e-6, "{turned:?}: now facing +x");
         l.key("c", &side);
         assert_eq!(l.plane, None);
+    }
+
+    #[test]
+    fn the_view_plane_faces_the_camera_in_the_world_on_uneven_spacing() {
+        let mut l = look();
+        let orbit = Orbit::default();
+        l.key("c", &orbit);
+        // With even spacing voxel space is the world's, scaled.
+        let [a, b, c, _] = l.plane_equation([40, 24, 16], [1.0; 3]).unwrap().unwrap();
+        let spacing = [1.0f32, 1.5, 2.0];
+        // A plane n . (voxel * spacing) + d = 0 has the voxel-space normal
+        // n * spacing.
+        let want = [a * spacing[0], b * spacing[1], c * spacing[2]];
+        let len = want.iter().map(|v| v * v).sum::<f32>().sqrt();
+        let got = l.plane_equation([40, 24, 16], spacing).unwrap().unwrap();
+        for i in 0..3 {
+            assert!((got[i] - want[i] / len).abs() < 1e-5, "{got:?} against {want:?}");
+        }
+        // Through the volume's centre.
+        let centre = [20.0, 12.0, 8.0];
+        let at: f32 = (0..3).map(|i| got[i] * centre[i]).sum::<f32>() + got[3];
+        assert!(at.abs() < 1e-4, "{at}");
     }
 
     #[test]

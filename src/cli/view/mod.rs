@@ -57,10 +57,10 @@ pub struct ViewArgs {
     /// Render this many frames, then exit (for tests and scripts).
     #[arg(long)]
     frames: Option<u32>,
-    /// With --frames: write the last frame here (.exr: linear RGBA f32 as rendered; .png). The S key writes NAME.exr and NAME.png.
+    /// With --frames: write the last frame here (.exr: linear RGBA f32 as rendered; .png). The S key writes NAME-1.exr and NAME-1.png, then -2, ...
     #[arg(long)]
     screenshot: Option<PathBuf>,
-    /// Keys to press before the first frame, comma-separated by name (t, Tab, ArrowLeft, Comma for ',', ...), for scripts and tests; `frame` draws a frame before the keys after it.
+    /// Keys to press before the first frame, comma-separated by name (t, Tab, Shift+Tab, ArrowLeft, Comma for ',', ...), for scripts and tests; `frame` draws a frame before the keys after it; q or Escape ends the session.
     #[arg(long, value_delimiter = ',', value_parser = controls::script_key)]
     keys: Vec<String>,
     /// Enable Vulkan validation with synchronization validation; fail on any message.
@@ -70,6 +70,8 @@ pub struct ViewArgs {
 
 /// In `--keys`, a frame drawn before the keys after it.
 const FRAME_KEY: &str = "frame";
+/// Keys that end the session.
+const QUIT_KEYS: [&str; 2] = ["q", "Escape"];
 
 /// Everything the window needs; dropped in field order (lacuna before the host's device, the window last).
 struct Viewer {
@@ -82,7 +84,11 @@ struct Viewer {
     drawn: u32,
     /// Scripted keys not pressed yet: those after a `frame` (`--keys`).
     pending_keys: VecDeque<String>,
+    /// A scripted Esc or Q was pressed: the session ends.
+    quit: bool,
+    /// Screenshots asked for by the S key since the last frame, and in all.
     shots: u32,
+    shots_written: u32,
     last: Instant,
     fps: f64,
     modifiers: ModifiersState,
@@ -130,7 +136,38 @@ impl ViewArgs {
                 format!("expected one of: {}, or {FRAME_KEY}", controls::script_names()),
             ));
         }
+        self.check_key_script()?;
         Ok(desc)
+    }
+
+    /// Keys that would never show are refused: those after the last frame
+    /// `--frames` draws, and a quitting key where the last frame is to be
+    /// written (`--screenshot`).
+    fn check_key_script(&self) -> Result<()> {
+        let quits = |k: &String| QUIT_KEYS.iter().any(|q| k.eq_ignore_ascii_case(q));
+        if let (Some(key), Some(_)) = (self.keys.iter().find(|k| quits(k)), &self.screenshot) {
+            return Err(Error::invalid(
+                "keys",
+                key.clone(),
+                "ends the session before --frames' last frame, so --screenshot would never be written: leave it out and let --frames end the session",
+            ));
+        }
+        // Keys after the j-th `frame` are pressed once frame j is drawn.
+        let last_key = self.keys.iter().rposition(|k| k != FRAME_KEY);
+        let frames_before = |i: usize| self.keys[..i].iter().filter(|k| *k == FRAME_KEY).count() as u64;
+        if let (Some(i), Some(n)) = (last_key, self.frames) {
+            let needed = frames_before(i) + 1;
+            if u64::from(n) < needed {
+                return Err(Error::invalid(
+                    "keys",
+                    self.keys.join(","),
+                    format!(
+                        "its last keys show from frame {needed}, but --frames {n} ends the session first: give --frames {needed} or more"
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -231,7 +268,9 @@ impl App<'_> {
             resize: true,
             drawn: 0,
             pending_keys: VecDeque::new(),
+            quit: false,
             shots: 0,
+            shots_written: 0,
             last: Instant::now(),
             fps: 0.0,
             modifiers: ModifiersState::empty(),
@@ -246,6 +285,9 @@ impl App<'_> {
         if let Some(viewer) = self.viewer.as_mut() {
             viewer.pending_keys = self.args.keys.iter().cloned().collect();
             viewer.press_pending()?;
+            if viewer.quit {
+                event_loop.exit();
+            }
         }
         Ok(())
     }
@@ -386,7 +428,10 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
+        // S presses this frame was read back for; keys pressed now ask of the next.
+        let shots = std::mem::take(&mut self.shots);
         self.press_pending()?;
+        let last = last || self.quit;
         if self.controls.playing {
             self.controls.step_time(1);
         }
@@ -409,14 +454,21 @@ impl Viewer {
         if last {
             println!("{}", self.summary());
         }
-        if self.shots > 0 {
-            self.shots = 0;
+        if shots > 0 {
+            self.shots_written += 1;
+            // Numbered: one press does not replace the last, nor the
+            // file --screenshot names.
             let stem = match &args.screenshot {
                 Some(p) => p.with_extension(""),
                 None => PathBuf::from(format!("lacuna-view-{}", std::process::id())),
             };
-            self.write(&stem.with_extension("exr"), FrameFormat::Exr)?;
-            self.write(&stem.with_extension("png"), FrameFormat::Png)?;
+            let named = |ext: &str| {
+                let mut name = stem.clone().into_os_string();
+                name.push(format!("-{}.{ext}", self.shots_written));
+                PathBuf::from(name)
+            };
+            self.write(&named("exr"), FrameFormat::Exr)?;
+            self.write(&named("png"), FrameFormat::Png)?;
         }
         Ok(last)
     }
