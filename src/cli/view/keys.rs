@@ -1,8 +1,9 @@
 //! What the viewer's keys do (`--keys` scripts them): a new TF or
-//! structure is rebuilt at once; a look the volume cannot show is skipped.
+//! structure is rebuilt at once; a look the volume cannot show is skipped;
+//! a script whose keys could never show is refused.
 
 use super::controls::{Change, Shape, SHIFT_TAB};
-use super::{Viewer, FRAME_KEY};
+use super::{ViewArgs, Viewer, FRAME_KEY, QUIT_KEYS};
 use lacuna::{Error, Result, TransferFunction};
 
 impl Viewer {
@@ -101,6 +102,38 @@ impl Viewer {
         }
         if change.screenshot {
             self.shots += 1;
+        }
+        Ok(())
+    }
+}
+
+impl ViewArgs {
+    /// Keys that would never show are refused: those after the last frame
+    /// `--frames` draws, and a quitting key where the last frame is to be
+    /// written (`--screenshot`).
+    pub(super) fn check_key_script(&self) -> Result<()> {
+        let quits = |k: &String| QUIT_KEYS.iter().any(|q| k.eq_ignore_ascii_case(q));
+        if let (Some(key), Some(_)) = (self.keys.iter().find(|k| quits(k)), &self.screenshot) {
+            return Err(Error::invalid(
+                "keys",
+                key.clone(),
+                "ends the session before --frames' last frame, so --screenshot would never be written: leave it out and let --frames end the session",
+            ));
+        }
+        // Keys after the j-th `frame` are pressed once frame j is drawn.
+        let last_key = self.keys.iter().rposition(|k| k != FRAME_KEY);
+        let frames_before = |i: usize| self.keys[..i].iter().filter(|k| *k == FRAME_KEY).count() as u64;
+        if let (Some(i), Some(n)) = (last_key, self.frames) {
+            let needed = frames_before(i) + 1;
+            if u64::from(n) < needed {
+                return Err(Error::invalid(
+                    "keys",
+                    self.keys.join(","),
+                    format!(
+                        "its last keys show from frame {needed}, but --frames {n} ends the session first: give --frames {needed} or more"
+                    ),
+                ));
+            }
         }
         Ok(())
     }
