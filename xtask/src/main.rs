@@ -4,7 +4,8 @@
 //!   `cargo run --release -- ARGS` (the main job: `cargo xtask run -- bench --quick`);
 //! - `cargo xtask test [ARGS]`: those, the validation layer, the ch2 MRI,
 //!   and a virtual X server with the libraries the viewer's window needs,
-//!   then `cargo test ARGS` with lavapipe's shader optimisation off (see
+//!   then the library checked as engines build it (`library_builds`) and
+//!   `cargo test ARGS` with lavapipe's shader optimisation off (see
 //!   `test_env`);
 //! - `cargo xtask setup [test|mpi]`: only the packages (mpi: MPI and IceT
 //!   for the `mpi` feature; `test` includes them, and runs `cargo test
@@ -58,10 +59,13 @@ fn main() -> ExitCode {
         // Without dpkg there is no IceT to unpack: the tests without MPI.
         "test" if !quiet_ok("dpkg-query", &["--version"]) => {
             eprintln!("note: no dpkg, so no IceT to unpack: the tests run without the `mpi` feature");
-            setup(&[RUN, TEST].concat()).and_then(|()| cargo(&["test"], rest, &test_env()))
+            setup(&[RUN, TEST].concat())
+                .and_then(|()| library_builds())
+                .and_then(|()| cargo(&["test"], rest, &test_env()))
         }
         "test" => setup(&[RUN, TEST, MPI].concat())
             .and_then(|()| icet())
+            .and_then(|()| library_builds())
             .and_then(|()| cargo(&["test", "--features", "mpi"], rest, &test_env())),
         "setup" if rest.first().map(String::as_str) == Some("test") => {
             setup(&[RUN, TEST, MPI].concat()).and_then(|()| icet())
@@ -77,6 +81,21 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => ExitCode::from(code),
     }
+}
+
+/// The library as an engine depends on it (README, "Library"): without
+/// the command line's features, and with frame files only. `cargo test`
+/// builds the default features, so code only these compile would go
+/// unbuilt (a missing import there once broke an engine's build).
+fn library_builds() -> Result<(), u8> {
+    for features in [
+        &["--no-default-features"][..],
+        &["--no-default-features", "--features", "frames"],
+    ] {
+        let features: Vec<String> = features.iter().map(|f| f.to_string()).collect();
+        cargo(&["check", "--lib"], &features, &[])?;
+    }
+    Ok(())
 }
 
 /// `cargo xtask run -- bench --quick` and `cargo xtask run bench --quick` alike.

@@ -93,5 +93,5 @@ fn inflating<'a>(source: &Path, mut file: std::fs::File, start: u64, skip: u64) 
 
 #[cfg(not(feature = "loaders"))]
 fn inflating<'a>(source: &Path, _: std::fs::File, _: u64, _: u64) -> Result<Box<dyn Read + 'a>> {
-    inflate(source, &[], 0).map(|_| -> Box<dyn Read + 'a> { Box::new(std::io::empty()) })
+    super::inflate(source, &[], 0).map(|_| -> Box<dyn Read + 'a> { Box::new(std::io::empty()) })
 }
