@@ -24,7 +24,8 @@ impl Builder {
         params: &Params,
     ) -> Result<(Structure, Timings)> {
         accel.method().check(params)?;
-        input.tf.check_channels(input.gpu_volume.channels as usize)?;
+        input.check()?;
+        ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {
             return Ok((fallback(accel, params, input), Timings::default()));
         }
@@ -54,6 +55,7 @@ impl Builder {
                 params: params.clone(),
                 mode: Some(input.mode),
                 volume: Some(input.built_over()),
+                built_for: input.built_for(accel),
                 built,
                 _keep: None,
             },
@@ -74,7 +76,8 @@ impl Builder {
         params: &Params,
     ) -> Result<Structure> {
         accel.method().check(params)?;
-        input.tf.check_channels(input.gpu_volume.channels as usize)?;
+        input.check()?;
+        ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {
             return Ok(fallback(accel, params, input));
         }
@@ -101,6 +104,7 @@ impl Builder {
             params: params.clone(),
             mode: Some(input.mode),
             volume: Some(input.built_over()),
+            built_for: input.built_for(accel),
             built,
             _keep: keep,
         })
@@ -141,6 +145,7 @@ fn fallback(accel: Accel, params: &Params, input: &BuildInput) -> Structure {
         params: params.clone(),
         mode: Some(input.mode),
         volume: Some(input.built_over()),
+        built_for: None,
         built: Box::new(ModeFallback::new(accel, &input.mode)),
         _keep: None,
     }

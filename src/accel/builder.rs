@@ -39,6 +39,9 @@ pub enum RangeKind {
 pub struct Ranges {
     bricks: Option<(GpuBricks, f64)>,
     cells: Vec<(GpuBricks, f64)>,
+    /// The `content_id` of the volume they were computed over (None: none
+    /// computed).
+    volume: Option<u64>,
 }
 
 impl Ranges {
@@ -271,7 +274,10 @@ impl Builder {
         volume: &GpuVolume,
         mut kept: Option<StepKeep>,
     ) -> Result<Ranges> {
-        let mut ranges = Ranges::default();
+        let mut ranges = Ranges {
+            volume: Some(volume.content_id()),
+            ..Ranges::default()
+        };
         let kinds = distinct(kinds)?;
         let several = several_cells(&kinds);
         let minmax = self.shared::<BrickMinMax>()?;
@@ -365,6 +371,19 @@ impl Builder {
 }
 
 impl Ranges {
+    /// A build over `volume` can read these: they were computed over its
+    /// texels (this upload, this series step), or none were.
+    pub fn check_volume(&self, volume: &GpuVolume) -> Result<()> {
+        match self.volume {
+            Some(id) if id != volume.content_id() => Err(crate::error::Error::invalid(
+                "ranges",
+                "of another upload or series step",
+                "a build reads the ranges of the volume it is built over: compute them for it (Builder::ranges)",
+            )),
+            _ => Ok(()),
+        }
+    }
+
     /// The coarsest ranges here whose brick edge divides `edge` (and is
     /// smaller): the cheapest to make `edge`'s from.
     fn finer(&self, edge: u32) -> Option<&GpuBricks> {

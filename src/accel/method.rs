@@ -61,6 +61,28 @@ impl BuildInput<'_> {
     pub(crate) fn built_over(&self) -> ([u32; 3], u32) {
         (self.gpu_volume.dims, self.gpu_volume.channels)
     }
+
+    /// The texels and transfer function a structure built from this skips
+    /// for (None: naive, which skips nothing).
+    pub(crate) fn built_for(&self, accel: Accel) -> Option<(u64, u64)> {
+        accel
+            .method()
+            .skips()
+            .then(|| (self.gpu_volume.content_id(), self.gpu_tf.key()))
+    }
+
+    /// Its parts agree: the transfer function classified on the host is
+    /// the one uploaded, and holds the volume's channels.
+    pub(crate) fn check(&self) -> Result<()> {
+        if self.tf.key() != self.gpu_tf.key() {
+            return Err(Error::invalid(
+                "build input",
+                self.tf.spec.clone(),
+                "is not the transfer function gpu_tf was uploaded from: give both the same one",
+            ));
+        }
+        self.tf.check_channels(self.gpu_volume.channels as usize)
+    }
 }
 
 /// When a built structure is marched by another entry's kernel: which, and why.
@@ -136,6 +158,11 @@ pub trait Method: Sync {
     }
     /// The per-volume ranges its build reads with these parameters.
     fn ranges(&self, params: &Params) -> Result<RangeKind>;
+    /// Whether its frames skip by what it was built for (a volume's
+    /// texels, a transfer function): all but naive, which reads neither.
+    fn skips(&self) -> bool {
+        true
+    }
     /// Every kind of ranges its build reads on `volume` and `info`'s device
     /// (default: `ranges`; a structure that builds others, `auto`, lists
     /// theirs).
@@ -293,6 +320,9 @@ pub struct Structure {
     /// The grid and channel count of the volume it was built over (None:
     /// any, as naive).
     pub(crate) volume: Option<([u32; 3], u32)>,
+    /// The volume's `content_id` and the transfer function's `key` it
+    /// skips for (None: any, as naive and a mode's naive fallback).
+    pub(crate) built_for: Option<(u64, u64)>,
     pub(crate) built: Box<dyn Built>,
     /// What a recorded build's command buffer still reads (the activity
     /// LUT of a mode's build and its staging).
@@ -327,11 +357,18 @@ impl Structure {
             Some(built) if !built.same_classification(mode) => Err(Error::invalid(
                 "frame mode",
                 mode.name(),
-                format!(
-                    "the {} structure was built for {} frames: build it with the frame's mode",
-                    self.accel,
-                    built.name()
-                ),
+                match (built, mode) {
+                    (Mode::Iso(b), Mode::Iso(_)) => format!(
+                        "the {} structure was built for iso values {}: build it for the frame's",
+                        self.accel,
+                        b.values().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+                    ),
+                    _ => format!(
+                        "the {} structure was built for {} frames: build it with the frame's mode",
+                        self.accel,
+                        built.name()
+                    ),
+                },
             )),
             _ => Ok(()),
         }
@@ -350,12 +387,48 @@ impl Structure {
                     volume.dims[0], volume.dims[1], volume.dims[2], volume.channels
                 ),
                 format!(
-                    "the {} structure was built over {}x{}x{} of {channels}: build it over the volume it renders",
+                    "the {} structure was built over {}x{}x{} of {channels} channel(s): build it over the volume it renders",
                     self.accel, dims[0], dims[1], dims[2]
                 ),
             )),
             _ => Ok(()),
         }
+    }
+
+    /// A frame of `volume` through `tf` can use this structure: it skips
+    /// what these texels (this upload, this series step) show through
+    /// this transfer function. Other texels or another TF on the same grid
+    /// would march a wrong image, with no error.
+    pub fn check_built_for(
+        &self,
+        volume: &crate::volume::GpuVolume,
+        tf: &crate::tf::GpuTransferFunction,
+    ) -> Result<()> {
+        self.check_volume(volume)?;
+        let Some((content, key)) = self.built_for else {
+            return Ok(());
+        };
+        if content != volume.content_id() {
+            return Err(Error::invalid(
+                "volume",
+                "another upload or series step",
+                format!(
+                    "the {} structure was built over other texels: build it again over the volume it renders (its ranges too)",
+                    self.accel
+                ),
+            ));
+        }
+        if key != tf.key() {
+            return Err(Error::invalid(
+                "transfer function",
+                "another one",
+                format!(
+                    "the {} structure was built for another transfer function: build it again for the one it renders with",
+                    self.accel
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// The ray direction octants it skips for ([`Built::octants`]); frames

@@ -38,6 +38,9 @@ impl Method for Naive {
     fn ranges(&self, _: &Params) -> Result<RangeKind> {
         Ok(RangeKind::None)
     }
+    fn skips(&self) -> bool {
+        false
+    }
     fn march(&self) -> March {
         March::plain(shaders::MARCH_NAIVE)
     }
@@ -66,6 +69,7 @@ impl Structure {
             params: Params::default(),
             mode: None,
             volume: None,
+            built_for: None,
             built: Box::new(NoData),
             _keep: None,
         }

@@ -286,7 +286,7 @@ impl Renderer {
             }
         };
         structure.check_mode(desc.mode())?;
-        structure.check_volume(volume)?;
+        structure.check_built_for(volume, tf)?;
         let kernel = self.kernels.get(
             structure.march(),
             variant,

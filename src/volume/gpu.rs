@@ -81,6 +81,8 @@ pub struct GpuVolume {
     /// A series step (`upload_step`): which, and what changed from the
     /// step before, for the builds that reuse that step's work.
     pub(super) step: Option<StepMark>,
+    /// Unique to this upload in this process (`content_id` before a step).
+    pub(super) uploaded: u64,
 }
 
 /// A dense series step's identity on the device, and where it was put in
@@ -96,12 +98,14 @@ pub struct StepMark {
 
 impl StepMark {
     pub(super) fn new(since: Option<(u64, std::sync::Arc<super::StepDelta>)>) -> StepMark {
-        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
-        StepMark {
-            id: NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-            since,
-        }
+        StepMark { id: next_id(), since }
     }
+}
+
+/// A number no upload or step of this process had before.
+fn next_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 fn sampler(ctx: &Context, filter: vk::Filter) -> Result<vk::Sampler> {
@@ -321,6 +325,7 @@ impl GpuVolume {
             image_mirror: None,
             upload_changed: !ctx.info().is_cpu(),
             step: None,
+            uploaded: next_id(),
             pool: pool.map(PoolLayout::stats),
         };
         // Bricked storage samples with the manual filter only: the

@@ -185,4 +185,11 @@ impl GpuVolume {
     pub fn step_mark(&self) -> Option<&StepMark> {
         self.step.as_ref()
     }
+
+    /// Which texels it holds: unique to this upload, and to each step
+    /// `replace` put in its memory since. A structure or ranges built from
+    /// it are for these texels only (`Structure::check_volume`).
+    pub fn content_id(&self) -> u64 {
+        self.step.as_ref().map_or(self.uploaded, |m| m.id)
+    }
 }

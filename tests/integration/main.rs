@@ -14,6 +14,7 @@ mod architecture;
 mod auto;
 mod bench;
 mod bricks;
+mod built_for;
 mod cells;
 mod channels;
 mod cli;

@@ -118,6 +118,7 @@ impl Builder {
                                     params: params.clone(),
                                     mode: Some(input.mode),
                                     volume: Some(input.built_over()),
+                                    built_for: input.built_for(accel),
                                     built: Box::new(chosen),
                                     _keep: None,
                                 },

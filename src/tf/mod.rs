@@ -11,6 +11,9 @@ use crate::error::{Error, Result};
 use crate::gpu::{vk, Buffer, Context, Staging};
 use std::path::Path;
 
+mod gpu;
+pub use gpu::GpuTransferFunction;
+
 /// Opacity of a sample of alpha `a` per voxel of path standing for `w`
 /// voxels: `1 - (1 - a)^w`, with 0 and 1 exact. As `glsl/common/opacity.glsl`
 /// (up to the rounding of the device's `pow`).
@@ -511,8 +514,22 @@ impl TransferFunction {
         (luts, tables)
     }
 
+    /// What its tables hold, as a number: equal for transfer functions
+    /// whose every channel's LUT is equal bit for bit (structures built
+    /// for one are for the other: `GpuTransferFunction::key`).
+    pub fn key(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        for t in self.channels() {
+            t.lut.len().hash(&mut h);
+            t.lut.iter().flatten().for_each(|v| v.to_bits().hash(&mut h));
+        }
+        h.finish()
+    }
+
     fn on_gpu(&self, lut: Buffer, max_table: Buffer) -> GpuTransferFunction {
         GpuTransferFunction {
+            key: self.key(),
             lut,
             max_table,
             visible: self.visible_entries(),
@@ -528,62 +545,6 @@ impl TransferFunction {
         let first = self.lut.iter().position(|c| c[3] > 0.0)?;
         let last = self.lut.iter().rposition(|c| c[3] > 0.0)?;
         Some([first as u32, last as u32])
-    }
-}
-
-/// A transfer function on the GPU: the LUT the marchers sample and the
-/// max-alpha table classification queries. Uploads wait, so both are visible
-/// to compute reads when `upload` returns. Read through its methods: the
-/// kernels index its buffers by what its fields say.
-pub struct GpuTransferFunction {
-    pub(crate) lut: Buffer,
-    pub(crate) max_table: Buffer,
-    /// `TransferFunction::visible_entries` of channel 1 (MIP and MinIP of
-    /// one channel skip by it).
-    pub(crate) visible: Option<[u32; 2]>,
-    /// Transfer functions held, channel after channel (1: one for every
-    /// channel of the volume).
-    pub(crate) channels: u32,
-    /// Entries of one channel's max table (`tf_range.glsl`).
-    pub(crate) max_stride: u32,
-}
-
-impl GpuTransferFunction {
-    /// The LUT the marchers sample (RGBA f32 entries, channel after channel).
-    pub fn lut(&self) -> &Buffer {
-        &self.lut
-    }
-
-    /// The max-alpha table classification queries.
-    pub fn max_table(&self) -> &Buffer {
-        &self.max_table
-    }
-
-    /// `TransferFunction::visible_entries` of channel 1.
-    pub fn visible(&self) -> Option<[u32; 2]> {
-        self.visible
-    }
-
-    /// Transfer functions held (1: one for every channel of the volume).
-    pub fn channels(&self) -> u32 {
-        self.channels
-    }
-
-    /// An error unless it suits `volume` (`TransferFunction::check_channels`).
-    pub fn check_channels(&self, volume_channels: u32) -> Result<()> {
-        if self.channels != 1 && self.channels != volume_channels {
-            return Err(Error::invalid(
-                "transfer function",
-                format!("{} channels", self.channels),
-                format!("the volume has {volume_channels}: {ONE_TF_EACH}"),
-            ));
-        }
-        Ok(())
-    }
-
-    /// How far apart channels' tables are, in tables (0: one for all).
-    pub fn channel_step(&self) -> u32 {
-        (self.channels > 1) as u32
     }
 }
 

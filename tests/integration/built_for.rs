@@ -1,0 +1,165 @@
+//! A structure skips for the texels and transfer function it was built
+//! for, and ranges are of the volume they were computed over: an embedding
+//! that hands the renderer or the builder others gets an error naming
+//! which, never a frame that differs from naive's.
+
+use crate::common::{accel, builder, frame, gpu};
+use lacuna::accel::{BuildInput, Structure};
+use lacuna::render::{FrameDesc, Iso, Mode, Octants, Renderer, Scene};
+use lacuna::volume::GpuVolume;
+use lacuna::{TransferFunction, Volume};
+
+fn input<'a>(
+    volume: &'a Volume,
+    gv: &'a GpuVolume,
+    tf: &'a TransferFunction,
+    lut: &'a lacuna::tf::GpuTransferFunction,
+    mode: Mode,
+) -> BuildInput<'a> {
+    BuildInput {
+        volume,
+        gpu_volume: gv,
+        tf,
+        gpu_tf: lut,
+        mode,
+        frames: &[],
+        octants: Octants::ALL,
+    }
+}
+
+fn error(r: lacuna::Result<impl Sized>) -> String {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn a_structure_refuses_another_transfer_function_or_other_texels() {
+    let ctx = gpu();
+    let volume = Volume::load("nbody:16", &Default::default()).unwrap();
+    let other = Volume::load("nbody:16:7", &Default::default()).unwrap();
+    let (tf, tf2) = (
+        TransferFunction::parse("ramp:0.35:1").unwrap(),
+        TransferFunction::parse("ramp:0.1:1").unwrap(),
+    );
+    let gv = GpuVolume::upload(&ctx, &volume).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let b = builder(&ctx);
+    let renderer = Renderer::new(&ctx).unwrap();
+    let desc = FrameDesc::builder(32, 32).build().unwrap();
+    for name in ["grid", "distance", "kd-cpu", "lbvh", "auto"] {
+        let a = accel(name);
+        let (ranges, _) = b.ranges_for(&[(a, &a.defaults())], &gv).unwrap();
+        let (s, _) = b
+            .build(
+                a,
+                &input(&volume, &gv, &tf, &lut, Mode::Composite),
+                &ranges,
+                &a.defaults(),
+            )
+            .unwrap();
+        let render = |s: &Structure, gv: &GpuVolume, lut| {
+            renderer.render(
+                Scene {
+                    structure: s,
+                    volume: gv,
+                    tf: lut,
+                },
+                &desc,
+            )
+        };
+        // The same transfer function uploaded again is the same one.
+        let again = tf.upload(&ctx).unwrap();
+        let naive = frame(&renderer, &Structure::naive(), &gv, &again, &desc);
+        assert_eq!(render(&s, &gv, &again).unwrap().0.pixels, naive.pixels, "{name}");
+        let lut2 = tf2.upload(&ctx).unwrap();
+        let e = error(render(&s, &gv, &lut2));
+        assert!(e.contains("built for another transfer function"), "{name}: {e}");
+        // Other texels on the same grid: another upload, or a series step
+        // put in this one's memory.
+        let gv2 = GpuVolume::upload(&ctx, &other).unwrap();
+        let e = error(render(&s, &gv2, &lut));
+        assert!(e.contains("built over other texels"), "{name}: {e}");
+        let mut stepped = GpuVolume::upload(&ctx, &volume).unwrap();
+        let (ranges, _) = b.ranges_for(&[(a, &a.defaults())], &stepped).unwrap();
+        let (s2, _) = b
+            .build(
+                a,
+                &input(&volume, &stepped, &tf, &lut, Mode::Composite),
+                &ranges,
+                &a.defaults(),
+            )
+            .unwrap();
+        assert!(render(&s2, &stepped, &lut).is_ok());
+        assert!(stepped.replace(&other, Some(&volume)).unwrap());
+        let e = error(render(&s2, &stepped, &lut));
+        assert!(e.contains("built over other texels"), "{name} after replace: {e}");
+        // The step's ranges are the ranges before: refused at the build.
+        let e = error(b.build(
+            a,
+            &input(&other, &stepped, &tf, &lut, Mode::Composite),
+            &ranges,
+            &a.defaults(),
+        ));
+        assert!(
+            e.contains("invalid ranges 'of another upload or series step'"),
+            "{name}: {e}"
+        );
+    }
+    // Naive skips nothing: any texels, any transfer function.
+    let gv2 = GpuVolume::upload(&ctx, &other).unwrap();
+    let lut2 = tf2.upload(&ctx).unwrap();
+    frame(&renderer, &Structure::naive(), &gv2, &lut2, &desc);
+}
+
+#[test]
+fn a_build_refuses_disagreeing_inputs_and_names_iso_values() {
+    let ctx = gpu();
+    let volume = Volume::load("nbody:16", &Default::default()).unwrap();
+    let small = Volume::load("nbody:8", &Default::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+    let gv = GpuVolume::upload(&ctx, &volume).unwrap();
+    let gv_small = GpuVolume::upload(&ctx, &small).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let b = builder(&ctx);
+    let a = accel("grid");
+    let (small_ranges, _) = b.ranges_for(&[(a, &a.defaults())], &gv_small).unwrap();
+    let e = error(b.build(
+        a,
+        &input(&volume, &gv, &tf, &lut, Mode::Composite),
+        &small_ranges,
+        &a.defaults(),
+    ));
+    assert!(e.contains("invalid ranges"), "{e}");
+    // The host transfer function classifies; the uploaded one must be it.
+    let (ranges, _) = b.ranges_for(&[(a, &a.defaults())], &gv).unwrap();
+    let other = TransferFunction::parse("band:0.2:0.4").unwrap();
+    let e = error(b.build(
+        a,
+        &input(&volume, &gv, &other, &lut, Mode::Composite),
+        &ranges,
+        &a.defaults(),
+    ));
+    assert!(
+        e.contains("is not the transfer function gpu_tf was uploaded from"),
+        "{e}"
+    );
+    // A structure for iso 0.3 at iso 0.5 names the values.
+    let iso = |v: f32| Mode::Iso(Iso::new(&[v]).unwrap());
+    let (s, _) = b
+        .build(a, &input(&volume, &gv, &tf, &lut, iso(0.3)), &ranges, &a.defaults())
+        .unwrap();
+    let mut gv = gv;
+    gv.prepare(&volume, true, None).unwrap();
+    let desc = FrameDesc::builder(16, 16).mode(iso(0.5)).build().unwrap();
+    let e = error(Renderer::new(&ctx).unwrap().render(
+        Scene {
+            structure: &s,
+            volume: &gv,
+            tf: &lut,
+        },
+        &desc,
+    ));
+    assert!(e.contains("built for iso values 0.3: build it for the frame's"), "{e}");
+}
