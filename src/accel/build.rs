@@ -24,7 +24,7 @@ impl Builder {
         params: &Params,
     ) -> Result<(Structure, Timings)> {
         accel.method().check(params)?;
-        input.check()?;
+        input.check(self.context())?;
         ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {
             return Ok((fallback(accel, params, input), Timings::default()));
@@ -56,6 +56,7 @@ impl Builder {
                 mode: Some(input.mode),
                 volume: Some(input.built_over()),
                 built_for: input.built_for(accel),
+                made_on: Some(self.context().clone()),
                 built,
                 _keep: None,
             },
@@ -76,7 +77,7 @@ impl Builder {
         params: &Params,
     ) -> Result<Structure> {
         accel.method().check(params)?;
-        input.check()?;
+        input.check(self.context())?;
         ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {
             return Ok(fallback(accel, params, input));
@@ -105,6 +106,7 @@ impl Builder {
             mode: Some(input.mode),
             volume: Some(input.built_over()),
             built_for: input.built_for(accel),
+            made_on: Some(self.context().clone()),
             built,
             _keep: keep,
         })
@@ -146,6 +148,7 @@ fn fallback(accel: Accel, params: &Params, input: &BuildInput) -> Structure {
         mode: Some(input.mode),
         volume: Some(input.built_over()),
         built_for: None,
+        made_on: None,
         built: Box::new(ModeFallback::new(accel, &input.mode)),
         _keep: None,
     }

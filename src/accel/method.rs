@@ -71,9 +71,22 @@ impl BuildInput<'_> {
             .then(|| (self.gpu_volume.content_id(), self.gpu_tf.key()))
     }
 
-    /// Its parts agree: the transfer function classified on the host is
-    /// the one uploaded, and holds the volume's channels.
-    pub(crate) fn check(&self) -> Result<()> {
+    /// Its parts agree: made on `ctx` (the builder's), the transfer
+    /// function classified on the host is the one uploaded, and holds the
+    /// volume's channels.
+    pub(crate) fn check(&self, ctx: &crate::gpu::Context) -> Result<()> {
+        for (what, made_on) in [
+            ("volume", self.gpu_volume.context()),
+            ("transfer function", self.gpu_tf.context()),
+        ] {
+            if !ctx.is(made_on) {
+                return Err(Error::invalid(
+                    what,
+                    "of another lacuna Context",
+                    "a builder builds over what was uploaded on its own context",
+                ));
+            }
+        }
         if self.tf.key() != self.gpu_tf.key() {
             return Err(Error::invalid(
                 "build input",
@@ -323,6 +336,8 @@ pub struct Structure {
     /// The volume's `content_id` and the transfer function's `key` it
     /// skips for (None: any, as naive and a mode's naive fallback).
     pub(crate) built_for: Option<(u64, u64)>,
+    /// The context its buffers were made on (None: it holds none).
+    pub(crate) made_on: Option<crate::gpu::Context>,
     pub(crate) built: Box<dyn Built>,
     /// What a recorded build's command buffer still reads (the activity
     /// LUT of a mode's build and its staging).
@@ -393,6 +408,12 @@ impl Structure {
             )),
             _ => Ok(()),
         }
+    }
+
+    /// Whether it can be drawn on `ctx`: it holds no buffers, or they are
+    /// `ctx`'s.
+    pub fn made_on(&self, ctx: &crate::gpu::Context) -> bool {
+        self.made_on.as_ref().is_none_or(|c| c.is(ctx))
     }
 
     /// A frame of `volume` through `tf` can use this structure: it skips

@@ -70,6 +70,7 @@ impl Structure {
             mode: None,
             volume: None,
             built_for: None,
+            made_on: None,
             built: Box::new(NoData),
             _keep: None,
         }

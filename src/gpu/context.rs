@@ -301,6 +301,12 @@ impl Context {
     /// How many handles to this context exist (this one included): every
     /// object made on it holds one.
     #[doc(hidden)]
+    /// Whether `other` is a handle of this same context: objects made on
+    /// one cannot be used on another (their handles are another device's).
+    pub fn is(&self, other: &Context) -> bool {
+        Arc::ptr_eq(&self.inner, &other.inner)
+    }
+
     pub fn handle_count(&self) -> usize {
         Arc::strong_count(&self.inner)
     }
@@ -435,6 +441,14 @@ impl Context {
         unlock: bool,
     ) -> Result<(T, std::thread::Result<Result<U>>)> {
         let device = self.device();
+        let me = Arc::as_ptr(&self.inner) as usize;
+        if RECORDING.with(|r| r.borrow().contains(&me)) {
+            return Err(Error::invalid(
+                "submission",
+                "inside another's recording closure",
+                "record into the command buffer the closure was given (the record_* forms): a submission from there waits for the one being recorded",
+            ));
+        }
         let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let pool = lock_pool();
         let alloc = vk::CommandBufferAllocateInfo::default()
@@ -446,7 +460,10 @@ impl Context {
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
-            let value = record(cmd);
+            let value = {
+                let _recording = Recording::on(me);
+                record(cmd)
+            };
             unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let value = value?;
             let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
@@ -477,6 +494,35 @@ impl Context {
         let pool = pool.unwrap_or_else(lock_pool);
         unsafe { device.free_command_buffers(*pool, &[cmd]) };
         result
+    }
+}
+
+thread_local! {
+    /// The contexts this thread is recording a submission's commands for
+    /// (`submit_inner`): a submission on one of them from its closure
+    /// would wait for the pool the recording holds.
+    static RECORDING: std::cell::RefCell<Vec<usize>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Marks a context as recording on this thread until dropped (also when
+/// the closure panics).
+struct Recording(usize);
+
+impl Recording {
+    fn on(context: usize) -> Recording {
+        RECORDING.with(|r| r.borrow_mut().push(context));
+        Recording(context)
+    }
+}
+
+impl Drop for Recording {
+    fn drop(&mut self) {
+        RECORDING.with(|r| {
+            let mut r = r.borrow_mut();
+            if let Some(i) = r.iter().rposition(|c| *c == self.0) {
+                r.remove(i);
+            }
+        });
     }
 }
 

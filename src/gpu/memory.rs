@@ -169,6 +169,11 @@ impl Buffer {
         self.raw
     }
 
+    /// The context it was made on.
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
     pub fn size(&self) -> u64 {
         self.size
     }

@@ -253,6 +253,17 @@ impl Renderer {
             rows,
         } = to;
         let Scene { structure, volume, tf } = scene;
+        let others = [
+            ("volume", volume.context()),
+            ("transfer function", tf.context()),
+            ("render target", target.params.context()),
+        ];
+        if let Some((what, _)) = others.iter().find(|(_, c)| !self.ctx.is(c)) {
+            return Err(other_context(what));
+        }
+        if !structure.made_on(&self.ctx) {
+            return Err(other_context("structure"));
+        }
         tf.check_channels(volume.channels)?;
         if desc.lighting().is_some() {
             volume.check_one_channel("shaded and iso frames")?;
@@ -487,4 +498,13 @@ impl Drop for Renderer {
     fn drop(&mut self) {
         unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
     }
+}
+
+/// The error for an object made on another context than the renderer's.
+fn other_context(what: &'static str) -> Error {
+    Error::invalid(
+        what,
+        "of another lacuna Context",
+        "a renderer draws what was uploaded and built on its own context",
+    )
 }

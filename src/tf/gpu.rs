@@ -34,6 +34,11 @@ impl GpuTransferFunction {
         &self.max_table
     }
 
+    /// The context it was uploaded with.
+    pub fn context(&self) -> &crate::gpu::Context {
+        self.lut.context()
+    }
+
     /// `TransferFunction::key` of the transfer function uploaded.
     pub fn key(&self) -> u64 {
         self.key

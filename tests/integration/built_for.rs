@@ -163,3 +163,67 @@ fn a_build_refuses_disagreeing_inputs_and_names_iso_values() {
     ));
     assert!(e.contains("built for iso values 0.3: build it for the frame's"), "{e}");
 }
+
+#[test]
+fn objects_of_another_context_are_refused_before_anything_is_recorded() {
+    let (ctx, other) = (gpu(), crate::common::fresh_gpu());
+    let volume = Volume::load("nbody:8", &Default::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+    let (gv, lut) = (GpuVolume::upload(&ctx, &volume).unwrap(), tf.upload(&ctx).unwrap());
+    let (gv_other, lut_other) = (GpuVolume::upload(&other, &volume).unwrap(), tf.upload(&other).unwrap());
+    let renderer = Renderer::new(&ctx).unwrap();
+    let desc = FrameDesc::builder(16, 16).build().unwrap();
+    let naive = Structure::naive();
+    let render = |gv, lut, s| {
+        error(renderer.render(
+            Scene {
+                structure: s,
+                volume: gv,
+                tf: lut,
+            },
+            &desc,
+        ))
+    };
+    assert!(render(&gv_other, &lut, &naive).contains("invalid volume 'of another lacuna Context'"));
+    assert!(render(&gv, &lut_other, &naive).contains("invalid transfer function 'of another lacuna Context'"));
+    let b_other = builder(&other);
+    let a = accel("grid");
+    let (ranges, _) = b_other.ranges_for(&[(a, &a.defaults())], &gv_other).unwrap();
+    let (s_other, _) = b_other
+        .build(
+            a,
+            &input(&volume, &gv_other, &tf, &lut_other, Mode::Composite),
+            &ranges,
+            &a.defaults(),
+        )
+        .unwrap();
+    assert!(render(&gv, &lut, &s_other).contains("invalid structure 'of another lacuna Context'"));
+    let e = error(b_other.build(
+        a,
+        &input(&volume, &gv, &tf, &lut, Mode::Composite),
+        &ranges,
+        &a.defaults(),
+    ));
+    assert!(e.contains("invalid volume 'of another lacuna Context'"), "{e}");
+    crate::common::assert_clean(&other);
+}
+
+#[test]
+fn a_submission_inside_a_recording_closure_is_an_error_not_a_hang() {
+    // On a context of its own, in a thread: were it to hang again, the
+    // test fails after a minute and leaves the shared contexts alone.
+    let (sent, got) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let ctx = crate::common::fresh_gpu();
+        let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+        let inside = ctx.submit_and_wait(|_| tf.upload(&ctx).map(|_| ()));
+        let after = tf.upload(&ctx).map(|_| ());
+        sent.send((inside.map_err(|e| e.to_string()), after.is_ok())).unwrap();
+    });
+    let (inside, after) = got
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("a submission from a recording closure hung");
+    let e = inside.expect_err("a submission inside a recording closure");
+    assert!(e.contains("inside another's recording closure"), "{e}");
+    assert!(after, "submissions work again after it");
+}

@@ -119,6 +119,7 @@ impl Builder {
                                     mode: Some(input.mode),
                                     volume: Some(input.built_over()),
                                     built_for: input.built_for(accel),
+                                    made_on: Some(self.context().clone()),
                                     built: Box::new(chosen),
                                     _keep: None,
                                 },
