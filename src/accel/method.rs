@@ -94,6 +94,15 @@ impl BuildInput<'_> {
                 "is not the transfer function gpu_tf was uploaded from: give both the same one",
             ));
         }
+        // Host-side builds read the volume's voxels at the device's dims.
+        self.volume.check()?;
+        if self.volume.dims != self.gpu_volume.dims || self.volume.channel_count() as u32 != self.gpu_volume.channels {
+            return Err(Error::invalid(
+                "build input",
+                self.volume.name.clone(),
+                "is not the volume gpu_volume was uploaded from: give both the same one",
+            ));
+        }
         self.tf.check_channels(self.gpu_volume.channels as usize)
     }
 }

@@ -46,6 +46,40 @@ impl Rays {
         if !finite {
             return Err(Error::invalid("rays", format!("{self:?}"), "must be finite"));
         }
-        Ok(())
+        // Every ray needs a direction: an orthographic one along a nonzero
+        // vector, a perspective one from an eye off the pixels' plane (in
+        // f64: the plane's normal underflows f32 at small steps).
+        let v = |a: [f32; 3]| a.map(f64::from);
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let normal = cross(v(self.du), v(self.dv));
+        let why = if dot(normal, normal) == 0.0 {
+            Some("du and dv must span the pixels' plane")
+        } else if !self.perspective && dot(v(self.eye_or_dir), v(self.eye_or_dir)) == 0.0 {
+            Some("an orthographic direction must not be zero")
+        } else if self.perspective
+            && dot(normal, std::array::from_fn(|a| v(self.eye_or_dir)[a] - v(self.base)[a])) == 0.0
+        {
+            Some("a perspective eye must not lie in the pixels' plane")
+        } else {
+            None
+        };
+        match why {
+            Some(why) => Err(Error::invalid(
+                "rays",
+                format!(
+                    "du {:?} dv {:?} eye or direction {:?}",
+                    self.du, self.dv, self.eye_or_dir
+                ),
+                why,
+            )),
+            None => Ok(()),
+        }
     }
 }

@@ -55,6 +55,8 @@ pub fn pixel_diff(a: [f32; 4], b: [f32; 4]) -> f64 {
 
 /// Compares two frames of the same size (an error otherwise).
 pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
+    a.check()?;
+    b.check()?;
     if (a.width, a.height) != (b.width, b.height) {
         return Err(Error::invalid(
             "frames",

@@ -38,6 +38,7 @@ impl Frame {
     /// metadata, atomically.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         use exr::prelude::*;
+        self.check()?;
         let (w, h) = (self.width as usize, self.height as usize);
         let pixels = &self.pixels;
         match &self.depth {

@@ -58,6 +58,24 @@ impl Frame {
         }
     }
 
+    /// Its fields agree (they are public): `width x height` pixels, and
+    /// as many depths where it has them. Writing a frame checks it first.
+    pub fn check(&self) -> crate::error::Result<()> {
+        let n = self.width as usize * self.height as usize;
+        let depths = self.depth.as_ref().map_or(n, Vec::len);
+        if self.pixels.len() != n || depths != n {
+            return Err(crate::error::Error::invalid(
+                "frame",
+                format!("{}x{}", self.width, self.height),
+                format!(
+                    "holds {} pixels and {depths} depths where its size needs {n}",
+                    self.pixels.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
         self.pixels[(y * self.width + x) as usize]
     }

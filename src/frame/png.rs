@@ -91,6 +91,7 @@ impl Frame {
     /// Writes the frame composited over `background` as an opaque 8-bit
     /// sRGB RGB PNG, atomically.
     pub fn write_png_over(&self, path: &Path, background: &Background) -> Result<()> {
+        self.check()?;
         let data: Vec<u8> = self
             .pixels
             .iter()
@@ -117,6 +118,7 @@ impl Frame {
     /// Writes the frame as an 8-bit sRGB RGBA PNG with straight alpha (see
     /// the module documentation), atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
+        self.check()?;
         let data: Vec<u8> = self.pixels.iter().flat_map(|&p| srgba8(p)).collect();
         write_png8(
             path,

@@ -162,7 +162,10 @@ pub fn resolve_storage(ctx: &Context, volume: &Volume, storage: Storage) -> Stor
 }
 
 impl GpuVolume {
-    /// Uploads `volume` (auto storage: `upload_as`) and waits.
+    /// Uploads `volume` (auto storage: `upload_as`) and waits. Frames then
+    /// sample with `Filter::device_default`; `prepare` adds what a CPU
+    /// device's faster filter reads (`lacuna render` calls it, so its
+    /// frames are those of an upload then prepared).
     pub fn upload(ctx: &Context, volume: &Volume) -> Result<Self> {
         Self::upload_as(ctx, volume, Storage::Auto)
     }
@@ -171,6 +174,7 @@ impl GpuVolume {
     /// allocation and heap limits first (bricks: the pool's, after the
     /// bricks are sorted).
     pub fn upload_as(ctx: &Context, volume: &Volume, storage: Storage) -> Result<Self> {
+        volume.check()?;
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
             return Self::upload_bricks(ctx, volume, edge);
         }
@@ -187,6 +191,7 @@ impl GpuVolume {
     /// As `upload_bricks`, each pool image also within `limits` (to leave
     /// a device room, or to split a pool on purpose).
     pub fn upload_bricks_within(ctx: &Context, volume: &Volume, edge: u32, limits: PoolLimits) -> Result<Self> {
+        volume.check()?;
         Self::upload_pool(ctx, volume, edge, limits, None)
     }
 
@@ -195,6 +200,7 @@ impl GpuVolume {
     /// `keep` less one brick equal the whole volume's; outside, the pool
     /// holds stand-in values no frame cropped to the block reads.
     pub fn upload_bricks_kept(ctx: &Context, volume: &Volume, edge: u32, keep: BrickBox) -> Result<Self> {
+        volume.check()?;
         Self::upload_pool(ctx, volume, edge, PoolLimits::of(ctx.info()), Some(keep))
     }
 
@@ -268,6 +274,7 @@ impl GpuVolume {
         volume: &Volume,
         storage: Storage,
     ) -> Result<(Self, Staging)> {
+        volume.check()?;
         let (format, texel, bytes) = texels(volume)?;
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
             let layout = plan_pool(ctx, volume, (texel, &bytes), edge, PoolLimits::of(ctx.info()), None)?;

@@ -45,6 +45,10 @@ impl GpuVolume {
     /// writes memory the device reads). After an error its contents are
     /// unspecified: drop it.
     pub fn replace(&mut self, volume: &Volume, previous: Option<&Volume>) -> Result<bool> {
+        volume.check()?;
+        if let Some(p) = previous {
+            p.check()?;
+        }
         let fits = self.pool.is_none()
             && volume.dims == self.dims
             && volume.channel_count() as u32 == self.channels

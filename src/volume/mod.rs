@@ -441,6 +441,43 @@ impl Volume {
         crate::tf::TransferFunction::per_channel(tfs)
     }
 
+    /// Its fields agree, as every loader and generator makes them (they
+    /// are public, so a caller can build one that does not): each
+    /// channel's voxels fill the grid, the spacing makes a finite box, and
+    /// the channels are at most `MAX_CHANNELS`. Uploads check it first.
+    pub fn check(&self) -> Result<()> {
+        check_dims(self.dims, &self.name)?;
+        check_spacing(self.dims, self.spacing, &self.name)?;
+        let n = self.voxel_count();
+        if self.channel_count() > MAX_CHANNELS {
+            return Err(Error::invalid(
+                "volume",
+                self.name.clone(),
+                format!("has {} channels, at most {MAX_CHANNELS}", self.channel_count()),
+            ));
+        }
+        for (k, c) in self.channels().enumerate() {
+            if c.dims != self.dims || c.data.len() as u64 != n {
+                return Err(Error::invalid(
+                    "volume",
+                    self.name.clone(),
+                    format!(
+                        "channel {} holds {} voxels on a {}x{}x{} grid, where the volume's {}x{}x{} needs {n}",
+                        k + 1,
+                        c.data.len(),
+                        c.dims[0],
+                        c.dims[1],
+                        c.dims[2],
+                        self.dims[0],
+                        self.dims[1],
+                        self.dims[2]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Voxels without data, over every channel.
     pub fn no_data_total(&self) -> u64 {
         self.channels().map(|c| c.no_data.total()).sum()

@@ -227,3 +227,33 @@ fn a_submission_inside_a_recording_closure_is_an_error_not_a_hang() {
     assert!(e.contains("inside another's recording closure"), "{e}");
     assert!(after, "submissions work again after it");
 }
+
+/// `Volume`, `Frame` and `Rays` have public fields: values that disagree
+/// are errors where they are used, not panics or frames from nowhere.
+#[test]
+fn public_fields_that_disagree_are_errors() {
+    let ctx = gpu();
+    let volume = Volume::load("nbody:8", &Default::default()).unwrap();
+    let mut short = volume.clone();
+    short.data = lacuna::volume::VoxelData::U8(vec![0; 100]);
+    let e = error(GpuVolume::upload(&ctx, &short));
+    assert!(e.contains("channel 1 holds 100 voxels on a 8x8x8 grid"), "{e}");
+    let mut nan = volume.clone();
+    nan.spacing[1] = f32::NAN;
+    let e = error(GpuVolume::upload(&ctx, &nan));
+    assert!(e.starts_with("invalid spacing") && e.contains("finite and > 0"), "{e}");
+    let mut frame = lacuna::frame::Frame::new(2, 2, vec![[0.0; 4]; 4]);
+    frame.pixels.pop();
+    let dir = tempfile::tempdir().unwrap();
+    let e = error(frame.write_exr(&dir.path().join("f.exr")));
+    assert!(e.contains("holds 3 pixels and 4 depths where its size needs 4"), "{e}");
+    assert!(error(lacuna::frame::diff(&frame, &frame)).contains("holds 3 pixels"));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    let still = lacuna::render::Rays::orthographic([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]);
+    let e = error(
+        FrameDesc::builder(4, 4)
+            .camera(lacuna::render::Camera::Rays(still))
+            .build(),
+    );
+    assert!(e.contains("an orthographic direction must not be zero"), "{e}");
+}
