@@ -62,13 +62,12 @@ impl BuildInput<'_> {
         (self.gpu_volume.dims, self.gpu_volume.channels)
     }
 
-    /// The texels and transfer function a structure built from this skips
-    /// for (None: naive, which skips nothing).
-    pub(crate) fn built_for(&self, accel: Accel) -> Option<(u64, u64)> {
-        accel
-            .method()
-            .skips()
-            .then(|| (self.gpu_volume.content_id(), self.gpu_tf.key()))
+    /// The texels and the opacities a structure built from this skips for
+    /// (None: naive, which skips nothing; no opacities: iso, whose values
+    /// classify, not the TF).
+    pub(crate) fn built_for(&self, accel: Accel) -> Option<(u64, Option<u64>)> {
+        let alpha = (!matches!(self.mode, Mode::Iso(_))).then(|| self.gpu_tf.alpha_key());
+        accel.method().skips().then(|| (self.gpu_volume.content_id(), alpha))
     }
 
     /// Its parts agree: made on `ctx` (the builder's), the transfer
@@ -342,9 +341,10 @@ pub struct Structure {
     /// The grid and channel count of the volume it was built over (None:
     /// any, as naive).
     pub(crate) volume: Option<([u32; 3], u32)>,
-    /// The volume's `content_id` and the transfer function's `key` it
-    /// skips for (None: any, as naive and a mode's naive fallback).
-    pub(crate) built_for: Option<(u64, u64)>,
+    /// The volume's `content_id` and the transfer function's `alpha_key`
+    /// it skips for (None: any, as naive and a mode's naive fallback; no
+    /// key: any TF, as iso).
+    pub(crate) built_for: Option<(u64, Option<u64>)>,
     /// The context its buffers were made on (None: it holds none).
     pub(crate) made_on: Option<crate::gpu::Context>,
     pub(crate) built: Box<dyn Built>,
@@ -448,12 +448,12 @@ impl Structure {
                 ),
             ));
         }
-        if key != tf.key() {
+        if key.is_some_and(|k| k != tf.alpha_key()) {
             return Err(Error::invalid(
                 "transfer function",
                 "another one",
                 format!(
-                    "the {} structure was built for another transfer function: build it again for the one it renders with",
+                    "the {} structure was built for other opacities: build it again for the transfer function it renders with",
                     self.accel
                 ),
             ));

@@ -298,15 +298,15 @@ impl Context {
         self.inner.kernels.len()
     }
 
-    /// How many handles to this context exist (this one included): every
-    /// object made on it holds one.
-    #[doc(hidden)]
     /// Whether `other` is a handle of this same context: objects made on
     /// one cannot be used on another (their handles are another device's).
     pub fn is(&self, other: &Context) -> bool {
         Arc::ptr_eq(&self.inner, &other.inner)
     }
 
+    /// How many handles to this context exist (this one included): every
+    /// object made on it holds one.
+    #[doc(hidden)]
     pub fn handle_count(&self) -> usize {
         Arc::strong_count(&self.inner)
     }

@@ -19,8 +19,9 @@ pub struct GpuTransferFunction {
     pub(crate) channels: u32,
     /// Entries of one channel's max table (`tf_range.glsl`).
     pub(crate) max_stride: u32,
-    /// `TransferFunction::key` of what was uploaded.
+    /// `TransferFunction::key` and `alpha_key` of what was uploaded.
     pub(crate) key: u64,
+    pub(crate) alpha_key: u64,
 }
 
 impl GpuTransferFunction {
@@ -42,6 +43,11 @@ impl GpuTransferFunction {
     /// `TransferFunction::key` of the transfer function uploaded.
     pub fn key(&self) -> u64 {
         self.key
+    }
+
+    /// `TransferFunction::alpha_key` of the transfer function uploaded.
+    pub fn alpha_key(&self) -> u64 {
+        self.alpha_key
     }
 
     /// `TransferFunction::visible_entries` of channel 1.

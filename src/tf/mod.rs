@@ -518,11 +518,27 @@ impl TransferFunction {
     /// whose every channel's LUT is equal bit for bit (structures built
     /// for one are for the other: `GpuTransferFunction::key`).
     pub fn key(&self) -> u64 {
+        self.hash_entries(4)
+    }
+
+    /// As `key`, of the opacities alone: what classification reads, so a
+    /// structure built for one TF skips exactly for another with this key
+    /// (a recoloured one).
+    pub fn alpha_key(&self) -> u64 {
+        self.hash_entries(1)
+    }
+
+    /// A hash of every channel's LUT entries' last `components` (4: RGBA;
+    /// 1: alpha).
+    fn hash_entries(&self, components: usize) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
         for t in self.channels() {
             t.lut.len().hash(&mut h);
-            t.lut.iter().flatten().for_each(|v| v.to_bits().hash(&mut h));
+            t.lut
+                .iter()
+                .flat_map(|e| &e[4 - components..])
+                .for_each(|v| v.to_bits().hash(&mut h));
         }
         h.finish()
     }
@@ -530,6 +546,7 @@ impl TransferFunction {
     fn on_gpu(&self, lut: Buffer, max_table: Buffer) -> GpuTransferFunction {
         GpuTransferFunction {
             key: self.key(),
+            alpha_key: self.alpha_key(),
             lut,
             max_table,
             visible: self.visible_entries(),

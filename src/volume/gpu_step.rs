@@ -192,7 +192,7 @@ impl GpuVolume {
 
     /// Which texels it holds: unique to this upload, and to each step
     /// `replace` put in its memory since. A structure or ranges built from
-    /// it are for these texels only (`Structure::check_volume`).
+    /// it are for these texels only (`Structure::check_built_for`).
     pub fn content_id(&self) -> u64 {
         self.step.as_ref().map_or(self.uploaded, |m| m.id)
     }

@@ -334,7 +334,7 @@ fn bad_view_input_is_one_line_before_any_window() {
     let shot = dir.path().join("shot.tiff");
     let missing = dir.path().join("no/such/dir/shot.exr");
     let json = dir.path().join("missing.json");
-    let cases: [(Vec<&str>, &str); 9] = [
+    let cases: [(Vec<&str>, &str); 11] = [
         (
             vec!["view", "nbody:16", "--keys", "t,Teleport"],
             "invalid key 'Teleport': expected one of:",
@@ -355,6 +355,14 @@ fn bad_view_input_is_one_line_before_any_window() {
             "no/such/dir",
         ),
         (vec!["view", "nbody:16", "--frames", "0"], "invalid frames '0'"),
+        (
+            vec!["view", "nbody:16", "--keys", "q,m"],
+            "invalid keys 'q,m': the keys after q are never pressed",
+        ),
+        (
+            vec!["view", "nbody:16", "--keys", "s,q"],
+            "invalid keys 's,q': S asks for the next frame, which q ends the session before",
+        ),
         // Keys that would never show.
         (
             vec!["view", "nbody:16", "--keys", "frame,m", "--frames", "1"],
@@ -371,7 +379,7 @@ fn bad_view_input_is_one_line_before_any_window() {
                 "--screenshot",
                 "x.exr",
             ],
-            "invalid keys 'q': ends the session before --frames' last frame",
+            "invalid keys 'q': q and Escape end the session before --frames' last frame",
         ),
         (
             vec!["view", "nbody:16", "--json", json.to_str().unwrap()],
@@ -585,4 +593,46 @@ fn an_octant_map_grows_with_the_frames_directions() {
         diff.stdout,
         diff.stderr
     );
+}
+
+/// On two channels with a TF each, the arrows move both windows, and the
+/// frame is render's with the moved TFs.
+#[test]
+fn arrows_move_every_channels_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("view.exr"), dir.path().join("render.exr"));
+    let common = ["vessels:16+nbody:16", "--size", "32x32", "--validate"];
+    let view = [
+        &["view"],
+        &common[..],
+        &[
+            "--keys",
+            "ArrowRight",
+            "--frames",
+            "1",
+            "--screenshot",
+            a.to_str().unwrap(),
+        ],
+    ]
+    .concat();
+    ok(&lacuna_windowed(&view), "view with ArrowRight on two channels");
+    let render = [
+        &["render"],
+        &common[..],
+        &[
+            "--tf",
+            "ramp:0.32:1.02",
+            "--tf",
+            "ramp:0.37:1.02",
+            "--out",
+            b.to_str().unwrap(),
+        ],
+    ]
+    .concat();
+    ok(&crate::common::lacuna(&render, &[]), "render");
+    let diff = crate::common::lacuna(
+        &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--max-abs", "0"],
+        &[],
+    );
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
 }

@@ -93,6 +93,7 @@ impl Builder {
         last: Option<&Choice>,
         input: &BuildInput,
     ) -> Result<StepBuild> {
+        input.check(self.context())?;
         let kept = last.filter(|c| accel == AUTO && c.share.is_some() && c.mode == input.mode && c.tf == input.tf.spec);
         let mut spent = (Timings::default(), Timings::default());
         if let Some(choice) = kept {

@@ -87,7 +87,7 @@ impl Viewer {
         if change.tf {
             // A TF the keys made invalid, or a JSON file that no longer
             // reads, is reported and the current one kept.
-            match TransferFunction::parse(&self.controls.tf_spec()) {
+            match TransferFunction::parse_channels(&self.controls.tf_spec()) {
                 Ok(tf) => self.scene.set_tf(tf)?,
                 Err(e) => {
                     eprintln!("note: transfer function not changed: {e}");
@@ -109,29 +109,38 @@ impl Viewer {
 
 impl ViewArgs {
     /// Keys that would never show are refused: those after the last frame
-    /// `--frames` draws, and a quitting key where the last frame is to be
-    /// written (`--screenshot`).
+    /// `--frames` draws; with `--frames`, a quitting key where the last
+    /// frame is to be written (`--screenshot`); keys after a quitting key;
+    /// and an S with no frame drawn between it and a quitting key.
     pub(super) fn check_key_script(&self) -> Result<()> {
         let quits = |k: &String| QUIT_KEYS.iter().any(|q| k.eq_ignore_ascii_case(q));
-        if let (Some(key), Some(_)) = (self.keys.iter().find(|k| quits(k)), &self.screenshot) {
-            return Err(Error::invalid(
-                "keys",
-                key.clone(),
-                "ends the session before --frames' last frame, so --screenshot would never be written: leave it out and let --frames end the session",
-            ));
+        let refuse = |message: String| Err(Error::invalid("keys", self.keys.join(","), message));
+        if let (Some(_), Some(_), Some(_)) = (self.keys.iter().find(|k| quits(k)), &self.screenshot, self.frames) {
+            return refuse(
+                "q and Escape end the session before --frames' last frame, so --screenshot would never be written: leave them out and let --frames end the session".into(),
+            );
         }
-        // Keys after the j-th `frame` are pressed once frame j is drawn.
-        let last_key = self.keys.iter().rposition(|k| k != FRAME_KEY);
+        if let Some(q) = self.keys.iter().position(quits) {
+            if q + 1 < self.keys.len() {
+                return refuse(format!("the keys after {} are never pressed", self.keys[q]));
+            }
+            let shot = self.keys[..q].iter().rposition(|k| k.eq_ignore_ascii_case("s"));
+            if shot.is_some_and(|s| !self.keys[s..q].iter().any(|k| k == FRAME_KEY)) {
+                return refuse(format!(
+                    "S asks for the next frame, which {} ends the session before: put `frame` between them",
+                    self.keys[q]
+                ));
+            }
+        }
+        // Keys after the j-th `frame` are pressed once frame j is drawn; a
+        // quitting key shows nothing.
+        let last_key = self.keys.iter().rposition(|k| k != FRAME_KEY && !quits(k));
         let frames_before = |i: usize| self.keys[..i].iter().filter(|k| *k == FRAME_KEY).count() as u64;
         if let (Some(i), Some(n)) = (last_key, self.frames) {
             let needed = frames_before(i) + 1;
             if u64::from(n) < needed {
-                return Err(Error::invalid(
-                    "keys",
-                    self.keys.join(","),
-                    format!(
-                        "its last keys show from frame {needed}, but --frames {n} ends the session first: give --frames {needed} or more"
-                    ),
+                return refuse(format!(
+                    "its last keys show from frame {needed}, but --frames {n} ends the session first: give --frames {needed} or more"
                 ));
             }
         }

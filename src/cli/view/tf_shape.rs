@@ -24,7 +24,7 @@ pub enum Shape {
 impl Shape {
     pub fn parse(spec: &str) -> Shape {
         if spec.contains('|') {
-            return Shape::Channels(spec.split('|').map(Shape::parse).collect());
+            return Shape::Channels(spec.split('|').map(|s| Shape::parse(s.trim())).collect());
         }
         let parts: Vec<&str> = spec.split(':').collect();
         let num = |i: usize| parts.get(i).and_then(|s| s.parse::<f32>().ok());
