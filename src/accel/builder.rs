@@ -274,13 +274,7 @@ impl Builder {
         volume: &GpuVolume,
         mut kept: Option<StepKeep>,
     ) -> Result<Ranges> {
-        if !self.ctx.is(volume.context()) {
-            return Err(crate::error::Error::invalid(
-                "volume",
-                "of another lacuna Context",
-                "a builder computes the ranges of what was uploaded on its own context",
-            ));
-        }
+        self.ctx.check_is(volume.context(), "volume")?;
         let mut ranges = Ranges {
             volume: Some(volume.content_id()),
             ..Ranges::default()

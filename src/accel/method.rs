@@ -74,19 +74,10 @@ impl BuildInput<'_> {
     /// function classified on the host is the one uploaded, and holds the
     /// volume's channels.
     pub(crate) fn check(&self, ctx: &crate::gpu::Context) -> Result<()> {
-        for (what, made_on) in [
-            ("volume", self.gpu_volume.context()),
-            ("transfer function", self.gpu_tf.context()),
-        ] {
-            if !ctx.is(made_on) {
-                return Err(Error::invalid(
-                    what,
-                    "of another lacuna Context",
-                    "a builder builds over what was uploaded on its own context",
-                ));
-            }
-        }
-        if self.tf.key() != self.gpu_tf.key() {
+        ctx.check_is(self.gpu_volume.context(), "volume")?;
+        ctx.check_is(self.gpu_tf.context(), "transfer function")?;
+        // Classification reads the opacities of the host's TF.
+        if self.tf.alpha_key() != self.gpu_tf.alpha_key() {
             return Err(Error::invalid(
                 "build input",
                 self.tf.spec.clone(),
@@ -419,10 +410,13 @@ impl Structure {
         }
     }
 
-    /// Whether it can be drawn on `ctx`: it holds no buffers, or they are
-    /// `ctx`'s.
-    pub fn made_on(&self, ctx: &crate::gpu::Context) -> bool {
-        self.made_on.as_ref().is_none_or(|c| c.is(ctx))
+    /// An error unless it can be drawn on `ctx`: it holds no buffers, or
+    /// they are `ctx`'s.
+    pub fn check_made_on(&self, ctx: &crate::gpu::Context) -> Result<()> {
+        match &self.made_on {
+            Some(made_on) => ctx.check_is(made_on, "structure"),
+            None => Ok(()),
+        }
     }
 
     /// A frame of `volume` through `tf` can use this structure: it skips

@@ -47,10 +47,8 @@ impl Rays {
             return Err(Error::invalid("rays", format!("{self:?}"), "must be finite"));
         }
         // Every ray needs a direction: an orthographic one along a nonzero
-        // vector; a perspective one from an eye that is not a pixel's
-        // point, which it can be only where the eye lies in the pixels'
-        // plane (or line): that is refused (in f64: the plane's normal
-        // underflows f32 at small steps).
+        // vector; a perspective one from an eye off the pixels' plane (in
+        // f64: the plane's normal underflows f32 at small steps).
         let v = |a: [f32; 3]| a.map(f64::from);
         let cross = |a: [f64; 3], b: [f64; 3]| {
             [
@@ -66,12 +64,6 @@ impl Rays {
             Some("an orthographic direction must not be zero")
         } else if self.perspective && dot(normal, normal) > 0.0 && dot(normal, to_eye) == 0.0 {
             Some("a perspective eye must not lie in the pixels' plane")
-        } else if self.perspective
-            && dot(normal, normal) == 0.0
-            && dot(v(self.du), v(self.du)) + dot(v(self.dv), v(self.dv)) == 0.0
-            && dot(to_eye, to_eye) == 0.0
-        {
-            Some("a perspective eye must not be the pixels' point")
         } else {
             None
         };

@@ -304,6 +304,18 @@ impl Context {
         Arc::ptr_eq(&self.inner, &other.inner)
     }
 
+    /// An error naming `what` unless `made_on` is this context (`is`).
+    pub fn check_is(&self, made_on: &Context, what: &'static str) -> Result<()> {
+        match self.is(made_on) {
+            true => Ok(()),
+            false => Err(Error::invalid(
+                what,
+                "of another lacuna Context",
+                "lacuna uses what was uploaded and built on the context it works on",
+            )),
+        }
+    }
+
     /// How many handles to this context exist (this one included): every
     /// object made on it holds one.
     #[doc(hidden)]

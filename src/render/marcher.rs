@@ -253,17 +253,10 @@ impl Renderer {
             rows,
         } = to;
         let Scene { structure, volume, tf } = scene;
-        let others = [
-            ("volume", volume.context()),
-            ("transfer function", tf.context()),
-            ("render target", target.params.context()),
-        ];
-        if let Some((what, _)) = others.iter().find(|(_, c)| !self.ctx.is(c)) {
-            return Err(other_context(what));
-        }
-        if !structure.made_on(&self.ctx) {
-            return Err(other_context("structure"));
-        }
+        self.ctx.check_is(volume.context(), "volume")?;
+        self.ctx.check_is(tf.context(), "transfer function")?;
+        self.ctx.check_is(target.params.context(), "render target")?;
+        structure.check_made_on(&self.ctx)?;
         tf.check_channels(volume.channels)?;
         if desc.lighting().is_some() {
             volume.check_one_channel("shaded and iso frames")?;
@@ -498,13 +491,4 @@ impl Drop for Renderer {
     fn drop(&mut self) {
         unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
     }
-}
-
-/// The error for an object made on another context than the renderer's.
-fn other_context(what: &'static str) -> Error {
-    Error::invalid(
-        what,
-        "of another lacuna Context",
-        "a renderer draws what was uploaded and built on its own context",
-    )
 }

@@ -19,8 +19,7 @@ pub struct GpuTransferFunction {
     pub(crate) channels: u32,
     /// Entries of one channel's max table (`tf_range.glsl`).
     pub(crate) max_stride: u32,
-    /// `TransferFunction::key` and `alpha_key` of what was uploaded.
-    pub(crate) key: u64,
+    /// `TransferFunction::alpha_key` of what was uploaded.
     pub(crate) alpha_key: u64,
 }
 
@@ -38,11 +37,6 @@ impl GpuTransferFunction {
     /// The context it was uploaded with.
     pub fn context(&self) -> &crate::gpu::Context {
         self.lut.context()
-    }
-
-    /// `TransferFunction::key` of the transfer function uploaded.
-    pub fn key(&self) -> u64 {
-        self.key
     }
 
     /// `TransferFunction::alpha_key` of the transfer function uploaded.

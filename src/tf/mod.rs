@@ -514,38 +514,22 @@ impl TransferFunction {
         (luts, tables)
     }
 
-    /// What its tables hold, as a number: equal for transfer functions
-    /// whose every channel's LUT is equal bit for bit (structures built
-    /// for one are for the other: `GpuTransferFunction::key`).
-    pub fn key(&self) -> u64 {
-        self.hash_entries(4)
-    }
-
-    /// As `key`, of the opacities alone: what classification reads, so a
-    /// structure built for one TF skips exactly for another with this key
-    /// (a recoloured one).
+    /// Its opacities, as a number: equal for transfer functions whose
+    /// every channel's alpha entries are equal bit for bit. Classification
+    /// reads only those, so a structure built for one skips exactly for
+    /// the other (a recoloured one; `GpuTransferFunction::alpha_key`).
     pub fn alpha_key(&self) -> u64 {
-        self.hash_entries(1)
-    }
-
-    /// A hash of every channel's LUT entries' last `components` (4: RGBA;
-    /// 1: alpha).
-    fn hash_entries(&self, components: usize) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
         for t in self.channels() {
             t.lut.len().hash(&mut h);
-            t.lut
-                .iter()
-                .flat_map(|e| &e[4 - components..])
-                .for_each(|v| v.to_bits().hash(&mut h));
+            t.lut.iter().for_each(|e| e[3].to_bits().hash(&mut h));
         }
         h.finish()
     }
 
     fn on_gpu(&self, lut: Buffer, max_table: Buffer) -> GpuTransferFunction {
         GpuTransferFunction {
-            key: self.key(),
             alpha_key: self.alpha_key(),
             lut,
             max_table,
