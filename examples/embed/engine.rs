@@ -11,7 +11,7 @@ use glam::{DVec3, Vec4};
 use lacuna::accel::{Accel, BuildInput, Builder, Ranges, Structure};
 use lacuna::frame::Frame;
 use lacuna::gpu::{
-    record, required_features, AdoptInfo, Context, EnabledFeatures, Staging, Timer, REQUIRED_EXTENSIONS,
+    record, required_features, AdoptInfo, Context, EnabledFeatures, Recording, Staging, Timer, REQUIRED_EXTENSIONS,
 };
 use lacuna::render::Mode;
 use lacuna::render::Octants;
@@ -466,10 +466,15 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
         layer.transition(device, cmd, undefined, general, NOTHING, storage);
         // 3. lacuna, recorded only: the uploads (once per volume / TF), the
         // per-volume ranges, the structure's build for this TF, the march.
-        timer.reset(cmd);
-        let (gv, volume_staging) = GpuVolume::record_upload(&ctx, cmd, &volume)?;
-        let (lut, tf_staging) = tf.record_upload(&ctx, cmd)?;
-        let ranges = builder.record_ranges(cmd, Some(&mut timer), &[accel.method().ranges(&params)?], &gv)?;
+        // SAFETY: `cmd` is this engine's, on the device `ctx` adopted, begun
+        // above and submitted below to the adopted queue; everything lacuna
+        // records a use of is returned in `Recorded` and kept until the
+        // fence wait, as are the engine's images and buffers.
+        let rec = unsafe { Recording::adopt(&ctx, cmd) };
+        timer.reset(rec);
+        let (gv, volume_staging) = GpuVolume::record_upload(rec, &volume)?;
+        let (lut, tf_staging) = tf.record_upload(rec)?;
+        let ranges = builder.record_ranges(rec, Some(&mut timer), &[accel.method().ranges(&params)?], &gv)?;
         let input = BuildInput {
             volume: &volume,
             gpu_volume: &gv,
@@ -479,26 +484,21 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             frames: &[],
             octants: Octants::ALL,
         };
-        let structure = builder.record_build(accel, cmd, Some(&mut timer), &input, &ranges, &params)?;
-        record::barrier(device, cmd, record::Access::COMPUTE_WRITE, record::Access::COMPUTE_READ);
+        let structure = builder.record_build(accel, rec, Some(&mut timer), &input, &ranges, &params)?;
+        rec.barrier(record::Access::COMPUTE_WRITE, record::Access::COMPUTE_READ);
         let scene = Scene {
             structure: &structure,
             volume: &gv,
             tf: &lut,
         };
 
-        let out = HostImage {
-            view: layer.view,
-            format: COLOUR,
-            layout: general,
-            width: size,
-            height: size,
-        };
-        let ends = HostDepth {
-            view: depth.view,
-            layout: depth_read,
-            width: size,
-            height: size,
+        // SAFETY: the engine's layer image (STORAGE usage) and depth image
+        // (SAMPLED), alive in these layouts until the fence wait.
+        let (out, ends) = unsafe {
+            (
+                HostImage::new(layer.view, COLOUR, general, size, size),
+                HostDepth::new(depth.view, depth_read, size, size),
+            )
         };
         // The engine's matrices; rays end at its depth image.
         let frame = FrameDesc::builder(size, size)
@@ -507,7 +507,7 @@ fn frame(host: &Device, settings: &Settings) -> Result<Rendered, String> {
             .filter(Filter::Manual)
             .depth(Some(ends))
             .build()?;
-        renderer.record(cmd, Some(&mut timer), &target, scene, &frame, Output::Image(out))?;
+        renderer.record(rec, Some(&mut timer), &target, scene, &frame, Output::Image(out))?;
         // 4. The engine reads its three images back.
         let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
         colour.transition(

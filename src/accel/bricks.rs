@@ -3,7 +3,8 @@
 //! change then reclassifies in O(bricks).
 
 use crate::error::{Error, Result};
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
+use crate::gpu::Recording;
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, OptionalTimer, Staging, Timer};
 use crate::prims::brick_minmax::{brick_counts, coarsens_exactly, BrickMinMax};
 use crate::prims::entry_barrier;
@@ -53,7 +54,7 @@ impl GpuBricks {
     /// `prims` convention; `entry_barrier` makes both visible).
     pub fn record(
         &mut self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mut timer: Option<&mut Timer>,
         pass: &str,
         minmax: &BrickMinMax,
@@ -69,13 +70,12 @@ impl GpuBricks {
             RangesFrom::Step { ranges, changed } => {
                 let ctx = volume.context();
                 let device = ctx.device();
-                entry_barrier(device, cmd);
+                entry_barrier(cmd);
                 let region = [vk::BufferCopy::default().size(self.ranges.size())];
-                unsafe { device.cmd_copy_buffer(cmd, ranges.raw, self.ranges.raw, &region) };
+                unsafe { device.cmd_copy_buffer(cmd.raw(), ranges.raw, self.ranges.raw, &region) };
                 self.computed = changed.len() as u64;
                 if !changed.is_empty() {
                     let (list, staging) = Buffer::record_with_data(
-                        ctx,
                         cmd,
                         "changed bricks",
                         bytemuck::cast_slice(&changed),
@@ -85,7 +85,7 @@ impl GpuBricks {
                     minmax.record_listed(cmd, volume, (self.brick, APRON), &self.ranges, (&list, count))?;
                     self._list = Some((list, staging));
                 } else {
-                    record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+                    cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
                 }
             }
             _ => {
@@ -100,12 +100,12 @@ impl GpuBricks {
     /// Records a copy of the ranges into `to` (a buffer of their size) for
     /// the next step (`RangesFrom::Step`), after `entry_barrier`; ends with
     /// one, so the copy's read is ordered before later writes.
-    pub fn record_keep(&self, cmd: vk::CommandBuffer, ctx: &Context, to: &Buffer) {
-        let device = ctx.device();
-        entry_barrier(device, cmd);
+    pub fn record_keep(&self, cmd: Recording<'_>, to: &Buffer) {
+        let device = cmd.context().device();
+        entry_barrier(cmd);
         let region = [vk::BufferCopy::default().size(self.ranges.size())];
-        unsafe { device.cmd_copy_buffer(cmd, self.ranges.raw, to.raw, &region) };
-        entry_barrier(device, cmd);
+        unsafe { device.cmd_copy_buffer(cmd.raw(), self.ranges.raw, to.raw, &region) };
+        entry_barrier(cmd);
     }
 
     /// The ranges buffer of `volume`'s `brick`^3 bricks, not yet computed.

@@ -7,7 +7,8 @@ use super::method::{Accel, BuildInput, Built, Structure};
 use super::mode::{activity, ModeFallback};
 use super::params::Params;
 use crate::error::Result;
-use crate::gpu::{vk, Timer, Timings};
+use crate::gpu::Recording;
+use crate::gpu::{Timer, Timings};
 use crate::volume::GpuVolume;
 use std::any::Any;
 
@@ -70,13 +71,15 @@ impl Builder {
     pub fn record_build(
         &self,
         accel: Accel,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,
         params: &Params,
     ) -> Result<Structure> {
         accel.method().check(params)?;
+        self.context().check_is(cmd.context(), "command buffer")?;
+        self.context().check_is(cmd.context(), "command buffer")?;
         input.check(self.context())?;
         ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {
@@ -84,7 +87,7 @@ impl Builder {
         }
         let (built, keep): (Box<dyn Built>, Option<Box<dyn Any>>) = match activity(&input.mode, input.tf)? {
             Some(activity) => {
-                let (gpu_activity, staging) = activity.record_upload(self.context(), cmd)?;
+                let (gpu_activity, staging) = activity.record_upload(cmd)?;
                 let classified = BuildInput {
                     tf: &activity,
                     gpu_tf: &gpu_activity,

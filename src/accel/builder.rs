@@ -6,7 +6,8 @@
 use super::bricks::{self, GpuBricks, RangesFrom};
 use super::bricks_host;
 use crate::error::{Error, Result};
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
+use crate::gpu::Recording;
 use crate::gpu::{vk, Buffer, Context, MemoryLocation, Timer, Timings};
 use crate::prims::brick_minmax::coarsens_exactly;
 use crate::prims::BrickMinMax;
@@ -254,7 +255,7 @@ impl Builder {
     /// reads them (`record_build` begins with one).
     pub fn record_ranges(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         kinds: &[RangeKind],
         volume: &GpuVolume,
@@ -268,12 +269,13 @@ impl Builder {
     /// (host passes timed there).
     fn record_kinds(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mut timer: Option<&mut Timer>,
         kinds: &[RangeKind],
         volume: &GpuVolume,
         mut kept: Option<StepKeep>,
     ) -> Result<Ranges> {
+        self.ctx.check_is(cmd.context(), "command buffer")?;
         self.ctx.check_is(volume.context(), "volume")?;
         let mut ranges = Ranges {
             volume: Some(volume.content_id()),
@@ -307,7 +309,7 @@ impl Builder {
     /// submission completed: `ranges`).
     fn record_step_ranges(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         (timer, pass): (Option<&mut Timer>, &str),
         minmax: &BrickMinMax,
         (b, host): (&mut GpuBricks, Option<(&Volume, &mut Timings)>),
@@ -361,10 +363,10 @@ impl Builder {
                 kept.len() - 1
             }
         };
-        b.record_keep(cmd, &self.ctx, &kept[i].ranges);
+        b.record_keep(cmd, &kept[i].ranges);
         if self.ctx.info().is_cpu() {
             // A later step may read the copy on the host (`step_on_host`).
-            record::barrier(self.ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+            cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         }
         kept[i].pending(volume);
         Ok(())

@@ -14,7 +14,8 @@ use super::params::{Param, Params};
 use crate::error::{Error, Result};
 use crate::gpu::record;
 use crate::gpu::shaders::{self, build_classify_range, build_classify_voxel};
-use crate::gpu::{vk, Binding, Buffer, Context, Kernel};
+use crate::gpu::Recording;
+use crate::gpu::{Binding, Buffer, Context, Kernel};
 use crate::prims::entry_barrier;
 use crate::tf::{GpuTransferFunction, TransferFunction, LUT_SIZE};
 use crate::volume::GpuVolume;
@@ -79,14 +80,14 @@ impl Classifier {
     /// Follows the `prims` barrier convention; ends with compute writes.
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mode: Classify,
         volume: &GpuVolume,
         bricks: &GpuBricks,
         tf: &GpuTransferFunction,
         flags: &Buffer,
     ) -> Result<()> {
-        entry_barrier(self.ctx.device(), cmd);
+        entry_barrier(cmd);
         tf.check_channels(volume.channels)?;
         match mode {
             Classify::Range => {
@@ -104,17 +105,21 @@ impl Classifier {
                     lut_size: LUT_SIZE as u32,
                     tf_stride: tf.channel_step() * tf.max_stride,
                 };
-                range.dispatch(
-                    cmd,
-                    &build_classify_range::Bindings {
-                        ranges: Binding::Storage(&bricks.ranges),
-                        transfer_max: Binding::Storage(&tf.max_table),
-                        flags: Binding::Storage(flags),
-                    }
-                    .list(),
-                    bytemuck::bytes_of(&push),
-                    groups,
-                )
+                // SAFETY: every binding is a live object of this context borrowed for
+                // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+                unsafe {
+                    range.dispatch(
+                        cmd,
+                        &build_classify_range::Bindings {
+                            ranges: Binding::Storage(&bricks.ranges),
+                            transfer_max: Binding::Storage(&tf.max_table),
+                            flags: Binding::Storage(flags),
+                        }
+                        .list(),
+                        bytemuck::bytes_of(&push),
+                        groups,
+                    )
+                }
             }
             Classify::Voxel { apron } => {
                 let groups =
@@ -135,22 +140,26 @@ impl Classifier {
                     pool_brick: volume.brick_edge(),
                     ..Default::default()
                 };
-                self.voxel.dispatch(
-                    cmd,
-                    &build_classify_voxel::Bindings {
-                        volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
-                        transfer_lut: Binding::Storage(&tf.lut),
-                        transfer_max: Binding::Storage(&tf.max_table),
-                        flags: Binding::Storage(flags),
-                        brick_table: Binding::TexelBuffer(volume.brick_table().view()),
-                        pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
-                        pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
-                        pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
-                    }
-                    .list(),
-                    bytemuck::bytes_of(&push),
-                    groups,
-                )
+                // SAFETY: every binding is a live object of this context borrowed for
+                // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+                unsafe {
+                    self.voxel.dispatch(
+                        cmd,
+                        &build_classify_voxel::Bindings {
+                            volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
+                            transfer_lut: Binding::Storage(&tf.lut),
+                            transfer_max: Binding::Storage(&tf.max_table),
+                            flags: Binding::Storage(flags),
+                            brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+                            pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
+                            pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
+                            pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
+                        }
+                        .list(),
+                        bytemuck::bytes_of(&push),
+                        groups,
+                    )
+                }
             }
         }
     }

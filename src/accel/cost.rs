@@ -40,8 +40,9 @@ use super::stats::Stats;
 use super::tree::{GpuTree, Node};
 use crate::desc::{DEFAULT_STEP, ERT_OFF};
 use crate::error::{Error, Result};
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::shaders::{self, blocks::RenderParams, march_bvh, MarchCommon};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, TexelBuffer, Timer};
 use crate::tf::{TransferFunction, LUT_SIZE};
 use crate::volume::{GpuVolume, Volume, VoxelData, VoxelType};
@@ -314,16 +315,11 @@ impl Probe {
         GpuTree::upload(&self.ctx, nodes, Stats::default())
     }
 
-    fn record(&self, cmd: vk::CommandBuffer, tree: &GpuTree, step: f32) -> Result<()> {
+    fn record(&self, cmd: Recording<'_>, tree: &GpuTree, step: f32) -> Result<()> {
         let params = &self.params[usize::from(step != STEP)];
         // Dispatches write the same frame (and may write the same status):
         // order them.
-        record::barrier(
-            self.ctx.device(),
-            cmd,
-            Access::COMPUTE_READ_WRITE,
-            Access::COMPUTE_READ_WRITE,
-        );
+        cmd.barrier(Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
         let groups = self.kernel.groups("cost probe", [RAYS, RAYS, 1])?;
         let mut bindings = MarchCommon {
             params: Binding::Storage(params),
@@ -349,7 +345,9 @@ impl Probe {
             }
             .list(),
         );
-        self.kernel.dispatch(cmd, &bindings, &[], groups)
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe { self.kernel.dispatch(cmd, &bindings, &[], groups) }
     }
 }
 

@@ -28,6 +28,7 @@ use crate::desc::Octants;
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_distance_octant_rows, build_distance_rows, march_distance};
+use crate::gpu::Recording;
 use crate::gpu::{
     vk, Binding, Bound, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, TexelBuffer, Timer, Timings,
 };
@@ -164,7 +165,7 @@ pub fn exceeded_limit(info: &crate::gpu::DeviceInfo, cells: u64, octants: bool) 
 /// `cmd`. Follows the `prims` barrier convention; ends with compute writes.
 pub fn record(
     builder: &Builder,
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     mut timer: Option<&mut Timer>,
     input: &BuildInput,
     cells: &GpuBricks,
@@ -198,9 +199,9 @@ pub fn record(
     {
         let pass = timer.begin(cmd, ["distance x", "distance y", "distance z"][axis])?;
         if axis == 0 {
-            entry_barrier(ctx.device(), cmd);
+            entry_barrier(cmd);
         } else {
-            record::compute_to_compute(ctx.device(), cmd);
+            cmd.compute_to_compute();
         }
         // One invocation per row (cube maps) or per row and task (octant
         // maps: a map word and the channels of it to compute).
@@ -242,7 +243,9 @@ pub fn record(
             .list();
             (bytemuck::bytes_of(&push).to_vec(), bindings)
         };
-        k.dispatch(cmd, &bindings, &push, groups)?;
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe { k.dispatch(cmd, &bindings, &push, groups) }?;
         timer.end(cmd, pass);
     }
     map._scratch = vec![scratch, stack];
@@ -254,7 +257,7 @@ pub fn record(
 /// frames need (none named: all).
 fn classified_map(
     builder: &Builder,
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     timer: &mut Option<&mut Timer>,
     input: &BuildInput,
     cells: &GpuBricks,
@@ -328,8 +331,8 @@ fn host_classified_map(
     let start = std::time::Instant::now();
     ctx.submit_and_wait(|cmd| {
         // Ranges are computed, or copied from a series step's before.
-        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
-        record::barrier(ctx.device(), cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     })?;
     let channels = cells.channels as usize;
@@ -373,7 +376,7 @@ pub fn build_on_host(
                     octants,
                     MemoryLocation::GpuToCpu,
                 )?;
-                record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+                cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
                 Ok(map)
             })?;
             (map, timer.results()?)
@@ -468,7 +471,7 @@ impl Method for DistanceMethod {
     fn record_build(
         &self,
         builder: &Builder,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,

@@ -14,8 +14,9 @@ use super::stats::Stats;
 use super::tree::STORAGE_TEXELS;
 use crate::desc::Mode;
 use crate::error::Result;
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::shaders::{self, march_grid};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
 
 /// Default cell edge in voxels.
@@ -85,7 +86,7 @@ pub(crate) fn count_active(flags: &Buffer, total: u64, cache: &std::sync::OnceLo
 /// writes.
 pub fn record(
     builder: &Builder,
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     mut timer: Option<&mut Timer>,
     input: &BuildInput,
     cells: &GpuBricks,
@@ -126,7 +127,7 @@ pub fn record(
 /// with the copy made visible to compute reads.
 pub fn record_ranges(
     builder: &Builder,
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     mut timer: Option<&mut Timer>,
     cells: &GpuBricks,
 ) -> Result<Grid> {
@@ -142,14 +143,14 @@ pub fn record_ranges(
     let ranges = TexelBuffer::new(builder.context(), ranges, vk::Format::R32G32_UINT)?;
     let device = builder.context().device();
     let pass = timer.begin(cmd, "classify")?;
-    record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+    cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
     let region = [vk::BufferCopy {
         src_offset: 0,
         dst_offset: 0,
         size: bytes,
     }];
-    unsafe { device.cmd_copy_buffer(cmd, cells.ranges.raw, ranges.buffer().raw, &region) };
-    record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+    unsafe { device.cmd_copy_buffer(cmd.raw(), cells.ranges.raw, ranges.buffer().raw, &region) };
+    cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
     timer.end(cmd, pass);
     Ok(Grid {
         cell: cells.brick,
@@ -204,7 +205,7 @@ impl Method for GridMethod {
     fn record_build(
         &self,
         builder: &Builder,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,

@@ -10,7 +10,8 @@ use super::params::{Param, Params};
 use super::stats::Stats;
 use crate::desc::{FrameDesc, Mode, Octants};
 use crate::error::{Error, Result};
-use crate::gpu::{vk, Bound, DeviceInfo, Shader, Timer, Timings};
+use crate::gpu::Recording;
+use crate::gpu::{Bound, DeviceInfo, Shader, Timer, Timings};
 use crate::tf::{GpuTransferFunction, TransferFunction};
 use crate::volume::{GpuVolume, Volume};
 use std::any::Any;
@@ -216,7 +217,7 @@ pub trait Method: Sync {
     fn record_build(
         &self,
         builder: &Builder,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,

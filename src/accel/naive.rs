@@ -7,7 +7,8 @@ use super::params::Params;
 use super::stats::Stats;
 use crate::desc::Mode;
 use crate::error::Result;
-use crate::gpu::{shaders, vk, Bound, Timer};
+use crate::gpu::Recording;
+use crate::gpu::{shaders, Bound, Timer};
 
 /// Naive marching (`--accel naive`): every lattice sample, the reference.
 pub struct Naive;
@@ -51,7 +52,7 @@ impl Method for Naive {
     fn record_build(
         &self,
         _: &Builder,
-        _: vk::CommandBuffer,
+        _: Recording<'_>,
         _: Option<&mut Timer>,
         _: &BuildInput,
         _: &Ranges,

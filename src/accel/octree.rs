@@ -19,7 +19,7 @@ use super::method::{BuildInput, Built, March, Method};
 use super::params::{Param, Params};
 use super::stats::Stats;
 use crate::error::Result;
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::shaders::{self, march_octree};
 use crate::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, Timer, Timings};
 use crate::spatial::octree_node::{axis_bit, Node};
@@ -117,7 +117,7 @@ pub fn build(
         let pass = timer.begin(cmd, "classify")?;
         classifier.record(cmd, mode, volume, bricks, tf, &flags)?;
         timer.end(cmd, pass);
-        record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
         Ok(())
     })?;
     let mut t = timer.results()?;

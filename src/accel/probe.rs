@@ -17,8 +17,9 @@ use super::kernels::{MarchKernels, ProbeConstants};
 use super::method::Structure;
 use crate::desc::FrameDesc;
 use crate::error::Result;
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::shaders::MarchCommon;
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, MemoryLocation, TexelBuffer, Timer};
 use crate::tf::TransferFunction;
 use crate::volume::GpuVolume;
@@ -209,7 +210,7 @@ impl<'a> FrameProbe<'a> {
 
     /// Records `structure`'s probe dispatch (counting or not) writing the
     /// output buffer; the caller orders it after earlier writes to it.
-    fn record(&self, cmd: vk::CommandBuffer, structure: &Structure, count: bool) -> Result<()> {
+    fn record(&self, cmd: Recording<'_>, structure: &Structure, count: bool) -> Result<()> {
         let desc = &self.desc;
         let filter = desc.filter_for(self.volume);
         let sampler = self.volume.sampler_for(filter)?;
@@ -248,7 +249,9 @@ impl<'a> FrameProbe<'a> {
             probed_tiles(tiles[1], self.stride).1,
             1,
         ];
-        kernel.dispatch(cmd, &bindings, &structure.built.push(), groups)
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe { kernel.dispatch(cmd, &bindings, &structure.built.push(), groups) }
     }
 
     /// What `structure`'s kernel does on the probed tiles.
@@ -264,20 +267,20 @@ impl<'a> FrameProbe<'a> {
     pub fn count_both(&self, structure: &Structure) -> Result<(Counts, Option<Counts>)> {
         let device = self.ctx.device();
         self.ctx.submit_and_wait(|cmd| {
-            record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
-            unsafe { device.cmd_fill_buffer(cmd, self.out.raw, 0, vk::WHOLE_SIZE, 0) };
-            unsafe { device.cmd_fill_buffer(cmd, self.status.raw, 0, vk::WHOLE_SIZE, 0) };
-            record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+            cmd.barrier(Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
+            unsafe { device.cmd_fill_buffer(cmd.raw(), self.out.raw, 0, vk::WHOLE_SIZE, 0) };
+            unsafe { device.cmd_fill_buffer(cmd.raw(), self.status.raw, 0, vk::WHOLE_SIZE, 0) };
+            cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
             self.record(cmd, structure, true)?;
-            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
-            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+            cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
+            cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
             let region = [vk::BufferCopy {
                 src_offset: 0,
                 dst_offset: 0,
                 size: self.out.size(),
             }];
-            unsafe { device.cmd_copy_buffer(cmd, self.out.raw, self.readback.raw, &region) };
-            record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+            unsafe { device.cmd_copy_buffer(cmd.raw(), self.out.raw, self.readback.raw, &region) };
+            cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
             Ok(())
         })?;
         let cut: u32 = bytemuck::pod_read_unaligned(&self.status.host()?[..4]);
@@ -349,7 +352,7 @@ pub fn time_interleaved(
     rounds: usize,
     statistic: Statistic,
 ) -> Result<Vec<f64>> {
-    let device = ctx.device();
+    let _device = ctx.device();
     let mut times = vec![Vec::new(); pairs.len()];
     for round in 0..=rounds {
         let mut timer = Timer::new(ctx, pairs.len() as u32)?;
@@ -358,7 +361,7 @@ pub fn time_interleaved(
             for (i, (probe, s)) in pairs.iter().enumerate() {
                 // Dispatches may write the same buffers (the frame, the
                 // march status, which they also read): order them.
-                record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
+                cmd.barrier(Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 let pass = timer.begin(cmd, &i.to_string())?;
                 probe.record(cmd, s, false)?;
                 timer.end(cmd, pass);

@@ -122,13 +122,30 @@ impl Camera {
 /// plane's depth means "nothing drawn".
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HostDepth {
-    pub view: vk::ImageView,
-    pub layout: vk::ImageLayout,
-    pub width: u32,
-    pub height: u32,
+    pub(crate) view: vk::ImageView,
+    pub(crate) layout: vk::ImageLayout,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
 }
 
 impl HostDepth {
+    /// The host's depth image `view` of `width` x `height` texels (size and
+    /// layout are checked against the frame when it is built).
+    ///
+    /// # Safety
+    /// Whenever a frame built with it executes, `view` is a live view of the
+    /// depth aspect of an image of the context's device created with
+    /// `SAMPLED` usage, in `layout` (`Renderer::render` waits for its own
+    /// frames; a frame refused records nothing).
+    pub unsafe fn new(view: vk::ImageView, layout: vk::ImageLayout, width: u32, height: u32) -> Self {
+        HostDepth {
+            view,
+            layout,
+            width,
+            height,
+        }
+    }
+
     fn check(&self, width: u32, height: u32) -> Result<()> {
         let readable = [
             vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,

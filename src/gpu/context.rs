@@ -5,7 +5,9 @@
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
 use super::kernel_cache::KernelCache;
+use super::record::Recording;
 use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
+use super::retire::{destroy, Retirement};
 use super::validation::{Messenger, ValidationMessage};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
@@ -71,6 +73,8 @@ pub(crate) struct Inner {
     pub(crate) kernels: KernelCache,
     /// Submissions lacuna made on the queue (`Context::submissions`).
     submissions: std::sync::atomic::AtomicU64,
+    /// Objects dropped while a submission of lacuna's was in flight.
+    pub(super) retirement: Mutex<Retirement>,
     owned: bool,
 }
 
@@ -283,6 +287,7 @@ impl Context {
                 info,
                 kernels: KernelCache::default(),
                 submissions: Default::default(),
+                retirement: Default::default(),
                 owned,
             }),
         })
@@ -418,7 +423,10 @@ impl Context {
     }
 
     /// Records commands with `record`, submits them and waits for completion.
-    pub fn submit_and_wait<T>(&self, record: impl FnOnce(vk::CommandBuffer) -> Result<T>) -> Result<T> {
+    /// Objects dropped meanwhile, in the closure or on another thread, are
+    /// destroyed after the wait, so what the commands use cannot go before
+    /// they ran.
+    pub fn submit_and_wait<T>(&self, record: impl FnOnce(Recording<'_>) -> Result<T>) -> Result<T> {
         // The pool stays locked through the wait: submissions from several
         // threads run one after another, as they always have.
         let (value, _) = self.submit_inner(record, || Ok(()), false)?;
@@ -434,7 +442,7 @@ impl Context {
     /// they run.
     pub fn submit_while<T, U>(
         &self,
-        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
+        record: impl FnOnce(Recording<'_>) -> Result<T>,
         meanwhile: impl FnOnce() -> Result<U>,
     ) -> Result<(T, U)> {
         match self.submit_inner(record, meanwhile, true)? {
@@ -448,7 +456,7 @@ impl Context {
     /// the pool unlocked where `unlock` (it may then submit).
     fn submit_inner<T, U>(
         &self,
-        record: impl FnOnce(vk::CommandBuffer) -> Result<T>,
+        record: impl FnOnce(Recording<'_>) -> Result<T>,
         meanwhile: impl FnOnce() -> Result<U>,
         unlock: bool,
     ) -> Result<(T, std::thread::Result<Result<U>>)> {
@@ -461,6 +469,8 @@ impl Context {
                 "record into the command buffer the closure was given (the record_* forms): a submission from there waits for the one being recorded",
             ));
         }
+        // Before the command buffer exists, dropped after it is freed.
+        let _open = self.open_submission();
         let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let pool = lock_pool();
         let alloc = vk::CommandBufferAllocateInfo::default()
@@ -473,8 +483,8 @@ impl Context {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
             let value = {
-                let _recording = Recording::on(me);
-                record(cmd)
+                let _recording = SubmitGuard::on(me);
+                record(Recording::own(self, cmd))
             };
             unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let value = value?;
@@ -518,16 +528,16 @@ thread_local! {
 
 /// Marks a context as recording on this thread until dropped (also when
 /// the closure panics).
-struct Recording(usize);
+struct SubmitGuard(usize);
 
-impl Recording {
-    fn on(context: usize) -> Recording {
+impl SubmitGuard {
+    fn on(context: usize) -> SubmitGuard {
         RECORDING.with(|r| r.borrow_mut().push(context));
-        Recording(context)
+        SubmitGuard(context)
     }
 }
 
-impl Drop for Recording {
+impl Drop for SubmitGuard {
     fn drop(&mut self) {
         RECORDING.with(|r| {
             let mut r = r.borrow_mut();
@@ -554,6 +564,8 @@ impl Drop for Inner {
                 let _ = self.device.device_wait_idle();
             }
             self.kernels.destroy_all(&self.device);
+            let left = std::mem::take(&mut self.retirement.get_mut().unwrap_or_else(|p| p.into_inner()).waiting);
+            destroy(&self.device, &self.allocator, left);
             ManuallyDrop::drop(&mut self.allocator);
             self.device
                 .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);

@@ -2,7 +2,9 @@
 //! `gpu-allocator`, uploaded through staging in z-slabs.
 
 use super::memory::{copy_to_mapped, Buffer, Staging, STAGING_CHUNK};
+use super::record::Recording;
 use super::record::{self, Access};
+use super::retire::Retired;
 use super::{Context, DeviceInfo};
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
@@ -112,14 +114,14 @@ impl Image3d {
     /// a barrier to compute-shader reads. Keep the returned `Staging` until
     /// the submission completed.
     pub fn record_with_data(
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         name: &str,
         format: vk::Format,
         extent: [u32; 3],
         texel_bytes: u64,
         data: &[u8],
     ) -> Result<(Self, Staging)> {
+        let ctx = cmd.context();
         let image = Self::create(ctx, name, format, extent, texel_bytes, data)?;
         let staging = Buffer::staging(ctx, "staging volume", data)?;
         image.record_copy(cmd, &staging, 0, extent[2], true, true);
@@ -369,7 +371,7 @@ impl Image3d {
         let buffer = &*buffer;
         // The whole image from the mirror: from UNDEFINED, as every texel
         // is written.
-        let record = |cmd| {
+        let record = |cmd: Recording<'_>| {
             self.record_copy(cmd, buffer, 0, d, true, true);
             Ok(())
         };
@@ -436,16 +438,8 @@ impl Image3d {
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             );
             self.ctx.submit_and_wait(|cmd| {
-                record::image_barrier(
-                    device,
-                    cmd,
-                    self.raw,
-                    read,
-                    dst,
-                    Access::COMPUTE_READ,
-                    Access::TRANSFER_WRITE,
-                );
-                unsafe { device.cmd_copy_buffer_to_image(cmd, buffer.raw, self.raw, dst, &regions) };
+                self.transition(cmd, read, dst, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
+                unsafe { device.cmd_copy_buffer_to_image(cmd.raw(), buffer.raw, self.raw, dst, &regions) };
                 self.record_readable(cmd);
                 Ok(())
             })?;
@@ -457,7 +451,7 @@ impl Image3d {
     /// Records the copy of slices `z .. z + n` from `staging`: the transition
     /// to TRANSFER_DST first (from UNDEFINED when `first`), and to
     /// SHADER_READ_ONLY_OPTIMAL for compute reads after the `last`.
-    fn record_copy(&self, cmd: vk::CommandBuffer, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) {
+    fn record_copy(&self, cmd: Recording<'_>, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) {
         let device = self.ctx.device();
         let [w, h, _] = self.extent;
         let (old, src) = if first {
@@ -466,40 +460,35 @@ impl Image3d {
             (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE)
         };
         let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
-        record::image_barrier(device, cmd, self.raw, old, dst, src, Access::TRANSFER_WRITE);
+        self.transition(cmd, old, dst, src, Access::TRANSFER_WRITE);
         let region = [copy_region(0, ([0, 0, z], [w, h, n]))];
-        unsafe { device.cmd_copy_buffer_to_image(cmd, staging.raw, self.raw, dst, &region) };
+        unsafe { device.cmd_copy_buffer_to_image(cmd.raw(), staging.raw, self.raw, dst, &region) };
         if last {
             self.record_readable(cmd);
         }
     }
 
+    /// Records a layout transition of this image.
+    fn transition(&self, cmd: Recording<'_>, old: vk::ImageLayout, new: vk::ImageLayout, src: Access, dst: Access) {
+        // SAFETY: the image is this context's, alive while `self` is, with
+        // one level and layer; callers name the layout it is in.
+        unsafe { cmd.image_barrier(self.raw, old, new, src, dst) };
+    }
+
     /// Records the transition from the copies' TRANSFER_DST_OPTIMAL to
     /// SHADER_READ_ONLY_OPTIMAL for compute reads.
-    fn record_readable(&self, cmd: vk::CommandBuffer) {
+    fn record_readable(&self, cmd: Recording<'_>) {
         let (dst, read) = (
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
         );
-        record::image_barrier(
-            self.ctx.device(),
-            cmd,
-            self.raw,
-            dst,
-            read,
-            Access::TRANSFER_WRITE,
-            Access::COMPUTE_READ,
-        );
+        self.transition(cmd, dst, read, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
     }
 }
 
 impl Drop for Image3d {
     fn drop(&mut self) {
-        let device = self.ctx.device();
-        unsafe { device.destroy_image_view(self.view, None) };
-        if let Some(a) = self.allocation.take() {
-            let _ = self.ctx.allocator().free(a);
-        }
-        unsafe { device.destroy_image(self.raw, None) };
+        self.ctx
+            .retire([Retired::Image(self.raw, self.view, self.allocation.take())]);
     }
 }

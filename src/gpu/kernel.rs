@@ -6,6 +6,7 @@
 
 use super::binding::{Binding, Bound};
 use super::kernel_cache::{KernelKey, KernelObjects};
+use super::record::Recording;
 use super::shaders::{Shader, Slot};
 use super::Context;
 use crate::error::{Error, Result, VkContext};
@@ -17,9 +18,9 @@ use ash::vk;
 /// and a second kernel of the same specialization costs no compile.
 pub struct Kernel {
     ctx: Context,
-    pub name: &'static str,
-    pub layout: vk::PipelineLayout,
-    pub pipeline: vk::Pipeline,
+    name: &'static str,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
     bindings: &'static [Slot],
     push_size: u32,
     local_size: [u32; 3],
@@ -95,6 +96,11 @@ impl Kernel {
         super::record::groups_for(self.ctx.info(), what, threads, self.local_size)
     }
 
+    /// The shader's name (`glsl/` path without the extension).
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
     /// The shader's bindings: (name, descriptor type), in binding order.
     pub fn slots(&self) -> &'static [Slot] {
         self.bindings
@@ -105,15 +111,26 @@ impl Kernel {
     /// Records only; no barriers. A binding missing, given twice, unknown
     /// to the shader or of another type, or a push block of another size, is
     /// an error naming the kernel and the binding, and nothing is recorded.
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, bindings: &[Bound], push: &[u8], groups: [u32; 3]) -> Result<()> {
-        self.dispatch_base(cmd, bindings, push, [0; 3], groups)
+    ///
+    /// # Safety
+    /// Every raw handle in `bindings` (`Binding`'s `StorageRange`,
+    /// `Sampled`, `SampledIn`, `StorageImage` and `TexelBuffer`) is a live
+    /// object of this kernel's device, of the type the binding names (an
+    /// image view in the layout it states), and stays so until the dispatch
+    /// has executed.
+    pub unsafe fn dispatch(&self, cmd: Recording<'_>, bindings: &[Bound], push: &[u8], groups: [u32; 3]) -> Result<()> {
+        // SAFETY: the caller's contract is `dispatch_base`'s.
+        unsafe { self.dispatch_base(cmd, bindings, push, [0; 3], groups) }
     }
 
     /// As `dispatch`, for the workgroups from `base` on (`vkCmdDispatchBase`:
     /// `gl_WorkGroupID` and `gl_GlobalInvocationID` include `base`).
-    pub fn dispatch_base(
+    ///
+    /// # Safety
+    /// As `dispatch`.
+    pub unsafe fn dispatch_base(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         bindings: &[Bound],
         push: &[u8],
         base: [u32; 3],
@@ -185,21 +202,21 @@ impl Kernel {
             })
             .collect();
         unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            device.cmd_bind_pipeline(cmd.raw(), vk::PipelineBindPoint::COMPUTE, self.pipeline);
             self.ctx.inner.push_descriptor.cmd_push_descriptor_set(
-                cmd,
+                cmd.raw(),
                 vk::PipelineBindPoint::COMPUTE,
                 self.layout,
                 0,
                 &writes,
             );
             if !push.is_empty() {
-                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+                device.cmd_push_constants(cmd.raw(), self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
             if base == [0; 3] {
-                device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+                device.cmd_dispatch(cmd.raw(), groups[0], groups[1], groups[2]);
             } else {
-                device.cmd_dispatch_base(cmd, base[0], base[1], base[2], groups[0], groups[1], groups[2]);
+                device.cmd_dispatch_base(cmd.raw(), base[0], base[1], base[2], groups[0], groups[1], groups[2]);
             }
         }
         Ok(())

@@ -1,7 +1,9 @@
 //! Buffers and 3D images backed by `gpu-allocator`, with staging upload and
 //! readback. Each object keeps its `Context` and frees itself on drop.
 
-use super::record::{self, Access};
+use super::record::Access;
+use super::record::Recording;
+use super::retire::Retired;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
@@ -126,12 +128,12 @@ impl Buffer {
     /// compute-shader reads (`Access::TRANSFER_WRITE -> COMPUTE_READ`).
     /// Keep the returned `Staging` until the submission completed.
     pub fn record_with_data(
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         name: &str,
         data: &[u8],
         usage: vk::BufferUsageFlags,
     ) -> Result<(Self, Staging)> {
+        let ctx = cmd.context();
         let buffer = Buffer::upload_target(ctx, name, data.len() as u64, usage)?;
         let staging = Buffer::staging(ctx, "staging upload", data)?;
         let region = [vk::BufferCopy {
@@ -140,8 +142,8 @@ impl Buffer {
             size: data.len() as u64,
         }];
         let device = ctx.device();
-        unsafe { device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ);
+        unsafe { device.cmd_copy_buffer(cmd.raw(), staging.raw, buffer.raw, &region) };
+        cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
         Ok((buffer, Staging(vec![staging])))
     }
 
@@ -242,7 +244,11 @@ impl Buffer {
                     dst_offset: offset + done,
                     size: n,
                 }];
-                unsafe { self.ctx.device().cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
+                unsafe {
+                    self.ctx
+                        .device()
+                        .cmd_copy_buffer(cmd.raw(), staging.raw, self.raw, &region)
+                };
                 Ok(())
             })?;
             done += n;
@@ -274,8 +280,8 @@ impl Buffer {
                     size: n,
                 }];
                 let device = self.ctx.device();
-                unsafe { device.cmd_copy_buffer(cmd, self.raw, staging.raw, &region) };
-                record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+                unsafe { device.cmd_copy_buffer(cmd.raw(), self.raw, staging.raw, &region) };
+                cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
             out.extend_from_slice(&staging.host()?[..n as usize]);
@@ -295,10 +301,7 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
-        if let Some(a) = self.allocation.take() {
-            let _ = self.ctx.allocator().free(a);
-        }
-        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+        self.ctx.retire([Retired::Buffer(self.raw, self.allocation.take())]);
     }
 }
 
@@ -376,7 +379,7 @@ impl TexelBuffer {
 impl Drop for TexelBuffer {
     fn drop(&mut self) {
         // Before the buffer, which drops after this.
-        unsafe { self.buffer.ctx.device().destroy_buffer_view(self.view, None) };
+        self.buffer.ctx.retire([Retired::BufferView(self.view)]);
     }
 }
 

@@ -2,7 +2,8 @@
 //! requirements, the context (own or adopted), memory, kernels from the
 //! reflected shaders (each made once per context, from SPIR-V pruned of
 //! what its specialization constants rule out: `prune`), recording and barriers,
-//! timestamp timer and timings, validation messenger. Imports nothing of
+//! timestamp timer and timings, validation messenger, and the deferred
+//! destruction of what a submission in flight may use (`retire`). Imports nothing of
 //! lacuna but `error`.
 
 mod binding;
@@ -16,6 +17,7 @@ mod memory;
 mod prune;
 pub mod record;
 mod requirements;
+mod retire;
 pub mod shaders;
 mod timer;
 pub mod timings;
@@ -27,7 +29,9 @@ pub use context::{Context, ContextOptions};
 pub use device::{list_devices, select_device, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::Kernel;
+pub use record::Recording;
 pub use requirements::{required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
+pub(crate) use retire::Retired;
 pub use shaders::{LocalDim, Shader};
 
 /// Compile-time check that a host type is laid out as a struct the shaders

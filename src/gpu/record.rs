@@ -1,13 +1,159 @@
-//! Recording helpers: synchronization2 barriers between dependent passes and
-//! dispatch sizing that respects `maxComputeWorkGroupCount`.
+//! Recording: the command buffer lacuna's `record_*` calls record into
+//! (`Recording`), its synchronization2 barriers between dependent passes,
+//! and dispatch sizing that respects `maxComputeWorkGroupCount`.
 //!
 //! Dependent compute passes are separated by one global memory barrier
 //! (`barrier(.., Access::COMPUTE_WRITE, Access::COMPUTE_READ_WRITE)`); buffer-
 //! or image-range barriers buy nothing on current drivers.
 
-use super::DeviceInfo;
+use super::{Context, DeviceInfo};
 use crate::error::Result;
 use ash::vk;
+use std::marker::PhantomData;
+
+/// A command buffer in the recording state on a lacuna `Context`'s device:
+/// what every `record_*` call records into. lacuna's own submissions
+/// (`Context::submit_and_wait`) hand one to their closure; a host adopts its
+/// own command buffer with [`Recording::adopt`], whose contract is what
+/// makes the recording calls safe to call.
+///
+/// It cannot leave the thread that made it (command buffers are externally
+/// synchronized), nor the closure that was given it. Recording in the
+/// closure compiles:
+///
+/// ```no_run
+/// fn record(ctx: &lacuna::gpu::Context) -> lacuna::Result<()> {
+///     ctx.submit_and_wait(|cmd| {
+///         cmd.compute_to_compute();
+///         Ok(())
+///     })
+/// }
+/// ```
+///
+/// keeping the recording past the submission does not:
+///
+/// ```compile_fail
+/// fn record(ctx: &lacuna::gpu::Context) -> lacuna::Result<()> {
+///     let mut kept = None;
+///     ctx.submit_and_wait(|cmd| {
+///         kept = Some(cmd);
+///         Ok(())
+///     })?;
+///     kept.map(|cmd| cmd.compute_to_compute());
+///     Ok(())
+/// }
+/// ```
+///
+/// and neither does recording from another thread:
+///
+/// ```compile_fail
+/// fn record(ctx: &lacuna::gpu::Context) -> lacuna::Result<()> {
+///     ctx.submit_and_wait(|cmd| {
+///         std::thread::scope(|s| {
+///             s.spawn(move || cmd.compute_to_compute());
+///         });
+///         Ok(())
+///     })
+/// }
+/// ```
+#[derive(Clone, Copy)]
+pub struct Recording<'r> {
+    ctx: &'r Context,
+    raw: vk::CommandBuffer,
+    _one_thread: PhantomData<*const ()>,
+}
+
+impl<'r> Recording<'r> {
+    /// Records lacuna's commands into the host's command buffer `raw`.
+    ///
+    /// # Safety
+    /// Until the command buffer's execution has completed (or it was reset
+    /// or freed without being submitted):
+    /// - `raw` was allocated on `ctx`'s device, is in the recording state
+    ///   while the `Recording` (or a copy) is used, and nothing else records
+    ///   into it meanwhile;
+    /// - it is submitted, if at all, to a queue of the family `ctx` was
+    ///   adopted with;
+    /// - every lacuna object a call records a use of through it (volumes,
+    ///   transfer functions, ranges, structures, targets, renderers, timers,
+    ///   and the `Staging` an upload returns) stays alive, and is not
+    ///   changed by another lacuna call (`GpuVolume::replace`, say);
+    /// - every raw handle given with it (`HostImage`, `HostDepth`,
+    ///   `HostDepthOut`, `Binding`'s raw variants) is a live object of
+    ///   `ctx`'s device, in the usage and layout its type states.
+    pub unsafe fn adopt(ctx: &'r Context, raw: vk::CommandBuffer) -> Self {
+        Recording {
+            ctx,
+            raw,
+            _one_thread: PhantomData,
+        }
+    }
+
+    /// A command buffer lacuna allocated and begun, submits and waits for.
+    pub(super) fn own(ctx: &'r Context, raw: vk::CommandBuffer) -> Self {
+        Recording {
+            ctx,
+            raw,
+            _one_thread: PhantomData,
+        }
+    }
+
+    /// The command buffer, for the host's own `vkCmd*` calls.
+    pub fn raw(self) -> vk::CommandBuffer {
+        self.raw
+    }
+
+    /// The context whose device the command buffer belongs to.
+    pub fn context(self) -> &'r Context {
+        self.ctx
+    }
+
+    /// One global memory barrier: everything `src` wrote is visible to `dst`.
+    pub fn barrier(self, src: Access, dst: Access) {
+        let barriers = [vk::MemoryBarrier2::default()
+            .src_stage_mask(src.stage)
+            .src_access_mask(src.access)
+            .dst_stage_mask(dst.stage)
+            .dst_access_mask(dst.access)];
+        let info = vk::DependencyInfo::default().memory_barriers(&barriers);
+        // SAFETY: `raw` is recording on this device (`adopt`'s contract, or lacuna's own).
+        unsafe { self.ctx.device().cmd_pipeline_barrier2(self.raw, &info) };
+    }
+
+    /// The barrier between two dependent compute dispatches.
+    pub fn compute_to_compute(self) {
+        self.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ_WRITE);
+    }
+
+    /// An image layout transition with its memory dependency.
+    ///
+    /// # Safety
+    /// `image` is a live image of this device with one mip level and layer,
+    /// in layout `old` when the barrier executes.
+    pub unsafe fn image_barrier(
+        self,
+        image: vk::Image,
+        old: vk::ImageLayout,
+        new: vk::ImageLayout,
+        src: Access,
+        dst: Access,
+    ) {
+        let barriers = [vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(src.stage)
+            .src_access_mask(src.access)
+            .dst_stage_mask(dst.stage)
+            .dst_access_mask(dst.access)
+            .old_layout(old)
+            .new_layout(new)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image)
+            .subresource_range(COLOR_RANGE)];
+        let info = vk::DependencyInfo::default().image_memory_barriers(&barriers);
+        // SAFETY: as `barrier`; the caller vouches for the image.
+        unsafe { self.ctx.device().cmd_pipeline_barrier2(self.raw, &info) };
+    }
+}
 
 /// A pipeline stage together with the memory accesses made there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,47 +206,6 @@ pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     base_array_layer: 0,
     layer_count: 1,
 };
-
-/// One global memory barrier: everything `src` wrote is visible to `dst`.
-pub fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Access, dst: Access) {
-    let barriers = [vk::MemoryBarrier2::default()
-        .src_stage_mask(src.stage)
-        .src_access_mask(src.access)
-        .dst_stage_mask(dst.stage)
-        .dst_access_mask(dst.access)];
-    let info = vk::DependencyInfo::default().memory_barriers(&barriers);
-    unsafe { device.cmd_pipeline_barrier2(cmd, &info) };
-}
-
-/// The barrier between two dependent compute dispatches.
-pub fn compute_to_compute(device: &ash::Device, cmd: vk::CommandBuffer) {
-    barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ_WRITE);
-}
-
-/// An image layout transition with its memory dependency.
-pub fn image_barrier(
-    device: &ash::Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    old: vk::ImageLayout,
-    new: vk::ImageLayout,
-    src: Access,
-    dst: Access,
-) {
-    let barriers = [vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(src.stage)
-        .src_access_mask(src.access)
-        .dst_stage_mask(dst.stage)
-        .dst_access_mask(dst.access)
-        .old_layout(old)
-        .new_layout(new)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(COLOR_RANGE)];
-    let info = vk::DependencyInfo::default().image_memory_barriers(&barriers);
-    unsafe { device.cmd_pipeline_barrier2(cmd, &info) };
-}
 
 /// Workgroup counts covering `threads` invocations with `local` threads per
 /// group along each axis, checked against `maxComputeWorkGroupCount`.

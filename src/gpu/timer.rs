@@ -1,6 +1,8 @@
 //! GPU timestamps for named passes. Ticks are masked to the queue's
 //! `timestampValidBits` and scaled by `timestampPeriod` (ns per tick).
 
+use super::record::Recording;
+use super::retire::Retired;
 use super::timings::Timings;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
@@ -18,6 +20,8 @@ pub struct Timer {
     /// Recordings so far (`reset`): a pass handle of an earlier one closes
     /// nothing.
     recording: u64,
+    /// The last `reset` was given another context's command buffer.
+    reset_elsewhere: bool,
 }
 
 /// Handle of a pass opened with [`Timer::begin`] (its index and recording).
@@ -39,6 +43,7 @@ impl Timer {
             passes: Vec::new(),
             open: None,
             recording: 0,
+            reset_elsewhere: false,
         })
     }
 
@@ -48,27 +53,46 @@ impl Timer {
     }
 
     /// Resets every query; record before the first pass of a recording.
-    pub fn reset(&mut self, cmd: vk::CommandBuffer) {
+    /// Into another context's command buffer it records nothing, and the
+    /// next `begin` is an error.
+    pub fn reset(&mut self, cmd: Recording<'_>) {
         self.passes.clear();
         self.open = None;
         self.recording += 1;
-        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+        self.reset_elsewhere = !self.ctx.is(cmd.context());
+        if self.reset_elsewhere {
+            return;
+        }
+        // SAFETY: the pool is this device's, as the command buffer is.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_reset_query_pool(cmd.raw(), self.pool, 0, self.capacity)
+        };
     }
 
-    fn write(&self, cmd: vk::CommandBuffer, query: u32) {
+    fn write(&self, cmd: Recording<'_>, query: u32) {
         // ALL_COMMANDS: the timestamp waits for all earlier work, so a pass
         // measures its own commands, not the tail of the one before.
         unsafe {
             self.ctx
                 .device()
-                .cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, query)
+                .cmd_write_timestamp2(cmd.raw(), vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, query)
         };
     }
 
     /// Opens pass `name`; passes do not nest (opening one while another is
     /// open is an error). On a queue without timestamps nothing is
     /// written, and `results` is empty.
-    pub fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Pass> {
+    pub fn begin(&mut self, cmd: Recording<'_>, name: &str) -> Result<Pass> {
+        self.ctx.check_is(cmd.context(), "timer's command buffer")?;
+        if self.reset_elsewhere {
+            return Err(Error::invalid(
+                "timer pass",
+                name,
+                "the timer's last reset went to another lacuna Context's command buffer",
+            ));
+        }
         if let Some(open) = self.open {
             return Err(Error::invalid(
                 "timer pass",
@@ -96,10 +120,10 @@ impl Timer {
     }
 
     /// Closes `pass`, the open one; any other pass (an earlier recording's,
-    /// or one already closed) is left as it is, and `results` names a pass
-    /// that was never closed.
-    pub fn end(&mut self, cmd: vk::CommandBuffer, pass: Pass) {
-        if self.open != Some(pass.0) || pass.1 != self.recording {
+    /// or one already closed), or a command buffer of another context,
+    /// leaves it as it is, and `results` names a pass that was never closed.
+    pub fn end(&mut self, cmd: Recording<'_>, pass: Pass) {
+        if self.open != Some(pass.0) || pass.1 != self.recording || !self.ctx.is(cmd.context()) {
             return;
         }
         if self.supported() {
@@ -150,7 +174,7 @@ impl Timer {
 
 impl Drop for Timer {
     fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_query_pool(self.pool, None) };
+        self.ctx.retire([Retired::QueryPool(self.pool)]);
     }
 }
 
@@ -159,20 +183,20 @@ impl Drop for Timer {
 /// recording code reads the same either way.
 pub trait OptionalTimer {
     /// Opens pass `name` when there is a timer.
-    fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Option<Pass>>;
+    fn begin(&mut self, cmd: Recording<'_>, name: &str) -> Result<Option<Pass>>;
     /// Closes a pass opened by `begin`.
-    fn end(&mut self, cmd: vk::CommandBuffer, pass: Option<Pass>);
+    fn end(&mut self, cmd: Recording<'_>, pass: Option<Pass>);
 }
 
 impl OptionalTimer for Option<&mut Timer> {
-    fn begin(&mut self, cmd: vk::CommandBuffer, name: &str) -> Result<Option<Pass>> {
+    fn begin(&mut self, cmd: Recording<'_>, name: &str) -> Result<Option<Pass>> {
         match self {
             Some(t) => t.begin(cmd, name).map(Some),
             None => Ok(None),
         }
     }
 
-    fn end(&mut self, cmd: vk::CommandBuffer, pass: Option<Pass>) {
+    fn end(&mut self, cmd: Recording<'_>, pass: Option<Pass>) {
         if let (Some(t), Some(p)) = (self, pass) {
             t.end(cmd, p);
         }

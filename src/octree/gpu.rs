@@ -140,9 +140,11 @@ impl<'k> GpuTracer<'k> {
             ctx.submit_and_wait(|cmd| {
                 timer.reset(cmd);
                 let pass = timer.begin(cmd, "trace")?;
-                kernel.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups)?;
+                // SAFETY: every binding is a live object of this context borrowed for
+                // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+                unsafe { kernel.dispatch(cmd, &bindings, bytemuck::bytes_of(&push), groups) }?;
                 timer.end(cmd, pass);
-                record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+                cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
             ms += self.timer.results()?.total();

@@ -8,6 +8,7 @@ use super::{check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record;
 use crate::gpu::shaders::{self, prims_brick_minmax as k, prims_ranges_coarsen as coarsen};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 use crate::volume::GpuVolume;
 
@@ -49,14 +50,7 @@ impl BrickMinMax {
     /// Records `out[b * channels + c] = vec2(min, max)` for every `brick`^3
     /// brick and channel with an apron of `apron` voxels. Ends with compute
     /// writes.
-    pub fn record(
-        &self,
-        cmd: vk::CommandBuffer,
-        volume: &GpuVolume,
-        brick: u32,
-        apron: u32,
-        out: &Buffer,
-    ) -> Result<()> {
+    pub fn record(&self, cmd: Recording<'_>, volume: &GpuVolume, brick: u32, apron: u32, out: &Buffer) -> Result<()> {
         self.record_bricks(cmd, volume, (brick, apron), out, None)
     }
 
@@ -64,7 +58,7 @@ impl BrickMinMax {
     /// indices, u32): the others of `out` are left as they are.
     pub fn record_listed(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         volume: &GpuVolume,
         (brick, apron): (u32, u32),
         out: &Buffer,
@@ -75,7 +69,7 @@ impl BrickMinMax {
 
     fn record_bricks(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         volume: &GpuVolume,
         (brick, apron): (u32, u32),
         out: &Buffer,
@@ -105,7 +99,7 @@ impl BrickMinMax {
                 (3, listed.is_some() as u32),
             ],
         )?;
-        entry_barrier(self.ctx.device(), cmd);
+        entry_barrier(cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", n as u64, kernel.local_size()[0])?;
         // dims.w: brick edge; counts.w: total bricks.
         let push = k::Push {
@@ -117,23 +111,27 @@ impl BrickMinMax {
             groups_x: groups[0],
             pool_brick: volume.brick_edge(),
         };
-        kernel.dispatch(
-            cmd,
-            &k::Bindings {
-                volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
-                ranges: Binding::Storage(out),
-                brick_table: Binding::TexelBuffer(volume.brick_table().view()),
-                pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
-                pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
-                pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
-                cells: Binding::TexelBuffer(cells.unwrap_or(volume.brick_table()).view()),
-                // Not read unless listed (a constant).
-                listed: Binding::Storage(list),
-            }
-            .list(),
-            bytemuck::bytes_of(&push),
-            groups,
-        )
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            kernel.dispatch(
+                cmd,
+                &k::Bindings {
+                    volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
+                    ranges: Binding::Storage(out),
+                    brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+                    pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
+                    pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
+                    pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
+                    cells: Binding::TexelBuffer(cells.unwrap_or(volume.brick_table()).view()),
+                    // Not read unless listed (a constant).
+                    listed: Binding::Storage(list),
+                }
+                .list(),
+                bytemuck::bytes_of(&push),
+                groups,
+            )
+        }
     }
 
     /// Records the ranges of `volume`'s `brick`^3 bricks into `out` from
@@ -143,7 +141,7 @@ impl BrickMinMax {
     /// writes.
     pub fn record_coarsen(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         volume: &GpuVolume,
         (fine, ratio): (&Buffer, u32),
         brick: u32,
@@ -159,7 +157,7 @@ impl BrickMinMax {
             "finer brick ranges",
             fine_total * 8 * volume.channels as u64,
         )?;
-        entry_barrier(self.ctx.device(), cmd);
+        entry_barrier(cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", total, self.coarsen.local_size()[0])?;
         let push = coarsen::Push {
             fine_counts: [fine_counts[0], fine_counts[1], fine_counts[2], volume.channels],
@@ -171,8 +169,12 @@ impl BrickMinMax {
             fine: Binding::Storage(fine),
             coarse: Binding::Storage(out),
         };
-        self.coarsen
-            .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.coarsen
+                .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)
+        }
     }
 }
 

@@ -6,6 +6,7 @@ use super::{check_elements, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_compact as k};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 /// Stream compaction on the device: the indices of flagged elements, in order.
@@ -52,7 +53,7 @@ impl Compact {
     /// usage, `count` TRANSFER_DST. Ends with compute writes.
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         flags: &Buffer,
         n: u64,
         indices: &Buffer,
@@ -62,8 +63,8 @@ impl Compact {
         check_elements("compaction", n, scratch.capacity, &[flags, indices])?;
         check_elements("compaction count", 1, 1, &[count])?;
         let device = self.ctx.device();
-        entry_barrier(device, cmd);
-        unsafe { device.cmd_fill_buffer(cmd, count.raw, 0, 4, 0) };
+        entry_barrier(cmd);
+        unsafe { device.cmd_fill_buffer(cmd.raw(), count.raw, 0, 4, 0) };
         if n == 0 {
             return Ok(());
         }
@@ -72,26 +73,30 @@ impl Compact {
             dst_offset: 0,
             size: n * 4,
         }];
-        unsafe { device.cmd_copy_buffer(cmd, flags.raw, scratch.offsets.raw, &region) };
+        unsafe { device.cmd_copy_buffer(cmd.raw(), flags.raw, scratch.offsets.raw, &region) };
         self.scan.record(cmd, &scratch.offsets, n, &scratch.scan)?;
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ);
         let groups = record::groups_linear(self.ctx.info(), "compact", n, self.kernel.local_size()[0])?;
         let push = k::Push {
             n: n as u32,
             groups_x: groups[0],
             ..Default::default()
         };
-        self.kernel.dispatch(
-            cmd,
-            &k::Bindings {
-                flags: Binding::Storage(flags),
-                offsets: Binding::Storage(&scratch.offsets),
-                out: Binding::Storage(indices),
-                count: Binding::Storage(count),
-            }
-            .list(),
-            bytemuck::bytes_of(&push),
-            groups,
-        )
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.kernel.dispatch(
+                cmd,
+                &k::Bindings {
+                    flags: Binding::Storage(flags),
+                    offsets: Binding::Storage(&scratch.offsets),
+                    out: Binding::Storage(indices),
+                    count: Binding::Storage(count),
+                }
+                .list(),
+                bytemuck::bytes_of(&push),
+                groups,
+            )
+        }
     }
 }

@@ -23,8 +23,9 @@ pub use layout::BlockLayout;
 pub use radix_sort::{RadixSort, SortScratch};
 pub use scan::{Scan, ScanScratch};
 
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::vk;
+use crate::gpu::Recording;
 
 /// Push-constant bytes from u32 words.
 pub fn words(w: &[u32]) -> Vec<u8> {
@@ -32,7 +33,7 @@ pub fn words(w: &[u32]) -> Vec<u8> {
 }
 
 /// Earlier compute and transfer writes become visible to compute and transfer reads.
-pub fn entry_barrier(device: &ash::Device, cmd: vk::CommandBuffer) {
+pub fn entry_barrier(cmd: Recording<'_>) {
     let src = Access {
         stage: vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
         access: vk::AccessFlags2::SHADER_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
@@ -44,7 +45,7 @@ pub fn entry_barrier(device: &ash::Device, cmd: vk::CommandBuffer) {
             | vk::AccessFlags2::TRANSFER_READ
             | vk::AccessFlags2::TRANSFER_WRITE,
     };
-    record::barrier(device, cmd, src, dst);
+    cmd.barrier(src, dst);
 }
 
 /// Checks that `bytes` of one storage binding fit `maxStorageBufferRange`.

@@ -8,6 +8,7 @@ use super::{check_elements, check_range, entry_barrier};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, prims_radix_hist, prims_radix_scatter};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 /// Key bits each pass of the radix sort orders.
@@ -92,7 +93,7 @@ impl RadixSort {
     /// TRANSFER_DST usage. Ends with compute or transfer writes.
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         keys: &Buffer,
         vals: &Buffer,
         n: u64,
@@ -104,7 +105,7 @@ impl RadixSort {
         }
         check_elements("sort", n, scratch.capacity, &[keys, vals])?;
         let device = self.ctx.device();
-        entry_barrier(device, cmd);
+        entry_barrier(cmd);
         if n <= 1 {
             return Ok(());
         }
@@ -128,44 +129,52 @@ impl RadixSort {
             };
             let push = bytemuck::bytes_of(&push);
             if pass > 0 {
-                record::compute_to_compute(device, cmd);
+                cmd.compute_to_compute();
             }
-            self.hist.dispatch(
-                cmd,
-                &prims_radix_hist::Bindings {
-                    keys: Binding::Storage(src.0),
-                    hist: Binding::Storage(&scratch.hist),
-                }
-                .list(),
-                push,
-                groups,
-            )?;
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.hist.dispatch(
+                    cmd,
+                    &prims_radix_hist::Bindings {
+                        keys: Binding::Storage(src.0),
+                        hist: Binding::Storage(&scratch.hist),
+                    }
+                    .list(),
+                    push,
+                    groups,
+                )
+            }?;
             self.scan.record(cmd, &scratch.hist, 16 * blocks, &scratch.scan)?;
-            record::compute_to_compute(device, cmd);
-            self.scatter.dispatch(
-                cmd,
-                &prims_radix_scatter::Bindings {
-                    keys_in: Binding::Storage(src.0),
-                    vals_in: Binding::Storage(src.1),
-                    keys_out: Binding::Storage(dst.0),
-                    vals_out: Binding::Storage(dst.1),
-                    offsets: Binding::Storage(&scratch.hist),
-                }
-                .list(),
-                push,
-                groups,
-            )?;
+            cmd.compute_to_compute();
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.scatter.dispatch(
+                    cmd,
+                    &prims_radix_scatter::Bindings {
+                        keys_in: Binding::Storage(src.0),
+                        vals_in: Binding::Storage(src.1),
+                        keys_out: Binding::Storage(dst.0),
+                        vals_out: Binding::Storage(dst.1),
+                        offsets: Binding::Storage(&scratch.hist),
+                    }
+                    .list(),
+                    push,
+                    groups,
+                )
+            }?;
         }
         if passes % 2 == 1 {
-            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+            cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
             let region = [vk::BufferCopy {
                 src_offset: 0,
                 dst_offset: 0,
                 size: n * 4,
             }];
             unsafe {
-                device.cmd_copy_buffer(cmd, scratch.keys.raw, keys.raw, &region);
-                device.cmd_copy_buffer(cmd, scratch.vals.raw, vals.raw, &region);
+                device.cmd_copy_buffer(cmd.raw(), scratch.keys.raw, keys.raw, &region);
+                device.cmd_copy_buffer(cmd.raw(), scratch.vals.raw, vals.raw, &region);
             }
         }
         Ok(())

@@ -7,6 +7,7 @@ use super::{check_elements, check_range, entry_barrier};
 use crate::error::Result;
 use crate::gpu::record::{self};
 use crate::gpu::shaders::{self, prims_scan_add, prims_scan_blocks};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation};
 
 /// An exclusive prefix sum of u32 on the device.
@@ -68,13 +69,13 @@ impl Scan {
 
     /// Records an exclusive scan of `data[0..n]` in place (see the barrier
     /// convention in `prims`).
-    pub fn record(&self, cmd: vk::CommandBuffer, data: &Buffer, n: u64, scratch: &ScanScratch) -> Result<()> {
+    pub fn record(&self, cmd: Recording<'_>, data: &Buffer, n: u64, scratch: &ScanScratch) -> Result<()> {
         check_elements("scan", n, scratch.capacity, &[data])?;
-        entry_barrier(self.ctx.device(), cmd);
+        entry_barrier(cmd);
         self.level(cmd, data, n, scratch, 0)
     }
 
-    fn level(&self, cmd: vk::CommandBuffer, data: &Buffer, n: u64, scratch: &ScanScratch, depth: usize) -> Result<()> {
+    fn level(&self, cmd: Recording<'_>, data: &Buffer, n: u64, scratch: &ScanScratch, depth: usize) -> Result<()> {
         if n == 0 {
             return Ok(());
         }
@@ -96,12 +97,16 @@ impl Scan {
             data: Binding::Storage(data),
             sums: Binding::Storage(sums),
         };
-        self.blocks
-            .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.blocks
+                .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)
+        }?;
         if blocks > 1 {
-            record::compute_to_compute(self.ctx.device(), cmd);
+            cmd.compute_to_compute();
             self.level(cmd, sums, blocks, scratch, depth + 1)?;
-            record::compute_to_compute(self.ctx.device(), cmd);
+            cmd.compute_to_compute();
             let push = prims_scan_add::Push {
                 n: n as u32,
                 groups_x: groups[0],
@@ -111,8 +116,12 @@ impl Scan {
                 data: Binding::Storage(data),
                 offsets: Binding::Storage(sums),
             };
-            self.add
-                .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.add
+                    .dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)
+            }?;
         }
         Ok(())
     }

@@ -7,8 +7,9 @@ use crate::accel::{March, Structure};
 use crate::desc::FrameDesc;
 use crate::error::{Error, Result, VkContext};
 use crate::frame::Frame;
-use crate::gpu::record::{self, Access};
+use crate::gpu::record::Access;
 use crate::gpu::shaders::{self, build_opacity_lut, render_depth_limit, MarchCommon};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Bound, Context, Kernel, OptionalTimer, TexelBuffer, Timer, Timings};
 use crate::tf::GpuTransferFunction;
 use crate::volume::GpuVolume;
@@ -126,7 +127,7 @@ impl Renderer {
     /// your own with `bands` and `record_band` (as `render` marches).
     pub fn record(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         target: &RenderTarget,
         scene: Scene,
@@ -166,7 +167,7 @@ impl Renderer {
     #[allow(clippy::too_many_arguments)]
     pub fn record_band(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         target: &RenderTarget,
         scene: Scene,
@@ -238,7 +239,7 @@ impl Renderer {
     /// `record`, writing `to`.
     fn record_frame(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         target: &RenderTarget,
         scene: Scene,
@@ -253,6 +254,7 @@ impl Renderer {
             rows,
         } = to;
         let Scene { structure, volume, tf } = scene;
+        self.ctx.check_is(cmd.context(), "command buffer")?;
         self.ctx.check_is(volume.context(), "volume")?;
         self.ctx.check_is(tf.context(), "transfer function")?;
         self.ctx.check_is(target.params.context(), "render target")?;
@@ -308,12 +310,12 @@ impl Renderer {
         let device = self.ctx.device();
         // Earlier frames on this target: their parameter reads and frame
         // readback must finish before this frame overwrites them.
-        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
-        record::barrier(device, cmd, Access::TRANSFER_READ, Access::COMPUTE_WRITE);
-        unsafe { device.cmd_update_buffer(cmd, target.params.raw, 0, bytemuck::bytes_of(&params)) };
+        cmd.barrier(Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
+        cmd.barrier(Access::TRANSFER_READ, Access::COMPUTE_WRITE);
+        unsafe { device.cmd_update_buffer(cmd.raw(), target.params.raw, 0, bytemuck::bytes_of(&params)) };
         let status = target.status_buffer();
-        unsafe { device.cmd_fill_buffer(cmd, status.raw, 0, vk::WHOLE_SIZE, 0) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        unsafe { device.cmd_fill_buffer(cmd.raw(), status.raw, 0, vk::WHOLE_SIZE, 0) };
+        cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         // The bindings every march kernel has, then the structure's own.
         let mut bindings: Vec<Bound> = MarchCommon {
             params: Binding::Storage(&target.params),
@@ -345,31 +347,39 @@ impl Renderer {
                 let depth_groups = self
                     .depth_limit
                     .groups("depth limits", [target.width, target.height, 1])?;
-                self.depth_limit.dispatch(cmd, &limits.list(), &[], depth_groups)?;
+                // SAFETY: every binding is a live object of this context borrowed for
+                // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+                unsafe { self.depth_limit.dispatch(cmd, &limits.list(), &[], depth_groups) }?;
             }
             // An earlier frame's march reads the LUT this one rewrites.
-            record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
-            self.opacity.dispatch(
-                cmd,
-                &build_opacity_lut::Bindings {
-                    raw: Binding::Storage(&tf.lut),
-                    lut: Binding::Storage(target.lut.buffer()),
-                }
-                .list(),
-                bytemuck::bytes_of(&lut_push),
-                lut_groups,
-            )?;
+            cmd.barrier(Access::COMPUTE_READ_WRITE, Access::COMPUTE_WRITE);
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.opacity.dispatch(
+                    cmd,
+                    &build_opacity_lut::Bindings {
+                        raw: Binding::Storage(&tf.lut),
+                        lut: Binding::Storage(target.lut.buffer()),
+                    }
+                    .list(),
+                    bytemuck::bytes_of(&lut_push),
+                    lut_groups,
+                )
+            }?;
             // The LUT and the depth limits, written above, are read by the march.
-            record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+            cmd.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ);
             // A band: workgroup rows [first, first + count).
             let [first, count] = rows.unwrap_or([0, groups[1]]);
             let rows = count.min(groups[1].saturating_sub(first));
-            kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1])
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe { kernel.dispatch_base(cmd, &bindings, &push, [0, first, 0], [groups[0], rows, 1]) }
         })();
         timer.end(cmd, pass);
         recorded?;
         // The march status (`RenderTarget::cut_groups`) is read by the host.
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
         Ok(())
     }
 
@@ -377,21 +387,23 @@ impl Renderer {
     /// target's host-visible readback buffer, with the barriers before (compute write -> transfer
     /// read) and after (transfer write -> host read). A target without a
     /// readback buffer is an error.
-    pub fn record_readback(&self, cmd: vk::CommandBuffer, target: &RenderTarget) -> Result<()> {
+    pub fn record_readback(&self, cmd: Recording<'_>, target: &RenderTarget) -> Result<()> {
+        self.ctx.check_is(cmd.context(), "command buffer")?;
+        self.ctx.check_is(target.params.context(), "render target")?;
         let (frame, readback) = (target.frame_buffer()?, target.readback_buffer()?);
         let device = self.ctx.device();
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         let copy = |src: &crate::gpu::Buffer, dst_offset: u64| {
             let region = [vk::BufferCopy {
                 src_offset: 0,
                 dst_offset,
                 size: src.size(),
             }];
-            unsafe { device.cmd_copy_buffer(cmd, src.raw, readback.raw, &region) };
+            unsafe { device.cmd_copy_buffer(cmd.raw(), src.raw, readback.raw, &region) };
         };
         copy(frame, 0);
         copy(&target.depth, frame.size());
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     }
 
@@ -489,6 +501,6 @@ fn band_rows(kernel: &Kernel, scene: Scene, desc: &FrameDesc, max_samples: u64) 
 
 impl Drop for Renderer {
     fn drop(&mut self) {
-        unsafe { self.ctx.device().destroy_sampler(self.depth_sampler, None) };
+        self.ctx.retire([crate::gpu::Retired::Sampler(self.depth_sampler)]);
     }
 }

@@ -36,11 +36,46 @@ pub struct RenderTarget {
 /// when the frame's commands execute.
 #[derive(Clone, Copy, Debug)]
 pub struct HostImage {
-    pub view: vk::ImageView,
-    pub format: vk::Format,
-    pub layout: vk::ImageLayout,
-    pub width: u32,
-    pub height: u32,
+    pub(crate) view: vk::ImageView,
+    pub(crate) format: vk::Format,
+    pub(crate) layout: vk::ImageLayout,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+}
+
+impl HostImage {
+    /// The host's image `view`, `width` x `height` texels of `format`.
+    /// Format, size and layout are checked where a frame is recorded.
+    ///
+    /// # Safety
+    /// Whenever a frame recorded to it executes, `view` is a live 2D view of
+    /// an image of the context's device created with `STORAGE` usage, in
+    /// `layout`. (A frame refused at record time records nothing.)
+    pub unsafe fn new(
+        view: vk::ImageView,
+        format: vk::Format,
+        layout: vk::ImageLayout,
+        width: u32,
+        height: u32,
+    ) -> Self {
+        HostImage {
+            view,
+            format,
+            layout,
+            width,
+            height,
+        }
+    }
+
+    /// Its width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Its height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
 }
 
 /// A host's storage buffer a frame writes its depth to: one f32 per pixel,
@@ -55,9 +90,9 @@ pub struct HostImage {
 /// it draws after.
 #[derive(Clone, Copy, Debug)]
 pub struct HostDepthOut {
-    pub buffer: vk::Buffer,
-    pub offset: u64,
-    pub size: u64,
+    pub(crate) buffer: vk::Buffer,
+    pub(crate) offset: u64,
+    pub(crate) size: u64,
 }
 
 /// The frame's destination.
@@ -72,6 +107,17 @@ pub enum Output {
 }
 
 impl HostDepthOut {
+    /// `size` bytes of the host's `buffer` from `offset` (checked against
+    /// the frame and the device's alignment where a frame is recorded).
+    ///
+    /// # Safety
+    /// Whenever a frame recorded to it executes, `buffer` is a live buffer
+    /// of the context's device created with `STORAGE_BUFFER` usage, at least
+    /// `offset + size` bytes long.
+    pub unsafe fn new(buffer: vk::Buffer, offset: u64, size: u64) -> Self {
+        HostDepthOut { buffer, offset, size }
+    }
+
     pub(crate) fn check(&self, ctx: &Context, width: u32, height: u32) -> Result<()> {
         let need = width as u64 * height as u64 * 4;
         if self.size < need {

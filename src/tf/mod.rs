@@ -8,6 +8,7 @@
 //! `spike:CENTER:WIDTH[:ALPHA]`, or a ParaView-exported JSON colormap file.
 
 use crate::error::{Error, Result};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Buffer, Context, Staging};
 use std::path::Path;
 
@@ -489,12 +490,12 @@ impl TransferFunction {
     /// As `upload`, recorded into `cmd`: copies from staging, then a barrier
     /// to compute-shader reads. Keep the returned `Staging` until the
     /// submission completed.
-    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<(GpuTransferFunction, Staging)> {
+    pub fn record_upload(&self, cmd: Recording<'_>) -> Result<(GpuTransferFunction, Staging)> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let (luts, tables) = self.channel_tables();
-        let (lut, a) = Buffer::record_with_data(ctx, cmd, "transfer function", bytemuck::cast_slice(&luts), usage)?;
+        let (lut, a) = Buffer::record_with_data(cmd, "transfer function", bytemuck::cast_slice(&luts), usage)?;
         let name = "transfer function max table";
-        let (max_table, b) = Buffer::record_with_data(ctx, cmd, name, bytemuck::cast_slice(&tables), usage)?;
+        let (max_table, b) = Buffer::record_with_data(cmd, name, bytemuck::cast_slice(&tables), usage)?;
         Ok((self.on_gpu(lut, max_table), a.join(b)))
     }
 

@@ -24,6 +24,7 @@ use super::{Volume, VoxelData};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, volume_cells as k};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, DeviceInfo, Kernel, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
 use rayon::prelude::*;
 
@@ -346,15 +347,21 @@ pub fn cells_words(volume: &Volume) -> Vec<u32> {
 /// writes to compute-shader reads. No host packing and no staging of 8 to
 /// 32 bytes a voxel. Timed as pass "cells" on `timer`. Keep the returned
 /// kernel until the submission completed.
-pub fn record_pack_cells(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
+///
+/// # Safety
+/// `view` is a view of a 3D image of `cmd`'s device holding a volume of
+/// `dims` texels of `kind`, in SHADER_READ_ONLY_OPTIMAL when the commands
+/// execute, and `sampler` a sampler of that device; both stay alive until
+/// the commands have executed.
+pub unsafe fn record_pack_cells(
+    cmd: Recording<'_>,
     mut timer: Option<&mut Timer>,
     (view, sampler): (vk::ImageView, vk::Sampler),
     dims: [u32; 3],
     kind: TexelKind,
     range: u64,
 ) -> Result<(TexelBuffer, Kernel)> {
+    let ctx = cmd.context();
     let bytes = check_cells(ctx.info(), dims, kind)?;
     let buffer = cells_buffer(ctx, bytes)?;
     let kernel = Kernel::new::<k::Push>(ctx, &shaders::VOLUME_CELLS)?;
@@ -389,11 +396,13 @@ pub fn record_pack_cells(
             volume_tex: Binding::Sampled(view, sampler),
             cells: Binding::StorageRange(buffer.raw, first * row_bytes, n * row_bytes),
         };
-        kernel.dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups)?;
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe { kernel.dispatch(cmd, &bindings.list(), bytemuck::bytes_of(&push), groups) }?;
         first += n;
     }
     timer.end(cmd, pass);
-    record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+    cmd.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ);
     Ok((TexelBuffer::new(ctx, buffer, kind.format().0)?, kernel))
 }
 

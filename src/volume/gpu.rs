@@ -15,6 +15,7 @@ use super::gradient_cells;
 use super::pool::{BrickBox, PoolLayout, PoolLimits, PoolStats, Storage};
 use super::{channels, HostPool, Volume, VoxelData, MAX_CHANNELS};
 use crate::error::{Error, Result, VkContext};
+use crate::gpu::Recording;
 use crate::gpu::{check_image3d, vk, Buffer, Context, Image3d, Kernel, Staging, TexelBuffer};
 use std::borrow::Cow;
 
@@ -263,17 +264,13 @@ impl GpuVolume {
     /// As `upload`, recorded into `cmd`: leaves the image in
     /// SHADER_READ_ONLY_OPTIMAL behind a barrier to compute-shader reads.
     /// Keep the returned `Staging` until the submission completed.
-    pub fn record_upload(ctx: &Context, cmd: vk::CommandBuffer, volume: &Volume) -> Result<(Self, Staging)> {
-        Self::record_upload_as(ctx, cmd, volume, Storage::Auto)
+    pub fn record_upload(cmd: Recording<'_>, volume: &Volume) -> Result<(Self, Staging)> {
+        Self::record_upload_as(cmd, volume, Storage::Auto)
     }
 
     /// As `upload_as`, recorded into `cmd` (see `record_upload`).
-    pub fn record_upload_as(
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        volume: &Volume,
-        storage: Storage,
-    ) -> Result<(Self, Staging)> {
+    pub fn record_upload_as(cmd: Recording<'_>, volume: &Volume, storage: Storage) -> Result<(Self, Staging)> {
+        let ctx = cmd.context();
         volume.check()?;
         let (format, texel, bytes) = texels(volume)?;
         if let Storage::Bricks { edge } = resolve_storage(ctx, volume, storage) {
@@ -283,17 +280,17 @@ impl GpuVolume {
             for k in 0..layout.images.len() {
                 let pool = pool_image_texels(&layout, k, &bytes)?;
                 let (image, staging) =
-                    Image3d::record_with_data(ctx, cmd, "brick pool", format, layout.extent(k), texel, &pool)?;
+                    Image3d::record_with_data(cmd, "brick pool", format, layout.extent(k), texel, &pool)?;
                 images.push(image);
                 staged.push(staging);
             }
             let table = bytemuck::cast_slice(&layout.table);
-            let (table, staging) = Buffer::record_with_data(ctx, cmd, "brick table", table, BRICK_TABLE_USAGE)?;
+            let (table, staging) = Buffer::record_with_data(cmd, "brick table", table, BRICK_TABLE_USAGE)?;
             let table = TexelBuffer::new(ctx, table, BRICK_TABLE_FORMAT)?;
             let gv = Self::with_images(ctx, volume, images, Some((&layout, table)))?;
             return Ok((gv, staged.into_iter().fold(staging, Staging::join)));
         }
-        let (image, staging) = Image3d::record_with_data(ctx, cmd, &volume.name, format, volume.dims, texel, &bytes)?;
+        let (image, staging) = Image3d::record_with_data(cmd, &volume.name, format, volume.dims, texel, &bytes)?;
         Ok((Self::with_images(ctx, volume, vec![image], None)?, staging))
     }
 
@@ -416,7 +413,8 @@ impl GpuVolume {
     /// (a CPU device: written through its mapping, nothing recorded or
     /// submitted); elsewhere lit frames read the gradient image, the same
     /// frames bit for bit.
-    pub fn record_add_gradient(&mut self, cmd: vk::CommandBuffer, volume: &Volume) -> Result<Option<Staging>> {
+    pub fn record_add_gradient(&mut self, cmd: Recording<'_>, volume: &Volume) -> Result<Option<Staging>> {
+        self.ctx.check_is(cmd.context(), "command buffer")?;
         let wants_cells = self.cells.is_some()
             && self.gradient_cells.is_none()
             && cells::host_shared(&self.ctx)
@@ -428,15 +426,8 @@ impl GpuVolume {
         let mut staging = None;
         if self.gradient.is_none() {
             let bytes = bytemuck::cast_slice(&texels);
-            let (image, kept) = Image3d::record_with_data(
-                &self.ctx,
-                cmd,
-                "gradient",
-                GRADIENT_FORMAT,
-                self.dims,
-                GRADIENT_TEXEL_BYTES,
-                bytes,
-            )?;
+            let (image, kept) =
+                Image3d::record_with_data(cmd, "gradient", GRADIENT_FORMAT, self.dims, GRADIENT_TEXEL_BYTES, bytes)?;
             self.gradient = Some(image);
             staging = Some(kept);
         }
@@ -575,11 +566,7 @@ impl GpuVolume {
 
 impl Drop for GpuVolume {
     fn drop(&mut self) {
-        unsafe {
-            self.ctx.device().destroy_sampler(self.sampler, None);
-            if let Some(linear) = self.linear {
-                self.ctx.device().destroy_sampler(linear, None);
-            }
-        }
+        let samplers = std::iter::once(self.sampler).chain(self.linear);
+        self.ctx.retire(samplers.map(crate::gpu::Retired::Sampler));
     }
 }

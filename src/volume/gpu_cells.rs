@@ -5,7 +5,8 @@
 use super::cells;
 use super::{GpuVolume, Volume};
 use crate::error::Result;
-use crate::gpu::{vk, Kernel, TexelBuffer, Timer, Timings};
+use crate::gpu::Recording;
+use crate::gpu::{Kernel, TexelBuffer, Timer, Timings};
 
 impl GpuVolume {
     /// Makes the cells copy (`volume`'s, the volume this was uploaded
@@ -42,12 +43,7 @@ impl GpuVolume {
     /// nothing to keep but this volume (it holds the kernel). On a CPU
     /// device the host packs the copy at once and nothing is recorded.
     /// Does nothing when the copy is already there.
-    pub fn record_add_cells(
-        &mut self,
-        cmd: vk::CommandBuffer,
-        timer: Option<&mut Timer>,
-        volume: &Volume,
-    ) -> Result<()> {
+    pub fn record_add_cells(&mut self, cmd: Recording<'_>, timer: Option<&mut Timer>, volume: &Volume) -> Result<()> {
         if self.cells.is_some() {
             return Ok(());
         }
@@ -70,10 +66,13 @@ impl GpuVolume {
         self.check_one_channel("the cells copy")
     }
 
-    fn record_pack_cells(&self, cmd: vk::CommandBuffer, timer: Option<&mut Timer>) -> Result<(TexelBuffer, Kernel)> {
+    fn record_pack_cells(&self, cmd: Recording<'_>, timer: Option<&mut Timer>) -> Result<(TexelBuffer, Kernel)> {
+        self.ctx.check_is(cmd.context(), "command buffer")?;
         let image = (self.image.view, self.sampler);
         let range = self.ctx.info().max_storage_buffer_range;
-        cells::record_pack_cells(&self.ctx, cmd, timer, image, self.dims, self.kind, range)
+        // SAFETY: the image and sampler are this volume's, alive while it is
+        // (the caller's recording keeps it).
+        unsafe { cells::record_pack_cells(cmd, timer, image, self.dims, self.kind, range) }
     }
 
     /// The cells copy, where `add_cells` (or `record_add_cells`) made it.

@@ -461,7 +461,7 @@ fn a_recorded_bricked_upload_submits_nothing_and_renders_as_the_uploaded_one() {
     // brick table) adds none of its own.
     let before = ctx.submissions();
     let (recorded, staging) = ctx
-        .submit_and_wait(|cmd| GpuVolume::record_upload_as(&ctx, cmd, &v, storage))
+        .submit_and_wait(|cmd| GpuVolume::record_upload_as(cmd, &v, storage))
         .unwrap();
     drop(staging);
     assert_eq!(ctx.submissions(), before + 1);

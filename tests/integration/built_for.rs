@@ -5,7 +5,8 @@
 
 use crate::common::{accel, builder, frame, gpu};
 use lacuna::accel::{BuildInput, Structure};
-use lacuna::render::{FrameDesc, Iso, Mode, Octants, Renderer, Scene};
+use lacuna::gpu::{vk, Buffer, Timer};
+use lacuna::render::{FrameDesc, Iso, Mode, Octants, Output, RenderTarget, Renderer, Scene};
 use lacuna::volume::GpuVolume;
 use lacuna::{TransferFunction, Volume};
 
@@ -212,7 +213,83 @@ fn objects_of_another_context_are_refused_before_anything_is_recorded() {
         &a.defaults(),
     ));
     assert!(e.contains("invalid volume 'of another lacuna Context'"), "{e}");
+    // A command buffer of the other context, given to this one's renderer,
+    // builder or timer: refused, nothing of this context recorded into it.
+    let target = RenderTarget::new(&ctx, 16, 16).unwrap();
+    let scene = Scene {
+        structure: &naive,
+        volume: &gv,
+        tf: &lut,
+    };
+    let e = error(other.submit_and_wait(|cmd| renderer.record(cmd, None, &target, scene, &desc, Output::Buffer)));
+    assert!(e.contains("invalid command buffer 'of another lacuna Context'"), "{e}");
+    let e = error(other.submit_and_wait(|cmd| renderer.record_readback(cmd, &target)));
+    assert!(e.contains("invalid command buffer 'of another lacuna Context'"), "{e}");
+    let b = builder(&ctx);
+    let kinds = [a.method().ranges(&a.defaults()).unwrap()];
+    let e = error(other.submit_and_wait(|cmd| b.record_ranges(cmd, None, &kinds, &gv)));
+    assert!(e.contains("invalid command buffer 'of another lacuna Context'"), "{e}");
+    let mut timer = Timer::new(&ctx, 1).unwrap();
+    let e = error(other.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        timer.begin(cmd, "march")
+    }));
+    assert!(
+        e.contains("invalid timer's command buffer 'of another lacuna Context'"),
+        "{e}"
+    );
+    // Reset into the other's and begun in its own: its queries were never reset.
+    ctx.submit_and_wait(|own| {
+        other.submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            Ok(())
+        })?;
+        let e = error(timer.begin(own, "march"));
+        assert!(e.contains("last reset went to another lacuna Context's"), "{e}");
+        Ok(())
+    })
+    .unwrap();
     crate::common::assert_clean(&other);
+    crate::common::assert_clean(&ctx);
+}
+
+/// Objects dropped in a submission's closure, while the commands that use
+/// them are still to run, live until the submission completed: safe code
+/// cannot free what a command is about to read.
+#[test]
+fn objects_dropped_while_recorded_live_until_their_commands_ran() {
+    let ctx = gpu();
+    let words: Vec<u32> = (0..4096u32).map(|i| i.wrapping_mul(2654435761)).collect();
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+    let buffer = ctx
+        .submit_and_wait(|cmd| {
+            let (buffer, staging) = Buffer::record_with_data(cmd, "copied", bytemuck::cast_slice(&words), usage)?;
+            drop(staging);
+            Ok(buffer)
+        })
+        .unwrap();
+    let got: Vec<u32> = bytemuck::pod_collect_to_vec(&buffer.download(0, 4096 * 4).unwrap());
+    assert_eq!(got, words);
+    // A volume uploaded and dropped with its staging in the closure, and
+    // one kept: the kept one renders as a volume uploaded the usual way.
+    let volume = Volume::load("nbody:16", &Default::default()).unwrap();
+    let kept = ctx
+        .submit_and_wait(|cmd| {
+            drop(GpuVolume::record_upload(cmd, &volume)?);
+            let (kept, staging) = GpuVolume::record_upload(cmd, &volume)?;
+            drop(staging);
+            Ok(kept)
+        })
+        .unwrap();
+    let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let renderer = Renderer::new(&ctx).unwrap();
+    let desc = FrameDesc::builder(32, 32).build().unwrap();
+    let usual = GpuVolume::upload(&ctx, &volume).unwrap();
+    let [a, b] = [&kept, &usual].map(|gv| frame(&renderer, &Structure::naive(), gv, &lut, &desc));
+    assert_eq!(a.pixels, b.pixels);
+    assert!(a.pixels.iter().any(|p| p[3] > 0.0), "the volume shows");
+    crate::common::assert_clean(&ctx);
 }
 
 #[test]

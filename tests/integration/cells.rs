@@ -178,7 +178,8 @@ fn the_devices_cells_copy_is_the_hosts_bit_for_bit() {
             let got = ctx
                 .submit_and_wait(|cmd| {
                     timer.reset(cmd);
-                    record_pack_cells(&ctx, cmd, Some(&mut timer), image, v.dims, kind, range)
+                    // SAFETY: the volume's own image and sampler, alive past the wait.
+                    unsafe { record_pack_cells(cmd, Some(&mut timer), image, v.dims, kind, range) }
                 })
                 .unwrap()
                 .0;

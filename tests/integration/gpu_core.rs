@@ -2,8 +2,8 @@
 //! buffers, timestamps, adoption of a host device, device limits.
 
 use crate::common::{assert_clean, gpu};
-use lacuna::gpu::record;
 use lacuna::gpu::shaders::prims_copy;
+use lacuna::gpu::{record, Recording};
 use lacuna::gpu::{
     required_features, shaders, vk, AdoptInfo, Binding, Bound, Buffer, Context, EnabledFeatures, Kernel,
     MemoryLocation, TexelBuffer, Timer, REQUIRED_EXTENSIONS,
@@ -48,11 +48,13 @@ fn chained_copies(ctx: &Context, with_barrier: bool) -> Vec<u32> {
     let kernel = copy_kernel(ctx);
     let groups = record::groups_linear(ctx.info(), "copy", n as u64, 64).unwrap();
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups)?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups) }?;
         if with_barrier {
-            record::compute_to_compute(ctx.device(), cmd);
+            cmd.compute_to_compute();
         }
-        kernel.dispatch(cmd, &copy(&b, &c), &push(n, groups[0]), groups)?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&b, &c), &push(n, groups[0]), groups) }?;
         Ok(())
     })
     .unwrap();
@@ -94,7 +96,8 @@ fn two_dimensional_dispatch_covers_counts_beyond_one_row() {
     let groups_x = 3u32;
     let groups = [groups_x, n.div_ceil(64).div_ceil(groups_x), 1];
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups_x), groups)?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups_x), groups) }?;
         Ok(())
     })
     .unwrap();
@@ -133,11 +136,13 @@ fn timer_reports_named_passes_in_order() {
     ctx.submit_and_wait(|cmd| {
         timer.reset(cmd);
         let p = timer.begin(cmd, "first")?;
-        kernel.dispatch(cmd, &copy(&a, &b), &push(n as u32, groups[0]), groups)?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&a, &b), &push(n as u32, groups[0]), groups) }?;
         timer.end(cmd, p);
-        record::compute_to_compute(ctx.device(), cmd);
+        cmd.compute_to_compute();
         let p = timer.begin(cmd, "second")?;
-        kernel.dispatch(cmd, &copy(&b, &a), &push(n as u32, groups[0]), groups)?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&b, &a), &push(n as u32, groups[0]), groups) }?;
         timer.end(cmd, p);
         Ok(())
     })
@@ -569,7 +574,8 @@ fn bindings_that_differ_from_the_shader_are_an_error_naming_the_kernel_and_bindi
         ];
         Ok(attempts
             .iter()
-            .map(|(b, why)| (kernel.dispatch(cmd, b, &push, [1, 1, 1]).err(), *why))
+            // SAFETY: only lacuna's own buffers are bound.
+            .map(|(b, why)| (unsafe { kernel.dispatch(cmd, b, &push, [1, 1, 1]) }.err(), *why))
             .collect::<Vec<_>>())
     });
     for (err, why) in result.unwrap() {
@@ -598,8 +604,10 @@ fn resources_go_to_the_binding_of_their_name_whatever_its_number() {
         dst: Binding::Storage(&c),
     };
     ctx.submit_and_wait(|cmd| {
-        kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups)?;
-        swapped.dispatch(cmd, &swapped_bindings.list(), &push(n, groups[0]), groups)
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { kernel.dispatch(cmd, &copy(&a, &b), &push(n, groups[0]), groups) }?;
+        // SAFETY: only lacuna's own buffers are bound.
+        unsafe { swapped.dispatch(cmd, &swapped_bindings.list(), &push(n, groups[0]), groups) }
     })
     .unwrap();
     for out in [&b, &c] {
@@ -664,8 +672,9 @@ fn copy_job<'a>(
     to: &'a Buffer,
     n: u32,
     groups: [u32; 3],
-) -> impl FnOnce(vk::CommandBuffer) -> lacuna::Result<()> + 'a {
-    move |cmd| kernel.dispatch(cmd, &copy(from, to), &push(n, groups[0]), groups)
+) -> impl FnOnce(Recording<'_>) -> lacuna::Result<()> + 'a {
+    // SAFETY: only lacuna's own buffers are bound.
+    move |cmd| unsafe { kernel.dispatch(cmd, &copy(from, to), &push(n, groups[0]), groups) }
 }
 
 /// `submit_while` runs host work between the submission and the wait (here

@@ -47,18 +47,16 @@ impl Host {
     }
 
     fn output(&self, size: u64, offset: u64) -> Output {
-        let image = HostImage {
-            view: self.image.view,
-            format: vk::Format::R32G32B32A32_SFLOAT,
-            layout: vk::ImageLayout::GENERAL,
-            width: SIZE,
-            height: SIZE,
+        let image = unsafe {
+            HostImage::new(
+                self.image.view,
+                vk::Format::R32G32B32A32_SFLOAT,
+                vk::ImageLayout::GENERAL,
+                SIZE,
+                SIZE,
+            )
         };
-        let depth = HostDepthOut {
-            buffer: self.depth.buffer,
-            offset,
-            size,
-        };
+        let depth = unsafe { HostDepthOut::new(self.depth.buffer, offset, size) };
         Output::ImageAndDepth(image, depth)
     }
 
@@ -74,7 +72,7 @@ impl Host {
         ctx.submit_and_wait(|cmd| {
             self.image.transition(
                 device,
-                cmd,
+                cmd.raw(),
                 vk::ImageLayout::UNDEFINED,
                 vk::ImageLayout::GENERAL,
                 (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
@@ -88,9 +86,7 @@ impl Host {
                 desc,
                 self.output(SIZE as u64 * SIZE as u64 * 4, 0),
             )?;
-            lacuna::gpu::record::barrier(
-                device,
-                cmd,
+            cmd.barrier(
                 lacuna::gpu::record::Access::COMPUTE_WRITE,
                 lacuna::gpu::record::Access::HOST_READ,
             );

@@ -239,13 +239,7 @@ fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, 
         vk::BufferUsageFlags::TRANSFER_DST,
     );
     let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
-    let host_image = HostImage {
-        view: image.view,
-        format,
-        layout: vk::ImageLayout::GENERAL,
-        width: SIZE,
-        height: SIZE,
-    };
+    let host_image = unsafe { HostImage::new(image.view, format, vk::ImageLayout::GENERAL, SIZE, SIZE) };
     let compute_write = (
         vk::PipelineStageFlags2::COMPUTE_SHADER,
         vk::AccessFlags2::SHADER_STORAGE_WRITE,
@@ -254,7 +248,7 @@ fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, 
         .submit_and_wait(|cmd| {
             image.transition(
                 device,
-                cmd,
+                cmd.raw(),
                 vk::ImageLayout::UNDEFINED,
                 vk::ImageLayout::GENERAL,
                 (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
@@ -264,13 +258,13 @@ fn render_to_image(f: &Fixture, i: usize, view: &FrameDesc, format: vk::Format, 
                 .record(cmd, None, &target, f.scene(i), view, Output::Image(host_image))?;
             image.transition(
                 device,
-                cmd,
+                cmd.raw(),
                 vk::ImageLayout::GENERAL,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 compute_write,
                 (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_READ),
             );
-            image.record_copy_out(device, cmd, out.buffer);
+            image.record_copy_out(device, cmd.raw(), out.buffer);
             Ok(())
         })
         .unwrap();
@@ -320,13 +314,8 @@ fn a_host_image_of_another_format_or_size_is_refused_by_name() {
     let m = cameras()[0].matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
     let view = view(Camera::Matrices(m));
     let target = RenderTarget::for_images(&f.ctx, SIZE, SIZE).unwrap();
-    let image = |format, width| HostImage {
-        view: vk::ImageView::null(),
-        format,
-        layout: vk::ImageLayout::GENERAL,
-        width,
-        height: SIZE,
-    };
+    let image =
+        |format, width| unsafe { HostImage::new(vk::ImageView::null(), format, vk::ImageLayout::GENERAL, width, SIZE) };
     for (img, needle) in [
         (image(vk::Format::B8G8R8A8_UNORM, SIZE), "B8G8R8A8_UNORM"),
         (image(vk::Format::R8G8B8A8_UNORM, SIZE + 1), "49x48"),
@@ -368,7 +357,7 @@ fn depth_plane(ctx: &Context, depth: f32) -> host::Image2d {
     ctx.submit_and_wait(|cmd| {
         image.transition(
             device,
-            cmd,
+            cmd.raw(),
             vk::ImageLayout::UNDEFINED,
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
@@ -378,7 +367,7 @@ fn depth_plane(ctx: &Context, depth: f32) -> host::Image2d {
         let range = [host::range(vk::ImageAspectFlags::DEPTH)];
         unsafe {
             device.cmd_clear_depth_stencil_image(
-                cmd,
+                cmd.raw(),
                 image.image,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &value,
@@ -387,7 +376,7 @@ fn depth_plane(ctx: &Context, depth: f32) -> host::Image2d {
         };
         image.transition(
             device,
-            cmd,
+            cmd.raw(),
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
             transfer,
@@ -426,12 +415,7 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
             .build()
             .unwrap();
         let plane = depth_plane(&f.ctx, depth);
-        let host_depth = HostDepth {
-            view: plane.view,
-            layout: vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
-            width: SIZE,
-            height: SIZE,
-        };
+        let host_depth = unsafe { HostDepth::new(plane.view, vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL, SIZE, SIZE) };
         let with = |d: HostDepth| view.to_builder().depth(Some(d)).build().unwrap();
         let ended = f.frame(0, &with(host_depth));
         let full = f.frame(0, &view);
@@ -457,10 +441,7 @@ fn rays_end_at_a_host_depth_plane_as_the_cpu_reference_says() {
         plane.destroy(f.ctx.device());
         // Nothing drawn (the far plane's depth everywhere) ends no ray.
         let far = depth_plane(&f.ctx, if reverse_z { 0.0 } else { 1.0 });
-        let open = HostDepth {
-            view: far.view,
-            ..host_depth
-        };
+        let open = unsafe { HostDepth::new(far.view, vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL, SIZE, SIZE) };
         assert!(same_bits(&full, &f.frame(0, &with(open))));
         far.destroy(f.ctx.device());
     }
@@ -499,18 +480,18 @@ fn frame_descriptions_refuse_bad_values_by_name_and_fill_the_block() {
         ),
         "field of view",
     );
-    let depth = HostDepth {
-        view: vk::ImageView::null(),
-        layout: vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
-        width: SIZE + 1,
-        height: SIZE,
+    let depth = unsafe {
+        HostDepth::new(
+            vk::ImageView::null(),
+            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+            SIZE + 1,
+            SIZE,
+        )
     };
     refused(frame().depth(Some(depth)), "host depth");
     refused(
-        frame().depth(Some(HostDepth {
-            width: SIZE,
-            layout: vk::ImageLayout::UNDEFINED,
-            ..depth
+        frame().depth(Some(unsafe {
+            HostDepth::new(vk::ImageView::null(), vk::ImageLayout::UNDEFINED, SIZE, SIZE)
         })),
         "host depth layout",
     );

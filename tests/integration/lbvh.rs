@@ -228,7 +228,7 @@ fn karras_emit_matches_the_cpu_with_duplicate_codes() {
 #[test]
 fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
     use lacuna::accel::Structure;
-    use lacuna::gpu::record::{self, Access};
+    use lacuna::gpu::record::Access;
     use lacuna::gpu::Timer;
     use lacuna::render::{Camera, FrameDesc, Orbit, Output, Projection, RenderTarget, Renderer, Scene};
 
@@ -306,7 +306,7 @@ fn a_recorded_lbvh_renders_as_naive_and_the_host_build_in_one_submission() {
                 .submit_and_wait(|cmd| {
                     timer.reset(cmd);
                     let s = builder.record_build(lbvh, cmd, Some(&mut timer), &input, &ranges, &params)?;
-                    record::barrier(ctx.device(), cmd, Access::COMPUTE_WRITE, Access::COMPUTE_READ);
+                    cmd.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ);
                     let scene = Scene {
                         structure: &s,
                         volume: &gv,

@@ -12,9 +12,9 @@ use lacuna::accel::table::{params_for, shared_params};
 use lacuna::accel::{Accel, BuildInput, Builder, Built, March, Method, Params, RangeKind, Ranges, Stats, TABLE};
 use lacuna::bench::{config, BenchConfig};
 use lacuna::frame::diff;
-use lacuna::gpu::record::{self, Access};
+use lacuna::gpu::record::Access;
 use lacuna::gpu::shaders::{self, march_grid};
-use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, TexelBuffer, Timer};
+use lacuna::gpu::{vk, Binding, Bound, Buffer, MemoryLocation, OptionalTimer, Recording, TexelBuffer, Timer};
 use lacuna::render::Mode;
 use lacuna::render::Octants;
 use lacuna::render::{Filter, FrameDesc, Projection, Renderer, Scene};
@@ -184,7 +184,7 @@ impl Method for FullGrid {
     fn record_build(
         &self,
         builder: &Builder,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mut timer: Option<&mut Timer>,
         input: &BuildInput,
         _: &Ranges,
@@ -208,15 +208,10 @@ impl Method for FullGrid {
             builder
                 .context()
                 .device()
-                .cmd_fill_buffer(cmd, flags.buffer().raw(), 0, vk::WHOLE_SIZE, 1)
+                .cmd_fill_buffer(cmd.raw(), flags.buffer().raw(), 0, vk::WHOLE_SIZE, 1)
         };
         // ALL_TRANSFER, not CLEAR, as the source stage (see the README's validation notes).
-        record::barrier(
-            builder.context().device(),
-            cmd,
-            Access::TRANSFER_WRITE,
-            Access::COMPUTE_READ,
-        );
+        cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
         timer.end(cmd, pass);
         Ok(Box::new(FullGridData { counts, edge, flags }))
     }

@@ -85,34 +85,33 @@ impl KdGpuBuilder {
         self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
             let pass = timer.begin(cmd, "queries")?;
-            entry_barrier(self.ctx.device(), cmd);
-            self.query.dispatch(
-                cmd,
-                &build_box_query::Bindings {
-                    codes: Binding::Storage(&s.codes),
-                    order: Binding::Storage(&s.order),
-                    boxes: Binding::Storage(&s.boxes),
-                    queries: Binding::Storage(&qbuf),
-                    results: Binding::Storage(&rbuf),
-                }
-                .list(),
-                // counts.w: bricks.
-                bytemuck::bytes_of(&build_box_query::Push {
-                    counts: [c[0], c[1], c[2], s.total as u32],
-                    queries: n as u32,
-                    groups_x: groups[0],
-                    brick: RASTER as u32,
-                    pad: 0,
-                }),
-                groups,
-            )?;
+            entry_barrier(cmd);
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.query.dispatch(
+                    cmd,
+                    &build_box_query::Bindings {
+                        codes: Binding::Storage(&s.codes),
+                        order: Binding::Storage(&s.order),
+                        boxes: Binding::Storage(&s.boxes),
+                        queries: Binding::Storage(&qbuf),
+                        results: Binding::Storage(&rbuf),
+                    }
+                    .list(),
+                    // counts.w: bricks.
+                    bytemuck::bytes_of(&build_box_query::Push {
+                        counts: [c[0], c[1], c[2], s.total as u32],
+                        queries: n as u32,
+                        groups_x: groups[0],
+                        brick: RASTER as u32,
+                        pad: 0,
+                    }),
+                    groups,
+                )
+            }?;
             timer.end(cmd, pass);
-            record::barrier(
-                self.ctx.device(),
-                cmd,
-                record::Access::COMPUTE_WRITE,
-                record::Access::HOST_READ,
-            );
+            cmd.barrier(record::Access::COMPUTE_WRITE, record::Access::HOST_READ);
             Ok(())
         })?;
         let ms = timer.results()?.get("queries").unwrap_or(0.0);
@@ -283,35 +282,43 @@ impl KdGpuBuilder {
                 pool_brick: gv.brick_edge(),
                 ..Default::default()
             };
-            self.tight.dispatch(
-                cmd,
-                &build_brick_tight::Bindings {
-                    volume_tex: Binding::Sampled(gv.image.view, gv.sampler),
-                    transfer_max: Binding::Storage(&tf.max_table),
-                    boxes: Binding::Storage(&boxes),
-                    brick_table: Binding::TexelBuffer(gv.brick_table().view()),
-                    pool_1: Binding::Sampled(gv.pool_views()[0], gv.sampler),
-                    pool_2: Binding::Sampled(gv.pool_views()[1], gv.sampler),
-                    pool_3: Binding::Sampled(gv.pool_views()[2], gv.sampler),
-                }
-                .list(),
-                bytemuck::bytes_of(&push),
-                groups,
-            )?;
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.tight.dispatch(
+                    cmd,
+                    &build_brick_tight::Bindings {
+                        volume_tex: Binding::Sampled(gv.image.view, gv.sampler),
+                        transfer_max: Binding::Storage(&tf.max_table),
+                        boxes: Binding::Storage(&boxes),
+                        brick_table: Binding::TexelBuffer(gv.brick_table().view()),
+                        pool_1: Binding::Sampled(gv.pool_views()[0], gv.sampler),
+                        pool_2: Binding::Sampled(gv.pool_views()[1], gv.sampler),
+                        pool_3: Binding::Sampled(gv.pool_views()[2], gv.sampler),
+                    }
+                    .list(),
+                    bytemuck::bytes_of(&push),
+                    groups,
+                )
+            }?;
             timer.end(cmd, pass);
             let pass = timer.begin(cmd, "morton")?;
             let groups = record::groups_linear(info, "morton", total, self.morton.local_size()[0])?;
-            self.morton.dispatch(
-                cmd,
-                &build_morton::Bindings {
-                    active_bricks: Binding::Storage(&dummy),
-                    codes: Binding::Storage(&codes),
-                    payload: Binding::Storage(&order),
-                }
-                .list(),
-                bytemuck::bytes_of(&MortonPush::every(counts, total as u32, groups[0])),
-                groups,
-            )?;
+            // SAFETY: every binding is a live object of this context borrowed for
+            // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+            unsafe {
+                self.morton.dispatch(
+                    cmd,
+                    &build_morton::Bindings {
+                        active_bricks: Binding::Storage(&dummy),
+                        codes: Binding::Storage(&codes),
+                        payload: Binding::Storage(&order),
+                    }
+                    .list(),
+                    bytemuck::bytes_of(&MortonPush::every(counts, total as u32, groups[0])),
+                    groups,
+                )
+            }?;
             timer.end(cmd, pass);
             let pass = timer.begin(cmd, "sort")?;
             self.sort.record(cmd, &codes, &order, total, 30, &scratch)?;

@@ -30,6 +30,7 @@ use super::tree::{STORAGE_XFER, TREE_MARCH};
 use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, build_lbvh_collapse, build_lbvh_emit, build_lbvh_refit, build_morton};
+use crate::gpu::Recording;
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, OptionalTimer, Timer, Timings};
 use crate::prims::{entry_barrier, Compact, CompactScratch, RadixSort, SortScratch};
 use crate::tf::GpuTransferFunction;
@@ -139,17 +140,17 @@ impl LbvhBuilder {
     /// brick indices in ascending order.
     pub fn record_select(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &LbvhInput,
         s: &SelectScratch,
     ) -> Result<()> {
         self.record_classify_compact(cmd, timer, input, s)?;
         let device = self.ctx.device();
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         unsafe {
             device.cmd_copy_buffer(
-                cmd,
+                cmd.raw(),
                 s.count.raw,
                 s.count_readback.raw,
                 &[vk::BufferCopy {
@@ -159,14 +160,14 @@ impl LbvhBuilder {
                 }],
             )
         };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::HOST_READ);
+        cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     }
 
     /// "classify" and "compact" of `record_select`, without the copy.
     fn record_classify_compact(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mut timer: Option<&mut Timer>,
         input: &LbvhInput,
         s: &SelectScratch,
@@ -226,7 +227,7 @@ impl LbvhBuilder {
     /// those entries sort last and the threads past n return).
     pub fn record_hierarchy(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         mut timer: Option<&mut Timer>,
         input: &LbvhInput,
         select: &SelectScratch,
@@ -247,56 +248,64 @@ impl LbvhBuilder {
         let device = self.ctx.device();
         let info = self.ctx.info();
         let c = bricks.counts;
-        entry_barrier(device, cmd);
+        entry_barrier(cmd);
         let pass = timer.begin(cmd, "morton")?;
         let groups = record::groups_linear(info, "morton", n, self.morton.local_size()[0])?;
-        self.morton.dispatch(
-            cmd,
-            &build_morton::Bindings {
-                active_bricks: Binding::Storage(active),
-                codes: Binding::Storage(&h.codes),
-                payload: Binding::Storage(&h.payload),
-            }
-            .list(),
-            bytemuck::bytes_of(&MortonPush::list(c, n as u32, groups[0])),
-            groups,
-        )?;
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.morton.dispatch(
+                cmd,
+                &build_morton::Bindings {
+                    active_bricks: Binding::Storage(active),
+                    codes: Binding::Storage(&h.codes),
+                    payload: Binding::Storage(&h.payload),
+                }
+                .list(),
+                bytemuck::bytes_of(&MortonPush::list(c, n as u32, groups[0])),
+                groups,
+            )
+        }?;
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "sort")?;
         self.sort.record(cmd, &h.codes, &h.payload, n, 30, &h.sort)?;
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "emit")?;
-        entry_barrier(device, cmd);
+        entry_barrier(cmd);
         unsafe {
-            device.cmd_fill_buffer(cmd, h.visits.raw, 0, vk::WHOLE_SIZE, 0);
-            device.cmd_fill_buffer(cmd, h.parents.raw, 0, 4, u32::MAX);
+            device.cmd_fill_buffer(cmd.raw(), h.visits.raw, 0, vk::WHOLE_SIZE, 0);
+            device.cmd_fill_buffer(cmd.raw(), h.parents.raw, 0, 4, u32::MAX);
         }
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         self.record_emit(cmd, &h.codes, n, count, nodes, &h.parents)?;
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "refit")?;
-        record::compute_to_compute(device, cmd);
+        cmd.compute_to_compute();
         let groups = record::groups_linear(info, "refit", n, self.refit.local_size()[0])?;
         let d = volume.dims;
-        self.refit.dispatch(
-            cmd,
-            &build_lbvh_refit::Bindings {
-                payload: Binding::Storage(&h.payload),
-                nodes: Binding::Storage(nodes),
-                parents: Binding::Storage(&h.parents),
-                visits: Binding::Storage(&h.visits),
-                count: Binding::Storage(count),
-            }
-            .list(),
-            // dims.w: brick edge.
-            bytemuck::bytes_of(&build_lbvh_refit::Push {
-                dims: [d[0], d[1], d[2], bricks.brick],
-                counts: [c[0], c[1], c[2], 0],
-                groups_x: groups[0],
-                pad: 0,
-            }),
-            groups,
-        )?;
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.refit.dispatch(
+                cmd,
+                &build_lbvh_refit::Bindings {
+                    payload: Binding::Storage(&h.payload),
+                    nodes: Binding::Storage(nodes),
+                    parents: Binding::Storage(&h.parents),
+                    visits: Binding::Storage(&h.visits),
+                    count: Binding::Storage(count),
+                }
+                .list(),
+                // dims.w: brick edge.
+                bytemuck::bytes_of(&build_lbvh_refit::Push {
+                    dims: [d[0], d[1], d[2], bricks.brick],
+                    counts: [c[0], c[1], c[2], 0],
+                    groups_x: groups[0],
+                    pad: 0,
+                }),
+                groups,
+            )
+        }?;
         timer.end(cmd, pass);
         if let Some(model) = collapse {
             let pass = timer.begin(cmd, "collapse")?;
@@ -309,39 +318,43 @@ impl LbvhBuilder {
     /// The collapse climb after the refit (its visit counters reset first).
     fn record_collapse(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         model: &CostModel,
         count: &Buffer,
         h: &HierarchyScratch,
         nodes: &Buffer,
     ) -> Result<()> {
         let device = self.ctx.device();
-        record::barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
-        unsafe { device.cmd_fill_buffer(cmd, h.visits.raw, 0, vk::WHOLE_SIZE, 0) };
-        record::barrier(device, cmd, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
-        record::compute_to_compute(device, cmd);
+        cmd.barrier(Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
+        unsafe { device.cmd_fill_buffer(cmd.raw(), h.visits.raw, 0, vk::WHOLE_SIZE, 0) };
+        cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        cmd.compute_to_compute();
         let groups = record::groups_linear(self.ctx.info(), "collapse", h.n, self.collapse.local_size()[0])?;
-        self.collapse.dispatch(
-            cmd,
-            &build_lbvh_collapse::Bindings {
-                nodes: Binding::Storage(nodes),
-                parents: Binding::Storage(&h.parents),
-                visits: Binding::Storage(&h.visits),
-                costs: Binding::Storage(&h.costs),
-                count: Binding::Storage(count),
-            }
-            .list(),
-            // `CostModel::gpu_constants`.
-            bytemuck::bytes_of(&build_lbvh_collapse::Push {
-                model: model.gpu_constants(),
-            }),
-            groups,
-        )
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.collapse.dispatch(
+                cmd,
+                &build_lbvh_collapse::Bindings {
+                    nodes: Binding::Storage(nodes),
+                    parents: Binding::Storage(&h.parents),
+                    visits: Binding::Storage(&h.visits),
+                    costs: Binding::Storage(&h.costs),
+                    count: Binding::Storage(count),
+                }
+                .list(),
+                // `CostModel::gpu_constants`.
+                bytemuck::bytes_of(&build_lbvh_collapse::Push {
+                    model: model.gpu_constants(),
+                }),
+                groups,
+            )
+        }
     }
 
     fn record_emit(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         codes: &Buffer,
         n: u64,
         count: &Buffer,
@@ -352,21 +365,25 @@ impl LbvhBuilder {
             return Ok(());
         }
         let groups = record::groups_linear(self.ctx.info(), "emit", n - 1, self.emit.local_size()[0])?;
-        self.emit.dispatch(
-            cmd,
-            &build_lbvh_emit::Bindings {
-                codes: Binding::Storage(codes),
-                nodes: Binding::Storage(nodes),
-                parents: Binding::Storage(parents),
-                count: Binding::Storage(count),
-            }
-            .list(),
-            bytemuck::bytes_of(&build_lbvh_emit::Push {
-                groups_x: groups[0],
-                ..Default::default()
-            }),
-            groups,
-        )
+        // SAFETY: every binding is a live object of this context borrowed for
+        // the call, or the host's (`Recording::adopt`, `HostImage::new`).
+        unsafe {
+            self.emit.dispatch(
+                cmd,
+                &build_lbvh_emit::Bindings {
+                    codes: Binding::Storage(codes),
+                    nodes: Binding::Storage(nodes),
+                    parents: Binding::Storage(parents),
+                    count: Binding::Storage(count),
+                }
+                .list(),
+                bytemuck::bytes_of(&build_lbvh_emit::Push {
+                    groups_x: groups[0],
+                    ..Default::default()
+                }),
+                groups,
+            )
+        }
     }
 
     /// Runs the hierarchy emit alone on sorted `codes` (duplicates allowed)
@@ -440,12 +457,7 @@ impl LbvhBuilder {
     /// writes. The returned tree keeps the scratch buffers the command
     /// buffer uses; its leaf and node counts and statistics are read back
     /// on first request, after the submission completed.
-    pub fn record_build(
-        &self,
-        cmd: vk::CommandBuffer,
-        mut timer: Option<&mut Timer>,
-        input: &LbvhInput,
-    ) -> Result<Lbvh> {
+    pub fn record_build(&self, cmd: Recording<'_>, mut timer: Option<&mut Timer>, input: &LbvhInput) -> Result<Lbvh> {
         let bricks = input.bricks;
         let select = self.select_scratch(bricks)?;
         let capacity = bricks.total;
@@ -454,7 +466,7 @@ impl LbvhBuilder {
         let device = self.ctx.device();
         // A fresh buffer: no earlier access to order. The compaction's entry
         // barrier makes the fill visible to its writes and to the Morton pass.
-        unsafe { device.cmd_fill_buffer(cmd, select.active.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
+        unsafe { device.cmd_fill_buffer(cmd.raw(), select.active.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
         self.record_classify_compact(cmd, timer.as_deref_mut(), input, &select)?;
         self.record_hierarchy(cmd, timer, input, &select, &h, &nodes)?;
         let SelectScratch {
@@ -526,7 +538,7 @@ impl Method for LbvhMethod {
     fn record_build(
         &self,
         builder: &Builder,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         timer: Option<&mut Timer>,
         input: &BuildInput,
         ranges: &Ranges,

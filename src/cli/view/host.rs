@@ -7,8 +7,8 @@
 //! One frame in flight: each frame is waited for, so its timestamps and
 //! readback are ready when `frame` returns.
 
-use lacuna::gpu::record::{self, Access};
-use lacuna::gpu::{required_features, vk, AdoptInfo, Context, EnabledFeatures};
+use super::blit;
+use lacuna::gpu::{required_features, vk, AdoptInfo, Context, EnabledFeatures, Recording};
 use lacuna::{Error, Result};
 use std::ffi::CStr;
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -429,8 +429,13 @@ impl Host {
 
     /// One frame: acquires a swapchain image, records `draw` (which must
     /// leave the canvas written by transfer in TRANSFER_SRC_OPTIMAL), blits
-    /// the canvas into the image, submits, presents and waits.
-    pub fn frame(&mut self, draw: impl FnOnce(vk::CommandBuffer, &Canvas) -> Result<()>) -> Result<Presented> {
+    /// the canvas into the image, submits, presents and waits. `ctx` is the
+    /// context adopted from this host (`adopt`).
+    pub fn frame(
+        &mut self,
+        ctx: &Context,
+        draw: impl FnOnce(Recording<'_>, &Canvas) -> Result<()>,
+    ) -> Result<Presented> {
         let stale = Presented {
             drawn: false,
             stale: true,
@@ -447,6 +452,13 @@ impl Host {
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => return Ok(stale),
             Err(e) => return Err(vk_err("vkAcquireNextImageKHR")(e)),
         };
+        if ctx.device().handle() != self.device.handle() {
+            return Err(Error::invalid(
+                "view context",
+                "another device",
+                "frame takes the context adopted from this host",
+            ));
+        }
         let (device, cmd) = (&self.device, self.cmd);
         let target = swapchain.images[index];
         unsafe {
@@ -458,60 +470,13 @@ impl Host {
                 .begin_command_buffer(cmd, &begin)
                 .map_err(vk_err("vkBeginCommandBuffer"))?;
         }
-        let drawn = draw(cmd, canvas);
-        // The acquire semaphore is waited on at the transfer stage, where the
-        // image's transition starts.
-        let transfer = Access {
-            stage: vk::PipelineStageFlags2::ALL_TRANSFER,
-            access: vk::AccessFlags2::NONE,
-        };
-        record::image_barrier(
-            device,
-            cmd,
-            target,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            transfer,
-            Access::TRANSFER_WRITE,
-        );
-        let (c, s) = (canvas.extent, swapchain.extent);
-        let corner = |e: vk::Extent2D| vk::Offset3D {
-            x: e.width as i32,
-            y: e.height as i32,
-            z: 1,
-        };
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
-        let blit = [vk::ImageBlit {
-            src_subresource: layers,
-            src_offsets: [vk::Offset3D::default(), corner(c)],
-            dst_subresource: layers,
-            dst_offsets: [vk::Offset3D::default(), corner(s)],
-        }];
-        unsafe {
-            device.cmd_blit_image(
-                cmd,
-                canvas.image,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                target,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &blit,
-                vk::Filter::NEAREST,
-            )
-        };
-        record::image_barrier(
-            device,
-            cmd,
-            target,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::ImageLayout::PRESENT_SRC_KHR,
-            Access::TRANSFER_WRITE,
-            Access::NONE,
-        );
+        // SAFETY: `cmd` is this host's, on the device `ctx` adopted, begun
+        // above and submitted to its queue below; the fence wait before this
+        // returns outlives everything `draw` borrowed to record.
+        let rec = unsafe { Recording::adopt(ctx, cmd) };
+        let drawn = draw(rec, canvas);
+        // SAFETY: the acquired swapchain image, of the swapchain's extent.
+        unsafe { blit::record_to_swapchain(device, rec, (canvas.image, canvas.extent), target, swapchain.extent) };
         unsafe { device.end_command_buffer(cmd) }.map_err(vk_err("vkEndCommandBuffer"))?;
         drawn?;
         let waits = [vk::SemaphoreSubmitInfo::default()

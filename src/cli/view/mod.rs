@@ -3,6 +3,7 @@
 //! its device into lacuna (`scene`: the renderer's use, in one module);
 //! `controls` turns mouse and keys into camera, TF and structure changes.
 
+mod blit;
 mod controls;
 mod host;
 mod keys;
@@ -389,10 +390,11 @@ impl Viewer {
             self.scene.ensure_gradient()?;
         }
         self.scene.prepare(&desc)?;
+        let ctx = self.scene.context().clone();
         let scene = &mut self.scene;
-        let presented = self
-            .host
-            .frame(|cmd, canvas| scene.record(cmd, canvas, &desc, shot || self.shots > 0))?;
+        let presented = self.host.frame(&ctx, |cmd, canvas| {
+            scene.record(cmd, canvas, &desc, shot || self.shots > 0)
+        })?;
         self.resize |= presented.stale;
         if !presented.drawn {
             return Ok(false);

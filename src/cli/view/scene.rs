@@ -10,7 +10,8 @@ use super::host::Canvas;
 use lacuna::accel::auto::{self, Choice};
 use lacuna::accel::{Accel, BuildInput, Builder, Params, Ranges, Structure};
 use lacuna::frame::Frame;
-use lacuna::gpu::record::{self, Access};
+use lacuna::gpu::record::Access;
+use lacuna::gpu::Recording;
 use lacuna::gpu::{vk, Context, Timer};
 use lacuna::render::{Filter, FrameDesc, Mode, Output, RenderTarget, Renderer};
 use lacuna::tf::GpuTransferFunction;
@@ -233,7 +234,7 @@ impl Scene {
     /// then the frame buffer copied into `canvas`, left in
     /// TRANSFER_SRC_OPTIMAL and visible to transfer reads; with `readback`,
     /// also the copy to host memory that `frame` reads.
-    pub fn record(&mut self, cmd: vk::CommandBuffer, canvas: &Canvas, desc: &FrameDesc, readback: bool) -> Result<()> {
+    pub fn record(&mut self, cmd: Recording<'_>, canvas: &Canvas, desc: &FrameDesc, readback: bool) -> Result<()> {
         let (w, h) = (canvas.extent.width, canvas.extent.height);
         if self.target.as_ref().map(|t| (t.width(), t.height())) != Some((w, h)) {
             self.target = Some(RenderTarget::new(&self.ctx, w, h)?);
@@ -256,16 +257,18 @@ impl Scene {
             .raw();
         // The previous frame's blit read the canvas; the whole frame is
         // written, so its old contents are discarded.
-        record::image_barrier(
-            device,
-            cmd,
-            canvas.image,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            Access::TRANSFER_READ,
-            Access::TRANSFER_WRITE,
-        );
-        record::barrier(device, cmd, Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        // SAFETY: the canvas is the host's image on this device, alive
+        // until the frame has been waited for (`Host::frame`).
+        unsafe {
+            cmd.image_barrier(
+                canvas.image,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                Access::TRANSFER_READ,
+                Access::TRANSFER_WRITE,
+            )
+        };
+        cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         let region = [vk::BufferImageCopy {
             buffer_offset: 0,
             buffer_row_length: 0,
@@ -285,22 +288,23 @@ impl Scene {
         }];
         unsafe {
             device.cmd_copy_buffer_to_image(
-                cmd,
+                cmd.raw(),
                 frame_buffer,
                 canvas.image,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &region,
             )
         };
-        record::image_barrier(
-            device,
-            cmd,
-            canvas.image,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            Access::TRANSFER_WRITE,
-            Access::TRANSFER_READ,
-        );
+        // SAFETY: as above; in TRANSFER_DST_OPTIMAL since the copy.
+        unsafe {
+            cmd.image_barrier(
+                canvas.image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                Access::TRANSFER_WRITE,
+                Access::TRANSFER_READ,
+            )
+        };
         if readback {
             self.renderer.record_readback(cmd, target)?;
         }
