@@ -165,6 +165,10 @@ void main() {
         return;
     }
     uint b = LISTED != 0u ? listed[i] : i;
+    // A listed index past the bricks writes nothing (the list is the caller's).
+    if (b >= pc.counts.x * pc.counts.y * pc.counts.z) {
+        return;
+    }
     uvec3 bc = uvec3(b % pc.counts.x, (b / pc.counts.x) % pc.counts.y, b / (pc.counts.x * pc.counts.y));
     ivec3 lo = max(ivec3(bc * pc.dims.w) - int(pc.apron), ivec3(0));
     ivec3 hi = min(ivec3(bc * pc.dims.w + pc.dims.w - 1u) + int(pc.apron), ivec3(pc.dims.xyz) - 1);

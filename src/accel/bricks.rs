@@ -16,17 +16,17 @@ pub const BRICK: u32 = crate::volume::BRICK;
 /// The volume's bricks on the device: per brick and channel the value range
 /// over the brick and its apron, which classification reads.
 pub struct GpuBricks {
-    pub brick: u32,
-    pub counts: [u32; 3],
-    pub total: u64,
+    pub(crate) brick: u32,
+    pub(crate) counts: [u32; 3],
+    pub(crate) total: u64,
     /// vec2(min, max) of normalised values per brick and channel (at
     /// `brick * channels + channel`), apron included.
-    pub ranges: Buffer,
+    pub(crate) ranges: Buffer,
     /// The volume's channels.
-    pub channels: u32,
+    pub(crate) channels: u32,
     /// How many bricks' ranges were read from the voxels (`total`, or a
     /// series step's changed bricks; 0 when coarsened from finer ranges).
-    pub computed: u64,
+    pub(crate) computed: u64,
     /// The changed bricks' list a step's ranges were recorded with: kept
     /// until the submission completed.
     _list: Option<(Buffer, Staging)>,
@@ -48,6 +48,38 @@ pub enum RangesFrom<'a> {
 }
 
 impl GpuBricks {
+    /// The brick edge in voxels.
+    pub fn brick(&self) -> u32 {
+        self.brick
+    }
+
+    /// Bricks per axis.
+    pub fn counts(&self) -> [u32; 3] {
+        self.counts
+    }
+
+    /// Bricks in all.
+    pub fn total(&self) -> u64 {
+        self.total
+    }
+
+    /// vec2(min, max) of normalised values per brick and channel (at
+    /// `brick * channels + channel`), apron included.
+    pub fn ranges(&self) -> &Buffer {
+        &self.ranges
+    }
+
+    /// The volume's channels.
+    pub fn channels(&self) -> u32 {
+        self.channels
+    }
+
+    /// How many bricks' ranges were read from the voxels (`total`, or a
+    /// series step's changed bricks; 0 when coarsened from finer ranges).
+    pub fn computed(&self) -> u64 {
+        self.computed
+    }
+
     /// Records the computation of the ranges (timed as `pass`) into `cmd`,
     /// `from` where it can (`RangesFrom`), the same ranges from fewer
     /// reads. Ends with compute and transfer writes of `ranges` (the
@@ -68,11 +100,16 @@ impl GpuBricks {
                 self.computed = 0;
             }
             RangesFrom::Step { ranges, changed } => {
-                let ctx = volume.context();
-                let device = ctx.device();
+                if ranges.size() != self.ranges.size() || changed.iter().any(|&b| b as u64 >= self.total) {
+                    return Err(Error::invalid(
+                        "step ranges",
+                        format!("{} bytes", ranges.size()),
+                        "must be ranges of the same bricks, and the changed bricks among them",
+                    ));
+                }
                 entry_barrier(cmd);
                 let region = [vk::BufferCopy::default().size(self.ranges.size())];
-                unsafe { device.cmd_copy_buffer(cmd.raw(), ranges.raw, self.ranges.raw, &region) };
+                cmd.copy_buffer(ranges, &self.ranges, &region)?;
                 self.computed = changed.len() as u64;
                 if !changed.is_empty() {
                     let (list, staging) = Buffer::record_with_data(
@@ -100,12 +137,12 @@ impl GpuBricks {
     /// Records a copy of the ranges into `to` (a buffer of their size) for
     /// the next step (`RangesFrom::Step`), after `entry_barrier`; ends with
     /// one, so the copy's read is ordered before later writes.
-    pub fn record_keep(&self, cmd: Recording<'_>, to: &Buffer) {
-        let device = cmd.context().device();
-        entry_barrier(cmd);
+    pub fn record_keep(&self, cmd: Recording<'_>, to: &Buffer) -> Result<()> {
         let region = [vk::BufferCopy::default().size(self.ranges.size())];
-        unsafe { device.cmd_copy_buffer(cmd.raw(), self.ranges.raw, to.raw, &region) };
         entry_barrier(cmd);
+        cmd.copy_buffer(&self.ranges, to, &region)?;
+        entry_barrier(cmd);
+        Ok(())
     }
 
     /// The ranges buffer of `volume`'s `brick`^3 bricks, not yet computed.

@@ -101,6 +101,9 @@ type StepKeep<'a> = (&'a mut Vec<(u32, u64)>, Option<(&'a Volume, &'a mut Timing
 pub struct Builder {
     ctx: Context,
     shared: Arc<Mutex<HashMap<TypeId, Arc<dyn Any + Send + Sync>>>>,
+    /// What `put` replaced: recordings may still bind it (a stand-in
+    /// buffer), so it lives as long as the builder.
+    replaced: Arc<Mutex<Vec<Arc<dyn Any + Send + Sync>>>>,
     /// The last series step's ranges, per brick edge: the next step's
     /// start from them (`RangesFrom::Step`).
     step_ranges: Mutex<Vec<StepRanges>>,
@@ -146,6 +149,7 @@ impl Builder {
         Ok(Builder {
             ctx: ctx.clone(),
             shared: Arc::new(Mutex::new(HashMap::new())),
+            replaced: Default::default(),
             step_ranges: Mutex::new(Vec::new()),
         })
     }
@@ -157,6 +161,7 @@ impl Builder {
         Builder {
             ctx: self.ctx.clone(),
             shared: self.shared.clone(),
+            replaced: self.replaced.clone(),
             step_ranges: Mutex::new(Vec::new()),
         }
     }
@@ -183,7 +188,9 @@ impl Builder {
     /// load).
     pub fn put<T: PerContext>(&self, value: T) {
         let mut map = self.shared.lock().unwrap_or_else(|p| p.into_inner());
-        map.insert(TypeId::of::<T>(), Arc::new(value));
+        if let Some(old) = map.insert(TypeId::of::<T>(), Arc::new(value)) {
+            self.replaced.lock().unwrap_or_else(|p| p.into_inner()).push(old);
+        }
     }
 
     /// The `T` of this context if a build made it already (nothing is made).
@@ -363,7 +370,7 @@ impl Builder {
                 kept.len() - 1
             }
         };
-        b.record_keep(cmd, &kept[i].ranges);
+        b.record_keep(cmd, &kept[i].ranges)?;
         if self.ctx.info().is_cpu() {
             // A later step may read the copy on the host (`step_on_host`).
             cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);

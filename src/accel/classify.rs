@@ -87,17 +87,35 @@ impl Classifier {
         tf: &GpuTransferFunction,
         flags: &Buffer,
     ) -> Result<()> {
-        entry_barrier(cmd);
+        // Their image views and buffers are bound below: this context's only.
+        self.ctx.check_is(volume.context(), "volume")?;
+        self.ctx.check_is(tf.context(), "transfer function")?;
+        self.ctx.check_is(bricks.ranges.context(), "brick ranges")?;
         tf.check_channels(volume.channels)?;
+        let need = [bricks.total * 4, bricks.total * 8 * volume.channels as u64];
+        if flags.size() < need[0] || bricks.ranges.size() < need[1] {
+            return Err(Error::invalid(
+                "classification buffers",
+                format!("{} and {} bytes", flags.size(), bricks.ranges.size()),
+                format!(
+                    "{} bricks need {} bytes of flags and {} of ranges",
+                    bricks.total, need[0], need[1]
+                ),
+            ));
+        }
+        entry_barrier(cmd);
         match mode {
             Classify::Range => {
                 // One kernel per channel count (made on first use).
-                let range = Kernel::specialized(
-                    &self.ctx,
-                    &shaders::BUILD_CLASSIFY_RANGE,
-                    std::mem::size_of::<build_classify_range::Push>(),
-                    &[(0, bricks.channels)],
-                )?;
+                // SAFETY: the constants are the ones this kernel is written for (its own table).
+                let range = unsafe {
+                    Kernel::specialized(
+                        &self.ctx,
+                        &shaders::BUILD_CLASSIFY_RANGE,
+                        std::mem::size_of::<build_classify_range::Push>(),
+                        &[(0, bricks.channels)],
+                    )
+                }?;
                 let groups = record::groups_linear(self.ctx.info(), "classify", bricks.total, range.local_size()[0])?;
                 let push = build_classify_range::Push {
                     bricks: bricks.total as u32,

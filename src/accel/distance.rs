@@ -63,7 +63,8 @@ fn rows_kernel(ctx: &Context, octants: bool, private: bool, first: bool) -> Resu
         ),
     };
     let constants = [(0, private as u32), (1, first as u32)];
-    Kernel::specialized(ctx, shader, push_size, &constants)
+    // SAFETY: the constants are the ones this kernel is written for (its own table).
+    unsafe { Kernel::specialized(ctx, shader, push_size, &constants) }
 }
 
 /// The tasks of an octant map's pass along `axis` for the octants `built`
@@ -432,7 +433,8 @@ pub struct DistanceMethod {
     pub octants: bool,
 }
 
-impl Method for DistanceMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for DistanceMethod {
     fn name(&self) -> &'static str {
         if self.octants {
             "distance-octant"
@@ -497,7 +499,8 @@ impl Method for DistanceMethod {
     }
 }
 
-impl Built for DistanceMap {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for DistanceMap {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_distance::Own {
             distance_texels: Binding::TexelBuffer(self.distances.view()),

@@ -141,7 +141,6 @@ pub fn record_ranges(
         MemoryLocation::GpuOnly,
     )?;
     let ranges = TexelBuffer::new(builder.context(), ranges, vk::Format::R32G32_UINT)?;
-    let device = builder.context().device();
     let pass = timer.begin(cmd, "classify")?;
     cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
     let region = [vk::BufferCopy {
@@ -149,7 +148,7 @@ pub fn record_ranges(
         dst_offset: 0,
         size: bytes,
     }];
-    unsafe { device.cmd_copy_buffer(cmd.raw(), cells.ranges.raw, ranges.buffer().raw, &region) };
+    cmd.copy_buffer(&cells.ranges, ranges.buffer(), &region)?;
     cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
     timer.end(cmd, pass);
     Ok(Grid {
@@ -186,7 +185,8 @@ pub(crate) const CELL_PARAM: Param = params::CELL.with_default(Value::Int(CELL))
 /// `--accel grid`.
 pub struct GridMethod;
 
-impl Method for GridMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for GridMethod {
     fn name(&self) -> &'static str {
         "grid"
     }
@@ -223,7 +223,8 @@ impl Method for GridMethod {
     }
 }
 
-impl Built for Grid {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for Grid {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
             cell_texels: Binding::TexelBuffer(self.flags.view()),

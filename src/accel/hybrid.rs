@@ -23,7 +23,8 @@ pub struct Hybrid {
 /// `--accel hybrid`.
 pub struct HybridMethod;
 
-impl Method for HybridMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for HybridMethod {
     fn name(&self) -> &'static str {
         "hybrid"
     }
@@ -67,7 +68,8 @@ impl Method for HybridMethod {
     }
 }
 
-impl Built for Hybrid {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for Hybrid {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_hybrid::Own {
             nodes: Binding::Storage(&self.tree.nodes),

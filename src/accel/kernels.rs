@@ -86,7 +86,10 @@ impl MarchKernels {
         constants.push((TILE_STRIDE_CONSTANT_ID, probe.tile_stride));
         constants.push((LOOP_CHECK_CONSTANT_ID, self.ctx.info().loop_pass_limit.is_some() as u32));
         let shader = march.shader;
-        Kernel::specialized(&self.ctx, &shader, shader.push_size as usize, &constants)
+        // SAFETY: the structure's constants are its `Method`'s (an unsafe
+        // trait: `march` names them for this shader), the frame's come from
+        // a checked `FrameDesc`, the rest are the march shaders' own.
+        unsafe { Kernel::specialized(&self.ctx, &shader, shader.push_size as usize, &constants) }
     }
 }
 

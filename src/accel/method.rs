@@ -127,7 +127,15 @@ pub enum MarchedKind {
 /// A built structure: what its march kernel reads beyond the bindings
 /// every march kernel has (`glsl/common/march.glsl`: the render parameters,
 /// volume, LUT and frame, which the renderer binds).
-pub trait Built: Any {
+///
+/// # Safety
+/// The renderer dispatches the march kernel with these bindings and push
+/// constants as they are: every binding is a live object of the context
+/// the structure was built on, of the type, usage and size the kernel
+/// (`Method::march` of the entry that built it, or `marched_as`) reads
+/// given `push`, and stays alive and unchanged while frames recorded with
+/// it are pending. lacuna's own structures keep that by construction.
+pub unsafe trait Built: Any {
     /// The kernel's own bindings, by name (`shaders::march_NAME::Own::list`).
     fn bindings(&self) -> Vec<Bound<'_>>;
     /// The march kernel's push constants (empty for none).
@@ -153,7 +161,11 @@ pub trait Built: Any {
 /// A skipping structure: its parameters, what it reads, how it is built,
 /// how it is marched. Implement it in the structure's module and add one
 /// line to the table (`table.rs`).
-pub trait Method: Sync {
+///
+/// # Safety
+/// `march` names the kernel that reads what `record_build` / `build`
+/// return, and those obey `Built`'s contract for it.
+pub unsafe trait Method: Sync {
     /// The CLI name (`--accel NAME`).
     fn name(&self) -> &'static str;
     /// One line for listings: what it is and who it is after.

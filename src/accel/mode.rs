@@ -106,7 +106,8 @@ impl ModeFallback {
     }
 }
 
-impl Built for ModeFallback {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for ModeFallback {
     fn bindings(&self) -> Vec<Bound<'_>> {
         Vec::new()
     }

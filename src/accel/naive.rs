@@ -20,7 +20,8 @@ pub const NAIVE: Accel = Accel(&Naive);
 /// Nothing to build and nothing to bind.
 pub(crate) struct NoData;
 
-impl Built for NoData {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for NoData {
     fn bindings(&self) -> Vec<Bound<'_>> {
         Vec::new()
     }
@@ -29,7 +30,8 @@ impl Built for NoData {
     }
 }
 
-impl Method for Naive {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for Naive {
     fn name(&self) -> &'static str {
         "naive"
     }

@@ -155,7 +155,8 @@ pub fn build(
 /// `--accel octree-84|octree-89|octree-93|octree-rev`: one entry per traversal.
 pub struct OctreeMethod(pub Traversal);
 
-impl Method for OctreeMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for OctreeMethod {
     fn name(&self) -> &'static str {
         match self.0 {
             Traversal::O84 => "octree-84",
@@ -205,7 +206,8 @@ impl Method for OctreeMethod {
     }
 }
 
-impl Built for VolumeOctree {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for VolumeOctree {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_octree::Own {
             nodes: Binding::Storage(&self.nodes),

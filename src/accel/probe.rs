@@ -118,6 +118,7 @@ impl<'a> FrameProbe<'a> {
         tiles_wanted: u32,
     ) -> Result<Self> {
         let ctx = builder.context().clone();
+        ctx.check_is(volume.context(), "volume")?;
         let (w, h) = desc.size();
         let tiles = [w.div_ceil(TILE), h.div_ceil(TILE)];
         let mut stride = 1;
@@ -212,6 +213,11 @@ impl<'a> FrameProbe<'a> {
     /// output buffer; the caller orders it after earlier writes to it.
     fn record(&self, cmd: Recording<'_>, structure: &Structure, count: bool) -> Result<()> {
         let desc = &self.desc;
+        // As the renderer: a structure of another context, mode or grid
+        // would read what its kernel was not sized for.
+        structure.check_made_on(&self.ctx)?;
+        structure.check_mode(desc.mode())?;
+        structure.check_volume(self.volume)?;
         let filter = desc.filter_for(self.volume);
         let sampler = self.volume.sampler_for(filter)?;
         let probe = ProbeConstants {
@@ -265,11 +271,10 @@ impl<'a> FrameProbe<'a> {
     /// so naive's counts are known from theirs (`count_naive` in
     /// glsl/common/march.glsl); `tests/integration/auto.rs` checks them against naive's.
     pub fn count_both(&self, structure: &Structure) -> Result<(Counts, Option<Counts>)> {
-        let device = self.ctx.device();
         self.ctx.submit_and_wait(|cmd| {
             cmd.barrier(Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
-            unsafe { device.cmd_fill_buffer(cmd.raw(), self.out.raw, 0, vk::WHOLE_SIZE, 0) };
-            unsafe { device.cmd_fill_buffer(cmd.raw(), self.status.raw, 0, vk::WHOLE_SIZE, 0) };
+            cmd.fill_buffer(&self.out, 0, vk::WHOLE_SIZE, 0)?;
+            cmd.fill_buffer(&self.status, 0, vk::WHOLE_SIZE, 0)?;
             cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
             self.record(cmd, structure, true)?;
             cmd.barrier(Access::COMPUTE_WRITE, Access::HOST_READ);
@@ -279,7 +284,7 @@ impl<'a> FrameProbe<'a> {
                 dst_offset: 0,
                 size: self.out.size(),
             }];
-            unsafe { device.cmd_copy_buffer(cmd.raw(), self.out.raw, self.readback.raw, &region) };
+            cmd.copy_buffer(&self.out, &self.readback, &region)?;
             cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
             Ok(())
         })?;

@@ -18,7 +18,8 @@ use crate::gpu::{vk, Binding, Bound, Buffer, Context, MemoryLocation, Timings};
 /// The march kernel of every structure in this format (`glsl/march/bvh.comp`).
 pub const TREE_MARCH: March = March::plain(shaders::MARCH_BVH);
 
-impl Built for GpuTree {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for GpuTree {
     fn bindings(&self) -> Vec<Bound<'_>> {
         if self.whole_box {
             // Marched by the naive kernel, which binds nothing of a structure.

@@ -298,7 +298,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
         let (series, loaded) = loaded;
         let (v, tf) = (&loaded.volume, &loaded.tf);
         let mut gv = GpuVolume::upload_as(ctx, v, ds.storage()?)?;
-        if let Some(pool) = gv.pool {
+        if let Some(pool) = gv.pool() {
             let note = format!("{}: {pool}", ds.volume);
             progress.note(&note);
             out.notes.push(note);

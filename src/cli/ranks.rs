@@ -183,7 +183,7 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
 
     let (width, height) = desc.size();
     let rays = desc.camera().rays(volume.dims, volume.spacing, width, height)?;
-    let pool = gpu_volume.pool;
+    let pool = gpu_volume.pool();
     let mut report = vec![
         format!(
             "volume  {} ({}x{}x{} {})",

@@ -133,10 +133,11 @@ impl HostDepth {
     /// layout are checked against the frame when it is built).
     ///
     /// # Safety
-    /// Whenever a frame built with it executes, `view` is a live view of the
-    /// depth aspect of an image of the context's device created with
+    /// Whenever a frame built with it executes, `view` is a live,
+    /// single-sampled 2D view of the depth aspect, at least `width` x
+    /// `height` texels, of an image of the renderer's device created with
     /// `SAMPLED` usage, in `layout` (`Renderer::render` waits for its own
-    /// frames; a frame refused records nothing).
+    /// frames).
     pub unsafe fn new(view: vk::ImageView, layout: vk::ImageLayout, width: u32, height: u32) -> Self {
         HostDepth {
             view,

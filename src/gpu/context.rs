@@ -330,7 +330,7 @@ impl Context {
 
     /// Names a GPU object for validation messages and capture tools (a no-op
     /// without `VK_EXT_debug_utils`).
-    pub fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
+    pub(crate) fn name_object<H: vk::Handle>(&self, handle: H, name: &str) {
         let Some(utils) = &self.inner.debug_utils else {
             return;
         };
@@ -469,10 +469,11 @@ impl Context {
                 "record into the command buffer the closure was given (the record_* forms): a submission from there waits for the one being recorded",
             ));
         }
-        // Before the command buffer exists, dropped after it is freed.
-        let _open = self.open_submission();
         let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
         let pool = lock_pool();
+        // Once this submission holds the pool (a thread waiting for it has
+        // recorded nothing yet), until after its command buffer is freed.
+        let _open = self.open_submission();
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)

@@ -30,6 +30,19 @@ pub fn check_image3d(info: &DeviceInfo, extent: [u32; 3], texel_bytes: u64) -> R
     check_image3d_of(info, "volume", extent, texel_bytes)
 }
 
+/// Bytes per texel of the 3D image formats lacuna makes (None: another).
+fn format_texel_bytes(format: vk::Format) -> Option<u64> {
+    use vk::Format as F;
+    Some(match format {
+        F::R8_UNORM => 1,
+        F::R8G8_UNORM | F::R16_UNORM | F::R16_SFLOAT => 2,
+        F::R8G8B8A8_UNORM | F::R16G16_UNORM | F::R16G16_SFLOAT | F::R32_SFLOAT | F::R32_UINT => 4,
+        F::R16G16B16A16_UNORM | F::R16G16B16A16_SFLOAT | F::R32G32_SFLOAT | F::R32G32_UINT => 8,
+        F::R32G32B32A32_SFLOAT | F::R32G32B32A32_UINT => 16,
+        _ => return None,
+    })
+}
+
 /// As `check_image3d`, for an image the errors call `what` (e.g. `brick pool of ch2.nii`).
 pub fn check_image3d_of(info: &DeviceInfo, what: &str, extent: [u32; 3], texel_bytes: u64) -> Result<u64> {
     let dims = format!("{what} {}x{}x{}", extent[0], extent[1], extent[2]);
@@ -155,6 +168,16 @@ impl Image3d {
     fn create_empty(ctx: &Context, name: &str, format: vk::Format, extent: [u32; 3], texel_bytes: u64) -> Result<Self> {
         let info = ctx.info();
         let dims = format!("volume {}x{}x{}", extent[0], extent[1], extent[2]);
+        if extent.contains(&0) {
+            return Err(Error::invalid("image extent", dims, "every side needs a texel"));
+        }
+        if format_texel_bytes(format) != Some(texel_bytes) {
+            return Err(Error::invalid(
+                "image texels",
+                format!("{texel_bytes} bytes of {format:?}"),
+                "must be the format's texel size (R, RG or RGBA of 8/16-bit unorm, 16/32-bit float, 32-bit uint)",
+            ));
+        }
         let bytes = check_image3d(info, extent, texel_bytes)?;
         // Sampling 16-bit unorm formats, for one, is optional in Vulkan.
         let needed = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::TRANSFER_DST;

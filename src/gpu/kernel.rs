@@ -32,24 +32,44 @@ impl Kernel {
     /// shader's reflected interface; a `P` of another size than the shader's
     /// block is an error naming the kernel.
     pub fn new<P: bytemuck::Pod>(ctx: &Context, shader: &Shader) -> Result<Self> {
-        Self::create(ctx, shader, std::mem::size_of::<P>(), &[])
+        // SAFETY: no constants: the shader's own defaults.
+        unsafe { Self::create(ctx, shader, std::mem::size_of::<P>(), &[]) }
     }
 
     /// As `new`, with u32 specialization constants for `constant_id` 0, 1, ...
     /// (`local_size_x_id = 0` makes constant 0 the workgroup width).
-    pub fn with_constants<P: bytemuck::Pod>(ctx: &Context, shader: &Shader, constants: &[u32]) -> Result<Self> {
-        Self::create(ctx, shader, std::mem::size_of::<P>(), constants)
+    ///
+    /// # Safety
+    /// As `specialized`.
+    pub unsafe fn with_constants<P: bytemuck::Pod>(ctx: &Context, shader: &Shader, constants: &[u32]) -> Result<Self> {
+        // SAFETY: the caller's contract.
+        unsafe { Self::create(ctx, shader, std::mem::size_of::<P>(), constants) }
     }
 
     /// As `with_constants`, with the Rust side's push block size in bytes.
-    pub fn create(ctx: &Context, shader: &Shader, push_size: usize, constants: &[u32]) -> Result<Self> {
+    ///
+    /// # Safety
+    /// As `specialized`.
+    pub unsafe fn create(ctx: &Context, shader: &Shader, push_size: usize, constants: &[u32]) -> Result<Self> {
         let entries: Vec<(u32, u32)> = (0..).zip(constants.iter().copied()).collect();
-        Self::specialized(ctx, shader, push_size, &entries)
+        // SAFETY: the caller's contract.
+        unsafe { Self::specialized(ctx, shader, push_size, &entries) }
     }
 
     /// As `create`, with (`constant_id`, value) pairs: ids the shader does
-    /// not declare are ignored, as Vulkan specifies.
-    pub fn specialized(ctx: &Context, shader: &Shader, push_size: usize, constants: &[(u32, u32)]) -> Result<Self> {
+    /// not declare are ignored, as Vulkan specifies. A workgroup size of 0 or
+    /// past the device's limits is an error.
+    ///
+    /// # Safety
+    /// Each constant is a value the shader was written to take at its id
+    /// (an array size it can hold, a variant it declares): the driver
+    /// compiles whatever the constants make of it.
+    pub unsafe fn specialized(
+        ctx: &Context,
+        shader: &Shader,
+        push_size: usize,
+        constants: &[(u32, u32)],
+    ) -> Result<Self> {
         let name = shader.name;
         if push_size != shader.push_size as usize {
             return Err(Error::Interface(format!(
@@ -65,6 +85,22 @@ impl Kernel {
             info.max_push_constants_size as u64,
         )?;
         let local_size = shader.local_size_for(constants);
+        for (a, &n) in local_size.iter().enumerate() {
+            let what = format!("workgroup of kernel {name} ({local_size:?})");
+            info.check(
+                what,
+                "maxComputeWorkGroupSize",
+                n as u64,
+                info.max_compute_work_group_size[a] as u64,
+            )?;
+            if n == 0 {
+                return Err(Error::invalid(
+                    "workgroup size",
+                    format!("{local_size:?}"),
+                    format!("kernel {name}: every axis needs an invocation"),
+                ));
+            }
+        }
         let threads: u64 = local_size.iter().map(|&n| n as u64).product();
         info.check(
             format!("workgroup of kernel {name} ({local_size:?})"),
@@ -112,12 +148,18 @@ impl Kernel {
     /// to the shader or of another type, or a push block of another size, is
     /// an error naming the kernel and the binding, and nothing is recorded.
     ///
+    /// A command buffer or a bound `Buffer` of another context is an error.
+    ///
     /// # Safety
-    /// Every raw handle in `bindings` (`Binding`'s `StorageRange`,
-    /// `Sampled`, `SampledIn`, `StorageImage` and `TexelBuffer`) is a live
-    /// object of this kernel's device, of the type the binding names (an
-    /// image view in the layout it states), and stays so until the dispatch
-    /// has executed.
+    /// - Every raw handle in `bindings` (`Binding`'s `StorageRange`,
+    ///   `Sampled`, `SampledIn`, `StorageImage` and `TexelBuffer`) is a live
+    ///   object of this kernel's device, of the type the binding names (an
+    ///   image view in the layout it states, a sampled view with a
+    ///   compatible sampler, a storage image of the format the shader
+    ///   declares), and stays so until the dispatch has executed.
+    /// - Every buffer has the usage its binding needs, and given `push` and
+    ///   `groups` the kernel reads and writes within what is bound (lacuna
+    ///   enables no robust buffer access).
     pub unsafe fn dispatch(&self, cmd: Recording<'_>, bindings: &[Bound], push: &[u8], groups: [u32; 3]) -> Result<()> {
         // SAFETY: the caller's contract is `dispatch_base`'s.
         unsafe { self.dispatch_base(cmd, bindings, push, [0; 3], groups) }
@@ -136,7 +178,23 @@ impl Kernel {
         base: [u32; 3],
         groups: [u32; 3],
     ) -> Result<()> {
-        let bindings = self.in_slot_order(bindings)?;
+        self.ctx.check_is(cmd.context(), "command buffer")?;
+        let ordered = self.in_slot_order(bindings)?;
+        for (name, b) in bindings {
+            let (buf, usage) = match b {
+                Binding::Storage(buf) => (buf, vk::BufferUsageFlags::STORAGE_BUFFER),
+                Binding::Uniform(buf) => (buf, vk::BufferUsageFlags::UNIFORM_BUFFER),
+                _ => continue,
+            };
+            self.ctx.check_is(buf.context(), "bound buffer")?;
+            if !buf.usage().contains(usage) {
+                return Err(Error::Interface(format!(
+                    "kernel {}: binding {name} needs a buffer of {usage:?} usage",
+                    self.name
+                )));
+            }
+        }
+        let bindings = ordered;
         if push.len() != self.push_size as usize {
             return Err(Error::Interface(format!(
                 "kernel {}: {} push bytes given, the shader's block is {}",

@@ -46,6 +46,7 @@ pub struct Buffer {
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
     size: u64,
+    usage: vk::BufferUsageFlags,
     name: String,
 }
 
@@ -59,6 +60,20 @@ impl Buffer {
         location: MemoryLocation,
     ) -> Result<Self> {
         let size = size.max(4);
+        // Only what lacuna binds and copies: no feature-gated usage.
+        let known = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::STORAGE_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        if usage.is_empty() || !known.contains(usage) {
+            return Err(Error::invalid(
+                "buffer usage",
+                format!("{usage:?}"),
+                format!("buffer '{name}': storage, uniform, texel or transfer usage, at least one"),
+            ));
+        }
         let info = ctx.info();
         info.check(
             format!("buffer '{name}' of {size} bytes"),
@@ -104,6 +119,7 @@ impl Buffer {
             raw,
             allocation: Some(allocation),
             size,
+            usage,
             name: name.to_string(),
         })
     }
@@ -289,6 +305,11 @@ impl Buffer {
         Ok(out)
     }
 
+    /// The usage it was made with.
+    pub fn usage(&self) -> vk::BufferUsageFlags {
+        self.usage
+    }
+
     /// A whole-buffer descriptor range.
     pub fn descriptor(&self) -> vk::DescriptorBufferInfo {
         vk::DescriptorBufferInfo {
@@ -330,6 +351,12 @@ impl TexelBuffer {
     /// must be a whole, non-zero number of texels.
     pub fn new(ctx: &Context, buffer: Buffer, format: vk::Format) -> Result<Self> {
         let what = format!("buffer '{}' as texels of {format:?}", buffer.name);
+        ctx.check_is(&buffer.ctx, "texel buffer's buffer")?;
+        if !buffer.usage.contains(vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER) {
+            return Err(Error::Interface(format!(
+                "{what}: it was made without UNIFORM_TEXEL_BUFFER usage"
+            )));
+        }
         let bytes = texel_bytes(format)
             .ok_or_else(|| Error::Unsupported(format!("{what}: not a texel buffer format lacuna reads")))?;
         if buffer.size == 0 || !buffer.size.is_multiple_of(bytes) {
@@ -394,6 +421,56 @@ impl Staging {
     pub fn join(mut self, other: Staging) -> Staging {
         self.0.extend(other.0);
         self
+    }
+}
+
+/// Copies and fills of lacuna's buffers, checked before they are recorded.
+impl Recording<'_> {
+    /// Records copies between two buffers of this context, each region
+    /// checked to lie within both (an error names the first that does not).
+    pub fn copy_buffer(self, src: &Buffer, dst: &Buffer, regions: &[vk::BufferCopy]) -> Result<()> {
+        self.context().check_is(src.context(), "copied buffer")?;
+        self.context().check_is(dst.context(), "copied-to buffer")?;
+        for r in regions {
+            let fits = |offset: u64, size: u64| offset.checked_add(r.size).is_some_and(|end| end <= size);
+            if !fits(r.src_offset, src.size()) || !fits(r.dst_offset, dst.size()) {
+                return Err(Error::invalid(
+                    "buffer copy",
+                    format!("{} bytes from {} to {}", r.size, r.src_offset, r.dst_offset),
+                    format!("the buffers hold {} and {} bytes", src.size(), dst.size()),
+                ));
+            }
+        }
+        // SAFETY: both buffers are this device's and alive for the call; the
+        // regions lie within them.
+        unsafe {
+            self.context()
+                .device()
+                .cmd_copy_buffer(self.raw(), src.raw, dst.raw, regions)
+        };
+        Ok(())
+    }
+
+    /// Records a fill of `buffer` (of this context) from `offset` on with
+    /// `value` (`vk::WHOLE_SIZE`: to its end), checked to lie within it.
+    pub fn fill_buffer(self, buffer: &Buffer, offset: u64, size: u64, value: u32) -> Result<()> {
+        self.context().check_is(buffer.context(), "filled buffer")?;
+        let within = size == vk::WHOLE_SIZE || offset.checked_add(size).is_some_and(|end| end <= buffer.size());
+        if !within || offset >= buffer.size() {
+            return Err(Error::invalid(
+                "buffer fill",
+                format!("{size} bytes from {offset}"),
+                format!("the buffer holds {} bytes", buffer.size()),
+            ));
+        }
+        // SAFETY: the buffer is this device's and alive for the call; the
+        // range lies within it.
+        unsafe {
+            self.context()
+                .device()
+                .cmd_fill_buffer(self.raw(), buffer.raw, offset, size, value)
+        };
+        Ok(())
     }
 }
 

@@ -67,20 +67,27 @@ impl<'r> Recording<'r> {
     /// Records lacuna's commands into the host's command buffer `raw`.
     ///
     /// # Safety
-    /// Until the command buffer's execution has completed (or it was reset
-    /// or freed without being submitted):
-    /// - `raw` was allocated on `ctx`'s device, is in the recording state
-    ///   while the `Recording` (or a copy) is used, and nothing else records
-    ///   into it meanwhile;
-    /// - it is submitted, if at all, to a queue of the family `ctx` was
-    ///   adopted with;
-    /// - every lacuna object a call records a use of through it (volumes,
-    ///   transfer functions, ranges, structures, targets, renderers, timers,
-    ///   and the `Staging` an upload returns) stays alive, and is not
-    ///   changed by another lacuna call (`GpuVolume::replace`, say);
-    /// - every raw handle given with it (`HostImage`, `HostDepth`,
+    /// - `raw` is a primary or secondary command buffer allocated on `ctx`'s
+    ///   device, not protected, in the recording state and outside any
+    ///   render pass instance while the `Recording` (or a copy) is used, and
+    ///   nothing else records into it meanwhile.
+    /// - It is submitted, if at all, to a queue of the family `ctx` was
+    ///   adopted with, and never after a lacuna call recording into it
+    ///   returned an error: reset or free it then (a call that fails may
+    ///   have recorded uses of what it made and dropped).
+    /// - Until its execution has completed (or it was reset or freed without
+    ///   being submitted): every lacuna object passed to a call recording
+    ///   through it, and every object such a call returned (volumes,
+    ///   transfer functions, ranges, structures, targets, the renderer and
+    ///   builder that recorded, timers, and each `Staging`), stays alive; none
+    ///   is changed by another lacuna call (`GpuVolume::replace`,
+    ///   `Builder::put`, `Buffer::upload`, say); and no result is read on the
+    ///   host (`RenderTarget::read`, `cut_groups`, `Timer::results`,
+    ///   `Buffer::download` or `host`, a tree's `stats`).
+    /// - Every raw handle given with it (`HostImage`, `HostDepth`,
     ///   `HostDepthOut`, `Binding`'s raw variants) is a live object of
-    ///   `ctx`'s device, in the usage and layout its type states.
+    ///   `ctx`'s device, in the usage, format, extent and layout its type
+    ///   states, until then too.
     pub unsafe fn adopt(ctx: &'r Context, raw: vk::CommandBuffer) -> Self {
         Recording {
             ctx,
@@ -128,8 +135,9 @@ impl<'r> Recording<'r> {
     /// An image layout transition with its memory dependency.
     ///
     /// # Safety
-    /// `image` is a live image of this device with one mip level and layer,
-    /// in layout `old` when the barrier executes.
+    /// `image` is a live colour image of this device with one mip level and
+    /// layer, in layout `old` when the barrier executes; `new` is a layout
+    /// its usage allows (not UNDEFINED or PREINITIALIZED).
     pub unsafe fn image_barrier(
         self,
         image: vk::Image,
@@ -158,11 +166,30 @@ impl<'r> Recording<'r> {
 /// A pipeline stage together with the memory accesses made there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Access {
-    pub stage: vk::PipelineStageFlags2,
-    pub access: vk::AccessFlags2,
+    pub(crate) stage: vk::PipelineStageFlags2,
+    pub(crate) access: vk::AccessFlags2,
 }
 
 impl Access {
+    /// Another pair than the constants below.
+    ///
+    /// # Safety
+    /// `access` is made at `stage` (Vulkan's table of supported accesses),
+    /// and both are of features the device was created with.
+    pub const unsafe fn new(stage: vk::PipelineStageFlags2, access: vk::AccessFlags2) -> Self {
+        Access { stage, access }
+    }
+
+    /// Its pipeline stages.
+    pub fn stage(&self) -> vk::PipelineStageFlags2 {
+        self.stage
+    }
+
+    /// Its memory accesses.
+    pub fn access(&self) -> vk::AccessFlags2 {
+        self.access
+    }
+
     pub const NONE: Access = Access {
         stage: vk::PipelineStageFlags2::NONE,
         access: vk::AccessFlags2::NONE,

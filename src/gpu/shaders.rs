@@ -37,18 +37,46 @@ pub struct Slot {
 
 /// A compute shader and its reflected interface.
 #[derive(Clone, Copy, Debug)]
+///
+/// Only the generated constants of this module are shaders: a kernel is
+/// made from SPIR-V compiled by `build.rs` with the interface read from it.
 pub struct Shader {
     /// Path under `glsl/` without `.comp`, e.g. `march/naive`.
-    pub name: &'static str,
-    pub words: &'static [u32],
+    pub(crate) name: &'static str,
+    pub(crate) words: &'static [u32],
     /// Bindings 0.. of set 0.
-    pub bindings: &'static [Slot],
+    pub(crate) bindings: &'static [Slot],
     /// Size in bytes of the push-constant block (0: none).
-    pub push_size: u32,
-    pub local_size: [LocalDim; 3],
+    pub(crate) push_size: u32,
+    pub(crate) local_size: [LocalDim; 3],
 }
 
 impl Shader {
+    /// Its path under `glsl/` without `.comp`, e.g. `march/naive`.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// Its SPIR-V words.
+    pub fn words(&self) -> &'static [u32] {
+        self.words
+    }
+
+    /// Bindings 0.. of set 0, as the SPIR-V declares them.
+    pub fn bindings(&self) -> &'static [Slot] {
+        self.bindings
+    }
+
+    /// Size in bytes of the push-constant block (0: none).
+    pub fn push_size(&self) -> u32 {
+        self.push_size
+    }
+
+    /// The workgroup size as declared: literal or specialization constants.
+    pub fn local_size(&self) -> [LocalDim; 3] {
+        self.local_size
+    }
+
     /// The workgroup size with specialization `constants` (constant_id 0, 1, ...).
     pub fn local_size_with(&self, constants: &[u32]) -> [u32; 3] {
         let entries: Vec<(u32, u32)> = (0..).zip(constants.iter().copied()).collect();

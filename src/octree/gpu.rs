@@ -26,7 +26,9 @@ impl TraceKernels {
         let kernels = Traversal::ALL
             .into_iter()
             .map(|t| {
-                Kernel::with_constants::<octree_trace::Push>(ctx, &shaders::OCTREE_TRACE, &[t.id()]).map(|k| (t, k))
+                // SAFETY: the constants are the ones this kernel is written for (its own table).
+                unsafe { Kernel::with_constants::<octree_trace::Push>(ctx, &shaders::OCTREE_TRACE, &[t.id()]) }
+                    .map(|k| (t, k))
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(TraceKernels {

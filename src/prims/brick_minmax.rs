@@ -5,7 +5,7 @@
 //! `glsl/prims/ranges_coarsen.comp` says why, for a fraction of the reads).
 
 use super::{check_range, entry_barrier};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::record;
 use crate::gpu::shaders::{self, prims_brick_minmax as k, prims_ranges_coarsen as coarsen};
 use crate::gpu::Recording;
@@ -75,9 +75,14 @@ impl BrickMinMax {
         out: &Buffer,
         listed: Option<(&Buffer, u32)>,
     ) -> Result<()> {
+        self.ctx.check_is(volume.context(), "volume")?;
         let counts = brick_counts(volume.dims, brick);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
+        check_holds(out, "brick ranges", total * 8 * volume.channels as u64)?;
+        if let Some((list, count)) = listed {
+            check_holds(list, "brick list", count as u64 * 4)?;
+        }
         let (list, n) = listed.unwrap_or((&self.no_list, total as u32));
         // The cells copy serves every box but a one-voxel one inside the
         // volume (brick 1 without apron): its cells pair voxels.
@@ -88,17 +93,20 @@ impl BrickMinMax {
             (None, 0) => (SOURCE_IMAGE, 0),
             (None, _) => (SOURCE_POOL, 0),
         };
-        let kernel = Kernel::specialized(
-            &self.ctx,
-            &shaders::PRIMS_BRICK_MINMAX,
-            std::mem::size_of::<k::Push>(),
-            &[
-                (0, source),
-                (1, kind),
-                (2, volume.channels),
-                (3, listed.is_some() as u32),
-            ],
-        )?;
+        // SAFETY: the constants are the ones this kernel is written for (its own table).
+        let kernel = unsafe {
+            Kernel::specialized(
+                &self.ctx,
+                &shaders::PRIMS_BRICK_MINMAX,
+                std::mem::size_of::<k::Push>(),
+                &[
+                    (0, source),
+                    (1, kind),
+                    (2, volume.channels),
+                    (3, listed.is_some() as u32),
+                ],
+            )
+        }?;
         entry_barrier(cmd);
         let groups = record::groups_linear(self.ctx.info(), "brick ranges", n as u64, kernel.local_size()[0])?;
         // dims.w: brick edge; counts.w: total bricks.
@@ -147,11 +155,20 @@ impl BrickMinMax {
         brick: u32,
         out: &Buffer,
     ) -> Result<()> {
+        if ratio == 0 || !brick.is_multiple_of(ratio) {
+            return Err(Error::invalid(
+                "coarsening ratio",
+                ratio.to_string(),
+                format!("must divide the brick edge {brick}"),
+            ));
+        }
         let counts = brick_counts(volume.dims, brick);
         let fine_counts = brick_counts(volume.dims, brick / ratio);
         let total = counts.iter().map(|&c| c as u64).product::<u64>();
         check_range(self.ctx.info(), "brick ranges", total * 8 * volume.channels as u64)?;
+        check_holds(out, "brick ranges", total * 8 * volume.channels as u64)?;
         let fine_total = fine_counts.iter().map(|&c| c as u64).product::<u64>();
+        check_holds(fine, "finer brick ranges", fine_total * 8 * volume.channels as u64)?;
         check_range(
             self.ctx.info(),
             "finer brick ranges",
@@ -185,4 +202,16 @@ pub fn coarsens_exactly(volume: &GpuVolume) -> bool {
     volume.norms[..volume.channels as usize]
         .iter()
         .all(|[lo, scale]| lo.is_finite() && scale.is_finite() && *scale >= 0.0)
+}
+
+/// An error unless `buffer` holds `bytes` (what a kernel writes or reads).
+fn check_holds(buffer: &Buffer, what: &'static str, bytes: u64) -> Result<()> {
+    match buffer.size() >= bytes {
+        true => Ok(()),
+        false => Err(Error::invalid(
+            what,
+            format!("{} bytes", buffer.size()),
+            format!("needs {bytes}"),
+        )),
+    }
 }

@@ -62,9 +62,8 @@ impl Compact {
     ) -> Result<()> {
         check_elements("compaction", n, scratch.capacity, &[flags, indices])?;
         check_elements("compaction count", 1, 1, &[count])?;
-        let device = self.ctx.device();
         entry_barrier(cmd);
-        unsafe { device.cmd_fill_buffer(cmd.raw(), count.raw, 0, 4, 0) };
+        cmd.fill_buffer(count, 0, 4, 0)?;
         if n == 0 {
             return Ok(());
         }
@@ -73,7 +72,7 @@ impl Compact {
             dst_offset: 0,
             size: n * 4,
         }];
-        unsafe { device.cmd_copy_buffer(cmd.raw(), flags.raw, scratch.offsets.raw, &region) };
+        cmd.copy_buffer(flags, &scratch.offsets, &region)?;
         self.scan.record(cmd, &scratch.offsets, n, &scratch.scan)?;
         cmd.barrier(Access::COMPUTE_WRITE, Access::COMPUTE_READ);
         let groups = record::groups_linear(self.ctx.info(), "compact", n, self.kernel.local_size()[0])?;

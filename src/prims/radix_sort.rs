@@ -41,8 +41,12 @@ impl RadixSort {
         let c = layout.check(ctx.info())?.constants();
         Ok(RadixSort {
             ctx: ctx.clone(),
-            hist: Kernel::with_constants::<prims_radix_hist::Push>(ctx, &shaders::PRIMS_RADIX_HIST, &c)?,
-            scatter: Kernel::with_constants::<prims_radix_scatter::Push>(ctx, &shaders::PRIMS_RADIX_SCATTER, &c)?,
+            // SAFETY: the constants are the ones this kernel is written for (its own table).
+            hist: unsafe { Kernel::with_constants::<prims_radix_hist::Push>(ctx, &shaders::PRIMS_RADIX_HIST, &c) }?,
+            // SAFETY: the constants are the ones this kernel is written for (its own table).
+            scatter: unsafe {
+                Kernel::with_constants::<prims_radix_scatter::Push>(ctx, &shaders::PRIMS_RADIX_SCATTER, &c)
+            }?,
             scan: Scan::with_layout(ctx, layout)?,
         })
     }
@@ -104,7 +108,6 @@ impl RadixSort {
             return Err(Error::invalid("key bits", key_bits.to_string(), "must be in 1..=32"));
         }
         check_elements("sort", n, scratch.capacity, &[keys, vals])?;
-        let device = self.ctx.device();
         entry_barrier(cmd);
         if n <= 1 {
             return Ok(());
@@ -172,10 +175,8 @@ impl RadixSort {
                 dst_offset: 0,
                 size: n * 4,
             }];
-            unsafe {
-                device.cmd_copy_buffer(cmd.raw(), scratch.keys.raw, keys.raw, &region);
-                device.cmd_copy_buffer(cmd.raw(), scratch.vals.raw, vals.raw, &region);
-            }
+            cmd.copy_buffer(&scratch.keys, keys, &region)?;
+            cmd.copy_buffer(&scratch.vals, vals, &region)?;
         }
         Ok(())
     }

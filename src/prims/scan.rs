@@ -34,8 +34,10 @@ impl Scan {
         let c = layout.check(ctx.info())?.constants();
         Ok(Scan {
             ctx: ctx.clone(),
-            blocks: Kernel::with_constants::<prims_scan_blocks::Push>(ctx, &shaders::PRIMS_SCAN_BLOCKS, &c)?,
-            add: Kernel::with_constants::<prims_scan_add::Push>(ctx, &shaders::PRIMS_SCAN_ADD, &c)?,
+            // SAFETY: the constants are the ones this kernel is written for (its own table).
+            blocks: unsafe { Kernel::with_constants::<prims_scan_blocks::Push>(ctx, &shaders::PRIMS_SCAN_BLOCKS, &c) }?,
+            // SAFETY: the constants are the ones this kernel is written for (its own table).
+            add: unsafe { Kernel::with_constants::<prims_scan_add::Push>(ctx, &shaders::PRIMS_SCAN_ADD, &c) }?,
         })
     }
 

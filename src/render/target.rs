@@ -48,9 +48,10 @@ impl HostImage {
     /// Format, size and layout are checked where a frame is recorded.
     ///
     /// # Safety
-    /// Whenever a frame recorded to it executes, `view` is a live 2D view of
-    /// an image of the context's device created with `STORAGE` usage, in
-    /// `layout`. (A frame refused at record time records nothing.)
+    /// Whenever a frame recorded to it executes, `view` is a live 2D colour
+    /// view (one level and layer) of `format` and at least `width` x
+    /// `height` texels, of an image of the renderer's device created with
+    /// `STORAGE` usage, in `layout`.
     pub unsafe fn new(
         view: vk::ImageView,
         format: vk::Format,

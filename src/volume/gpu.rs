@@ -70,8 +70,8 @@ pub struct GpuVolume {
     /// the image fits one (`Image3d::upload_mirrored`): it holds the last
     /// step's texels, so a step rewrites in it only what changed.
     pub(super) image_mirror: Option<Buffer>,
-    /// Bricked storage's layout in numbers; None: dense.
-    pub pool: Option<PoolStats>,
+    /// Bricked storage's layout in numbers; None: dense (`pool()`).
+    pub(crate) pool: Option<PoolStats>,
     /// Whether `replace` with the step before at hand uploads only the
     /// bricks of the image that changed (one copy region each), rather
     /// than the whole image. By default on devices that are not the CPU
@@ -494,6 +494,11 @@ impl GpuVolume {
     /// The images the pool spans: `POOL_IMAGES` of the kernels (1 when dense).
     pub fn pool_image_count(&self) -> u32 {
         1 + self.pool_images.len() as u32
+    }
+
+    /// Bricked storage's layout in numbers; None: dense.
+    pub fn pool(&self) -> Option<PoolStats> {
+        self.pool
     }
 
     /// The pool's brick edge: `VOLUME_BRICK` of the kernels, 0 when dense.

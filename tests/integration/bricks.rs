@@ -292,7 +292,7 @@ fn a_pool_split_over_four_images_equals_dense() {
     let t = tf_of(&v);
     let mut fx = Fixture::new();
     let gv = GpuVolume::upload_bricks_within(&fx.ctx, &v, 5, limits(4096, 64 * 216)).unwrap();
-    assert_eq!(gv.pool_image_count(), 4, "{:?}", gv.pool);
+    assert_eq!(gv.pool_image_count(), 4, "{:?}", gv.pool());
     let views = &standard_views()[..3];
     let bricked = Fixture::with_bricks_within(5, limits(4096, 64 * 216));
     for (mode, shading) in every_look() {
@@ -328,7 +328,7 @@ fn bricked_storage_refuses_the_hardware_filter_and_dense_copies() {
     let ctx = gpu();
     let v = load("vessels:40");
     let mut gv = GpuVolume::upload_as(&ctx, &v, Storage::Bricks { edge: 8 }).unwrap();
-    let pool = gv.pool.expect("bricked");
+    let pool = gv.pool().expect("bricked");
     assert_eq!((pool.edge, pool.stored + pool.constant), (8, 125));
     assert!(pool.constant > 0, "vessels has empty bricks: {pool}");
     assert_eq!(gv.default_filter(), Filter::Manual);
@@ -338,7 +338,7 @@ fn bricked_storage_refuses_the_hardware_filter_and_dense_copies() {
     assert!(e.contains("bricked storage"), "{e}");
     // Auto is dense where the dense image fits.
     let auto = GpuVolume::upload(&ctx, &v).unwrap();
-    assert!(auto.pool.is_none());
+    assert!(auto.pool().is_none());
     assert_clean(&ctx);
 }
 
@@ -429,7 +429,7 @@ fn a_volume_of_one_value_is_one_texel() {
     )
     .unwrap();
     let gv = GpuVolume::upload_as(&ctx, &v, Storage::Bricks { edge: 4 }).unwrap();
-    let pool = gv.pool.unwrap();
+    let pool = gv.pool().unwrap();
     assert_eq!((pool.stored, pool.constant), (0, 5 * 5 * 6));
     assert_eq!(pool.pool_bytes, 125, "one slot of 5^3 texels holds the one value");
     // One value normalises to 0.
@@ -465,7 +465,7 @@ fn a_recorded_bricked_upload_submits_nothing_and_renders_as_the_uploaded_one() {
         .unwrap();
     drop(staging);
     assert_eq!(ctx.submissions(), before + 1);
-    assert!(recorded.pool.is_some(), "recorded in bricks");
+    assert!(recorded.pool().is_some(), "recorded in bricks");
     let renderer = lacuna::render::Renderer::new(&ctx).unwrap();
     let lut = tf.upload(&ctx).unwrap();
     for az in [30.0, 200.0] {

@@ -532,12 +532,12 @@ fn a_step_rewritten_where_it_changed_equals_its_fresh_upload() {
                 );
                 for (i, kind) in kinds.iter().enumerate() {
                     let pick = |r: &lacuna::accel::builder::Ranges| match kind {
-                        RangeKind::Cells(c) => r.cells(*c).unwrap().computed,
-                        _ => r.bricks().unwrap().computed,
+                        RangeKind::Cells(c) => r.cells(*c).unwrap().computed(),
+                        _ => r.bricks().unwrap().computed(),
                     };
                     let range_bits = |r: &lacuna::accel::builder::Ranges| match kind {
-                        RangeKind::Cells(c) => bits(&r.cells(*c).unwrap().ranges),
-                        _ => bits(&r.bricks().unwrap().ranges),
+                        RangeKind::Cells(c) => bits(r.cells(*c).unwrap().ranges()),
+                        _ => bits(r.bricks().unwrap().ranges()),
                     };
                     let name = &before.name;
                     assert!(
@@ -603,7 +603,7 @@ fn a_played_series_keeps_its_step_ranges_exact() {
                 assert!(words(&gv) == words(&fresh), "step {k}: cells copies differ");
                 let (want, _) = Builder::new(&ctx).unwrap().ranges(&kinds, &fresh).unwrap();
                 assert!(
-                    bits(&got.cells(cell).unwrap().ranges) == bits(&want.cells(cell).unwrap().ranges),
+                    bits(got.cells(cell).unwrap().ranges()) == bits(want.cells(cell).unwrap().ranges()),
                     "step {k} cell {cell} host {host}: ranges differ"
                 );
                 last = Some((gv, v));

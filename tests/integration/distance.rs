@@ -42,7 +42,7 @@ struct Built {
 /// The phase `build_on_host` classifies in: on the host where it sees the
 /// cells' ranges (lavapipe), else on the device.
 fn classify_phase(cells: &lacuna::accel::GpuBricks) -> &'static str {
-    match cells.ranges.mapped_coherent() {
+    match cells.ranges().mapped_coherent() {
         Some(_) => "classify (host)",
         None => "classify",
     }
@@ -177,9 +177,9 @@ fn host_classification_equals_the_kernels_per_channel_and_around_no_data() {
             timings.get(classify_phase(cells)).is_some(),
             "cell {cell}: classified elsewhere"
         );
-        let total = cells.total as usize;
+        let total = cells.total() as usize;
         let (d, h) = (flag_words(&device.flags, total), flag_words(&host.flags, total));
-        let r: Vec<f32> = bytemuck::pod_collect_to_vec(&cells.ranges.download(0, cells.ranges.size()).unwrap());
+        let r: Vec<f32> = bytemuck::pod_collect_to_vec(&cells.ranges().download(0, cells.ranges().size()).unwrap());
         let numbers = |b: usize| r[4 * b..4 * b + 4].iter().all(|x| !x.is_nan());
         let mut by_channel = [0usize; 2];
         for i in 0..total {

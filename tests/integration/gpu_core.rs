@@ -477,9 +477,9 @@ fn interfaces_are_read_from_the_spirv() {
     use lacuna::gpu::LocalDim;
     let d = vk::DescriptorType::STORAGE_BUFFER;
     let g = shaders::MARCH_GRID;
-    assert_eq!(g.name, "march/grid");
+    assert_eq!(g.name(), "march/grid");
     let texels = vk::DescriptorType::UNIFORM_TEXEL_BUFFER;
-    let slots: Vec<(&str, vk::DescriptorType)> = g.bindings.iter().map(|s| (s.name, s.ty)).collect();
+    let slots: Vec<(&str, vk::DescriptorType)> = g.bindings().iter().map(|s| (s.name, s.ty)).collect();
     assert_eq!(
         slots,
         [
@@ -499,10 +499,10 @@ fn interfaces_are_read_from_the_spirv() {
             ("cell_texels", texels)
         ]
     );
-    assert_eq!(g.push_size, 16);
+    assert_eq!(g.push_size(), 16);
     assert_eq!(std::mem::size_of::<shaders::march_grid::Push>(), 16);
     assert_eq!(
-        g.local_size,
+        g.local_size(),
         [LocalDim::Fixed(8), LocalDim::Fixed(8), LocalDim::Fixed(1)]
     );
     // The render parameters are a fixed-size storage block (see
@@ -510,17 +510,17 @@ fn interfaces_are_read_from_the_spirv() {
     // SPIR-V; the march status is one word; the structure's arrays have no
     // fixed size.
     assert_eq!(
-        g.bindings[0].block_size as usize,
+        g.bindings()[0].block_size as usize,
         std::mem::size_of::<lacuna::render::RenderParams>()
     );
     let status = g.slot("march_status").unwrap().1;
     assert_eq!(status.block_size, 4);
-    assert!(g.bindings[2..]
+    assert!(g.bindings()[2..]
         .iter()
         .filter(|s| s.name != "march_status")
         .all(|s| s.block_size == 0));
     // Every march kernel's parameter block is the one generated struct.
-    for s in shaders::ALL.iter().filter(|s| s.name.starts_with("march/")) {
+    for s in shaders::ALL.iter().filter(|s| s.name().starts_with("march/")) {
         let (_, params) = s.slot("params").unwrap();
         assert_eq!(
             params.block_size as usize,
@@ -529,9 +529,9 @@ fn interfaces_are_read_from_the_spirv() {
     }
     // local_size_x_id = 0: the width is specialization constant 0.
     let scan = shaders::PRIMS_SCAN_BLOCKS;
-    assert!(matches!(scan.local_size[0], LocalDim::Spec { id: 0, .. }));
+    assert!(matches!(scan.local_size()[0], LocalDim::Spec { id: 0, .. }));
     assert_eq!(scan.local_size_with(&[32, 32])[0], 32);
-    assert!(shaders::ALL.iter().any(|s| s.name == "march/naive"));
+    assert!(shaders::ALL.iter().any(|s| s.name() == "march/naive"));
 }
 
 #[test]
@@ -592,8 +592,8 @@ fn resources_go_to_the_binding_of_their_name_whatever_its_number() {
     let ctx = gpu();
     let kernel = copy_kernel(&ctx);
     let swapped = Kernel::new::<shaders::test_copy_swapped::Push>(&ctx, &shaders::TEST_COPY_SWAPPED).unwrap();
-    assert_eq!(shaders::TEST_COPY_SWAPPED.bindings[0].name, "dst");
-    assert_eq!(shaders::PRIMS_COPY.bindings[0].name, "src");
+    assert_eq!(shaders::TEST_COPY_SWAPPED.bindings()[0].name, "dst");
+    assert_eq!(shaders::PRIMS_COPY.bindings()[0].name, "src");
     let n = 300u32;
     let input: Vec<u32> = (0..n).map(|i| i * 3 + 1).collect();
     let a = storage(&ctx, "a", &input);

@@ -41,6 +41,7 @@ mod prims;
 mod registry;
 mod render_naive;
 mod series;
+mod soundness;
 mod stream;
 mod stream_files;
 mod transfer_function;

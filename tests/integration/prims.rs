@@ -253,7 +253,7 @@ fn brick_minmax_matches_the_cpu_brick_grid() {
             0 => GpuVolume::upload(&ctx, &v).unwrap(),
             e => GpuVolume::upload_bricks(&ctx, &v, e).unwrap(),
         };
-        if let (Some(pool), "vessels:40") = (gv.pool, spec) {
+        if let (Some(pool), "vessels:40") = (gv.pool(), spec) {
             assert!(pool.constant > 0, "the constant-brick path runs: {pool}");
         }
         for apron in [0, 1] {
@@ -317,9 +317,9 @@ fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
         // builder's direct ranges (so the comparison below is not of two
         // direct computations).
         let (direct16, _) = builder.ranges(&[RangeKind::Cells(16)], &gv).unwrap();
-        let want = &direct16.cells(16).unwrap().ranges;
+        let want = &direct16.cells(16).unwrap().ranges();
         let out = buffer(&ctx, &vec![0; want.size() as usize / 4]);
-        let fine = &coarsened.cells(4).unwrap().ranges;
+        let fine = &coarsened.cells(4).unwrap().ranges();
         ctx.submit_and_wait(|cmd| mm.record_coarsen(cmd, &gv, (fine, 4), 16, &out))
             .unwrap();
         assert!(
@@ -330,7 +330,7 @@ fn coarser_ranges_from_finer_ones_are_the_direct_ranges_bit_for_bit() {
         for cell in [8, 16, 32] {
             let (direct, _) = builder.ranges(&[RangeKind::Cells(cell)], &gv).unwrap();
             let bytes = |r: &lacuna::accel::builder::Ranges| {
-                let b = &r.cells(cell).unwrap().ranges;
+                let b = &r.cells(cell).unwrap().ranges();
                 b.download(0, b.size()).unwrap()
             };
             assert!(

@@ -82,7 +82,8 @@ fn shared_parameters_agree_and_every_listing_takes_them() {
     );
     // Two structures declaring one name differently is refused by name.
     struct Clash;
-    impl Method for Clash {
+    // SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+    unsafe impl Method for Clash {
         fn name(&self) -> &'static str {
             "clash"
         }
@@ -160,7 +161,8 @@ struct FullGridData {
     flags: TexelBuffer,
 }
 
-impl Method for FullGrid {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for FullGrid {
     fn name(&self) -> &'static str {
         "toy-full-grid"
     }
@@ -217,7 +219,8 @@ impl Method for FullGrid {
     }
 }
 
-impl Built for FullGridData {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for FullGridData {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
             cell_texels: Binding::TexelBuffer(self.flags.view()),

@@ -445,7 +445,7 @@ fn a_volume_over_the_3d_image_limit_is_refused_dense_and_bricked_by_auto() {
     assert!(err.to_string().contains(&max.to_string()));
     // Auto storage takes bricks where the dense image does not fit.
     let gv = GpuVolume::upload(&ctx, &v).unwrap();
-    assert_eq!(gv.pool.map(|p| p.edge), Some(lacuna::volume::POOL_BRICK));
+    assert_eq!(gv.pool().map(|p| p.edge), Some(lacuna::volume::POOL_BRICK));
     common::assert_clean(&ctx);
 }
 

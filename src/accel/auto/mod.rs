@@ -174,7 +174,8 @@ pub struct Chosen {
     inner: Box<dyn Built>,
 }
 
-impl Built for Chosen {
+// SAFETY: binds only buffers it owns, made and sized by its build for the kernel that marches it.
+unsafe impl Built for Chosen {
     fn bindings(&self) -> Vec<Bound<'_>> {
         self.inner.bindings()
     }
@@ -217,7 +218,8 @@ const TREE_PARAM: Param = Param::choice(
     "auto: also price a collapsed k-d tree built on the device (auto: on devices that are not CPUs, where it leads on sparse data; its build costs a CPU device more than it gains)",
 );
 
-impl Method for AutoMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for AutoMethod {
     fn name(&self) -> &'static str {
         "auto"
     }

@@ -93,7 +93,8 @@ pub fn build(
 /// `--accel kd-cpu`.
 pub struct KdCpu;
 
-impl Method for KdCpu {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for KdCpu {
     fn name(&self) -> &'static str {
         "kd-cpu"
     }

@@ -357,7 +357,8 @@ impl PerContext for KdGpuBuilder {
 /// `--accel kd-gpu`.
 pub struct KdGpu;
 
-impl Method for KdGpu {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for KdGpu {
     fn name(&self) -> &'static str {
         "kd-gpu"
     }

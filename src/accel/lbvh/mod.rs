@@ -54,9 +54,9 @@ pub struct LbvhInput<'a> {
 
 /// Per-volume buffers of the selection phase (classify + compact).
 pub struct SelectScratch {
-    pub flags: Buffer,
-    pub active: Buffer,
-    pub count: Buffer,
+    pub(crate) flags: Buffer,
+    pub(crate) active: Buffer,
+    pub(crate) count: Buffer,
     count_readback: Buffer,
     compact: CompactScratch,
 }
@@ -146,20 +146,13 @@ impl LbvhBuilder {
         s: &SelectScratch,
     ) -> Result<()> {
         self.record_classify_compact(cmd, timer, input, s)?;
-        let device = self.ctx.device();
         cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
-        unsafe {
-            device.cmd_copy_buffer(
-                cmd.raw(),
-                s.count.raw,
-                s.count_readback.raw,
-                &[vk::BufferCopy {
-                    src_offset: 0,
-                    dst_offset: 0,
-                    size: 4,
-                }],
-            )
-        };
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: 4,
+        }];
+        cmd.copy_buffer(&s.count, &s.count_readback, &region)?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     }
@@ -245,7 +238,6 @@ impl LbvhBuilder {
         if n == 0 {
             return Ok(());
         }
-        let device = self.ctx.device();
         let info = self.ctx.info();
         let c = bricks.counts;
         entry_barrier(cmd);
@@ -272,10 +264,8 @@ impl LbvhBuilder {
         timer.end(cmd, pass);
         let pass = timer.begin(cmd, "emit")?;
         entry_barrier(cmd);
-        unsafe {
-            device.cmd_fill_buffer(cmd.raw(), h.visits.raw, 0, vk::WHOLE_SIZE, 0);
-            device.cmd_fill_buffer(cmd.raw(), h.parents.raw, 0, 4, u32::MAX);
-        }
+        cmd.fill_buffer(&h.visits, 0, vk::WHOLE_SIZE, 0)?;
+        cmd.fill_buffer(&h.parents, 0, 4, u32::MAX)?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         self.record_emit(cmd, &h.codes, n, count, nodes, &h.parents)?;
         timer.end(cmd, pass);
@@ -324,9 +314,8 @@ impl LbvhBuilder {
         h: &HierarchyScratch,
         nodes: &Buffer,
     ) -> Result<()> {
-        let device = self.ctx.device();
         cmd.barrier(Access::COMPUTE_READ_WRITE, Access::TRANSFER_WRITE);
-        unsafe { device.cmd_fill_buffer(cmd.raw(), h.visits.raw, 0, vk::WHOLE_SIZE, 0) };
+        cmd.fill_buffer(&h.visits, 0, vk::WHOLE_SIZE, 0)?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         cmd.compute_to_compute();
         let groups = record::groups_linear(self.ctx.info(), "collapse", h.n, self.collapse.local_size()[0])?;
@@ -463,10 +452,9 @@ impl LbvhBuilder {
         let capacity = bricks.total;
         let h = self.hierarchy_scratch(capacity)?;
         let nodes = self.nodes_buffer(capacity)?;
-        let device = self.ctx.device();
         // A fresh buffer: no earlier access to order. The compaction's entry
         // barrier makes the fill visible to its writes and to the Morton pass.
-        unsafe { device.cmd_fill_buffer(cmd.raw(), select.active.raw, 0, vk::WHOLE_SIZE, u32::MAX) };
+        cmd.fill_buffer(&select.active, 0, vk::WHOLE_SIZE, u32::MAX)?;
         self.record_classify_compact(cmd, timer.as_deref_mut(), input, &select)?;
         self.record_hierarchy(cmd, timer, input, &select, &h, &nodes)?;
         let SelectScratch {
@@ -501,7 +489,8 @@ impl PerContext for LbvhBuilder {
 /// `--accel lbvh`.
 pub struct LbvhMethod;
 
-impl Method for LbvhMethod {
+// SAFETY: `march` is the kernel its builds' `Built` bindings and push constants are made for.
+unsafe impl Method for LbvhMethod {
     fn name(&self) -> &'static str {
         "lbvh"
     }

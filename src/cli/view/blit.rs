@@ -19,10 +19,8 @@ pub unsafe fn record_to_swapchain(
 ) {
     // The acquire semaphore is waited on at the transfer stage, where the
     // image's transition starts.
-    let transfer = Access {
-        stage: vk::PipelineStageFlags2::ALL_TRANSFER,
-        access: vk::AccessFlags2::NONE,
-    };
+    // SAFETY: no access at the transfer stage, which every device has.
+    let transfer = unsafe { Access::new(vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::NONE) };
     // SAFETY: the acquired swapchain image (one level and layer); its
     // old contents are not needed.
     unsafe {

@@ -193,7 +193,7 @@ impl Fixture {
                 // Unless the texels are wider, hold NaN or sit in bricks
                 // (manual only).
                 filters.contains(&Filter::Hardware)
-                    || p.gv.pool.is_some()
+                    || p.gv.pool().is_some()
                     || lacuna::volume::common_kind(v) != lacuna::volume::TexelKind::Unorm8
                     || v.no_data_total() > 0,
                 "R8 UNORM must filter linearly (Vulkan requires it)"

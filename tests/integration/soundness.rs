@@ -1,0 +1,172 @@
+//! What safe code cannot do through lacuna's recording API: mix objects of
+//! two contexts in one command buffer, copy past a buffer's end, bind a
+//! buffer without the usage its binding needs, make an image whose texels
+//! disagree with its format, or free what a recorded command reads.
+
+use crate::common::{assert_clean, fresh_gpu, gpu};
+use lacuna::accel::{Builder, RangeKind};
+use lacuna::gpu::{vk, Buffer, Context, Image3d, MemoryLocation, Recording, TexelBuffer};
+use lacuna::prims::{BrickMinMax, Scan};
+use lacuna::volume::GpuVolume;
+use lacuna::Volume;
+
+fn error<T>(r: lacuna::Result<T>) -> String {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn storage(ctx: &Context, words: u64) -> Buffer {
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(ctx, "test", words * 4, usage, MemoryLocation::GpuOnly).unwrap()
+}
+
+fn uploaded(ctx: &Context) -> GpuVolume {
+    GpuVolume::upload(ctx, &Volume::load("nbody:16", &Default::default()).unwrap()).unwrap()
+}
+
+#[test]
+fn recording_calls_refuse_objects_of_another_context() {
+    let (ctx, other) = (gpu(), fresh_gpu());
+    let scan = Scan::new(&ctx).unwrap();
+    let scratch = scan.scratch(64).unwrap();
+    let data = storage(&ctx, 64);
+    let e = error(other.submit_and_wait(|cmd| scan.record(cmd, &data, 64, &scratch)));
+    assert!(e.contains("invalid command buffer 'of another lacuna Context'"), "{e}");
+    let foreign = storage(&other, 64);
+    let e = error(ctx.submit_and_wait(|cmd| scan.record(cmd, &foreign, 64, &scratch)));
+    assert!(e.contains("invalid bound buffer 'of another lacuna Context'"), "{e}");
+    // Ranges kept into the other's buffer, dropped in the closure: before,
+    // a copy into memory freed at once (retirement is per context).
+    let gv = uploaded(&ctx);
+    let (ranges, _) = Builder::new(&ctx).unwrap().ranges(&[RangeKind::Bricks], &gv).unwrap();
+    let bricks = ranges.bricks().unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| {
+        let to = storage(&other, bricks.ranges().size() / 4);
+        bricks.record_keep(cmd, &to)
+    }));
+    assert!(
+        e.contains("invalid copied-to buffer 'of another lacuna Context'"),
+        "{e}"
+    );
+    let usage = vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
+    let texels = Buffer::new(&other, "texels", 64, usage, MemoryLocation::GpuOnly).unwrap();
+    let e = error(TexelBuffer::new(&ctx, texels, vk::Format::R32_UINT));
+    assert!(
+        e.contains("invalid texel buffer's buffer 'of another lacuna Context'"),
+        "{e}"
+    );
+    assert_clean(&ctx);
+    assert_clean(&other);
+}
+
+#[test]
+fn copies_bindings_and_images_are_checked_against_sizes_usage_and_format() {
+    let ctx = gpu();
+    let gv = uploaded(&ctx);
+    let (ranges, _) = Builder::new(&ctx).unwrap().ranges(&[RangeKind::Bricks], &gv).unwrap();
+    let tiny = storage(&ctx, 1);
+    let e = error(ctx.submit_and_wait(|cmd| ranges.bricks()?.record_keep(cmd, &tiny)));
+    assert!(e.contains("invalid buffer copy"), "{e}");
+    let minmax = BrickMinMax::new(&ctx).unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| minmax.record(cmd, &gv, 8, 1, &tiny)));
+    assert!(e.contains("invalid brick ranges '4 bytes'"), "{e}");
+    let e = error(Buffer::new(
+        &ctx,
+        "none",
+        64,
+        vk::BufferUsageFlags::empty(),
+        MemoryLocation::GpuOnly,
+    ));
+    assert!(e.contains("invalid buffer usage"), "{e}");
+    let scan = Scan::new(&ctx).unwrap();
+    let scratch = scan.scratch(16).unwrap();
+    let usage = vk::BufferUsageFlags::TRANSFER_DST;
+    let copy_only = Buffer::new(&ctx, "copy only", 64, usage, MemoryLocation::GpuOnly).unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| scan.record(cmd, &copy_only, 16, &scratch)));
+    assert!(e.contains("needs a buffer of STORAGE_BUFFER usage"), "{e}");
+    let e = error(TexelBuffer::new(&ctx, storage(&ctx, 16), vk::Format::R32_UINT));
+    assert!(e.contains("without UNIFORM_TEXEL_BUFFER usage"), "{e}");
+    let rgba = vk::Format::R32G32B32A32_SFLOAT;
+    let e = error(Image3d::with_data(&ctx, "image", rgba, [4, 4, 4], 1, &[0; 64]));
+    assert!(e.contains("invalid image texels"), "{e}");
+    let e = error(Image3d::with_data(
+        &ctx,
+        "image",
+        vk::Format::R8_UNORM,
+        [4, 0, 4],
+        1,
+        &[],
+    ));
+    assert!(e.contains("invalid image extent"), "{e}");
+    assert_clean(&ctx);
+}
+
+/// A host's command buffer on the context's device and queue family.
+struct HostCmd {
+    pool: vk::CommandPool,
+    raw: vk::CommandBuffer,
+}
+
+impl HostCmd {
+    fn begin(ctx: &Context) -> HostCmd {
+        let d = ctx.device();
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(ctx.queue_family());
+        unsafe {
+            let pool = d.create_command_pool(&info, None).unwrap();
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            let raw = d.allocate_command_buffers(&alloc).unwrap()[0];
+            d.begin_command_buffer(raw, &vk::CommandBufferBeginInfo::default())
+                .unwrap();
+            HostCmd { pool, raw }
+        }
+    }
+
+    /// Ends, submits on the context's queue (no lacuna call is submitting
+    /// meanwhile: the context is this test's) and waits.
+    fn submit_and_wait(self, ctx: &Context) {
+        let d = ctx.device();
+        unsafe {
+            d.end_command_buffer(self.raw).unwrap();
+            let queue = d.get_device_queue(ctx.queue_family(), 0);
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.raw)];
+            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+            d.queue_submit2(queue, &submit, fence).unwrap();
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// `Builder::put` replaces a per-context value (here the brick min/max
+/// kernels, whose stand-in list buffer every ranges pass binds) while a
+/// host's command buffer that bound it is pending: the old value lives as
+/// long as the builder, so the ranges come out as a builder's own.
+#[test]
+fn what_builder_put_replaces_outlives_the_recordings_that_bound_it() {
+    let ctx = gpu();
+    let gv = uploaded(&ctx);
+    let builder = Builder::new(&ctx).unwrap();
+    let host = HostCmd::begin(&ctx);
+    // SAFETY: recording on this context's device, outside a render pass,
+    // submitted to its family below after no failed call; the builder, the
+    // volume and the ranges returned are kept, and unread, until the wait.
+    let rec = unsafe { Recording::adopt(&ctx, host.raw) };
+    let ranges = builder.record_ranges(rec, None, &[RangeKind::Bricks], &gv).unwrap();
+    builder.put(BrickMinMax::new(&ctx).unwrap());
+    host.submit_and_wait(&ctx);
+    let (want, _) = Builder::new(&ctx).unwrap().ranges(&[RangeKind::Bricks], &gv).unwrap();
+    let bytes = |r: &lacuna::accel::Ranges| {
+        let b = r.bricks().unwrap().ranges();
+        b.download(0, b.size()).unwrap()
+    };
+    assert_eq!(bytes(&ranges), bytes(&want));
+    assert_clean(&ctx);
+}
