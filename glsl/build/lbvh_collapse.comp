@@ -21,9 +21,12 @@ layout(std430, set = 0, binding = 1) readonly buffer Parents { int parents[]; };
 layout(std430, set = 0, binding = 2) coherent buffer Visits { uint visits[]; };
 // Per node: (expected cost per ray meeting it, surface area).
 layout(std430, set = 0, binding = 3) coherent buffer Costs { vec2 costs[]; };
-layout(std430, set = 0, binding = 4) readonly buffer Count { uint n; };
+layout(std430, set = 0, binding = 4) readonly buffer Count { uint count_n; };
 // x: sample cost per voxel of chord; y: inner step; z: leaf entry (ns).
-layout(push_constant) uniform Push { vec4 model; } pc;
+layout(push_constant) uniform Push { vec4 model; uint cap; } pc;
+// The leaf count, at most the pass's capacity (`cap`, what the buffers
+// were sized for): a count past it indexes nothing out of bounds.
+#define n min(count_n, pc.cap)
 
 // (cost as one leaf, surface area) of box [lo, hi]; the operation order of
 // CostModel::leaf, so the CPU reference decides alike.

@@ -12,8 +12,11 @@ layout(std430, set = 0, binding = 1) writeonly buffer Nodes { BvhNode nodes[]; }
 layout(std430, set = 0, binding = 2) writeonly buffer Parents { int parents[]; };
 // The leaf count n, as the compaction wrote it: a recorded build dispatches
 // over the brick capacity and the threads past n - 1 return.
-layout(std430, set = 0, binding = 3) readonly buffer Count { uint n; };
-layout(push_constant) uniform Push { uint groups_x; uint pad0; uint pad1; uint pad2; } pc;
+layout(std430, set = 0, binding = 3) readonly buffer Count { uint count_n; };
+layout(push_constant) uniform Push { uint groups_x; uint cap; uint pad1; uint pad2; } pc;
+// The leaf count, at most the pass's capacity (`cap`, what the buffers
+// were sized for): a count past it indexes nothing out of bounds.
+#define n min(count_n, pc.cap)
 
 int delta(int i, int j) {
     if (j < 0 || j >= int(n)) {

@@ -21,13 +21,16 @@ layout(std430, set = 0, binding = 2) readonly buffer Parents { int parents[]; };
 layout(std430, set = 0, binding = 3) coherent buffer Visits { uint visits[]; };
 // The leaf count n from the compaction (a recorded build dispatches over the
 // brick capacity; threads past n return).
-layout(std430, set = 0, binding = 4) readonly buffer Count { uint n; };
+layout(std430, set = 0, binding = 4) readonly buffer Count { uint count_n; };
 layout(push_constant) uniform Push {
     uvec4 dims;   // xyz: volume dims; w: brick edge
     uvec4 counts; // xyz: bricks per axis
     uint groups_x;
-    uint pad;
+    uint cap;
 } pc;
+// The leaf count, at most the pass's capacity (`cap`, what the buffers
+// were sized for): a count past it indexes nothing out of bounds.
+#define n min(count_n, pc.cap)
 
 void main() {
     uint i = linear_index(pc.groups_x);

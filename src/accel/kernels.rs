@@ -50,7 +50,7 @@ impl MarchKernels {
 
     /// `march`'s kernel (its output `variant`, or the frame buffer's) for
     /// frames with `frame` constants and `probe`'s.
-    pub fn get(
+    pub(crate) fn get(
         &self,
         march: March,
         variant: Option<&str>,
@@ -66,7 +66,7 @@ impl MarchKernels {
     /// lavapipe in 0.5 to 3 s a march kernel): what a probe will dispatch.
     /// Candidates that differ only in cell size share a kernel; its threads
     /// wait for the one that makes it (`gpu/kernel_cache.rs`).
-    pub fn prepare(&self, wanted: &[(March, KernelConstants, ProbeConstants)]) -> Result<()> {
+    pub(crate) fn prepare(&self, wanted: &[(March, KernelConstants, ProbeConstants)]) -> Result<()> {
         std::thread::scope(|scope| {
             let jobs: Vec<_> = wanted
                 .iter()

@@ -20,11 +20,30 @@ use std::any::Any;
 /// and its specialization constants (constant_id 0, 1, ...).
 #[derive(Clone, Copy, Debug)]
 pub struct March {
-    pub shader: Shader,
-    pub constants: &'static [u32],
+    pub(crate) shader: Shader,
+    pub(crate) constants: &'static [u32],
 }
 
 impl March {
+    /// The kernel of `shader` with `constants` at constant_id 0, 1, ...
+    ///
+    /// # Safety
+    /// As `Kernel::specialized`: the constants are values the shader was
+    /// written to take there.
+    pub const unsafe fn new(shader: Shader, constants: &'static [u32]) -> Self {
+        March { shader, constants }
+    }
+
+    /// Its shader.
+    pub fn shader(&self) -> Shader {
+        self.shader
+    }
+
+    /// Its specialization constants (constant_id 0, 1, ...).
+    pub fn constants(&self) -> &'static [u32] {
+        self.constants
+    }
+
     /// A kernel without specialization.
     pub const fn plain(shader: Shader) -> Self {
         March { shader, constants: &[] }

@@ -181,12 +181,30 @@ impl Kernel {
         self.ctx.check_is(cmd.context(), "command buffer")?;
         let ordered = self.in_slot_order(bindings)?;
         for (name, b) in bindings {
-            let (buf, usage) = match b {
-                Binding::Storage(buf) => (buf, vk::BufferUsageFlags::STORAGE_BUFFER),
-                Binding::Uniform(buf) => (buf, vk::BufferUsageFlags::UNIFORM_BUFFER),
+            let info = self.ctx.info();
+            let (buf, usage, range, limit) = match b {
+                Binding::Storage(buf) => (
+                    buf,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    info.max_storage_buffer_range,
+                    "maxStorageBufferRange",
+                ),
+                Binding::Uniform(buf) => (
+                    buf,
+                    vk::BufferUsageFlags::UNIFORM_BUFFER,
+                    info.max_uniform_buffer_range,
+                    "maxUniformBufferRange",
+                ),
                 _ => continue,
             };
             self.ctx.check_is(buf.context(), "bound buffer")?;
+            // Bound whole: all of it must be in range.
+            info.check(
+                format!("kernel {}: binding {name}", self.name),
+                limit,
+                buf.size(),
+                range,
+            )?;
             if !buf.usage().contains(usage) {
                 return Err(Error::Interface(format!(
                     "kernel {}: binding {name} needs a buffer of {usage:?} usage",

@@ -260,12 +260,7 @@ impl Buffer {
                     dst_offset: offset + done,
                     size: n,
                 }];
-                unsafe {
-                    self.ctx
-                        .device()
-                        .cmd_copy_buffer(cmd.raw(), staging.raw, self.raw, &region)
-                };
-                Ok(())
+                cmd.copy_buffer(&staging, self, &region)
             })?;
             done += n;
         }
@@ -295,8 +290,7 @@ impl Buffer {
                     dst_offset: 0,
                     size: n,
                 }];
-                let device = self.ctx.device();
-                unsafe { device.cmd_copy_buffer(cmd.raw(), self.raw, staging.raw, &region) };
+                cmd.copy_buffer(self, &staging, &region)?;
                 cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
                 Ok(())
             })?;
@@ -308,6 +302,17 @@ impl Buffer {
     /// The usage it was made with.
     pub fn usage(&self) -> vk::BufferUsageFlags {
         self.usage
+    }
+
+    /// An error unless it was made with `usage` (to be `what`).
+    pub(crate) fn check_usage(&self, usage: vk::BufferUsageFlags, what: &str) -> Result<()> {
+        match self.usage.contains(usage) {
+            true => Ok(()),
+            false => Err(Error::Interface(format!(
+                "buffer '{}' {what}: it was made without {usage:?} usage",
+                self.name
+            ))),
+        }
     }
 
     /// A whole-buffer descriptor range.
@@ -426,14 +431,20 @@ impl Staging {
 
 /// Copies and fills of lacuna's buffers, checked before they are recorded.
 impl Recording<'_> {
-    /// Records copies between two buffers of this context, each region
-    /// checked to lie within both (an error names the first that does not).
+    /// Records copies between two buffers of this context (TRANSFER_SRC
+    /// and TRANSFER_DST usage), each region non-empty and within both, and
+    /// not overlapping itself within one buffer (an error names the first
+    /// that is not).
     pub fn copy_buffer(self, src: &Buffer, dst: &Buffer, regions: &[vk::BufferCopy]) -> Result<()> {
         self.context().check_is(src.context(), "copied buffer")?;
         self.context().check_is(dst.context(), "copied-to buffer")?;
+        src.check_usage(vk::BufferUsageFlags::TRANSFER_SRC, "copied from")?;
+        dst.check_usage(vk::BufferUsageFlags::TRANSFER_DST, "copied to")?;
         for r in regions {
             let fits = |offset: u64, size: u64| offset.checked_add(r.size).is_some_and(|end| end <= size);
-            if !fits(r.src_offset, src.size()) || !fits(r.dst_offset, dst.size()) {
+            let overlaps =
+                src.raw == dst.raw && r.src_offset < r.dst_offset + r.size && r.dst_offset < r.src_offset + r.size;
+            if r.size == 0 || !fits(r.src_offset, src.size()) || !fits(r.dst_offset, dst.size()) || overlaps {
                 return Err(Error::invalid(
                     "buffer copy",
                     format!("{} bytes from {} to {}", r.size, r.src_offset, r.dst_offset),
@@ -451,12 +462,15 @@ impl Recording<'_> {
         Ok(())
     }
 
-    /// Records a fill of `buffer` (of this context) from `offset` on with
-    /// `value` (`vk::WHOLE_SIZE`: to its end), checked to lie within it.
+    /// Records a fill of `buffer` (of this context, TRANSFER_DST usage)
+    /// from `offset` on with `value` (`vk::WHOLE_SIZE`: to its end),
+    /// checked to be whole words within it.
     pub fn fill_buffer(self, buffer: &Buffer, offset: u64, size: u64, value: u32) -> Result<()> {
         self.context().check_is(buffer.context(), "filled buffer")?;
-        let within = size == vk::WHOLE_SIZE || offset.checked_add(size).is_some_and(|end| end <= buffer.size());
-        if !within || offset >= buffer.size() {
+        buffer.check_usage(vk::BufferUsageFlags::TRANSFER_DST, "filled")?;
+        let within = size == vk::WHOLE_SIZE
+            || (size > 0 && size.is_multiple_of(4) && offset.checked_add(size).is_some_and(|end| end <= buffer.size()));
+        if !within || offset >= buffer.size() || !offset.is_multiple_of(4) {
             return Err(Error::invalid(
                 "buffer fill",
                 format!("{size} bytes from {offset}"),

@@ -4,10 +4,10 @@
 //! its references and primitives, and traces rays in batches, each batch
 //! timed with GPU timestamps.
 
-use super::build::Octree;
-use super::prims::{Ray, TraceResult, TraceScene};
+use super::build::{Octree, MAX_DEPTH_LIMIT};
+use super::prims::{Ray, TraceResult, TraceScene, POLYGON};
 use super::traverse::Traversal;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::record::{self, Access};
 use crate::gpu::shaders::{self, octree_trace};
 use crate::gpu::{vk, Binding, Buffer, Context, Kernel, MemoryLocation, Timer};
@@ -71,6 +71,7 @@ fn storage(ctx: &Context, name: &str, bytes: &[u8]) -> Result<Buffer> {
 impl<'k> GpuTracer<'k> {
     /// Uploads `tree` over `scene` for tracing with `kernels`.
     pub fn new(kernels: &'k TraceKernels, tree: &Octree, scene: &TraceScene) -> Result<Self> {
+        check_for_gpu(tree, scene)?;
         let ctx = &kernels.ctx;
         let info = ctx.info();
         for (what, bytes) in [
@@ -155,4 +156,49 @@ impl<'k> GpuTracer<'k> {
         }
         Ok((out, ms))
     }
+}
+
+/// An error unless every index the traversal kernels follow stays in its
+/// array: the octree and scene have public fields, and the kernels read
+/// them unchecked (no robust buffer access). Children come after their
+/// parent (so the tree has no cycle) and no deeper than the kernels'
+/// stacks; each node's stored depth and parent are its own.
+fn check_for_gpu(tree: &Octree, scene: &TraceScene) -> Result<()> {
+    let bad = |what: String| Err(Error::invalid("octree", what, "is not an octree the builder makes"));
+    let (nodes, refs) = (&tree.nodes, &tree.refs);
+    if nodes.is_empty() || nodes[0].depth() != 0 || nodes[0].parent() != 0 {
+        return bad("its root".into());
+    }
+    for (i, n) in nodes.iter().enumerate() {
+        let (first, count) = (n.first() as u64, n.count() as u64);
+        if n.is_leaf() {
+            if first + count > refs.len() as u64 {
+                return bad(format!("leaf {i}'s references"));
+            }
+            continue;
+        }
+        if first <= i as u64 || first + 8 > nodes.len() as u64 || n.depth() >= MAX_DEPTH_LIMIT {
+            return bad(format!("node {i}'s children"));
+        }
+        for c in &nodes[first as usize..first as usize + 8] {
+            if c.parent() as usize != i || c.depth() != n.depth() + 1 {
+                return bad(format!("node {i}'s children"));
+            }
+        }
+    }
+    if let Some(r) = refs.iter().find(|&&r| r as usize >= scene.prims.len()) {
+        return bad(format!("reference to primitive {r}"));
+    }
+    for (i, p) in scene.prims.iter().enumerate() {
+        let [kind, first, count, drop] = p.info;
+        let polygon_fits = first as u64 + count as u64 <= scene.verts.len() as u64 && drop < 3;
+        if kind > POLYGON || (kind == POLYGON && !polygon_fits) {
+            return Err(Error::invalid(
+                "primitive",
+                i.to_string(),
+                "a sphere, cone, or polygon of the scene's vertices",
+            ));
+        }
+    }
+    Ok(())
 }

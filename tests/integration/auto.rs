@@ -235,7 +235,7 @@ fn auto_marches_what_it_chose_and_equals_naive() {
         let c = choice(&s);
         // Frames are marched with the chosen structure's kernel and data.
         assert_eq!(c.accel, s.marched_as());
-        assert_eq!(s.march().shader.name(), c.accel.method().march().shader.name());
+        assert_eq!(s.march().shader().name(), c.accel.method().march().shader().name());
         let reported = s.marched_as_reason().expect("auto says what it chose");
         assert_eq!(reported.label, c.describe());
         assert_eq!(reported.reason, c.reason());

@@ -170,3 +170,108 @@ fn what_builder_put_replaces_outlives_the_recordings_that_bound_it() {
     assert_eq!(bytes(&ranges), bytes(&want));
     assert_clean(&ctx);
 }
+
+/// The second review's holes: each is now an error, nothing recorded.
+#[test]
+fn views_copies_ranges_lbvh_buffers_and_octrees_are_checked_before_use() {
+    let (ctx, other) = (gpu(), fresh_gpu());
+    // A k-d tree of this context over the other's volume (its views are
+    // bound, which a dispatch cannot check: a segfault before).
+    let kd = lacuna::accel::kd::gpu::KdGpuBuilder::new(&ctx).unwrap();
+    let tf = lacuna::TransferFunction::parse("ramp:0.35:1").unwrap();
+    let (gv_other, lut) = (uploaded(&other), tf.upload(&ctx).unwrap());
+    let params = lacuna::accel::kd::KdParams::default();
+    let e = error(kd.build(&gv_other, &lut, &params, None));
+    assert!(e.contains("invalid volume 'of another lacuna Context'"), "{e}");
+    // Copies and fills: usage, alignment, overlap.
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let storage_only = Buffer::new(&ctx, "storage only", 64, usage, MemoryLocation::GpuOnly).unwrap();
+    let both = storage(&ctx, 16);
+    let region = |src_offset, dst_offset, size| {
+        [vk::BufferCopy {
+            src_offset,
+            dst_offset,
+            size,
+        }]
+    };
+    for (attempt, needle) in [
+        (
+            ctx.submit_and_wait(|cmd| cmd.copy_buffer(&storage_only, &both, &region(0, 0, 4))),
+            "without TRANSFER_SRC",
+        ),
+        (
+            ctx.submit_and_wait(|cmd| cmd.copy_buffer(&both, &storage_only, &region(0, 0, 4))),
+            "without TRANSFER_DST",
+        ),
+        (
+            ctx.submit_and_wait(|cmd| cmd.copy_buffer(&both, &both, &region(0, 4, 8))),
+            "invalid buffer copy",
+        ),
+        (
+            ctx.submit_and_wait(|cmd| cmd.copy_buffer(&both, &both, &region(0, 32, 0))),
+            "invalid buffer copy",
+        ),
+        (
+            ctx.submit_and_wait(|cmd| cmd.fill_buffer(&both, 2, 4, 0)),
+            "invalid buffer fill",
+        ),
+        (
+            ctx.submit_and_wait(|cmd| cmd.fill_buffer(&both, 0, 5, 0)),
+            "invalid buffer fill",
+        ),
+        (storage_only.upload(0, &[0; 4]), "without TRANSFER_DST"),
+    ] {
+        let e = error(attempt);
+        assert!(e.contains(needle), "{e} (wanted {needle})");
+    }
+    // A buffer bound whole past maxStorageBufferRange.
+    let range = ctx.info().max_storage_buffer_range;
+    let big = Buffer::new(&ctx, "big", range + 4096, usage, MemoryLocation::GpuOnly).unwrap();
+    let scan = Scan::new(&ctx).unwrap();
+    let scratch = scan.scratch(64).unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| scan.record(cmd, &big, 64, &scratch)));
+    assert!(e.contains("maxStorageBufferRange"), "{e}");
+    drop(big);
+    // An LBVH hierarchy recorded into a node buffer too small for it.
+    let gv = uploaded(&ctx);
+    let (ranges, _) = Builder::new(&ctx).unwrap().ranges(&[RangeKind::Bricks], &gv).unwrap();
+    let bricks = ranges.bricks().unwrap();
+    let lbvh = lacuna::accel::lbvh::LbvhBuilder::new(&ctx).unwrap();
+    let classifier = lacuna::accel::Classifier::new(&ctx).unwrap();
+    let input = lacuna::accel::lbvh::LbvhInput {
+        classifier: &classifier,
+        mode: lacuna::accel::Classify::Range,
+        volume: &gv,
+        bricks,
+        tf: &lut,
+        collapse: None,
+    };
+    let select = lbvh.select_scratch(bricks).unwrap();
+    let h = lbvh.hierarchy_scratch(bricks.total()).unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| lbvh.record_hierarchy(cmd, None, &input, &select, &h, &storage(&ctx, 1))));
+    assert!(e.contains("invalid LBVH buffers"), "{e}");
+    // An octree whose child index points outside it, or back at its root.
+    use lacuna::octree::{GpuTracer, Mode, Octree, OctreeOptions, TraceKernels, TraceScene};
+    let scene = lacuna::scene::Scene::generate(lacuna::scene::SpdScene::Balls, Some(1)).unwrap();
+    let traced = TraceScene::new(&scene);
+    let options = OctreeOptions {
+        mode: Mode::Center,
+        max_depth: 3,
+        max_objects: 1,
+    };
+    let kernels = TraceKernels::new(&ctx).unwrap();
+    let tree = Octree::for_scene(&traced, options);
+    assert!(
+        GpuTracer::new(&kernels, &tree, &traced).is_ok(),
+        "the builder's own octree"
+    );
+    let interior = tree.nodes.iter().position(|n| !n.is_leaf()).expect("an interior node");
+    for first in [1_000_000, 0] {
+        let mut bad = Octree::for_scene(&traced, options);
+        bad.nodes[interior].info[0] = first;
+        let e = error(GpuTracer::new(&kernels, &bad, &traced));
+        assert!(e.contains("invalid octree"), "{e}");
+    }
+    assert_clean(&ctx);
+    assert_clean(&other);
+}

@@ -129,6 +129,10 @@ impl KdGpuBuilder {
         params: &KdParams,
         collapse: Option<&CostModel>,
     ) -> Result<(GpuTree, Timings)> {
+        // The volume's views and the TF's tables are bound: this context's only.
+        self.ctx.check_is(gv.context(), "volume")?;
+        self.ctx.check_is(tf.context(), "transfer function")?;
+        tf.check_channels(gv.channels)?;
         let mut timings = Timings::default();
         let mut timer = Timer::new(&self.ctx, 4)?;
         let sorted = self.sorted_bricks(gv, tf, &mut timer, &mut timings)?;

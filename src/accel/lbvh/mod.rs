@@ -238,6 +238,19 @@ impl LbvhBuilder {
         if n == 0 {
             return Ok(());
         }
+        // The kernels index `active` and the nodes up to the capacity `n`
+        // (the GPU's count is clamped to it).
+        let need = [n * 4, (2 * n).max(1) * 32];
+        if active.size() < need[0] || nodes.size() < need[1] {
+            return Err(Error::invalid(
+                "LBVH buffers",
+                format!("{} and {} bytes", active.size(), nodes.size()),
+                format!(
+                    "{n} leaves need {} bytes of active bricks and {} of nodes",
+                    need[0], need[1]
+                ),
+            ));
+        }
         let info = self.ctx.info();
         let c = bricks.counts;
         entry_barrier(cmd);
@@ -291,7 +304,7 @@ impl LbvhBuilder {
                     dims: [d[0], d[1], d[2], bricks.brick],
                     counts: [c[0], c[1], c[2], 0],
                     groups_x: groups[0],
-                    pad: 0,
+                    cap: n as u32,
                 }),
                 groups,
             )
@@ -335,6 +348,7 @@ impl LbvhBuilder {
                 // `CostModel::gpu_constants`.
                 bytemuck::bytes_of(&build_lbvh_collapse::Push {
                     model: model.gpu_constants(),
+                    cap: h.n as u32,
                 }),
                 groups,
             )
@@ -368,6 +382,7 @@ impl LbvhBuilder {
                 .list(),
                 bytemuck::bytes_of(&build_lbvh_emit::Push {
                     groups_x: groups[0],
+                    cap: n as u32,
                     ..Default::default()
                 }),
                 groups,
