@@ -480,12 +480,13 @@ impl Context {
             .command_buffer_count(1);
         let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let mut pool = Some(pool);
+        let done = Arc::new(std::sync::atomic::AtomicBool::new(false));
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
             let value = {
                 let _recording = SubmitGuard::on(me);
-                record(Recording::own(self, cmd))
+                record(Recording::own(self, cmd, &done))
             };
             unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
             let value = value?;
@@ -512,6 +513,7 @@ impl Context {
             let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
             unsafe { device.destroy_fence(fence, None) };
             waited?;
+            done.store(true, std::sync::atomic::Ordering::Release);
             Ok((value, host))
         })();
         let pool = pool.unwrap_or_else(lock_pool);

@@ -10,6 +10,8 @@ use super::{Context, DeviceInfo};
 use crate::error::Result;
 use ash::vk;
 use std::marker::PhantomData;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 /// A command buffer in the recording state on a lacuna `Context`'s device:
 /// what every `record_*` call records into. lacuna's own submissions
@@ -60,6 +62,8 @@ use std::marker::PhantomData;
 pub struct Recording<'r> {
     ctx: &'r Context,
     raw: vk::CommandBuffer,
+    /// lacuna's own submission: whether it has completed (None: a host's).
+    done: Option<&'r Arc<AtomicBool>>,
     _one_thread: PhantomData<*const ()>,
 }
 
@@ -92,17 +96,27 @@ impl<'r> Recording<'r> {
         Recording {
             ctx,
             raw,
+            done: None,
             _one_thread: PhantomData,
         }
     }
 
-    /// A command buffer lacuna allocated and begun, submits and waits for.
-    pub(super) fn own(ctx: &'r Context, raw: vk::CommandBuffer) -> Self {
+    /// A command buffer lacuna allocated and begun, submits and waits for;
+    /// `done` is set once it has completed.
+    pub(super) fn own(ctx: &'r Context, raw: vk::CommandBuffer, done: &'r Arc<AtomicBool>) -> Self {
         Recording {
             ctx,
             raw,
+            done: Some(done),
             _one_thread: PhantomData,
         }
+    }
+
+    /// For lacuna's own submissions, the flag set once this one has
+    /// completed (None: a host's command buffer, whose completion is the
+    /// host's to know).
+    pub(crate) fn completion(self) -> Option<Arc<AtomicBool>> {
+        self.done.cloned()
     }
 
     /// The command buffer, for the host's own `vkCmd*` calls.

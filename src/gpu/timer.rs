@@ -7,6 +7,8 @@ use super::timings::Timings;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// GPU timestamps around named passes of recorded work, read back as
 /// `Timings` once the work completed.
@@ -22,6 +24,9 @@ pub struct Timer {
     recording: u64,
     /// The last `reset` was given another context's command buffer.
     reset_elsewhere: bool,
+    /// Set once lacuna's own submission that recorded the last `reset` has
+    /// completed (None: a host's command buffer, or no reset yet).
+    completed: Option<Arc<AtomicBool>>,
 }
 
 /// Handle of a pass opened with [`Timer::begin`] (its index and recording).
@@ -44,6 +49,7 @@ impl Timer {
             open: None,
             recording: 0,
             reset_elsewhere: false,
+            completed: None,
         })
     }
 
@@ -60,6 +66,7 @@ impl Timer {
         self.open = None;
         self.recording += 1;
         self.reset_elsewhere = !self.ctx.is(cmd.context());
+        self.completed = cmd.completion();
         if self.reset_elsewhere {
             return;
         }
@@ -139,6 +146,15 @@ impl Timer {
         let mut timings = Timings::default();
         if self.passes.is_empty() || !self.supported() {
             return Ok(timings);
+        }
+        // Queries of a submission not yet run (or never submitted: its
+        // closure failed) hold nothing to read.
+        if self.completed.as_ref().is_some_and(|d| !d.load(Ordering::Acquire)) {
+            return Err(Error::invalid(
+                "timer results",
+                "before the submission that recorded them completed",
+                "read them after submit_and_wait returned Ok",
+            ));
         }
         // Its end query was never written: waiting for it would not return.
         if let Some((name, ..)) = self.passes.iter().find(|p| !p.2) {

@@ -275,3 +275,33 @@ fn views_copies_ranges_lbvh_buffers_and_octrees_are_checked_before_use() {
     assert_clean(&ctx);
     assert_clean(&other);
 }
+
+/// A timer's results are read only after the submission that recorded its
+/// reset completed: inside the closure, or after a closure that failed (never
+/// submitted), its queries hold nothing yet.
+#[test]
+fn timer_results_wait_for_the_submission_that_recorded_them() {
+    let ctx = gpu();
+    let mut timer = lacuna::gpu::Timer::new(&ctx, 1).unwrap();
+    let inside = ctx
+        .submit_and_wait(|cmd| {
+            timer.reset(cmd);
+            let pass = timer.begin(cmd, "empty")?;
+            timer.end(cmd, pass);
+            Ok(timer.results().map(|_| ()).map_err(|e| e.to_string()))
+        })
+        .unwrap();
+    let e = inside.expect_err("results inside the recording closure");
+    assert!(e.contains("before the submission that recorded them completed"), "{e}");
+    assert!(timer.results().unwrap().get("empty").is_some(), "after the wait");
+    let failed = ctx.submit_and_wait(|cmd| {
+        timer.reset(cmd);
+        let pass = timer.begin(cmd, "empty")?;
+        timer.end(cmd, pass);
+        Err::<(), _>(lacuna::Error::Interface("planted".into()))
+    });
+    assert!(failed.is_err());
+    let e = error(timer.results());
+    assert!(e.contains("before the submission that recorded them completed"), "{e}");
+    assert_clean(&ctx);
+}
