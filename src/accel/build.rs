@@ -79,7 +79,6 @@ impl Builder {
     ) -> Result<Structure> {
         accel.method().check(params)?;
         self.context().check_is(cmd.context(), "command buffer")?;
-        self.context().check_is(cmd.context(), "command buffer")?;
         input.check(self.context())?;
         ranges.check_volume(input.gpu_volume)?;
         if !accel.method().marches(&input.mode) {

@@ -157,8 +157,7 @@ impl Buffer {
             dst_offset: 0,
             size: data.len() as u64,
         }];
-        let device = ctx.device();
-        unsafe { device.cmd_copy_buffer(cmd.raw(), staging.raw, buffer.raw, &region) };
+        cmd.copy_buffer(&staging, &buffer, &region)?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ);
         Ok((buffer, Staging(vec![staging])))
     }
@@ -237,9 +236,9 @@ impl Buffer {
     /// Bytes `[offset, offset + len)`, or an error naming the buffer when
     /// it does not hold them.
     fn check_range(&self, offset: u64, len: u64) -> Result<()> {
-        match offset.checked_add(len) {
-            Some(end) if end <= self.size => Ok(()),
-            _ => Err(Error::invalid(
+        match self.holds(offset, len) {
+            true => Ok(()),
+            false => Err(Error::invalid(
                 "buffer range",
                 format!("{len} bytes at {offset}"),
                 format!("buffer '{}' holds {} bytes", self.name, self.size),
@@ -297,6 +296,11 @@ impl Buffer {
             out.extend_from_slice(&staging.host()?[..n as usize]);
         }
         Ok(out)
+    }
+
+    /// Whether `len` bytes from `offset` lie within it.
+    pub(crate) fn holds(&self, offset: u64, len: u64) -> bool {
+        offset.checked_add(len).is_some_and(|end| end <= self.size)
     }
 
     /// The usage it was made with.
@@ -441,10 +445,10 @@ impl Recording<'_> {
         src.check_usage(vk::BufferUsageFlags::TRANSFER_SRC, "copied from")?;
         dst.check_usage(vk::BufferUsageFlags::TRANSFER_DST, "copied to")?;
         for r in regions {
-            let fits = |offset: u64, size: u64| offset.checked_add(r.size).is_some_and(|end| end <= size);
-            let overlaps =
-                src.raw == dst.raw && r.src_offset < r.dst_offset + r.size && r.dst_offset < r.src_offset + r.size;
-            if r.size == 0 || !fits(r.src_offset, src.size()) || !fits(r.dst_offset, dst.size()) || overlaps {
+            let overlaps = src.raw == dst.raw
+                && r.src_offset < r.dst_offset.saturating_add(r.size)
+                && r.dst_offset < r.src_offset.saturating_add(r.size);
+            if r.size == 0 || !src.holds(r.src_offset, r.size) || !dst.holds(r.dst_offset, r.size) || overlaps {
                 return Err(Error::invalid(
                     "buffer copy",
                     format!("{} bytes from {} to {}", r.size, r.src_offset, r.dst_offset),
@@ -468,8 +472,7 @@ impl Recording<'_> {
     pub fn fill_buffer(self, buffer: &Buffer, offset: u64, size: u64, value: u32) -> Result<()> {
         self.context().check_is(buffer.context(), "filled buffer")?;
         buffer.check_usage(vk::BufferUsageFlags::TRANSFER_DST, "filled")?;
-        let within = size == vk::WHOLE_SIZE
-            || (size > 0 && size.is_multiple_of(4) && offset.checked_add(size).is_some_and(|end| end <= buffer.size()));
+        let within = size == vk::WHOLE_SIZE || (size > 0 && size.is_multiple_of(4) && buffer.holds(offset, size));
         if !within || offset >= buffer.size() || !offset.is_multiple_of(4) {
             return Err(Error::invalid(
                 "buffer fill",

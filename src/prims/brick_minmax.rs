@@ -206,7 +206,7 @@ pub fn coarsens_exactly(volume: &GpuVolume) -> bool {
 
 /// An error unless `buffer` holds `bytes` (what a kernel writes or reads).
 fn check_holds(buffer: &Buffer, what: &'static str, bytes: u64) -> Result<()> {
-    match buffer.size() >= bytes {
+    match buffer.holds(0, bytes) {
         true => Ok(()),
         false => Err(Error::invalid(
             what,

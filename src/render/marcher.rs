@@ -314,7 +314,7 @@ impl Renderer {
         cmd.barrier(Access::TRANSFER_READ, Access::COMPUTE_WRITE);
         unsafe { device.cmd_update_buffer(cmd.raw(), target.params.raw, 0, bytemuck::bytes_of(&params)) };
         let status = target.status_buffer();
-        unsafe { device.cmd_fill_buffer(cmd.raw(), status.raw, 0, vk::WHOLE_SIZE, 0) };
+        cmd.fill_buffer(status, 0, vk::WHOLE_SIZE, 0)?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
         // The bindings every march kernel has, then the structure's own.
         let mut bindings: Vec<Bound> = MarchCommon {
@@ -389,20 +389,19 @@ impl Renderer {
     /// readback buffer is an error.
     pub fn record_readback(&self, cmd: Recording<'_>, target: &RenderTarget) -> Result<()> {
         self.ctx.check_is(cmd.context(), "command buffer")?;
-        self.ctx.check_is(target.params.context(), "render target")?;
         let (frame, readback) = (target.frame_buffer()?, target.readback_buffer()?);
-        let device = self.ctx.device();
         cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
+        // Checked copies: the target's buffers and the command buffer share a context.
         let copy = |src: &crate::gpu::Buffer, dst_offset: u64| {
             let region = [vk::BufferCopy {
                 src_offset: 0,
                 dst_offset,
                 size: src.size(),
             }];
-            unsafe { device.cmd_copy_buffer(cmd.raw(), src.raw, readback.raw, &region) };
+            cmd.copy_buffer(src, readback, &region)
         };
-        copy(frame, 0);
-        copy(&target.depth, frame.size());
+        copy(frame, 0)?;
+        copy(&target.depth, frame.size())?;
         cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
         Ok(())
     }

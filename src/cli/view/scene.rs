@@ -255,19 +255,17 @@ impl Scene {
             .frame()
             .ok_or_else(|| Error::Unsupported("the viewer's render target has no frame buffer".into()))?
             .raw();
+        let (undefined, dst, src) = (
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        );
+        // SAFETY: the canvas is the host's colour image on this device, alive
+        // until the frame has been waited for (`Host::frame`), in `old`.
+        let canvas_to = |old, new, from, to| unsafe { cmd.image_barrier(canvas.image, old, new, from, to) };
         // The previous frame's blit read the canvas; the whole frame is
         // written, so its old contents are discarded.
-        // SAFETY: the canvas is the host's image on this device, alive
-        // until the frame has been waited for (`Host::frame`).
-        unsafe {
-            cmd.image_barrier(
-                canvas.image,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                Access::TRANSFER_READ,
-                Access::TRANSFER_WRITE,
-            )
-        };
+        canvas_to(undefined, dst, Access::TRANSFER_READ, Access::TRANSFER_WRITE);
         cmd.barrier(Access::COMPUTE_WRITE, Access::TRANSFER_READ);
         let region = [vk::BufferImageCopy {
             buffer_offset: 0,
@@ -295,16 +293,7 @@ impl Scene {
                 &region,
             )
         };
-        // SAFETY: as above; in TRANSFER_DST_OPTIMAL since the copy.
-        unsafe {
-            cmd.image_barrier(
-                canvas.image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                Access::TRANSFER_WRITE,
-                Access::TRANSFER_READ,
-            )
-        };
+        canvas_to(dst, src, Access::TRANSFER_WRITE, Access::TRANSFER_READ);
         if readback {
             self.renderer.record_readback(cmd, target)?;
         }
