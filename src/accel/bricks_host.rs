@@ -43,11 +43,11 @@ pub fn serves(gv: &GpuVolume, host: &Volume) -> bool {
 /// using either buffer.
 pub fn step_on_host(host: &Volume, norm: [f32; 2], changed: &[u32], kept: &mut Buffer, b: &mut GpuBricks) -> bool {
     let bytes = b.ranges.size() as usize;
-    let coherent = |buffer: &Buffer| buffer.mapped_coherent().is_some_and(|m| m.len() >= bytes);
+    let coherent = |buffer: &Buffer| buffer.is_host_coherent() && buffer.size() as usize >= bytes;
     if !coherent(kept) || !coherent(&b.ranges) || kept.size() != b.ranges.size() {
         return false;
     }
-    let (Some(kept), Some(out)) = (kept.mapped_mut(), b.ranges.mapped_mut()) else {
+    let (Ok(kept), Ok(out)) = (kept.host_mut(), b.ranges.host_mut()) else {
         return false;
     };
     // Mapped memory starts at a word boundary (Vulkan's map alignment).

@@ -324,9 +324,9 @@ fn host_classified_map(
     octants: bool,
 ) -> Result<Option<(DistanceMap, Timings)>> {
     let ctx = builder.context();
-    let Some(mapped_ranges) = cells.ranges.mapped_coherent() else {
+    if !cells.ranges.is_host_coherent() {
         return Ok(None);
-    };
+    }
     input.tf.check_channels(cells.channels as usize)?;
     let mut map = unclassified_map(ctx, input, cells, octants, MemoryLocation::GpuToCpu)?;
     let start = std::time::Instant::now();
@@ -339,6 +339,7 @@ fn host_classified_map(
     let channels = cells.channels as usize;
     let n = map.total as usize;
     // Read after the submission: coherent memory needs no invalidate.
+    let mapped_ranges = cells.ranges.host()?;
     let ranges = words::<f32>(&mapped_ranges[..8 * n * channels]);
     // Mapped memory starts at a word boundary (Vulkan's map alignment).
     let flags = bytemuck::try_cast_slice_mut(&mut map.flags.host_mut()?[..4 * n])
@@ -385,8 +386,11 @@ pub fn build_on_host(
     };
     let start = std::time::Instant::now();
     let (counts, built) = (map.counts, map.built);
-    let flags = words::<u32>(&map.flags.host()?[..4 * map.total as usize]);
-    distance_host::transform(counts, &flags, octants, built, map.distances.host_mut()?);
+    {
+        let mapped_flags = map.flags.host()?;
+        let flags = words::<u32>(&mapped_flags[..4 * map.total as usize]);
+        distance_host::transform(counts, &flags, octants, built, map.distances.host_mut()?);
+    }
     timings.push("distance (host)", start.elapsed().as_secs_f64() * 1e3);
     Ok((map, timings))
 }

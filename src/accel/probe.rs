@@ -292,7 +292,8 @@ impl<'a> FrameProbe<'a> {
         if cut > 0 {
             return Err(structure.cut_error(self.ctx.info(), cut));
         }
-        let pixels: &[[f32; 4]] = bytemuck::cast_slice(&self.readback.host()?[..self.out.size() as usize]);
+        let readback = self.readback.host()?;
+        let pixels: &[[f32; 4]] = bytemuck::cast_slice(&readback[..self.out.size() as usize]);
         let (w, h) = self.desc.size();
         let (own, naive) = pixels.split_at((w * h) as usize);
         let mut c = Counts::default();

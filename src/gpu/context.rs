@@ -5,7 +5,7 @@
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
 use super::kernel_cache::KernelCache;
-use super::record::Recording;
+use super::record::{Completion, Recording};
 use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 use super::retire::{destroy, Retirement};
 use super::validation::{Messenger, ValidationMessage};
@@ -480,7 +480,9 @@ impl Context {
             .command_buffer_count(1);
         let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let mut pool = Some(pool);
-        let done = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let done = Completion::recording();
+        // A closure that fails or unwinds leaves it abandoned: never run.
+        let _abandoned = Abandon(&done);
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
@@ -504,6 +506,7 @@ impl Context {
                 unsafe { device.destroy_fence(fence, None) };
                 return Err(e);
             }
+            done.running();
             if unlock {
                 // The pool is not touched again until the free: `meanwhile`
                 // may record and submit its own commands.
@@ -513,12 +516,21 @@ impl Context {
             let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
             unsafe { device.destroy_fence(fence, None) };
             waited?;
-            done.store(true, std::sync::atomic::Ordering::Release);
+            done.completed();
             Ok((value, host))
         })();
         let pool = pool.unwrap_or_else(lock_pool);
         unsafe { device.free_command_buffers(*pool, &[cmd]) };
         result
+    }
+}
+
+/// Abandons a submission still recording when dropped.
+struct Abandon<'a>(&'a Completion);
+
+impl Drop for Abandon<'_> {
+    fn drop(&mut self) {
+        self.0.abandon();
     }
 }
 

@@ -211,6 +211,10 @@ impl Kernel {
                     self.name
                 )));
             }
+            // A storage binding may be written (taken as written).
+            if matches!(b, Binding::Storage(_)) {
+                buf.written_by(cmd)?;
+            }
         }
         let bindings = ordered;
         if push.len() != self.push_size as usize {

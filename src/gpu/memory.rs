@@ -1,14 +1,15 @@
 //! Buffers and 3D images backed by `gpu-allocator`, with staging upload and
 //! readback. Each object keeps its `Context` and frees itself on drop.
 
-use super::record::Access;
-use super::record::Recording;
+use super::host_read::{lock, HostAccess, HostRead};
+use super::record::{Access, Recording};
 use super::retire::Retired;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::Mutex;
 
 /// Largest staging chunk for uploads and readbacks, so big volumes stream
 /// through a bounded amount of host-visible memory.
@@ -48,6 +49,9 @@ pub struct Buffer {
     size: u64,
     usage: vk::BufferUsageFlags,
     name: String,
+    /// Who holds its mapped bytes: the host's readers, and lacuna's
+    /// submissions that record device writes into it. Never both.
+    host_access: Mutex<HostAccess>,
 }
 
 impl Buffer {
@@ -121,6 +125,7 @@ impl Buffer {
             size,
             usage,
             name: name.to_string(),
+            host_access: Mutex::default(),
         })
     }
 
@@ -199,38 +204,84 @@ impl Buffer {
         &self.name
     }
 
-    /// The mapped bytes of a host-visible buffer.
-    pub fn mapped(&self) -> Option<&[u8]> {
-        self.allocation.as_ref()?.mapped_slice()
+    /// Whether the host sees its memory, coherently: the device's writes,
+    /// once a barrier to host reads and a wait made them available, read
+    /// with no invalidate.
+    pub fn is_host_coherent(&self) -> bool {
+        self.allocation.as_ref().is_some_and(|a| {
+            a.mapped_ptr().is_some() && a.memory_properties().contains(vk::MemoryPropertyFlags::HOST_COHERENT)
+        })
     }
 
-    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
-        self.allocation.as_mut()?.mapped_slice_mut()
+    /// Its mapped bytes, read on the host. An error naming the buffer when
+    /// it is not host visible, or while one of lacuna's submissions that
+    /// writes it is recorded or running (read after `submit_and_wait`
+    /// returns); while the `HostRead` lives, recording a device write into
+    /// it is an error.
+    pub fn host(&self) -> Result<HostRead<'_>> {
+        let bytes = self.mapped_bytes()?;
+        let mut access = lock(&self.host_access);
+        if access.written_in_flight() {
+            return Err(self.in_flight("read on the host"));
+        }
+        access.readers += 1;
+        drop(access);
+        Ok(HostRead::counted(bytes, &self.host_access))
     }
 
-    /// As `mapped`, where the memory is also host coherent: the device's
-    /// writes, once a barrier to host reads and a wait made them
-    /// available, read with no invalidate.
-    pub fn mapped_coherent(&self) -> Option<&[u8]> {
-        let allocation = self.allocation.as_ref()?;
-        let coherent = allocation
-            .memory_properties()
-            .contains(vk::MemoryPropertyFlags::HOST_COHERENT);
-        allocation.mapped_slice().filter(|_| coherent)
-    }
-
-    /// As `mapped`, an error naming the buffer when it is not host visible.
-    pub fn host(&self) -> Result<&[u8]> {
-        let name = &self.name;
-        self.mapped()
-            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
-    }
-
-    /// As `mapped_mut`, an error naming the buffer when it is not host visible.
+    /// Its mapped bytes, to write on the host: an error naming the buffer
+    /// when it is not host visible, or while one of lacuna's submissions
+    /// that writes it is recorded or running.
     pub fn host_mut(&mut self) -> Result<&mut [u8]> {
-        let name = self.name.clone();
-        self.mapped_mut()
+        let access = self.host_access.get_mut().unwrap_or_else(|p| p.into_inner());
+        if access.written_in_flight() {
+            return Err(self.in_flight("written on the host"));
+        }
+        let name = &self.name;
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
             .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
+    fn mapped_bytes(&self) -> Result<&[u8]> {
+        let name = &self.name;
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
+    }
+
+    fn in_flight(&self, what: &str) -> Error {
+        Error::invalid(
+            "host access",
+            format!("buffer '{}' {what}", self.name),
+            "a submission that writes it has not completed: read it after submit_and_wait returns",
+        )
+    }
+
+    /// Notes that `cmd` records a device write into it: an error while a
+    /// `HostRead` of it lives; until lacuna's submission settles, host
+    /// reads are errors. (A host's adopted command buffer is the host's to
+    /// wait for: `Recording::adopt`.) Device-local memory the host cannot
+    /// read needs no note.
+    pub(crate) fn written_by(&self, cmd: Recording<'_>) -> Result<()> {
+        if self.allocation.as_ref().is_none_or(|a| a.mapped_ptr().is_none()) {
+            return Ok(());
+        }
+        let mut access = lock(&self.host_access);
+        if access.readers > 0 {
+            return Err(Error::invalid(
+                "device write",
+                format!("into buffer '{}'", self.name),
+                "the host is reading it (a HostRead is alive): drop that first",
+            ));
+        }
+        if let Some(done) = cmd.completion() {
+            access.written_in_flight();
+            access.writers.push(done);
+        }
+        Ok(())
     }
 
     /// Bytes `[offset, offset + len)`, or an error naming the buffer when
@@ -456,6 +507,7 @@ impl Recording<'_> {
                 ));
             }
         }
+        dst.written_by(self)?;
         // SAFETY: both buffers are this device's and alive for the call; the
         // regions lie within them.
         unsafe {
@@ -480,6 +532,7 @@ impl Recording<'_> {
                 format!("the buffer holds {} bytes", buffer.size()),
             ));
         }
+        buffer.written_by(self)?;
         // SAFETY: the buffer is this device's and alive for the call; the
         // range lies within it.
         unsafe {

@@ -9,6 +9,7 @@
 mod binding;
 mod context;
 mod device;
+mod host_read;
 mod image;
 mod instance;
 mod kernel;
@@ -54,6 +55,7 @@ macro_rules! check_layout {
     };
 }
 pub(crate) use check_layout;
+pub use host_read::HostRead;
 pub use image::{check_image3d, check_image3d_of, Image3d};
 pub use memory::{Buffer, Staging, TexelBuffer};
 pub use timer::{OptionalTimer, Pass, Timer};

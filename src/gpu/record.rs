@@ -10,7 +10,7 @@ use super::{Context, DeviceInfo};
 use crate::error::Result;
 use ash::vk;
 use std::marker::PhantomData;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
 /// A command buffer in the recording state on a lacuna `Context`'s device:
@@ -62,8 +62,8 @@ use std::sync::Arc;
 pub struct Recording<'r> {
     ctx: &'r Context,
     raw: vk::CommandBuffer,
-    /// lacuna's own submission: whether it has completed (None: a host's).
-    done: Option<&'r Arc<AtomicBool>>,
+    /// Where lacuna's own submission is (None: a host's command buffer).
+    done: Option<&'r Completion>,
     _one_thread: PhantomData<*const ()>,
 }
 
@@ -102,8 +102,8 @@ impl<'r> Recording<'r> {
     }
 
     /// A command buffer lacuna allocated and begun, submits and waits for;
-    /// `done` is set once it has completed.
-    pub(super) fn own(ctx: &'r Context, raw: vk::CommandBuffer, done: &'r Arc<AtomicBool>) -> Self {
+    /// `done` follows it.
+    pub(super) fn own(ctx: &'r Context, raw: vk::CommandBuffer, done: &'r Completion) -> Self {
         Recording {
             ctx,
             raw,
@@ -112,10 +112,9 @@ impl<'r> Recording<'r> {
         }
     }
 
-    /// For lacuna's own submissions, the flag set once this one has
-    /// completed (None: a host's command buffer, whose completion is the
-    /// host's to know).
-    pub(crate) fn completion(self) -> Option<Arc<AtomicBool>> {
+    /// For lacuna's own submissions, where this one is (None: a host's
+    /// command buffer, whose completion is the host's to know).
+    pub(crate) fn completion(self) -> Option<Completion> {
         self.done.cloned()
     }
 
@@ -174,6 +173,52 @@ impl<'r> Recording<'r> {
         let info = vk::DependencyInfo::default().image_memory_barriers(&barriers);
         // SAFETY: as `barrier`; the caller vouches for the image.
         unsafe { self.ctx.device().cmd_pipeline_barrier2(self.raw, &info) };
+    }
+}
+
+/// Where one of lacuna's own submissions is: recording, running,
+/// completed, or abandoned (its closure failed, or the submit did, so its
+/// commands never run). What its recordings wrote is read on the host only
+/// once it completed (`Timer::results`) or settled (`Buffer::host`).
+#[derive(Clone)]
+pub(crate) struct Completion(Arc<AtomicU8>);
+
+impl Completion {
+    const RECORDING: u8 = 0;
+    const RUNNING: u8 = 1;
+    const COMPLETED: u8 = 2;
+    const ABANDONED: u8 = 3;
+
+    pub(super) fn recording() -> Self {
+        Completion(Arc::new(AtomicU8::new(Self::RECORDING)))
+    }
+
+    pub(super) fn running(&self) {
+        self.0.store(Self::RUNNING, Ordering::Release);
+    }
+
+    /// After the wait: everything its commands wrote is the host's to read.
+    pub(super) fn completed(&self) {
+        self.0.store(Self::COMPLETED, Ordering::Release);
+    }
+
+    /// Where it was never submitted (a recording that is not running
+    /// stays so when its closure unwinds).
+    pub(super) fn abandon(&self) {
+        let _ = self
+            .0
+            .compare_exchange(Self::RECORDING, Self::ABANDONED, Ordering::AcqRel, Ordering::Acquire);
+    }
+
+    /// Whether it ran to completion.
+    pub(crate) fn has_completed(&self) -> bool {
+        self.0.load(Ordering::Acquire) == Self::COMPLETED
+    }
+
+    /// Whether its commands can no longer touch memory: completed, or
+    /// never submitted.
+    pub(crate) fn is_settled(&self) -> bool {
+        self.0.load(Ordering::Acquire) >= Self::COMPLETED
     }
 }
 

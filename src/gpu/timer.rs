@@ -1,14 +1,12 @@
 //! GPU timestamps for named passes. Ticks are masked to the queue's
 //! `timestampValidBits` and scaled by `timestampPeriod` (ns per tick).
 
-use super::record::Recording;
+use super::record::{Completion, Recording};
 use super::retire::Retired;
 use super::timings::Timings;
 use super::Context;
 use crate::error::{Error, Result, VkContext};
 use ash::vk;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 
 /// GPU timestamps around named passes of recorded work, read back as
 /// `Timings` once the work completed.
@@ -26,7 +24,7 @@ pub struct Timer {
     reset_elsewhere: bool,
     /// Set once lacuna's own submission that recorded the last `reset` has
     /// completed (None: a host's command buffer, or no reset yet).
-    completed: Option<Arc<AtomicBool>>,
+    completed: Option<Completion>,
 }
 
 /// Handle of a pass opened with [`Timer::begin`] (its index and recording).
@@ -149,7 +147,7 @@ impl Timer {
         }
         // Queries of a submission not yet run (or never submitted: its
         // closure failed) hold nothing to read.
-        if self.completed.as_ref().is_some_and(|d| !d.load(Ordering::Acquire)) {
+        if self.completed.as_ref().is_some_and(|d| !d.has_completed()) {
             return Err(Error::invalid(
                 "timer results",
                 "before the submission that recorded them completed",

@@ -42,9 +42,9 @@ struct Built {
 /// The phase `build_on_host` classifies in: on the host where it sees the
 /// cells' ranges (lavapipe), else on the device.
 fn classify_phase(cells: &lacuna::accel::GpuBricks) -> &'static str {
-    match cells.ranges().mapped_coherent() {
-        Some(_) => "classify (host)",
-        None => "classify",
+    match cells.ranges().is_host_coherent() {
+        true => "classify (host)",
+        false => "classify",
     }
 }
 

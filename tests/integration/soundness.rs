@@ -305,3 +305,61 @@ fn timer_results_wait_for_the_submission_that_recorded_them() {
     assert!(e.contains("before the submission that recorded them completed"), "{e}");
     assert_clean(&ctx);
 }
+
+#[test]
+fn host_reads_and_device_writes_of_one_buffer_never_overlap() {
+    let ctx = gpu();
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let buf = Buffer::new(&ctx, "shared", 64, usage, MemoryLocation::GpuToCpu).unwrap();
+    // Read while the submission that fills it runs (on a CPU device, its
+    // queue thread): before, safe code raced the device's writes.
+    let ((), during) = ctx
+        .submit_while(
+            |cmd| {
+                cmd.fill_buffer(&buf, 0, vk::WHOLE_SIZE, 7)?;
+                cmd.barrier(
+                    lacuna::gpu::record::Access::TRANSFER_WRITE,
+                    lacuna::gpu::record::Access::HOST_READ,
+                );
+                Ok(())
+            },
+            || Ok(buf.host().map(|_| ()).map_err(|e| e.to_string())),
+        )
+        .unwrap();
+    let e = during.expect_err("a host read while the fill runs");
+    assert!(e.contains("a submission that writes it has not completed"), "{e}");
+    // Inside the closure too: the write is recorded, not yet run.
+    let e = error(ctx.submit_and_wait(|cmd| {
+        cmd.fill_buffer(&buf, 0, vk::WHOLE_SIZE, 8)?;
+        buf.host().map(|_| ())
+    }));
+    assert!(e.contains("a submission that writes it has not completed"), "{e}");
+    // That closure failed: nothing ran, and the buffer still holds 7s.
+    assert!(buf.host().unwrap().chunks(4).all(|w| w == 7u32.to_le_bytes()));
+    // A live host read refuses a recorded device write, copy, fill or bind.
+    let read = buf.host().unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| cmd.fill_buffer(&buf, 0, vk::WHOLE_SIZE, 9)));
+    assert!(e.contains("invalid device write 'into buffer 'shared''"), "{e}");
+    let scan = Scan::new(&ctx).unwrap();
+    let scratch = scan.scratch(16).unwrap();
+    let e = error(ctx.submit_and_wait(|cmd| scan.record(cmd, &buf, 16, &scratch)));
+    assert!(e.contains("the host is reading it"), "{e}");
+    assert!(
+        read.chunks(4).all(|w| w == 7u32.to_le_bytes()),
+        "unchanged under the read"
+    );
+    drop(read);
+    // A frame's readback, read while it is copied: refused, then read.
+    let target = lacuna::render::RenderTarget::new(&ctx, 8, 8).unwrap();
+    let renderer = lacuna::render::Renderer::new(&ctx).unwrap();
+    let ((), during) = ctx
+        .submit_while(
+            |cmd| renderer.record_readback(cmd, &target),
+            || Ok(target.read().map(|_| ()).map_err(|e| e.to_string())),
+        )
+        .unwrap();
+    let e = during.expect_err("a frame read while its readback runs");
+    assert!(e.contains("a submission that writes it has not completed"), "{e}");
+    assert!(target.read().is_ok(), "after the wait");
+    assert_clean(&ctx);
+}
