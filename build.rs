@@ -337,10 +337,11 @@ fn main() {
                     .iter()
                     .map(|b| {
                         format!(
-                            "Slot {{ name: {:?}, ty: vk::DescriptorType::{}, block_size: {} }}",
+                            "Slot {{ name: {:?}, ty: vk::DescriptorType::{}, block_size: {}, writes: {} }}",
                             b.name,
                             b.ty.vk_name(),
-                            b.block_size
+                            b.block_size,
+                            b.writes
                         )
                     })
                     .collect();

@@ -47,6 +47,9 @@ pub struct Slot {
     /// The block size in bytes of a uniform or storage buffer (of a storage
     /// block ending in a runtime array, the part before it), else 0.
     pub block_size: u32,
+    /// Whether the shader may write it: a storage buffer not declared
+    /// `readonly` (NonWritable), or a storage image.
+    pub writes: bool,
 }
 
 /// A struct as the shader lays it out (the fixed members of a block).
@@ -109,6 +112,8 @@ struct Module {
     composites: HashMap<u32, Vec<u32>>,
     decorations: HashMap<(u32, u32), Vec<u32>>,
     member_offsets: HashMap<(u32, u32), u32>,
+    /// Struct members decorated NonWritable (GLSL `readonly` on a block).
+    nonwritable_members: std::collections::HashSet<(u32, u32)>,
     array_strides: HashMap<u32, u32>,
     variables: Vec<(u32, u32, u32)>,
     names: HashMap<u32, String>,
@@ -122,6 +127,7 @@ const DEC_BLOCK: u32 = 2;
 const DEC_BUFFER_BLOCK: u32 = 3;
 const DEC_ARRAY_STRIDE: u32 = 6;
 const DEC_BUILTIN: u32 = 11;
+const DEC_NON_WRITABLE: u32 = 24;
 const DEC_BINDING: u32 = 33;
 const DEC_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
@@ -218,11 +224,28 @@ impl Module {
                 72 if a[2] == DEC_OFFSET => {
                     m.member_offsets.insert((a[0], a[1]), a[3]);
                 }
+                72 if a[2] == DEC_NON_WRITABLE => {
+                    m.nonwritable_members.insert((a[0], a[1]));
+                }
                 _ => {}
             }
             i += count;
         }
         Ok(m)
+    }
+
+    /// Whether the storage block variable `id` of type `block` is declared
+    /// `readonly`: the variable, or every member of its block, NonWritable.
+    fn read_only(&self, id: u32, block: u32) -> bool {
+        if self.decorations.contains_key(&(id, DEC_NON_WRITABLE)) {
+            return true;
+        }
+        match self.types.get(&block) {
+            Some(Ty::Struct(members)) => {
+                !members.is_empty() && (0..members.len() as u32).all(|k| self.nonwritable_members.contains(&(block, k)))
+            }
+            _ => false,
+        }
     }
 
     fn decoration(&self, id: u32, dec: u32) -> Option<u32> {
@@ -445,12 +468,18 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
             Some(n) => n.clone(),
             None => snake_case(m.names.get(&pointee).ok_or(format!("resource %{id} has no name"))?),
         };
+        let writes = match ty {
+            Descriptor::StorageBuffer => !m.read_only(id, pointee),
+            Descriptor::StorageImage => true,
+            _ => false,
+        };
         slots.push((
             binding,
             Slot {
                 name,
                 ty,
                 block_size: size,
+                writes,
             },
         ));
     }

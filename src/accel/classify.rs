@@ -168,7 +168,7 @@ impl Classifier {
                             transfer_lut: Binding::Storage(&tf.lut),
                             transfer_max: Binding::Storage(&tf.max_table),
                             flags: Binding::Storage(flags),
-                            brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+                            brick_table: Binding::Texels(volume.brick_table()),
                             pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
                             pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
                             pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),

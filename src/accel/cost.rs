@@ -324,14 +324,14 @@ impl Probe {
         let mut bindings = MarchCommon {
             params: Binding::Storage(params),
             volume_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
-            tf_lut: Binding::TexelBuffer(self.lut.view()),
+            tf_lut: Binding::Texels(&self.lut),
             frame: Binding::Storage(&self.frame),
             // Composite frames write no depth and read no gradient.
             frame_depth: Binding::Storage(&self.frame),
             gradient_tex: Binding::Sampled(self.volume.image.view, self.volume.sampler),
-            volume_cells: Binding::TexelBuffer(self.no_cells.view()),
-            gradient_cells: Binding::TexelBuffer(self.no_cells.view()),
-            brick_table: Binding::TexelBuffer(self.volume.brick_table().view()),
+            volume_cells: Binding::Texels(&self.no_cells),
+            gradient_cells: Binding::Texels(&self.no_cells),
+            brick_table: Binding::Texels(self.volume.brick_table()),
             pool_1: Binding::Sampled(self.volume.pool_views()[0], self.volume.sampler),
             pool_2: Binding::Sampled(self.volume.pool_views()[1], self.volume.sampler),
             pool_3: Binding::Sampled(self.volume.pool_views()[2], self.volume.sampler),

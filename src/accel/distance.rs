@@ -507,7 +507,7 @@ unsafe impl Method for DistanceMethod {
 unsafe impl Built for DistanceMap {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_distance::Own {
-            distance_texels: Binding::TexelBuffer(self.distances.view()),
+            distance_texels: Binding::Texels(&self.distances),
         }
         .list()
     }

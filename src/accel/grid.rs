@@ -227,7 +227,7 @@ unsafe impl Method for GridMethod {
 unsafe impl Built for Grid {
     fn bindings(&self) -> Vec<Bound<'_>> {
         march_grid::Own {
-            cell_texels: Binding::TexelBuffer(self.flags.view()),
+            cell_texels: Binding::Texels(&self.flags),
         }
         .list()
     }

@@ -74,7 +74,7 @@ unsafe impl Built for Hybrid {
         march_hybrid::Own {
             nodes: Binding::Storage(&self.tree.nodes),
             count: Binding::Storage(&self.tree.count),
-            cell_flags: Binding::TexelBuffer(self.grid.flags.view()),
+            cell_flags: Binding::Texels(&self.grid.flags),
         }
         .list()
     }

@@ -2,7 +2,7 @@
 //! binding it goes to (`Bound`). The generated `shaders::NAME::Bindings`
 //! structs list them.
 
-use super::memory::Buffer;
+use super::memory::{Buffer, TexelBuffer};
 use ash::vk;
 
 /// A resource bound at one binding slot.
@@ -21,7 +21,9 @@ pub enum Binding<'a> {
     SampledIn(vk::ImageView, vk::Sampler, vk::ImageLayout),
     /// A storage image (`image2D` in GLSL) in GENERAL layout.
     StorageImage(vk::ImageView),
-    /// A uniform texel buffer (`samplerBuffer` in GLSL): a buffer view.
+    /// A uniform texel buffer (`samplerBuffer` in GLSL): lacuna's.
+    Texels(&'a TexelBuffer),
+    /// A uniform texel buffer as a raw buffer view (a host's).
     TexelBuffer(vk::BufferView),
 }
 
@@ -32,7 +34,7 @@ impl Binding<'_> {
             Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::Sampled(..) | Binding::SampledIn(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
-            Binding::TexelBuffer(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            Binding::Texels(_) | Binding::TexelBuffer(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }

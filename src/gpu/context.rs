@@ -5,7 +5,6 @@
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
 use super::kernel_cache::KernelCache;
-use super::record::{Completion, Recording};
 use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 use super::retire::{destroy, Retirement};
 use super::validation::{Messenger, ValidationMessage};
@@ -63,16 +62,16 @@ pub(crate) struct Inner {
     /// Present when the instance has `VK_EXT_debug_utils` (validation on): GPU
     /// objects get names that validation messages and capture tools show.
     debug_utils: Option<ash::ext::debug_utils::Device>,
-    queue: Mutex<vk::Queue>,
+    pub(super) queue: Mutex<vk::Queue>,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
-    command_pool: Mutex<vk::CommandPool>,
+    pub(super) command_pool: Mutex<vk::CommandPool>,
     messenger: Option<Messenger>,
     pub(crate) info: DeviceInfo,
     /// Every kernel made on this context (`Kernel` borrows their objects).
     pub(crate) kernels: KernelCache,
     /// Submissions lacuna made on the queue (`Context::submissions`).
-    submissions: std::sync::atomic::AtomicU64,
+    pub(super) submissions: std::sync::atomic::AtomicU64,
     /// Objects dropped while a submission of lacuna's was in flight.
     pub(super) retirement: Mutex<Retirement>,
     owned: bool,
@@ -420,146 +419,6 @@ impl Context {
     /// left this unchanged.
     pub fn submissions(&self) -> u64 {
         self.inner.submissions.load(std::sync::atomic::Ordering::Relaxed)
-    }
-
-    /// Records commands with `record`, submits them and waits for completion.
-    /// Objects dropped meanwhile, in the closure or on another thread, are
-    /// destroyed after the wait, so what the commands use cannot go before
-    /// they ran.
-    pub fn submit_and_wait<T>(&self, record: impl FnOnce(Recording<'_>) -> Result<T>) -> Result<T> {
-        // The pool stays locked through the wait: submissions from several
-        // threads run one after another, as they always have.
-        let (value, _) = self.submit_inner(record, || Ok(()), false)?;
-        Ok(value)
-    }
-
-    /// As `submit_and_wait`, running `meanwhile` on the host between the
-    /// submission and the wait: host work that needs nothing the commands
-    /// write overlaps the device's (on a CPU device, its queue thread's).
-    /// `meanwhile` may submit work of its own. The wait comes even when
-    /// `meanwhile` fails or panics (its error is returned, its panic
-    /// resumed, after it), so nothing the commands read is dropped while
-    /// they run.
-    pub fn submit_while<T, U>(
-        &self,
-        record: impl FnOnce(Recording<'_>) -> Result<T>,
-        meanwhile: impl FnOnce() -> Result<U>,
-    ) -> Result<(T, U)> {
-        match self.submit_inner(record, meanwhile, true)? {
-            (value, Ok(host)) => Ok((value, host?)),
-            (_, Err(panic)) => std::panic::resume_unwind(panic),
-        }
-    }
-
-    /// The submission of `submit_and_wait` and `submit_while`: `meanwhile`
-    /// runs (its panic caught) between the submission and the wait, with
-    /// the pool unlocked where `unlock` (it may then submit).
-    fn submit_inner<T, U>(
-        &self,
-        record: impl FnOnce(Recording<'_>) -> Result<T>,
-        meanwhile: impl FnOnce() -> Result<U>,
-        unlock: bool,
-    ) -> Result<(T, std::thread::Result<Result<U>>)> {
-        let device = self.device();
-        let me = Arc::as_ptr(&self.inner) as usize;
-        if RECORDING.with(|r| r.borrow().contains(&me)) {
-            return Err(Error::invalid(
-                "submission",
-                "inside another's recording closure",
-                "record into the command buffer the closure was given (the record_* forms): a submission from there waits for the one being recorded",
-            ));
-        }
-        let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
-        let pool = lock_pool();
-        // Once this submission holds the pool (a thread waiting for it has
-        // recorded nothing yet), until after its command buffer is freed.
-        let _open = self.open_submission();
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(*pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
-        let mut pool = Some(pool);
-        let done = Completion::recording();
-        // A closure that fails or unwinds leaves it abandoned: never run.
-        let _abandoned = Abandon(&done);
-        let result = (|| {
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
-            let value = {
-                let _recording = SubmitGuard::on(me);
-                record(Recording::own(self, cmd, &done))
-            };
-            unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
-            let value = value?;
-            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-            let submitted = {
-                let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
-                self.inner
-                    .submissions
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
-            };
-            if let Err(e) = submitted {
-                unsafe { device.destroy_fence(fence, None) };
-                return Err(e);
-            }
-            done.running();
-            if unlock {
-                // The pool is not touched again until the free: `meanwhile`
-                // may record and submit its own commands.
-                pool.take();
-            }
-            let host = std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile));
-            let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
-            unsafe { device.destroy_fence(fence, None) };
-            waited?;
-            done.completed();
-            Ok((value, host))
-        })();
-        let pool = pool.unwrap_or_else(lock_pool);
-        unsafe { device.free_command_buffers(*pool, &[cmd]) };
-        result
-    }
-}
-
-/// Abandons a submission still recording when dropped.
-struct Abandon<'a>(&'a Completion);
-
-impl Drop for Abandon<'_> {
-    fn drop(&mut self) {
-        self.0.abandon();
-    }
-}
-
-thread_local! {
-    /// The contexts this thread is recording a submission's commands for
-    /// (`submit_inner`): a submission on one of them from its closure
-    /// would wait for the pool the recording holds.
-    static RECORDING: std::cell::RefCell<Vec<usize>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// Marks a context as recording on this thread until dropped (also when
-/// the closure panics).
-struct SubmitGuard(usize);
-
-impl SubmitGuard {
-    fn on(context: usize) -> SubmitGuard {
-        RECORDING.with(|r| r.borrow_mut().push(context));
-        SubmitGuard(context)
-    }
-}
-
-impl Drop for SubmitGuard {
-    fn drop(&mut self) {
-        RECORDING.with(|r| {
-            let mut r = r.borrow_mut();
-            if let Some(i) = r.iter().rposition(|c| *c == self.0) {
-                r.remove(i);
-            }
-        });
     }
 }
 

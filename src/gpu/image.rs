@@ -114,7 +114,7 @@ impl Image3d {
             )?;
             fill(z, n, &mut staging.host_mut()?[..(n as u64 * slice_bytes) as usize]);
             ctx.submit_and_wait(|cmd| {
-                image.record_copy(cmd, &staging, z, n, z == 0, z + n == d);
+                image.record_copy(cmd, &staging, z, n, z == 0, z + n == d)?;
                 Ok(())
             })?;
             z += n;
@@ -137,7 +137,7 @@ impl Image3d {
         let ctx = cmd.context();
         let image = Self::create(ctx, name, format, extent, texel_bytes, data)?;
         let staging = Buffer::staging(ctx, "staging volume", data)?;
-        image.record_copy(cmd, &staging, 0, extent[2], true, true);
+        image.record_copy(cmd, &staging, 0, extent[2], true, true)?;
         Ok((image, Staging(vec![staging])))
     }
 
@@ -273,10 +273,8 @@ impl Image3d {
             let start = (z as u64 * slice_bytes) as usize;
             let len = (n as u64 * slice_bytes) as usize;
             copy_to_mapped(&mut buffer.host_mut()?[..len], &data[start..start + len]);
-            self.ctx.submit_and_wait(|cmd| {
-                self.record_copy(cmd, buffer, z, n, z == 0, z + n == d);
-                Ok(())
-            })?;
+            self.ctx
+                .submit_and_wait(|cmd| self.record_copy(cmd, buffer, z, n, z == 0, z + n == d))?;
             z += n;
         }
         Ok(())
@@ -394,10 +392,7 @@ impl Image3d {
         let buffer = &*buffer;
         // The whole image from the mirror: from UNDEFINED, as every texel
         // is written.
-        let record = |cmd: Recording<'_>| {
-            self.record_copy(cmd, buffer, 0, d, true, true);
-            Ok(())
-        };
+        let record = |cmd: Recording<'_>| self.record_copy(cmd, buffer, 0, d, true, true);
         let ((), value) = self.ctx.submit_while(record, meanwhile)?;
         *mirror = taken;
         Ok(value)
@@ -461,6 +456,7 @@ impl Image3d {
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             );
             self.ctx.submit_and_wait(|cmd| {
+                buffer.used_by(cmd)?;
                 self.transition(cmd, read, dst, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
                 unsafe { device.cmd_copy_buffer_to_image(cmd.raw(), buffer.raw, self.raw, dst, &regions) };
                 self.record_readable(cmd);
@@ -474,7 +470,8 @@ impl Image3d {
     /// Records the copy of slices `z .. z + n` from `staging`: the transition
     /// to TRANSFER_DST first (from UNDEFINED when `first`), and to
     /// SHADER_READ_ONLY_OPTIMAL for compute reads after the `last`.
-    fn record_copy(&self, cmd: Recording<'_>, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) {
+    fn record_copy(&self, cmd: Recording<'_>, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) -> Result<()> {
+        staging.used_by(cmd)?;
         let device = self.ctx.device();
         let [w, h, _] = self.extent;
         let (old, src) = if first {
@@ -489,6 +486,7 @@ impl Image3d {
         if last {
             self.record_readable(cmd);
         }
+        Ok(())
     }
 
     /// Records a layout transition of this image.

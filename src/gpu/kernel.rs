@@ -182,6 +182,11 @@ impl Kernel {
         let ordered = self.in_slot_order(bindings)?;
         for (name, b) in bindings {
             let info = self.ctx.info();
+            if let Binding::Texels(t) = b {
+                self.ctx.check_is(t.buffer().context(), "bound texel buffer")?;
+                t.buffer().used_by(cmd)?;
+                continue;
+            }
             let (buf, usage, range, limit) = match b {
                 Binding::Storage(buf) => (
                     buf,
@@ -211,9 +216,12 @@ impl Kernel {
                     self.name
                 )));
             }
-            // A storage binding may be written (taken as written).
-            if matches!(b, Binding::Storage(_)) {
-                buf.written_by(cmd)?;
+            // The host must not read what the kernel may write, nor write
+            // what it reads, until the submission settles.
+            let writes = self.bindings.iter().any(|s| s.name == *name && s.writes);
+            match writes {
+                true => buf.written_by(cmd)?,
+                false => buf.used_by(cmd)?,
             }
         }
         let bindings = ordered;
@@ -231,9 +239,11 @@ impl Kernel {
             .map(|b| match *b {
                 Binding::Storage(buf) | Binding::Uniform(buf) => [buf.descriptor()],
                 Binding::StorageRange(buffer, offset, range) => [vk::DescriptorBufferInfo { buffer, offset, range }],
-                Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) | Binding::TexelBuffer(_) => {
-                    [vk::DescriptorBufferInfo::default()]
-                }
+                Binding::Sampled(..)
+                | Binding::SampledIn(..)
+                | Binding::StorageImage(_)
+                | Binding::Texels(_)
+                | Binding::TexelBuffer(_) => [vk::DescriptorBufferInfo::default()],
             })
             .collect();
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
@@ -260,6 +270,7 @@ impl Kernel {
         let texel_views: Vec<[vk::BufferView; 1]> = bindings
             .iter()
             .map(|b| match *b {
+                Binding::Texels(t) => [t.view()],
                 Binding::TexelBuffer(view) => [view],
                 _ => [vk::BufferView::null()],
             })
@@ -276,7 +287,7 @@ impl Kernel {
                     Binding::Sampled(..) | Binding::SampledIn(..) | Binding::StorageImage(_) => {
                         w.image_info(&image_infos[i])
                     }
-                    Binding::TexelBuffer(_) => w.texel_buffer_view(&texel_views[i]),
+                    Binding::Texels(_) | Binding::TexelBuffer(_) => w.texel_buffer_view(&texel_views[i]),
                     _ => w.buffer_info(&buffer_infos[i]),
                 }
             })

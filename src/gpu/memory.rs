@@ -217,12 +217,13 @@ impl Buffer {
     /// it is not host visible, or while one of lacuna's submissions that
     /// writes it is recorded or running (read after `submit_and_wait`
     /// returns); while the `HostRead` lives, recording a device write into
-    /// it is an error.
+    /// it is an error. A submission whose wait failed (a lost device) never
+    /// settles: what it wrote stays refused.
     pub fn host(&self) -> Result<HostRead<'_>> {
         let bytes = self.mapped_bytes()?;
         let mut access = lock(&self.host_access);
         if access.written_in_flight() {
-            return Err(self.in_flight("read on the host"));
+            return Err(self.in_flight("read on the host", "writes"));
         }
         access.readers += 1;
         drop(access);
@@ -231,12 +232,14 @@ impl Buffer {
 
     /// Its mapped bytes, to write on the host: an error naming the buffer
     /// when it is not host visible, or while one of lacuna's submissions
-    /// that writes it is recorded or running.
+    /// that reads or writes it is recorded or running.
     pub fn host_mut(&mut self) -> Result<&mut [u8]> {
         let access = self.host_access.get_mut().unwrap_or_else(|p| p.into_inner());
-        if access.written_in_flight() {
-            return Err(self.in_flight("written on the host"));
+        if access.used_in_flight() {
+            return Err(self.in_flight("written on the host", "reads or writes"));
         }
+        // `&mut self`: no HostRead of it is alive (one forgotten no longer counts).
+        access.readers = 0;
         let name = &self.name;
         self.allocation
             .as_mut()
@@ -252,25 +255,35 @@ impl Buffer {
             .ok_or_else(|| Error::Interface(format!("buffer '{name}' is not host visible")))
     }
 
-    fn in_flight(&self, what: &str) -> Error {
+    fn in_flight(&self, what: &str, uses: &str) -> Error {
         Error::invalid(
             "host access",
             format!("buffer '{}' {what}", self.name),
-            "a submission that writes it has not completed: read it after submit_and_wait returns",
+            format!("a submission that {uses} it has not completed: access it after submit_and_wait returns"),
         )
     }
 
     /// Notes that `cmd` records a device write into it: an error while a
     /// `HostRead` of it lives; until lacuna's submission settles, host
-    /// reads are errors. (A host's adopted command buffer is the host's to
-    /// wait for: `Recording::adopt`.) Device-local memory the host cannot
-    /// read needs no note.
+    /// reads and writes are errors. (A host's adopted command buffer is the
+    /// host's to wait for: `Recording::adopt`.) Memory the host cannot map
+    /// needs no note.
     pub(crate) fn written_by(&self, cmd: Recording<'_>) -> Result<()> {
+        self.note_use(cmd, true)
+    }
+
+    /// Notes that `cmd` records a device read of it: until lacuna's
+    /// submission settles, host writes are errors.
+    pub(crate) fn used_by(&self, cmd: Recording<'_>) -> Result<()> {
+        self.note_use(cmd, false)
+    }
+
+    fn note_use(&self, cmd: Recording<'_>, writes: bool) -> Result<()> {
         if self.allocation.as_ref().is_none_or(|a| a.mapped_ptr().is_none()) {
             return Ok(());
         }
         let mut access = lock(&self.host_access);
-        if access.readers > 0 {
+        if writes && access.readers > 0 {
             return Err(Error::invalid(
                 "device write",
                 format!("into buffer '{}'", self.name),
@@ -278,8 +291,7 @@ impl Buffer {
             ));
         }
         if let Some(done) = cmd.completion() {
-            access.written_in_flight();
-            access.writers.push(done);
+            access.add(done, writes);
         }
         Ok(())
     }
@@ -507,6 +519,7 @@ impl Recording<'_> {
                 ));
             }
         }
+        src.used_by(self)?;
         dst.written_by(self)?;
         // SAFETY: both buffers are this device's and alive for the call; the
         // regions lie within them.

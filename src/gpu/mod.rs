@@ -20,6 +20,7 @@ pub mod record;
 mod requirements;
 mod retire;
 pub mod shaders;
+mod submit;
 mod timer;
 pub mod timings;
 mod validation;

@@ -220,6 +220,11 @@ impl Completion {
     pub(crate) fn is_settled(&self) -> bool {
         self.0.load(Ordering::Acquire) >= Self::COMPLETED
     }
+
+    /// Whether both follow one submission.
+    pub(crate) fn same(&self, other: &Completion) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 /// A pipeline stage together with the memory accesses made there.
@@ -281,6 +286,11 @@ impl Access {
     pub const HOST_READ: Access = Access {
         stage: vk::PipelineStageFlags2::HOST,
         access: vk::AccessFlags2::HOST_READ,
+    };
+    /// Every write of every command before.
+    pub const ALL_WRITES: Access = Access {
+        stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+        access: vk::AccessFlags2::MEMORY_WRITE,
     };
 }
 

@@ -33,6 +33,9 @@ pub struct Slot {
     pub name: &'static str,
     pub ty: vk::DescriptorType,
     pub block_size: u32,
+    /// Whether the shader may write it (a storage buffer not `readonly`,
+    /// or a storage image).
+    pub writes: bool,
 }
 
 /// A compute shader and its reflected interface.

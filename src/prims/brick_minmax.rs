@@ -127,11 +127,11 @@ impl BrickMinMax {
                 &k::Bindings {
                     volume_tex: Binding::Sampled(volume.image.view, volume.sampler),
                     ranges: Binding::Storage(out),
-                    brick_table: Binding::TexelBuffer(volume.brick_table().view()),
+                    brick_table: Binding::Texels(volume.brick_table()),
                     pool_1: Binding::Sampled(volume.pool_views()[0], volume.sampler),
                     pool_2: Binding::Sampled(volume.pool_views()[1], volume.sampler),
                     pool_3: Binding::Sampled(volume.pool_views()[2], volume.sampler),
-                    cells: Binding::TexelBuffer(cells.unwrap_or(volume.brick_table()).view()),
+                    cells: Binding::Texels(cells.unwrap_or(volume.brick_table())),
                     // Not read unless listed (a constant).
                     listed: Binding::Storage(list),
                 }

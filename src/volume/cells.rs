@@ -364,6 +364,8 @@ pub unsafe fn record_pack_cells(
     let ctx = cmd.context();
     let bytes = check_cells(ctx.info(), dims, kind)?;
     let buffer = cells_buffer(ctx, bytes)?;
+    // Written through raw ranges: the host must not read it until then.
+    buffer.written_by(cmd)?;
     let kernel = Kernel::new::<k::Push>(ctx, &shaders::VOLUME_CELLS)?;
     let info = ctx.info();
     let counts = cell_dims(dims);

@@ -363,3 +363,80 @@ fn host_reads_and_device_writes_of_one_buffer_never_overlap() {
     assert!(target.read().is_ok(), "after the wait");
     assert_clean(&ctx);
 }
+
+#[test]
+fn host_writes_wait_for_device_reads_and_read_only_bindings_are_not_writes() {
+    use lacuna::gpu::record::Access;
+    use lacuna::prims::Compact;
+    use std::cell::RefCell;
+    let ctx = gpu();
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    // A host write into the source of a running copy: before, it tore the copy.
+    let src = RefCell::new(Buffer::new(&ctx, "src", 1 << 16, usage, MemoryLocation::CpuToGpu).unwrap());
+    let dst = Buffer::new(&ctx, "dst", 1 << 16, usage, MemoryLocation::GpuToCpu).unwrap();
+    src.borrow_mut().host_mut().unwrap().fill(1);
+    let region = [vk::BufferCopy {
+        src_offset: 0,
+        dst_offset: 0,
+        size: 1 << 16,
+    }];
+    let ((), during) = ctx
+        .submit_while(
+            |cmd| {
+                cmd.copy_buffer(&src.borrow(), &dst, &region)?;
+                cmd.barrier(Access::TRANSFER_WRITE, Access::HOST_READ);
+                Ok(())
+            },
+            || {
+                Ok(src
+                    .borrow_mut()
+                    .host_mut()
+                    .map(|m| m.fill(2))
+                    .map_err(|e| e.to_string()))
+            },
+        )
+        .unwrap();
+    let e = during.expect_err("a host write while the copy reads it");
+    assert!(
+        e.contains("a submission that reads or writes it has not completed"),
+        "{e}"
+    );
+    assert!(dst.host().unwrap().iter().all(|&b| b == 1), "the copy is whole");
+    src.borrow_mut().host_mut().unwrap().fill(2);
+    // Compaction only reads its flags (`readonly` in the shader): a host
+    // read of them is no conflict, either way round.
+    let flags = Buffer::host_written(&ctx, "flags", bytemuck::cast_slice(&[1u32, 0, 1, 1]), usage).unwrap();
+    let (indices, count) = (storage(&ctx, 4), storage(&ctx, 1));
+    let compact = Compact::new(&ctx).unwrap();
+    let scratch = compact.scratch(4).unwrap();
+    let read = flags.host().unwrap();
+    ctx.submit_and_wait(|cmd| compact.record(cmd, &flags, 4, &indices, &count, &scratch))
+        .unwrap();
+    drop(read);
+    let flags = RefCell::new(flags);
+    let ((), during) = ctx
+        .submit_while(
+            |cmd| compact.record(cmd, &flags.borrow(), 4, &indices, &count, &scratch),
+            || {
+                let read = flags.borrow().host().map(|b| b.len()).map_err(|e| e.to_string());
+                let write = flags.borrow_mut().host_mut().map(|_| ()).map_err(|e| e.to_string());
+                Ok((read, write))
+            },
+        )
+        .unwrap();
+    assert_eq!(during.0, Ok(16), "a host read of flags the kernel only reads");
+    let e = during.1.expect_err("a host write of flags the kernel reads");
+    assert!(e.contains("reads or writes it has not completed"), "{e}");
+    assert_eq!(count.download(0, 4).unwrap(), 3u32.to_le_bytes(), "three flags set");
+    // A forgotten HostRead: `&mut` proves none is alive, and clears it.
+    let mut leaky = Buffer::new(&ctx, "leaky", 64, usage, MemoryLocation::GpuToCpu).unwrap();
+    std::mem::forget(leaky.host().unwrap());
+    let e = error(ctx.submit_and_wait(|cmd| cmd.fill_buffer(&leaky, 0, vk::WHOLE_SIZE, 1)));
+    assert!(e.contains("the host is reading it"), "{e}");
+    leaky.host_mut().unwrap();
+    ctx.submit_and_wait(|cmd| cmd.fill_buffer(&leaky, 0, vk::WHOLE_SIZE, 1))
+        .unwrap();
+    assert!(leaky.host().unwrap().chunks(4).all(|w| w == 1u32.to_le_bytes()));
+    assert_clean(&ctx);
+}

@@ -295,7 +295,7 @@ impl KdGpuBuilder {
                         volume_tex: Binding::Sampled(gv.image.view, gv.sampler),
                         transfer_max: Binding::Storage(&tf.max_table),
                         boxes: Binding::Storage(&boxes),
-                        brick_table: Binding::TexelBuffer(gv.brick_table().view()),
+                        brick_table: Binding::Texels(gv.brick_table()),
                         pool_1: Binding::Sampled(gv.pool_views()[0], gv.sampler),
                         pool_2: Binding::Sampled(gv.pool_views()[1], gv.sampler),
                         pool_3: Binding::Sampled(gv.pool_views()[2], gv.sampler),
