@@ -160,6 +160,11 @@ impl Kernel {
     /// - Every buffer has the usage its binding needs, and given `push` and
     ///   `groups` the kernel reads and writes within what is bound (lacuna
     ///   enables no robust buffer access).
+    /// - Memory bound through a raw handle is not read or written on the
+    ///   host until the dispatch has executed: where it is a lacuna
+    ///   `Buffer`'s or `TexelBuffer`'s, lacuna does not see the access, so
+    ///   bind those as `Storage`, `Uniform` or `Texels`, or make no
+    ///   `host`/`host_mut` call on them until then.
     pub unsafe fn dispatch(&self, cmd: Recording<'_>, bindings: &[Bound], push: &[u8], groups: [u32; 3]) -> Result<()> {
         // SAFETY: the caller's contract is `dispatch_base`'s.
         unsafe { self.dispatch_base(cmd, bindings, push, [0; 3], groups) }

@@ -114,7 +114,10 @@ impl HostDepthOut {
     /// # Safety
     /// Whenever a frame recorded to it executes, `buffer` is a live buffer
     /// of the context's device created with `STORAGE_BUFFER` usage, at least
-    /// `offset + size` bytes long.
+    /// `offset + size` bytes long, and nothing reads or writes those bytes
+    /// on the host meanwhile (where it is a lacuna `Buffer`'s handle: no
+    /// `Buffer::host` or `host_mut` until the submission completed; lacuna
+    /// does not see the write through a raw handle).
     pub unsafe fn new(buffer: vk::Buffer, offset: u64, size: u64) -> Self {
         HostDepthOut { buffer, offset, size }
     }

@@ -1,7 +1,8 @@
 //! What safe code cannot do through lacuna's recording API: mix objects of
 //! two contexts in one command buffer, copy past a buffer's end, bind a
 //! buffer without the usage its binding needs, make an image whose texels
-//! disagree with its format, or free what a recorded command reads.
+//! disagree with its format, free what a recorded command reads, or touch on
+//! the host memory a submission reads or writes.
 
 use crate::common::{assert_clean, fresh_gpu, gpu};
 use lacuna::accel::{Builder, RangeKind};
@@ -438,5 +439,49 @@ fn host_writes_wait_for_device_reads_and_read_only_bindings_are_not_writes() {
     ctx.submit_and_wait(|cmd| cmd.fill_buffer(&leaky, 0, vk::WHOLE_SIZE, 1))
         .unwrap();
     assert!(leaky.host().unwrap().chunks(4).all(|w| w == 1u32.to_le_bytes()));
+    assert_clean(&ctx);
+}
+
+#[test]
+fn another_thread_cannot_write_a_buffer_a_recorded_copy_reads() {
+    let ctx = gpu();
+    let n: u64 = 1 << 20;
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    let src = std::sync::Mutex::new(Buffer::new(&ctx, "src", n, usage, MemoryLocation::CpuToGpu).unwrap());
+    let dst = Buffer::new(&ctx, "dst", n, usage, MemoryLocation::GpuToCpu).unwrap();
+    src.lock().unwrap().host_mut().unwrap().fill(1);
+    let (recorded, tried) = (std::sync::Barrier::new(2), std::sync::Barrier::new(2));
+    let tries = std::thread::scope(|s| {
+        // The mutex guards only the recording call: `&mut` is the other
+        // thread's once the copy is recorded, and until it has run.
+        let other = s.spawn(|| {
+            recorded.wait();
+            let before = src
+                .lock()
+                .unwrap()
+                .host_mut()
+                .map(|m| m.fill(2))
+                .map_err(|e| e.to_string());
+            tried.wait();
+            before
+        });
+        ctx.submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: n,
+            }];
+            cmd.copy_buffer(&src.lock().unwrap(), &dst, &region)?;
+            recorded.wait();
+            tried.wait();
+            Ok(())
+        })
+        .unwrap();
+        other.join().unwrap()
+    });
+    let e = tries.expect_err("host_mut while a recorded copy reads it");
+    assert!(e.contains("reads or writes it has not completed"), "{e}");
+    assert!(dst.host().unwrap().iter().all(|&b| b == 1), "the copy is whole");
+    src.lock().unwrap().host_mut().unwrap().fill(2);
     assert_clean(&ctx);
 }
