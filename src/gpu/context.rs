@@ -5,6 +5,7 @@
 use super::device::{compute_family, device_info, select, DeviceInfo};
 use super::instance::{create_instance, load_entry};
 use super::kernel_cache::KernelCache;
+use super::order::Order;
 use super::requirements::{missing_requirement, required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 use super::retire::{destroy, Retirement};
 use super::validation::{Messenger, ValidationMessage};
@@ -65,7 +66,11 @@ pub(crate) struct Inner {
     pub(super) queue: Mutex<vk::Queue>,
     pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
-    pub(super) command_pool: Mutex<vk::CommandPool>,
+    /// Command pools no submission is recording with (one each).
+    pub(super) command_pools: Mutex<Vec<vk::CommandPool>>,
+    /// Held from a submission to its wait: lacuna's submissions run on the
+    /// device one after another (their recording need not).
+    pub(super) order: Order,
     messenger: Option<Messenger>,
     pub(crate) info: DeviceInfo,
     /// Every kernel made on this context (`Kernel` borrows their objects).
@@ -145,7 +150,7 @@ impl Context {
     }
 
     /// Adopts a host's instance, device and queue. lacuna creates its own
-    /// allocator and command pool on them and destroys only those; dropping
+    /// allocator and command pools on them and destroys only those; dropping
     /// the context waits for nothing of the host's (lacuna's own submissions
     /// are waited for by the call that made them).
     ///
@@ -281,7 +286,8 @@ impl Context {
                 queue: Mutex::new(queue),
                 queue_family: family,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
-                command_pool: Mutex::new(pool),
+                command_pools: Mutex::new(vec![pool]),
+                order: Order::default(),
                 messenger,
                 info,
                 kernels: KernelCache::default(),
@@ -439,10 +445,20 @@ impl Drop for Inner {
             }
             self.kernels.destroy_all(&self.device);
             let left = std::mem::take(&mut self.retirement.get_mut().unwrap_or_else(|p| p.into_inner()).waiting);
-            destroy(&self.device, &self.allocator, left);
+            destroy(
+                &self.device,
+                &self.allocator,
+                left.into_iter().map(|(_, o)| o).collect(),
+            );
             ManuallyDrop::drop(&mut self.allocator);
-            self.device
-                .destroy_command_pool(*self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner()), None);
+            for pool in self
+                .command_pools
+                .get_mut()
+                .unwrap_or_else(|p| p.into_inner())
+                .drain(..)
+            {
+                self.device.destroy_command_pool(pool, None);
+            }
             if self.owned {
                 self.device.destroy_device(None);
             }

@@ -15,6 +15,7 @@ mod instance;
 mod kernel;
 mod kernel_cache;
 mod memory;
+mod order;
 mod prune;
 pub mod record;
 mod requirements;

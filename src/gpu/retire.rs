@@ -6,6 +6,7 @@
 use super::Context;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, Allocator};
+use std::collections::BTreeSet;
 use std::sync::Mutex;
 
 /// The Vulkan objects of a dropped lacuna object.
@@ -17,11 +18,16 @@ pub(crate) enum Retired {
     QueryPool(vk::QueryPool),
 }
 
-/// lacuna's submissions in flight on a context and what waits for them.
+/// lacuna's submissions in flight on a context and what waits for them:
+/// each object for the submissions open when it was dropped (those with
+/// ids up to its tag; later ones cannot name it), not for every later one.
 #[derive(Default)]
 pub(crate) struct Retirement {
-    open: usize,
-    pub(super) waiting: Vec<Retired>,
+    /// Ids of the submissions in flight.
+    open: BTreeSet<u64>,
+    next: u64,
+    /// Each with the newest id open when it was dropped.
+    pub(super) waiting: Vec<(u64, Retired)>,
 }
 
 impl Context {
@@ -31,8 +37,8 @@ impl Context {
         let mut now = Vec::new();
         {
             let mut r = self.inner.retirement.lock().unwrap_or_else(|p| p.into_inner());
-            if r.open > 0 {
-                r.waiting.extend(objects);
+            if let Some(&newest) = r.open.last() {
+                r.waiting.extend(objects.into_iter().map(|o| (newest, o)));
                 return;
             }
             now.extend(objects);
@@ -42,8 +48,22 @@ impl Context {
 
     /// Marks a submission in flight until the guard drops (after its wait).
     pub(super) fn open_submission(&self) -> OpenSubmission<'_> {
-        self.inner.retirement.lock().unwrap_or_else(|p| p.into_inner()).open += 1;
-        OpenSubmission(self)
+        let mut r = self.inner.retirement.lock().unwrap_or_else(|p| p.into_inner());
+        let id = r.next;
+        r.next += 1;
+        r.open.insert(id);
+        OpenSubmission(self, id)
+    }
+
+    /// How many dropped objects wait for submissions in flight.
+    #[doc(hidden)]
+    pub fn retired_waiting(&self) -> usize {
+        self.inner
+            .retirement
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .waiting
+            .len()
     }
 }
 
@@ -78,18 +98,21 @@ pub(super) fn destroy(device: &ash::Device, allocator: &Mutex<Allocator>, object
 }
 
 /// A submission of lacuna's in flight; dropping it (after the wait)
-/// destroys what was retired meanwhile once no other is in flight.
-pub(super) struct OpenSubmission<'a>(&'a Context);
+/// destroys what was retired meanwhile once every submission in flight
+/// when it was dropped has closed.
+pub(super) struct OpenSubmission<'a>(&'a Context, u64);
 
 impl Drop for OpenSubmission<'_> {
     fn drop(&mut self) {
         let due = {
             let mut r = self.0.inner.retirement.lock().unwrap_or_else(|p| p.into_inner());
-            r.open -= 1;
-            match r.open {
-                0 => std::mem::take(&mut r.waiting),
-                _ => Vec::new(),
-            }
+            r.open.remove(&self.1);
+            let oldest = r.open.first().copied().unwrap_or(u64::MAX);
+            let (due, wait) = std::mem::take(&mut r.waiting)
+                .into_iter()
+                .partition(|(tag, _)| *tag < oldest);
+            r.waiting = wait;
+            due.into_iter().map(|(_, o)| o).collect()
         };
         destroy(self.0.device(), &self.0.inner.allocator, due);
     }

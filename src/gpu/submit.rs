@@ -14,14 +14,12 @@ impl Context {
     /// destroyed after the wait, so what the commands use cannot go before
     /// they ran.
     ///
-    /// Submissions on one context run one after another: the closure holds
-    /// the context's command pool until the wait. A submission on the same
-    /// context from inside the closure is an error; so do not wait in the
-    /// closure for another thread that submits on this context (it waits
-    /// for the pool, and neither returns).
+    /// Submissions on one context run on the device one after another;
+    /// their closures may record at the same time on several threads (each
+    /// submission records with a command pool of its own). A submission on
+    /// the same context from inside the closure, on the same thread, is an
+    /// error: it would run before the commands being recorded.
     pub fn submit_and_wait<T>(&self, record: impl FnOnce(Recording<'_>) -> Result<T>) -> Result<T> {
-        // The pool stays locked through the wait: submissions from several
-        // threads run one after another, as they always have.
         let (value, _) = self.submit_inner(record, || Ok(()), false)?;
         Ok(value)
     }
@@ -46,7 +44,7 @@ impl Context {
 
     /// The submission of `submit_and_wait` and `submit_while`: `meanwhile`
     /// runs (its panic caught) between the submission and the wait, with
-    /// the pool unlocked where `unlock` (it may then submit).
+    /// the device order released where `unlock` (it may then submit).
     fn submit_inner<T, U>(
         &self,
         record: impl FnOnce(Recording<'_>) -> Result<T>,
@@ -59,67 +57,112 @@ impl Context {
             return Err(Error::invalid(
                 "submission",
                 "inside another's recording closure",
-                "record into the command buffer the closure was given (the record_* forms): a submission from there waits for the one being recorded",
+                "record into the command buffer the closure was given (the record_* forms): a submission from there would run before the commands being recorded",
             ));
         }
-        let lock_pool = || self.inner.command_pool.lock().unwrap_or_else(|p| p.into_inner());
-        let pool = lock_pool();
-        // Once this submission holds the pool (a thread waiting for it has
-        // recorded nothing yet), until after its command buffer is freed.
+        // Open before anything is recorded, until after the wait.
         let _open = self.open_submission();
-        let alloc = vk::CommandBufferAllocateInfo::default()
-            .command_pool(*pool)
-            .level(vk::CommandBufferLevel::PRIMARY)
-            .command_buffer_count(1);
-        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
-        let mut pool = Some(pool);
+        let lease = CommandLease::new(self)?;
+        let cmd = lease.cmd;
         let done = Completion::recording();
         // A closure that fails or unwinds leaves it abandoned: never run.
         let _abandoned = Abandon(&done);
-        let result = (|| {
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
-            let value = {
-                let _recording = SubmitGuard::on(me);
-                record(Recording::own(self, cmd, &done))
-            };
-            if value.is_ok() {
-                // A fence wait alone makes no device write visible to the
-                // host: after it, whatever the commands wrote is readable.
-                Recording::own(self, cmd, &done).barrier(Access::ALL_WRITES, Access::HOST_READ);
-            }
-            unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
-            let value = value?;
-            let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-            let submitted = {
-                let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
-                self.inner
-                    .submissions
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
-            };
-            if let Err(e) = submitted {
-                unsafe { device.destroy_fence(fence, None) };
-                return Err(e);
-            }
-            done.running();
-            if unlock {
-                // The pool is not touched again until the free: `meanwhile`
-                // may record and submit its own commands.
-                pool.take();
-            }
-            let host = std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile));
-            let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        unsafe { device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        let value = {
+            let _recording = SubmitGuard::on(me);
+            record(Recording::own(self, cmd, &done))
+        };
+        if value.is_ok() {
+            // A fence wait alone makes no device write visible to the
+            // host: after it, whatever the commands wrote is readable.
+            Recording::own(self, cmd, &done).barrier(Access::ALL_WRITES, Access::HOST_READ);
+        }
+        unsafe { device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+        let value = value?;
+        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        let mut order = Some(self.inner.order.take());
+        let submitted = {
+            let queue = self.inner.queue.lock().unwrap_or_else(|p| p.into_inner());
+            self.inner
+                .submissions
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            unsafe { device.queue_submit2(*queue, &submit, fence) }.vk("vkQueueSubmit2")
+        };
+        if let Err(e) = submitted {
             unsafe { device.destroy_fence(fence, None) };
-            waited?;
-            done.completed();
-            Ok((value, host))
-        })();
-        let pool = pool.unwrap_or_else(lock_pool);
-        unsafe { device.free_command_buffers(*pool, &[cmd]) };
-        result
+            return Err(e);
+        }
+        done.running();
+        if unlock {
+            // `meanwhile` may submit its own commands, which then run
+            // beside these.
+            order.take();
+        }
+        let host = std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile));
+        let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
+        unsafe { device.destroy_fence(fence, None) };
+        waited?;
+        done.completed();
+        Ok((value, host))
+    }
+}
+
+/// One primary command buffer in a command pool no other submission
+/// records with; dropping it frees the buffer and leaves the pool idle.
+struct CommandLease<'a> {
+    ctx: &'a Context,
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+}
+
+impl<'a> CommandLease<'a> {
+    fn new(ctx: &'a Context) -> Result<Self> {
+        let device = ctx.device();
+        let idle = ctx.inner.command_pools.lock().unwrap_or_else(|p| p.into_inner()).pop();
+        let pool = match idle {
+            Some(pool) => pool,
+            None => {
+                let info = vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(ctx.inner.queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+                unsafe { device.create_command_pool(&info, None) }.vk("vkCreateCommandPool")?
+            }
+        };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        match unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers") {
+            Ok(cmds) => Ok(CommandLease {
+                ctx,
+                pool,
+                cmd: cmds[0],
+            }),
+            Err(e) => {
+                ctx.inner
+                    .command_pools
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .push(pool);
+                Err(e)
+            }
+        }
+    }
+}
+
+impl Drop for CommandLease<'_> {
+    fn drop(&mut self) {
+        // After the wait, or never submitted.
+        unsafe { self.ctx.device().free_command_buffers(self.pool, &[self.cmd]) };
+        self.ctx
+            .inner
+            .command_pools
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(self.pool);
     }
 }
 
@@ -135,7 +178,7 @@ impl Drop for Abandon<'_> {
 thread_local! {
     /// The contexts this thread is recording a submission's commands for
     /// (`submit_inner`): a submission on one of them from its closure
-    /// would wait for the pool the recording holds.
+    /// would run before the commands being recorded.
     static RECORDING: std::cell::RefCell<Vec<usize>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 

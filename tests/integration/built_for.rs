@@ -341,3 +341,78 @@ fn public_fields_that_disagree_are_errors() {
     );
     assert!(e.contains("an orthographic direction must not be zero"), "{e}");
 }
+
+#[test]
+fn a_recording_closure_may_wait_for_another_threads_submission() {
+    // Before, the closure held the context's one command pool through the
+    // wait, and the other thread's upload waited for it: neither returned.
+    let (sent, got) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let ctx = crate::common::fresh_gpu();
+        let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
+        let uploaded = ctx.submit_and_wait(|cmd| {
+            let lut = std::thread::scope(|s| s.spawn(|| tf.upload(&ctx)).join().unwrap())?;
+            cmd.compute_to_compute();
+            Ok(lut)
+        });
+        let messages = ctx.take_validation_messages().len();
+        sent.send((uploaded.map(|lut| lut.channels()).map_err(|e| e.to_string()), messages))
+            .unwrap();
+    });
+    let (uploaded, messages) = got
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("a closure waiting for another thread's submission hung");
+    assert_eq!(uploaded, Ok(1), "the other thread's upload");
+    assert_eq!(messages, 0, "validation messages");
+}
+
+#[test]
+fn an_object_waits_only_for_the_submissions_in_flight_when_it_was_dropped() {
+    // Before, a dropped object waited until no submission of lacuna's was
+    // open at all, so under overlapping submissions from several threads
+    // they piled up. In a thread: were a recording closure to hold what the
+    // second submission needs again, the test fails after a minute instead
+    // of hanging.
+    let (sent, got) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let ctx = crate::common::fresh_gpu();
+        let usage = lacuna::gpu::vk::BufferUsageFlags::STORAGE_BUFFER;
+        let (opened, dropped) = (std::sync::Barrier::new(2), std::sync::Barrier::new(2));
+        let (while_first, while_second) = std::thread::scope(|s| {
+            let first = s.spawn(|| {
+                ctx.submit_and_wait(|cmd| {
+                    opened.wait();
+                    dropped.wait();
+                    cmd.compute_to_compute();
+                    Ok(())
+                })
+            });
+            opened.wait();
+            let b = lacuna::gpu::Buffer::new(&ctx, "dropped", 64, usage, lacuna::gpu::MemoryLocation::GpuOnly).unwrap();
+            drop(b);
+            let while_first = ctx.retired_waiting();
+            // A second submission opens after the drop and stays open while the
+            // first runs to its end.
+            let while_second = ctx
+                .submit_and_wait(|cmd| {
+                    dropped.wait();
+                    first.join().unwrap()?;
+                    cmd.compute_to_compute();
+                    Ok(ctx.retired_waiting())
+                })
+                .unwrap();
+            (while_first, while_second)
+        });
+        let messages = ctx.take_validation_messages().len();
+        sent.send((while_first, while_second, messages)).unwrap();
+    });
+    let (while_first, while_second, messages) = got
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .expect("two overlapping submissions hung");
+    assert_eq!(while_first, 1, "the buffer waits for the submission it may be in");
+    assert_eq!(
+        while_second, 0,
+        "destroyed once that one completed, the second still open"
+    );
+    assert_eq!(messages, 0, "validation messages");
+}
