@@ -294,19 +294,12 @@ fn objects_dropped_while_recorded_live_until_their_commands_ran() {
 
 #[test]
 fn a_submission_inside_a_recording_closure_is_an_error_not_a_hang() {
-    // On a context of its own, in a thread: were it to hang again, the
-    // test fails after a minute and leaves the shared contexts alone.
-    let (sent, got) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let ctx = crate::common::fresh_gpu();
+    let (inside, after) = on_a_fresh_context_within_a_minute("a submission from a recording closure", |ctx| {
         let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
-        let inside = ctx.submit_and_wait(|_| tf.upload(&ctx).map(|_| ()));
-        let after = tf.upload(&ctx).map(|_| ());
-        sent.send((inside.map_err(|e| e.to_string()), after.is_ok())).unwrap();
+        let inside = ctx.submit_and_wait(|_| tf.upload(ctx).map(|_| ()));
+        let after = tf.upload(ctx).map(|_| ());
+        (inside.map_err(|e| e.to_string()), after.is_ok())
     });
-    let (inside, after) = got
-        .recv_timeout(std::time::Duration::from_secs(60))
-        .expect("a submission from a recording closure hung");
     let e = inside.expect_err("a submission inside a recording closure");
     assert!(e.contains("inside another's recording closure"), "{e}");
     assert!(after, "submissions work again after it");
@@ -346,39 +339,27 @@ fn public_fields_that_disagree_are_errors() {
 fn a_recording_closure_may_wait_for_another_threads_submission() {
     // Before, the closure held the context's one command pool through the
     // wait, and the other thread's upload waited for it: neither returned.
-    let (sent, got) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let ctx = crate::common::fresh_gpu();
+    let uploaded = on_a_fresh_context_within_a_minute("a closure waiting for another thread's submission", |ctx| {
         let tf = TransferFunction::parse("ramp:0.35:1").unwrap();
         let uploaded = ctx.submit_and_wait(|cmd| {
-            let lut = std::thread::scope(|s| s.spawn(|| tf.upload(&ctx)).join().unwrap())?;
+            let lut = std::thread::scope(|s| s.spawn(|| tf.upload(ctx)).join().unwrap())?;
             cmd.compute_to_compute();
             Ok(lut)
         });
-        let messages = ctx.take_validation_messages().len();
-        sent.send((uploaded.map(|lut| lut.channels()).map_err(|e| e.to_string()), messages))
-            .unwrap();
+        uploaded.map(|lut| lut.channels()).map_err(|e| e.to_string())
     });
-    let (uploaded, messages) = got
-        .recv_timeout(std::time::Duration::from_secs(60))
-        .expect("a closure waiting for another thread's submission hung");
     assert_eq!(uploaded, Ok(1), "the other thread's upload");
-    assert_eq!(messages, 0, "validation messages");
 }
 
 #[test]
 fn an_object_waits_only_for_the_submissions_in_flight_when_it_was_dropped() {
     // Before, a dropped object waited until no submission of lacuna's was
     // open at all, so under overlapping submissions from several threads
-    // they piled up. In a thread: were a recording closure to hold what the
-    // second submission needs again, the test fails after a minute instead
-    // of hanging.
-    let (sent, got) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let ctx = crate::common::fresh_gpu();
+    // they piled up.
+    let (while_first, while_second) = on_a_fresh_context_within_a_minute("two overlapping submissions", |ctx| {
         let usage = lacuna::gpu::vk::BufferUsageFlags::STORAGE_BUFFER;
         let (opened, dropped) = (std::sync::Barrier::new(2), std::sync::Barrier::new(2));
-        let (while_first, while_second) = std::thread::scope(|s| {
+        std::thread::scope(|s| {
             let first = s.spawn(|| {
                 ctx.submit_and_wait(|cmd| {
                     opened.wait();
@@ -388,11 +369,11 @@ fn an_object_waits_only_for_the_submissions_in_flight_when_it_was_dropped() {
                 })
             });
             opened.wait();
-            let b = lacuna::gpu::Buffer::new(&ctx, "dropped", 64, usage, lacuna::gpu::MemoryLocation::GpuOnly).unwrap();
+            let b = lacuna::gpu::Buffer::new(ctx, "dropped", 64, usage, lacuna::gpu::MemoryLocation::GpuOnly).unwrap();
             drop(b);
             let while_first = ctx.retired_waiting();
-            // A second submission opens after the drop and stays open while the
-            // first runs to its end.
+            // A second submission opens after the drop and stays open while
+            // the first runs to its end.
             let while_second = ctx
                 .submit_and_wait(|cmd| {
                     dropped.wait();
@@ -402,17 +383,31 @@ fn an_object_waits_only_for_the_submissions_in_flight_when_it_was_dropped() {
                 })
                 .unwrap();
             (while_first, while_second)
-        });
-        let messages = ctx.take_validation_messages().len();
-        sent.send((while_first, while_second, messages)).unwrap();
+        })
     });
-    let (while_first, while_second, messages) = got
-        .recv_timeout(std::time::Duration::from_secs(60))
-        .expect("two overlapping submissions hung");
     assert_eq!(while_first, 1, "the buffer waits for the submission it may be in");
     assert_eq!(
         while_second, 0,
         "destroyed once that one completed, the second still open"
     );
-    assert_eq!(messages, 0, "validation messages");
+}
+
+/// Runs `f` on a context of its own, in a thread: were it to hang, the test
+/// fails after a minute and leaves the shared contexts alone. It fails on
+/// any validation message too.
+fn on_a_fresh_context_within_a_minute<T: Send + 'static>(
+    what: &str,
+    f: impl FnOnce(&lacuna::gpu::Context) -> T + Send + 'static,
+) -> T {
+    let (sent, got) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let ctx = crate::common::fresh_gpu();
+        let value = f(&ctx);
+        sent.send((value, ctx.take_validation_messages().len())).unwrap();
+    });
+    let (value, messages) = got
+        .recv_timeout(std::time::Duration::from_secs(60))
+        .unwrap_or_else(|e| panic!("{what}: hung or failed ({e})"));
+    assert_eq!(messages, 0, "{what}: validation messages");
+    value
 }
