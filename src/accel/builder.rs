@@ -107,6 +107,10 @@ pub struct Builder {
     /// The last series step's ranges, per brick edge: the next step's
     /// start from them (`RangesFrom::Step`).
     step_ranges: Mutex<Vec<StepRanges>>,
+    /// Held through `ranges_with`, from recording to marking the kept
+    /// ranges' step: two threads' submissions may run in another order
+    /// than they recorded, and each reads and rewrites the kept copies.
+    steps: Mutex<()>,
 }
 
 /// A copy of a series step's ranges of one brick edge.
@@ -151,6 +155,7 @@ impl Builder {
             shared: Arc::new(Mutex::new(HashMap::new())),
             replaced: Default::default(),
             step_ranges: Mutex::new(Vec::new()),
+            steps: Mutex::new(()),
         })
     }
 
@@ -163,6 +168,7 @@ impl Builder {
             shared: self.shared.clone(),
             replaced: self.replaced.clone(),
             step_ranges: Mutex::new(Vec::new()),
+            steps: Mutex::new(()),
         }
     }
 
@@ -221,6 +227,7 @@ impl Builder {
         volume: &GpuVolume,
         host: Option<&Volume>,
     ) -> Result<(Ranges, Timings)> {
+        let _steps = self.steps.lock().unwrap_or_else(|p| p.into_inner());
         // One submission, one timed pass a kind.
         let passes = distinct(kinds)?.len() as u32;
         let mut timer = Timer::new(&self.ctx, passes)?;

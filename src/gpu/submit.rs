@@ -14,11 +14,16 @@ impl Context {
     /// destroyed after the wait, so what the commands use cannot go before
     /// they ran.
     ///
-    /// Submissions on one context run on the device one after another;
-    /// their closures may record at the same time on several threads (each
-    /// submission records with a command pool of its own). A submission on
-    /// the same context from inside the closure, on the same thread, is an
-    /// error: it would run before the commands being recorded.
+    /// Submissions on one context run on the device one after another, in
+    /// the order they were submitted (not recorded), except beside a
+    /// `submit_while`'s commands, which run alongside what is submitted
+    /// during its `meanwhile`. Their closures may record at the same time
+    /// on several threads (each submission records with a command pool of
+    /// its own), so a closure may wait for another thread that submits. A
+    /// submission on the same context from inside the closure, on the same
+    /// thread, is an error: it would run before the commands being
+    /// recorded. A wait that fails (a lost device) leaks the submission's
+    /// command buffer and every object dropped while it was open.
     pub fn submit_and_wait<T>(&self, record: impl FnOnce(Recording<'_>) -> Result<T>) -> Result<T> {
         let (value, _) = self.submit_inner(record, || Ok(()), false)?;
         Ok(value)
@@ -103,8 +108,15 @@ impl Context {
         }
         let host = std::panic::catch_unwind(std::panic::AssertUnwindSafe(meanwhile));
         let waited = unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences");
+        if let Err(e) = waited {
+            // The commands may still run (a lost device, or out of memory):
+            // leak their command buffer, and keep the submission open so
+            // nothing dropped since is destroyed under them.
+            std::mem::forget(lease);
+            std::mem::forget(_open);
+            return Err(e);
+        }
         unsafe { device.destroy_fence(fence, None) };
-        waited?;
         done.completed();
         Ok((value, host))
     }
@@ -153,16 +165,20 @@ impl<'a> CommandLease<'a> {
     }
 }
 
+/// Idle command pools a context keeps; more are destroyed when returned
+/// (a burst of concurrent submissions does not hold their memory).
+const IDLE_POOLS: usize = 4;
+
 impl Drop for CommandLease<'_> {
     fn drop(&mut self) {
         // After the wait, or never submitted.
-        unsafe { self.ctx.device().free_command_buffers(self.pool, &[self.cmd]) };
-        self.ctx
-            .inner
-            .command_pools
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .push(self.pool);
+        let device = self.ctx.device();
+        unsafe { device.free_command_buffers(self.pool, &[self.cmd]) };
+        let mut idle = self.ctx.inner.command_pools.lock().unwrap_or_else(|p| p.into_inner());
+        match idle.len() < IDLE_POOLS {
+            true => idle.push(self.pool),
+            false => unsafe { device.destroy_command_pool(self.pool, None) },
+        }
     }
 }
 

@@ -411,3 +411,46 @@ fn on_a_fresh_context_within_a_minute<T: Send + 'static>(
     assert_eq!(messages, 0, "{what}: validation messages");
     value
 }
+
+#[test]
+fn concurrent_submissions_from_several_threads_keep_their_data_and_free_what_they_drop() {
+    let (whole, waiting) = on_a_fresh_context_within_a_minute("concurrent submissions", |ctx| {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: 4096,
+        }];
+        let whole = std::thread::scope(|s| {
+            let threads: Vec<_> = (0..4u32)
+                .map(|t| {
+                    s.spawn(move || {
+                        (0..15u32).all(|i| {
+                            let words: Vec<u32> = (0..1024u32).map(|k| k ^ (t << 24) ^ (i << 12)).collect();
+                            let bytes: &[u8] = bytemuck::cast_slice(&words);
+                            let a = Buffer::with_data(ctx, "a", bytes, usage).unwrap();
+                            // Staging and a copy target dropped in the closure,
+                            // the copy source after it.
+                            let b = ctx
+                                .submit_and_wait(|cmd| {
+                                    let (b, staging) = Buffer::record_with_data(cmd, "b", bytes, usage)?;
+                                    drop(staging);
+                                    let c = Buffer::upload_target(ctx, "c", 4096, usage)?;
+                                    cmd.copy_buffer(&a, &c, &region)?;
+                                    drop(c);
+                                    Ok(b)
+                                })
+                                .unwrap();
+                            drop(a);
+                            b.download(0, 4096).unwrap() == bytes
+                        })
+                    })
+                })
+                .collect();
+            threads.into_iter().all(|h| h.join().unwrap())
+        });
+        (whole, ctx.retired_waiting())
+    });
+    assert!(whole, "every thread's buffers hold what it uploaded");
+    assert_eq!(waiting, 0, "everything dropped is destroyed once all submissions ended");
+}
