@@ -92,10 +92,15 @@ fn missing(what: &str) -> Error {
     )
 }
 
-/// A series step's bookkeeping through `record_kinds`: which kept copies
+/// A series step's bookkeeping through `record_kinds`: the builder's kept
+/// copies (locked for the whole of `ranges_with`), which of them
 /// hold which step once the submission completed, and the step's voxels
 /// on the host with the timings of the passes made there.
-type StepKeep<'a> = (&'a mut Vec<(u32, u64)>, Option<(&'a Volume, &'a mut Timings)>);
+type StepKeep<'a> = (
+    &'a mut Vec<StepRanges>,
+    &'a mut Vec<(u32, u64)>,
+    Option<(&'a Volume, &'a mut Timings)>,
+);
 
 /// Builds structures: holds the context and what is made once per context.
 pub struct Builder {
@@ -105,12 +110,11 @@ pub struct Builder {
     /// buffer), so it lives as long as the builder.
     replaced: Arc<Mutex<Vec<Arc<dyn Any + Send + Sync>>>>,
     /// The last series step's ranges, per brick edge: the next step's
-    /// start from them (`RangesFrom::Step`).
+    /// start from them (`RangesFrom::Step`). Locked through `ranges_with`,
+    /// from recording to marking their step: two threads' submissions may
+    /// run in another order than they recorded, and each reads and
+    /// rewrites the kept copies.
     step_ranges: Mutex<Vec<StepRanges>>,
-    /// Held through `ranges_with`, from recording to marking the kept
-    /// ranges' step: two threads' submissions may run in another order
-    /// than they recorded, and each reads and rewrites the kept copies.
-    steps: Mutex<()>,
 }
 
 /// A copy of a series step's ranges of one brick edge.
@@ -155,7 +159,6 @@ impl Builder {
             shared: Arc::new(Mutex::new(HashMap::new())),
             replaced: Default::default(),
             step_ranges: Mutex::new(Vec::new()),
-            steps: Mutex::new(()),
         })
     }
 
@@ -168,7 +171,6 @@ impl Builder {
             shared: self.shared.clone(),
             replaced: self.replaced.clone(),
             step_ranges: Mutex::new(Vec::new()),
-            steps: Mutex::new(()),
         }
     }
 
@@ -227,7 +229,7 @@ impl Builder {
         volume: &GpuVolume,
         host: Option<&Volume>,
     ) -> Result<(Ranges, Timings)> {
-        let _steps = self.steps.lock().unwrap_or_else(|p| p.into_inner());
+        let mut step_ranges = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
         // One submission, one timed pass a kind.
         let passes = distinct(kinds)?.len() as u32;
         let mut timer = Timer::new(&self.ctx, passes)?;
@@ -236,11 +238,10 @@ impl Builder {
         let host = host.map(|h| (h, &mut host_t));
         let mut ranges = self.ctx.submit_and_wait(|cmd| {
             timer.reset(cmd);
-            let kept = Some((&mut kept, host));
+            let kept = Some((&mut *step_ranges, &mut kept, host));
             self.record_kinds(cmd, Some(&mut timer), kinds, volume, kept)
         })?;
         // The copies kept for the next step are whole now.
-        let mut step_ranges = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
         for (brick, step) in kept {
             if let Some(k) = step_ranges.iter_mut().find(|k| k.brick == brick) {
                 k.step = step;
@@ -305,9 +306,10 @@ impl Builder {
             let step = volume.step_mark().map(|m| m.id);
             match (finer, step, kept.as_mut()) {
                 (Some(f), _, _) => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Finer(f))?,
-                (None, Some(step), Some((kept, host))) => {
+                (None, Some(step), Some((copies, kept, host))) => {
                     let host = host.as_mut().map(|(v, t)| (*v, &mut **t));
-                    self.record_step_ranges(cmd, (timer.as_deref_mut(), &pass), &minmax, (&mut b, host), volume)?;
+                    let b = (&mut b, host);
+                    self.record_step_ranges(cmd, (timer.as_deref_mut(), &pass), &minmax, b, copies, volume)?;
                     kept.push((size, step));
                 }
                 _ => b.record(cmd, timer.as_deref_mut(), &pass, &minmax, volume, RangesFrom::Volume)?,
@@ -327,9 +329,9 @@ impl Builder {
         (timer, pass): (Option<&mut Timer>, &str),
         minmax: &BrickMinMax,
         (b, host): (&mut GpuBricks, Option<(&Volume, &mut Timings)>),
+        kept: &mut Vec<StepRanges>,
         volume: &GpuVolume,
     ) -> Result<()> {
-        let mut kept = self.step_ranges.lock().unwrap_or_else(|p| p.into_inner());
         let at = kept.iter().position(|k| k.brick == b.brick);
         let changed = at.and_then(|i| Some((i, kept[i].changed_for(volume, b.brick)?)));
         if let (Some((i, changed)), Some((host, timings))) = (&changed, host) {

@@ -13,7 +13,7 @@ use std::sync::{Mutex, MutexGuard};
 #[derive(Default)]
 pub(super) struct HostAccess {
     /// `HostRead`s alive.
-    pub(super) readers: usize,
+    readers: usize,
     /// lacuna's submissions that write it and may not have settled.
     writers: Vec<Completion>,
     /// lacuna's submissions that only read it and may not have settled.
@@ -21,29 +21,49 @@ pub(super) struct HostAccess {
 }
 
 impl HostAccess {
-    /// Whether a submission that writes the buffer may still run.
-    pub(super) fn written_in_flight(&mut self) -> bool {
-        self.writers.retain(|w| !w.is_settled());
-        !self.writers.is_empty()
+    /// Counts a host read (true), unless a submission that writes the
+    /// buffer may still run.
+    pub(super) fn start_read(&mut self) -> bool {
+        if unsettled(&mut self.writers) {
+            return false;
+        }
+        self.readers += 1;
+        true
     }
 
-    /// Whether a submission that reads or writes the buffer may still run.
-    pub(super) fn used_in_flight(&mut self) -> bool {
-        self.users.retain(|w| !w.is_settled());
-        self.written_in_flight() || !self.users.is_empty()
+    /// Whether the host may write (through `&mut`, so no `HostRead` is
+    /// alive, and one forgotten no longer counts): no submission that
+    /// reads or writes the buffer may still run.
+    pub(super) fn start_write(&mut self) -> bool {
+        self.readers = 0;
+        !unsettled(&mut self.writers) && !unsettled(&mut self.users)
     }
 
-    /// Notes a submission that writes (else reads) the buffer, once.
-    pub(super) fn add(&mut self, done: Completion, writes: bool) {
+    /// Notes a submission that writes (else reads) the buffer, once (a
+    /// host's, `None`, is the host's to wait for); a write is refused
+    /// (false) while a `HostRead` is alive.
+    pub(super) fn note(&mut self, done: Option<Completion>, writes: bool) -> bool {
+        if writes && self.readers > 0 {
+            return false;
+        }
         let list = match writes {
             true => &mut self.writers,
             false => &mut self.users,
         };
-        list.retain(|w| !w.is_settled());
-        if !list.iter().any(|w| w.same(&done)) {
-            list.push(done);
+        if let Some(done) = done {
+            unsettled(list);
+            if !list.iter().any(|w| w.same(&done)) {
+                list.push(done);
+            }
         }
+        true
     }
+}
+
+/// Drops the settled submissions from `list`: whether any is left.
+fn unsettled(list: &mut Vec<Completion>) -> bool {
+    list.retain(|w| !w.is_settled());
+    !list.is_empty()
 }
 
 /// A buffer's mapped bytes, read on the host: while it lives, recording a

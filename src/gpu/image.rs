@@ -450,15 +450,13 @@ impl Image3d {
                 regions.push(copy_region(offset as u64, *b));
                 offset += box_bytes(b) as usize;
             }
-            let device = self.ctx.device();
             let (read, dst) = (
                 vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             );
             self.ctx.submit_and_wait(|cmd| {
-                buffer.used_by(cmd)?;
                 self.transition(cmd, read, dst, Access::COMPUTE_READ, Access::TRANSFER_WRITE);
-                unsafe { device.cmd_copy_buffer_to_image(cmd.raw(), buffer.raw, self.raw, dst, &regions) };
+                self.record_from(cmd, buffer, &regions)?;
                 self.record_readable(cmd);
                 Ok(())
             })?;
@@ -471,8 +469,6 @@ impl Image3d {
     /// to TRANSFER_DST first (from UNDEFINED when `first`), and to
     /// SHADER_READ_ONLY_OPTIMAL for compute reads after the `last`.
     fn record_copy(&self, cmd: Recording<'_>, staging: &Buffer, z: u32, n: u32, first: bool, last: bool) -> Result<()> {
-        staging.used_by(cmd)?;
-        let device = self.ctx.device();
         let [w, h, _] = self.extent;
         let (old, src) = if first {
             (vk::ImageLayout::UNDEFINED, Access::COMPUTE_READ)
@@ -481,11 +477,26 @@ impl Image3d {
         };
         let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
         self.transition(cmd, old, dst, src, Access::TRANSFER_WRITE);
-        let region = [copy_region(0, ([0, 0, z], [w, h, n]))];
-        unsafe { device.cmd_copy_buffer_to_image(cmd.raw(), staging.raw, self.raw, dst, &region) };
+        self.record_from(cmd, staging, &[copy_region(0, ([0, 0, z], [w, h, n]))])?;
         if last {
             self.record_readable(cmd);
         }
+        Ok(())
+    }
+
+    /// Records copies of `regions` from `buffer` (noted as read: the host
+    /// may not write it until the submission settles) into this image, in
+    /// TRANSFER_DST_OPTIMAL.
+    fn record_from(&self, cmd: Recording<'_>, buffer: &Buffer, regions: &[vk::BufferImageCopy]) -> Result<()> {
+        buffer.used_by(cmd)?;
+        let dst = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+        // SAFETY: the buffer and image are this device's and alive for the
+        // call; callers keep the regions within both.
+        unsafe {
+            self.ctx
+                .device()
+                .cmd_copy_buffer_to_image(cmd.raw(), buffer.raw, self.raw, dst, regions)
+        };
         Ok(())
     }
 

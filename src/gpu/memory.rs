@@ -221,12 +221,9 @@ impl Buffer {
     /// settles: what it wrote stays refused.
     pub fn host(&self) -> Result<HostRead<'_>> {
         let bytes = self.mapped_bytes()?;
-        let mut access = lock(&self.host_access);
-        if access.written_in_flight() {
+        if !lock(&self.host_access).start_read() {
             return Err(self.in_flight("read on the host", "writes"));
         }
-        access.readers += 1;
-        drop(access);
         Ok(HostRead::counted(bytes, &self.host_access))
     }
 
@@ -234,12 +231,14 @@ impl Buffer {
     /// when it is not host visible, or while one of lacuna's submissions
     /// that reads or writes it is recorded or running.
     pub fn host_mut(&mut self) -> Result<&mut [u8]> {
-        let access = self.host_access.get_mut().unwrap_or_else(|p| p.into_inner());
-        if access.used_in_flight() {
+        if !self
+            .host_access
+            .get_mut()
+            .unwrap_or_else(|p| p.into_inner())
+            .start_write()
+        {
             return Err(self.in_flight("written on the host", "reads or writes"));
         }
-        // `&mut self`: no HostRead of it is alive (one forgotten no longer counts).
-        access.readers = 0;
         let name = &self.name;
         self.allocation
             .as_mut()
@@ -282,18 +281,14 @@ impl Buffer {
         if self.allocation.as_ref().is_none_or(|a| a.mapped_ptr().is_none()) {
             return Ok(());
         }
-        let mut access = lock(&self.host_access);
-        if writes && access.readers > 0 {
-            return Err(Error::invalid(
+        match lock(&self.host_access).note(cmd.completion(), writes) {
+            true => Ok(()),
+            false => Err(Error::invalid(
                 "device write",
                 format!("into buffer '{}'", self.name),
                 "the host is reading it (a HostRead is alive): drop that first",
-            ));
+            )),
         }
-        if let Some(done) = cmd.completion() {
-            access.add(done, writes);
-        }
-        Ok(())
     }
 
     /// Bytes `[offset, offset + len)`, or an error naming the buffer when
