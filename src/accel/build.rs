@@ -84,7 +84,8 @@ impl Builder {
         if !accel.method().marches(&input.mode) {
             return Ok(fallback(accel, params, input));
         }
-        let (built, keep): (Box<dyn Built>, Option<Box<dyn Any>>) = match activity(&input.mode, input.tf)? {
+        let (built, keep): (Box<dyn Built>, Option<Box<dyn Any + Send + Sync>>) = match activity(&input.mode, input.tf)?
+        {
             Some(activity) => {
                 let (gpu_activity, staging) = activity.record_upload(cmd)?;
                 let classified = BuildInput {

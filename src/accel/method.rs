@@ -154,7 +154,9 @@ pub enum MarchedKind {
 /// (`Method::march` of the entry that built it, or `marched_as`) reads
 /// given `push`, and stays alive and unchanged while frames recorded with
 /// it are pending. lacuna's own structures keep that by construction.
-pub unsafe trait Built: Any {
+/// It is `Send + Sync` so a `Structure` can be built on a loader thread
+/// and recorded from several (every binding is a Vulkan handle).
+pub unsafe trait Built: Any + Send + Sync {
     /// The kernel's own bindings, by name (`shaders::march_NAME::Own::list`).
     fn bindings(&self) -> Vec<Bound<'_>>;
     /// The march kernel's push constants (empty for none).
@@ -373,7 +375,7 @@ pub struct Structure {
     pub(crate) built: Box<dyn Built>,
     /// What a recorded build's command buffer still reads (the activity
     /// LUT of a mode's build and its staging).
-    pub(crate) _keep: Option<Box<dyn Any>>,
+    pub(crate) _keep: Option<Box<dyn Any + Send + Sync>>,
 }
 
 impl Structure {

@@ -454,3 +454,52 @@ fn concurrent_submissions_from_several_threads_keep_their_data_and_free_what_the
     assert!(whole, "every thread's buffers hold what it uploaded");
     assert_eq!(waiting, 0, "everything dropped is destroyed once all submissions ended");
 }
+
+#[test]
+fn structures_built_on_loader_threads_render_from_other_threads_as_naive() {
+    fn send_and_share<T: Send + Sync>(_: &T) {}
+    let ctx = gpu();
+    let volume = Volume::load("vessels:24", &Default::default()).unwrap();
+    let tf = TransferFunction::parse("ramp:0.3:1").unwrap();
+    let gv = GpuVolume::upload(&ctx, &volume).unwrap();
+    let lut = tf.upload(&ctx).unwrap();
+    let b = builder(&ctx);
+    let renderer = Renderer::new(&ctx).unwrap();
+    let desc = FrameDesc::builder(32, 32).build().unwrap();
+    let names = ["kd-cpu", "lbvh", "distance-octant", "auto"];
+    // Each structure built on a thread of its own, as a loader would, and
+    // handed back.
+    let structures: Vec<Structure> = std::thread::scope(|s| {
+        let loaders: Vec<_> = names
+            .iter()
+            .map(|name| {
+                let (b, volume, gv, tf, lut) = (&b, &volume, &gv, &tf, &lut);
+                s.spawn(move || {
+                    let a = accel(name);
+                    let (ranges, _) = b.ranges_for(&[(a, &a.defaults())], gv).unwrap();
+                    let input = input(volume, gv, tf, lut, Mode::Composite);
+                    b.build(a, &input, &ranges, &a.defaults()).unwrap().0
+                })
+            })
+            .collect();
+        loaders.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let naive = frame(&renderer, &Structure::naive(), &gv, &lut, &desc);
+    assert!(naive.pixels.iter().any(|p| p[3] > 0.0), "an empty frame");
+    // Each marched from a thread of its own, all sharing the structures.
+    let frames: Vec<_> = std::thread::scope(|s| {
+        let renders: Vec<_> = structures
+            .iter()
+            .map(|structure| {
+                send_and_share(structure);
+                let (renderer, gv, lut, desc) = (&renderer, &gv, &lut, &desc);
+                s.spawn(move || frame(renderer, structure, gv, lut, desc))
+            })
+            .collect();
+        renders.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for (name, f) in names.iter().zip(&frames) {
+        assert_eq!(f.pixels, naive.pixels, "{name}");
+    }
+    crate::common::assert_clean(&ctx);
+}
