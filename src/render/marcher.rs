@@ -85,8 +85,35 @@ impl Renderer {
     /// writing the frame buffer (and its depth where `desc` writes depth);
     /// created on first use.
     pub fn kernel(&self, march: March, desc: &FrameDesc, volume: &GpuVolume) -> Result<Arc<Kernel>> {
-        let constants = crate::desc::with_depth_out(desc.kernel_constants(volume), desc.writes_depth());
-        self.kernels.get(march, None, constants, ProbeConstants::PLAIN)
+        self.output_kernel(march, desc, volume, None, desc.writes_depth())
+    }
+
+    /// Creates now the kernel that `record` of `scene` and `desc` to an
+    /// output like `output` (its kind and host image format) would create
+    /// on first use: a host warms a new look before its frame loop, so the
+    /// first frame's recording does not stall on a pipeline compile.
+    pub fn prepare(&self, scene: Scene, desc: &FrameDesc, output: Output) -> Result<()> {
+        let (variant, write_depth) = match output {
+            Output::Buffer => (None, desc.writes_depth()),
+            Output::Image(image) => (Some(image.variant()?), false),
+            Output::ImageAndDepth(image, _) => (Some(image.variant()?), true),
+        };
+        self.output_kernel(scene.structure.march(), desc, scene.volume, variant, write_depth)?;
+        Ok(())
+    }
+
+    /// The march kernel writing the output `variant` (None: the frame
+    /// buffer), with depth written or not.
+    fn output_kernel(
+        &self,
+        march: March,
+        desc: &FrameDesc,
+        volume: &GpuVolume,
+        variant: Option<&'static str>,
+        write_depth: bool,
+    ) -> Result<Arc<Kernel>> {
+        let constants = crate::desc::with_depth_out(desc.kernel_constants(volume), write_depth);
+        self.kernels.get(march, variant, constants, ProbeConstants::PLAIN)
     }
 
     /// Records one frame of `desc` into `cmd` (timed as "march" when `timer`
@@ -119,9 +146,9 @@ impl Renderer {
     /// cut the march short (`check_whole`); it covers the last frame
     /// recorded on the target. State
     /// left bound: the compute pipeline, pipeline layout, push descriptors
-    /// and push constants of the last lacuna kernel; graphics state and the
-    /// host's descriptor sets are untouched, but a host compute pipeline
-    /// must be bound again.
+    /// and push constants of the last lacuna kernel; the graphics bind point
+    /// is untouched, but the host binds its compute pipeline, descriptor
+    /// sets and push constants again (the pushed set 0 disturbs them).
     ///
     /// One dispatch: a frame of many samples is split into submissions of
     /// your own with `bands` and `record_band` (as `render` marches).
@@ -143,7 +170,9 @@ impl Renderer {
     /// takes `limits::MAX_SAMPLES_PER_SUBMIT`): submit each band's
     /// `record_band` on its own, so no submission runs long enough for a
     /// driver's watchdog. Every band but the last starts and ends on a
-    /// workgroup row (8 pixel rows); together they cover the frame once.
+    /// workgroup row (8 pixel rows); together they cover the frame once. A
+    /// band is at least one workgroup row, so a budget below one row's
+    /// samples gives bands of one row each, over the budget.
     pub fn bands(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<Vec<Band>> {
         let (_, height) = desc.size();
         let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
@@ -293,12 +322,7 @@ impl Renderer {
         };
         structure.check_mode(desc.mode())?;
         structure.check_built_for(volume, tf)?;
-        let kernel = self.kernels.get(
-            structure.march(),
-            variant,
-            crate::desc::with_depth_out(desc.kernel_constants(volume), write_depth),
-            ProbeConstants::PLAIN,
-        )?;
+        let kernel = self.output_kernel(structure.march(), desc, volume, variant, write_depth)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
         let n = crate::tf::LUT_SIZE as u32;
         let lut_groups = self.opacity.groups("frame LUT", [n * tf.channels, 1, 1])?;

@@ -227,6 +227,12 @@ impl RenderTarget {
     /// creating a target does: callers check it before work that comes
     /// first (loading a volume, auto's probes).
     pub fn check_size(info: &DeviceInfo, width: u32, height: u32) -> Result<()> {
+        Self::check_size_for(info, width, height, true)
+    }
+
+    /// `check_size` for a target with its own frame buffer (`frame`) or one
+    /// for host images, whose largest buffer is the per-pixel parameters.
+    fn check_size_for(info: &DeviceInfo, width: u32, height: u32, frame: bool) -> Result<()> {
         if width == 0 || height == 0 {
             return Err(Error::invalid(
                 "size",
@@ -234,9 +240,13 @@ impl RenderTarget {
                 "width and height must be > 0",
             ));
         }
-        let bytes = width as u64 * height as u64 * 16;
+        let pixels = width as u64 * height as u64;
+        let (what, bytes) = match frame {
+            true => ("frame", pixels * 16),
+            false => ("frame's ray parameters", params_bytes(pixels)),
+        };
         info.check(
-            format!("frame {width}x{height} ({bytes} bytes)"),
+            format!("{what} {width}x{height} ({bytes} bytes)"),
             "maxStorageBufferRange",
             bytes,
             info.max_storage_buffer_range,
@@ -248,7 +258,7 @@ impl RenderTarget {
 
     fn create(ctx: &Context, width: u32, height: u32, frame: bool, readback: bool) -> Result<Self> {
         let info = ctx.info();
-        Self::check_size(info, width, height)?;
+        Self::check_size_for(info, width, height, frame)?;
         let pixels = width as u64 * height as u64;
         let bytes = pixels * 16;
         let buffer = |name: &str, size: u64, usage: vk::BufferUsageFlags, location: MemoryLocation| {
@@ -272,7 +282,7 @@ impl RenderTarget {
         )?;
         let params = buffer(
             "render params",
-            std::mem::size_of::<RenderParams>() as u64 + pixels * 4,
+            params_bytes(pixels),
             storage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
@@ -366,4 +376,10 @@ impl RenderTarget {
         }
         Ok(frame)
     }
+}
+
+/// Bytes of a target's parameter buffer: the frame's block and a word per
+/// pixel (its ray limit).
+fn params_bytes(pixels: u64) -> u64 {
+    std::mem::size_of::<RenderParams>() as u64 + pixels * 4
 }

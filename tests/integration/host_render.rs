@@ -309,6 +309,67 @@ fn host_images_of_each_format_hold_the_frame_buffers_pixels() {
 }
 
 #[test]
+fn prepare_makes_the_kernel_a_host_image_frame_records_so_recording_compiles_nothing() {
+    let f = fixture(&["naive", "lbvh"]);
+    let m = cameras()[1].matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
+    let view = view(Camera::Matrices(m)).to_builder().step(0.6).build().unwrap();
+    for (format, texel) in [
+        (vk::Format::R8G8B8A8_UNORM, 4),
+        (vk::Format::R16G16B16A16_SFLOAT, 8),
+        (vk::Format::R32G32B32A32_SFLOAT, 16),
+    ] {
+        for i in 0..f.structures.len() {
+            // Only the view's format matters to the kernel, not the view.
+            let like = unsafe { HostImage::new(vk::ImageView::null(), format, vk::ImageLayout::GENERAL, SIZE, SIZE) };
+            f.renderer.prepare(f.scene(i), &view, Output::Image(like)).unwrap();
+            let made = f.ctx.kernels_created();
+            let pixels = render_to_image(&f, i, &view, format, texel);
+            assert!(
+                pixels.iter().any(|&b| b != 0),
+                "{format:?}, structure {i}: an empty frame"
+            );
+            assert_eq!(
+                f.ctx.kernels_created(),
+                made,
+                "{format:?}, structure {i}: recording compiled a kernel"
+            );
+        }
+    }
+    let bad = unsafe {
+        HostImage::new(
+            vk::ImageView::null(),
+            vk::Format::B8G8R8A8_UNORM,
+            vk::ImageLayout::GENERAL,
+            SIZE,
+            SIZE,
+        )
+    };
+    let err = f.renderer.prepare(f.scene(0), &view, Output::Image(bad)).unwrap_err();
+    assert!(err.to_string().contains("B8G8R8A8_UNORM"), "{err}");
+    assert_clean(&f.ctx);
+}
+
+#[test]
+fn a_target_for_host_images_takes_sizes_whose_frame_buffer_would_pass_the_storage_range() {
+    let ctx = gpu();
+    let range = ctx.info().max_storage_buffer_range;
+    // A frame buffer holds 16 bytes a pixel; a host image target's largest
+    // buffer, the rays' parameters, 4.
+    let side = ((range / 16) as f64).sqrt() as u32 + 1;
+    let err = RenderTarget::new(&ctx, side, side)
+        .err()
+        .expect("a frame buffer past the range");
+    assert!(err.to_string().contains("maxStorageBufferRange"), "{err}");
+    RenderTarget::for_images(&ctx, side, side).unwrap();
+    let side = ((range / 4) as f64).sqrt() as u32 + 1;
+    let err = RenderTarget::for_images(&ctx, side, side)
+        .err()
+        .expect("parameters past the range");
+    assert!(err.to_string().contains("ray parameters"), "{err}");
+    assert_clean(&ctx);
+}
+
+#[test]
 fn a_host_image_of_another_format_or_size_is_refused_by_name() {
     let f = fixture(&["naive"]);
     let m = cameras()[0].matrices(f.gv.dims(), f.gv.spacing(), SIZE, SIZE).unwrap();
