@@ -25,6 +25,12 @@ pub mod spatial;
 pub mod tf;
 pub mod volume;
 
+// The versions of the crates whose types the public API takes (`ash`'s
+// handles in `gpu::AdoptInfo`, `glam`'s matrices in `render::CameraMatrices`),
+// so an engine need not pin the same versions itself.
+pub use ash;
+pub use glam;
+
 pub use error::{Error, Result};
 pub use gpu::Timings;
 

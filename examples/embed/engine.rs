@@ -6,10 +6,10 @@
 //! depth. The engine composites the volume over the cube on the CPU.
 
 use super::host::{HostBuffer, Image2d};
-use ash::vk;
-use glam::{DVec3, Vec4};
 use lacuna::accel::{Accel, BuildInput, Builder, Ranges, Structure};
+use lacuna::ash::{self, vk};
 use lacuna::frame::Frame;
+use lacuna::glam::{DVec3, Vec4};
 use lacuna::gpu::{
     record, required_features, AdoptInfo, Context, EnabledFeatures, Recording, Staging, Timer, REQUIRED_EXTENSIONS,
 };

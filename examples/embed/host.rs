@@ -3,7 +3,7 @@
 //! engine has it; `tests/integration/embed.rs` and `tests/integration/host_render.rs` use it too.
 #![allow(dead_code)]
 
-use ash::vk;
+use lacuna::ash::{self, vk};
 
 /// A 2D image with its own memory and a view of `aspect`.
 pub struct Image2d {

@@ -397,12 +397,14 @@ impl Context {
         self.inner.messenger.is_some()
     }
 
-    /// Every validation message collected so far (empty without validation).
+    /// Every validation message collected so far (empty without validation):
+    /// the first `MAX_KEPT` (1024) since they were last taken, and one more
+    /// naming how many were dropped after them.
     pub fn validation_messages(&self) -> Vec<ValidationMessage> {
         self.inner
             .messenger
             .as_ref()
-            .map(|m| m.store.lock().unwrap_or_else(|p| p.into_inner()).clone())
+            .map(|m| m.store.lock().unwrap_or_else(|p| p.into_inner()).list())
             .unwrap_or_default()
     }
 
@@ -411,7 +413,7 @@ impl Context {
         self.inner
             .messenger
             .as_ref()
-            .map(|m| std::mem::take(&mut *m.store.lock().unwrap_or_else(|p| p.into_inner())))
+            .map(|m| m.store.lock().unwrap_or_else(|p| p.into_inner()).take())
             .unwrap_or_default()
     }
 

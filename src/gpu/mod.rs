@@ -32,7 +32,7 @@ pub use context::{Context, ContextOptions};
 pub use device::{list_devices, select_device, DeviceInfo, DeviceSummary};
 pub use gpu_allocator::MemoryLocation;
 pub use kernel::Kernel;
-pub use record::Recording;
+pub use record::{Access, Recording};
 pub use requirements::{required_features, AdoptInfo, EnabledFeatures, REQUIRED_EXTENSIONS};
 pub(crate) use retire::Retired;
 pub use shaders::{LocalDim, Shader};

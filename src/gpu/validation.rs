@@ -29,7 +29,50 @@ impl fmt::Display for ValidationMessage {
     }
 }
 
-pub(crate) type MessageStore = Arc<Mutex<Vec<ValidationMessage>>>;
+/// Messages kept until taken. A host that never takes them (validation
+/// left on in a long-running engine) holds at most `MAX_KEPT`; the rest are
+/// counted, and a last message says how many were dropped.
+#[derive(Default)]
+pub(crate) struct Messages {
+    kept: Vec<ValidationMessage>,
+    dropped: u64,
+}
+
+/// How many messages are kept until taken.
+pub const MAX_KEPT: usize = 1024;
+
+impl Messages {
+    fn push(&mut self, message: ValidationMessage) {
+        match self.kept.len() < MAX_KEPT {
+            true => self.kept.push(message),
+            false => self.dropped += 1,
+        }
+    }
+
+    /// The kept messages, and one more naming how many were dropped.
+    pub(crate) fn list(&self) -> Vec<ValidationMessage> {
+        let mut list = self.kept.clone();
+        if self.dropped > 0 {
+            list.push(ValidationMessage {
+                severity: vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                id: "lacuna-messages-dropped".into(),
+                text: format!(
+                    "{} more validation messages were dropped: lacuna keeps the first {MAX_KEPT} until they are taken",
+                    self.dropped
+                ),
+            });
+        }
+        list
+    }
+
+    pub(crate) fn take(&mut self) -> Vec<ValidationMessage> {
+        let list = self.list();
+        *self = Messages::default();
+        list
+    }
+}
+
+pub(crate) type MessageStore = Arc<Mutex<Messages>>;
 
 /// Owns the debug-utils messenger; the store outlives it through the `Arc`.
 pub(crate) struct Messenger {
@@ -69,7 +112,7 @@ impl Messenger {
     pub(crate) fn new(entry: &ash::Entry, instance: &ash::Instance) -> crate::Result<Self> {
         use crate::error::VkContext;
         let loader = ash::ext::debug_utils::Instance::new(entry, instance);
-        let store: MessageStore = Arc::new(Mutex::new(Vec::new()));
+        let store: MessageStore = Arc::new(Mutex::new(Messages::default()));
         let user = Box::new(store.clone());
         let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
@@ -96,5 +139,41 @@ impl Messenger {
 impl Drop for Messenger {
     fn drop(&mut self) {
         unsafe { self.loader.destroy_debug_utils_messenger(self.handle, None) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn message(i: usize) -> ValidationMessage {
+        ValidationMessage {
+            severity: vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            id: format!("VUID-{i}"),
+            text: String::new(),
+        }
+    }
+
+    #[test]
+    fn messages_past_the_cap_are_counted_and_named_until_taken() {
+        let mut store = Messages::default();
+        for i in 0..MAX_KEPT + 5 {
+            store.push(message(i));
+        }
+        let list = store.list();
+        assert_eq!(list.len(), MAX_KEPT + 1);
+        assert_eq!(list[MAX_KEPT - 1].id, format!("VUID-{}", MAX_KEPT - 1));
+        assert!(
+            list[MAX_KEPT].text.starts_with("5 more validation messages"),
+            "{}",
+            list[MAX_KEPT]
+        );
+        assert_eq!(store.take().len(), MAX_KEPT + 1);
+        assert!(store.take().is_empty());
+        store.push(message(7));
+        assert_eq!(
+            store.take().iter().map(|m| m.id.as_str()).collect::<Vec<_>>(),
+            ["VUID-7"]
+        );
     }
 }

@@ -396,7 +396,12 @@ impl TransferFunction {
         1 + self.other_channels.len()
     }
 
-    /// Channel `c`'s transfer function (0-based): its own, or the only one.
+    /// Channel `c`'s transfer function (0-based): its own, or the only one
+    /// (one transfer function serves every channel).
+    ///
+    /// # Panics
+    /// If it has one per channel and `c >= channel_count()`, as indexing a
+    /// slice does (`check_channels` says whether it suits a volume).
     pub fn channel(&self, c: usize) -> &TransferFunction {
         match c {
             0 => self,

@@ -414,6 +414,9 @@ impl Volume {
 
     /// Channel `c` (0-based; 0 is this volume's own data) as a one-channel
     /// volume: its data, type, range and normalisation.
+    ///
+    /// # Panics
+    /// If `c >= channel_count()`, as indexing a slice does.
     pub fn channel(&self, c: usize) -> &Volume {
         if c == 0 {
             self
