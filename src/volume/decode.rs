@@ -75,6 +75,22 @@ pub(super) fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator
 }
 
 /// A signed byte shifted into the unsigned range, so it stays native.
+/// Negates raw voxels of `ty` in place, within their type: the bitwise
+/// complement of an integer (`MAX - x` unsigned, `-1 - x` signed), the
+/// sign of a float (NaN stays NaN). A NIfTI's negative `scl_slope` is then
+/// a positive one (`nifti::Scaling`), so every later step sees values that
+/// grow with the data's own.
+pub(super) fn negate_raw(bytes: &mut [u8], ty: VoxelType, little: bool) {
+    match ty {
+        VoxelType::F32 | VoxelType::F64 => {
+            let n = ty.bytes();
+            let sign = if little { n - 1 } else { 0 };
+            bytes.chunks_exact_mut(n).for_each(|w| w[sign] ^= 0x80);
+        }
+        _ => bytes.iter_mut().for_each(|b| *b = !*b),
+    }
+}
+
 pub(super) fn shifted_i8(b: u8) -> u8 {
     (b as i8 as i16 + 128) as u8
 }

@@ -68,7 +68,11 @@ impl<'a> SourceValues<'a> {
             scale,
             halves,
             source_type: volume.source_type,
-            integer: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64),
+            // Integer sources stay integers unless scaled (a NIfTI's
+            // scl_slope / scl_inter) by a fraction.
+            integer: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64)
+                && lo.fract() == 0.0
+                && scale.fract() == 0.0,
             tolerance,
         }
     }
@@ -154,8 +158,9 @@ impl<'a> SourceValues<'a> {
 
     /// The export type: `requested` if it holds every value, else an error
     /// naming the first voxel it cannot hold. Without a request: the source
-    /// type if it is uint8, uint16 or float32, else the smallest of those
-    /// that holds every value (float32 holds integers exactly up to 2^24).
+    /// type if it is uint8, uint16 or float32 and holds every value (a
+    /// NIfTI's scaling can take them past it), else the smallest of those
+    /// that does (float32 holds integers exactly up to 2^24).
     pub fn export_type(&self, requested: Option<VoxelType>) -> Result<VoxelType> {
         if let Some((i, why)) = self.first_misfit(VoxelType::F32) {
             let (x, y, z) = self.voxel(i);
@@ -172,11 +177,13 @@ impl<'a> SourceValues<'a> {
                 .unwrap_or(VoxelType::F32)
         };
         let Some(ty) = requested else {
-            return Ok(if EXPORT_TYPES.contains(&self.source_type) {
-                self.source_type
-            } else {
-                smallest()
-            });
+            return Ok(
+                if EXPORT_TYPES.contains(&self.source_type) && self.first_misfit(self.source_type).is_none() {
+                    self.source_type
+                } else {
+                    smallest()
+                },
+            );
         };
         if !EXPORT_TYPES.contains(&ty) {
             return Err(Error::invalid(

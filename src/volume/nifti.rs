@@ -261,10 +261,14 @@ fn parse(path: &Path, mut reader: Box<dyn Read + '_>, step: u32, device: Option<
         meet_the_trailer(path, &mut reader)?;
     }
     let little = header.endianness == nifti::Endianness::Little;
+    let scaling = scaling(&header, ty);
     let mut volumes = Vec::new();
-    for (c, data) in blocks.iter().enumerate() {
+    for (c, data) in blocks.iter_mut().enumerate() {
+        if scaling.is_some_and(|s| s.negate) {
+            super::decode::negate_raw(data, ty, little);
+        }
         let mut volume = decode(path, data, ty, little, dims, spacing(&header))?;
-        rescale_range(&mut volume, &header);
+        rescale_range(&mut volume, scaling);
         if channels > 1 {
             volume.name = format!("{}[{c}]", path.display());
         }
@@ -311,13 +315,54 @@ fn spacing(header: &NiftiHeader) -> [f32; 3] {
     })
 }
 
-/// scl_slope/scl_inter rescale linearly; normalised values are unchanged
-/// for a positive slope, so only the reported range moves.
-fn rescale_range(volume: &mut Volume, header: &NiftiHeader) {
+/// A NIfTI's `scl_slope` / `scl_inter` (value = slope x raw + inter), with
+/// a positive slope: a negative one is read as its negation over the raw
+/// voxels negated within their type (`decode::negate_raw`: raw = k - raw'),
+/// and the intercept moved to match (inter + slope x k), so the volume's
+/// values grow with what lacuna stores and its normalisation stays
+/// increasing.
+#[derive(Clone, Copy)]
+struct Scaling {
+    negate: bool,
+    slope: f64,
+    inter: f64,
+}
+
+/// The file's scaling; None where it scales nothing (slope 0, as the
+/// format says, or not finite).
+fn scaling(header: &NiftiHeader, ty: VoxelType) -> Option<Scaling> {
     let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
-    if slope != 0.0 && slope.is_finite() && inter.is_finite() {
-        let [a, b] = volume.value_range.map(|v| v * slope + inter);
-        volume.value_range = [a.min(b), a.max(b)];
+    if slope == 0.0 || !slope.is_finite() || !inter.is_finite() {
+        return None;
+    }
+    if slope > 0.0 {
+        return Some(Scaling {
+            negate: false,
+            slope,
+            inter,
+        });
+    }
+    // raw = k - raw' for the complement (unsigned: MAX, signed: -1) and
+    // the sign flip (floats: 0).
+    let k = match ty {
+        VoxelType::U8 => u8::MAX as f64,
+        VoxelType::U16 => u16::MAX as f64,
+        VoxelType::U32 => u32::MAX as f64,
+        VoxelType::I8 | VoxelType::I16 | VoxelType::I32 => -1.0,
+        VoxelType::F32 | VoxelType::F64 => 0.0,
+    };
+    Some(Scaling {
+        negate: true,
+        slope: -slope,
+        inter: inter + slope * k,
+    })
+}
+
+/// The value range in scaled units: normalised values are unchanged by a
+/// positive slope, so only the reported range moves.
+fn rescale_range(volume: &mut Volume, scaling: Option<Scaling>) {
+    if let Some(Scaling { slope, inter, .. }) = scaling {
+        volume.value_range = volume.value_range.map(|v| v * slope + inter);
     }
 }
 
@@ -379,6 +424,7 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         Ok(reader)
     };
     let trailer = |reader: &mut dyn Read| meet_the_trailer(path, reader);
+    let scaling = scaling(&header, ty);
     let file = super::slabs::SlabFile {
         path,
         dims,
@@ -387,9 +433,10 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         open: &open_at,
         tail: (step + 1 == l.steps).then_some(&trailer as &super::slabs::TailCheck),
         slab_bytes: super::slabs::SLAB_BYTES,
+        negate: scaling.is_some_and(|s| s.negate),
     };
     let mut volume = super::slabs::stream(&file, to, path.display().to_string(), spacing(&header))?;
-    rescale_range(&mut volume, &header);
+    rescale_range(&mut volume, scaling);
     Ok(volume)
 }
 

@@ -116,6 +116,7 @@ pub fn load_bricks(path: &Path, layout: Option<RawLayout>, to: &StreamTo) -> Res
         open: &open,
         tail: None,
         slab_bytes: super::slabs::SLAB_BYTES,
+        negate: false,
     };
     super::slabs::stream(&file, to, path.display().to_string(), [1.0; 3])
 }

@@ -31,6 +31,8 @@ pub(super) struct SlabFile<'a> {
     pub tail: Option<&'a TailCheck<'a>>,
     /// Source bytes read at once (`SLAB_BYTES`).
     pub slab_bytes: usize,
+    /// Each voxel negated within its type as read (`decode::negate_raw`).
+    pub negate: bool,
 }
 
 impl SlabFile<'_> {
@@ -57,6 +59,9 @@ impl SlabFile<'_> {
                 ),
                 _ => Error::format(self.path, format!("cannot read layers {z} to {}: {e}", z + n)),
             })?;
+            if self.negate {
+                decode::negate_raw(&mut slab[..n * layer], self.ty, self.little);
+            }
             f(&slab[..n * layer])?;
             z += n;
         }
@@ -194,9 +199,13 @@ mod tests {
             (VoxelType::U32, true),
         ] {
             let bytes = file_bytes(ty, little, n);
-            let dense = crate::volume::decode::decode(path, &bytes, ty, little, dims, [1.0; 3]).unwrap();
             let layer = 13 * 7 * ty.bytes();
-            for slab_layers in [1, 2] {
+            for (slab_layers, negate) in [(1, false), (2, false), (1, true), (2, true)] {
+                let mut read = bytes.clone();
+                if negate {
+                    crate::volume::decode::negate_raw(&mut read, ty, little);
+                }
+                let dense = crate::volume::decode::decode(path, &read, ty, little, dims, [1.0; 3]).unwrap();
                 let open = |z: u32| -> Result<Box<dyn Read>> {
                     Ok(Box::new(std::io::Cursor::new(bytes[z as usize * layer..].to_vec())))
                 };
@@ -208,6 +217,7 @@ mod tests {
                     open: &open,
                     tail: None,
                     slab_bytes: slab_layers * layer,
+                    negate,
                 };
                 let limits = PoolLimits {
                     max_image_dim: 4096,
@@ -215,7 +225,7 @@ mod tests {
                     max_table_entries: 1 << 30,
                 };
                 let s = stream(&file, &StreamTo::new(4, limits), "mem".into(), [1.0; 3]).unwrap();
-                let what = format!("{ty} little={little} in slabs of {slab_layers}");
+                let what = format!("{ty} little={little} negated={negate} in slabs of {slab_layers}");
                 assert!(
                     (0..n).all(|i| s.data.texel(i).to_bits() == dense.data.texel(i).to_bits()),
                     "{what}"

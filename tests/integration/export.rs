@@ -483,3 +483,106 @@ fn bad_export_input_is_one_line_exit_2_and_leaves_nothing() {
         fails(input.path(), args, needle);
     }
 }
+
+/// Little-endian bytes of `values` as `ty` (a NIfTI's voxels).
+fn raw_bytes(ty: VoxelType, values: &[f64]) -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::read(write_source(dir.path(), "v", DIMS, ty, values)).unwrap()
+}
+
+#[test]
+fn scaled_nifti_voxels_load_render_and_export_as_slope_times_raw_plus_intercept() {
+    let dir = tempfile::tempdir().unwrap();
+    let floats: Vec<f64> = values(-3.0, 0.19).into_iter().map(|v| (v as f32) as f64).collect();
+    // (type, NIfTI datatype, raw values, slope, intercept, default export type)
+    for (k, (ty, datatype, raw, slope, inter, want)) in [
+        (VoxelType::U8, 2i16, values(0.0, 2.0), 10.0f32, 0.0f32, VoxelType::U16),
+        (VoxelType::U8, 2, values(0.0, 2.0), -1.0, 0.0, VoxelType::F32),
+        (VoxelType::U8, 2, values(0.0, 2.0), -1.0, 250.0, VoxelType::U8),
+        (VoxelType::U8, 2, values(0.0, 1.0), 0.5, 0.0, VoxelType::F32),
+        (VoxelType::I16, 4, values(-1200.0, 31.0), -2.0, 5.0, VoxelType::F32),
+        (VoxelType::F32, 16, floats.clone(), -0.5, 1.0, VoxelType::F32),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let name = format!("{ty} x {slope} + {inter}");
+        let mut bytes =
+            crate::common::nifti_bytes(&DIMS, datatype, 8 * ty.bytes() as i16, [1.0; 3], &raw_bytes(ty, &raw));
+        bytes[112..116].copy_from_slice(&slope.to_le_bytes());
+        bytes[116..120].copy_from_slice(&inter.to_le_bytes());
+        let nii = dir.path().join(format!("scaled{k}.nii"));
+        std::fs::write(&nii, bytes).unwrap();
+        let scaled: Vec<f64> = raw.iter().map(|r| r * slope as f64 + inter as f64).collect();
+        let v = load(&nii);
+        let (lo, hi) = scaled
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        let span = hi - lo;
+        assert!(
+            (v.value_range[0] - lo).abs() <= span * 1e-6 && (v.value_range[1] - hi).abs() <= span * 1e-6,
+            "{name}: range {:?}, want [{lo}, {hi}]",
+            v.value_range
+        );
+        // What the GPU samples: the scaled values normalised over their
+        // range, as a file holding them does.
+        let reference = load(&write_source(
+            dir.path(),
+            &format!("ref{k}"),
+            DIMS,
+            VoxelType::F64,
+            &scaled,
+        ));
+        assert_same_values(&v, &reference, 1e-6);
+        let w = write_raw(&v, &dir.path().join(format!("out{k}")), None).unwrap();
+        assert_eq!(w.ty, want, "{name}");
+        for (i, (g, s)) in file_values(&w.path, want).iter().zip(&scaled).enumerate() {
+            let tol = match ty {
+                VoxelType::F32 => span * 2f64.powi(-24) + s.abs() * 2f64.powi(-23),
+                _ => 0.0,
+            };
+            assert!((g - s).abs() <= tol, "{name}: voxel {i} exported {g}, want {s}");
+        }
+    }
+    // Halves are not integers: uint8 cannot hold them, and says so.
+    let halves = dir.path().join("scaled3.nii");
+    let err = write_raw(&load(&halves), &dir.path().join("halves"), Some(VoxelType::U8)).unwrap_err();
+    assert!(err.to_string().contains("not an integer"), "{err}");
+}
+
+#[test]
+fn a_negatively_scaled_nifti_renders_streamed_into_bricks_as_its_scaled_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = values(0.0, 2.0);
+    let mut bytes = crate::common::nifti_bytes(&DIMS, 2, 8, [1.0; 3], &raw_bytes(VoxelType::U8, &raw));
+    bytes[112..116].copy_from_slice(&(-1.0f32).to_le_bytes());
+    let nii = dir.path().join("negative.nii");
+    std::fs::write(&nii, bytes).unwrap();
+    let scaled: Vec<f64> = raw.iter().map(|r| -r).collect();
+    let reference = write_source(dir.path(), "negated", DIMS, VoxelType::F64, &scaled);
+    let mut frames = Vec::new();
+    for (input, storage) in [(&nii, "bricks:4"), (&nii, "dense"), (&reference, "dense")] {
+        let out = dir.path().join(format!("{storage}-{}.exr", frames.len()));
+        let run = lacuna(
+            &[
+                "render",
+                input.to_str().unwrap(),
+                "--tf",
+                "ramp:0.2:1",
+                "--size",
+                "32x32",
+                "--storage",
+                storage,
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &[],
+        );
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        frames.push(lacuna::frame::Frame::read_exr(&out).unwrap());
+    }
+    assert!(frames[2].pixels.iter().any(|p| p[3] > 0.01), "an empty frame");
+    assert_eq!(frames[0].pixels, frames[1].pixels, "bricks against dense");
+    let d = lacuna::frame::diff(&frames[1], &frames[2]).unwrap();
+    assert!(d.max_abs <= 1e-5, "against the negated values: {}", d.max_abs);
+}

@@ -70,6 +70,7 @@ pub fn load_step_bricks(path: &Path, step: u32, to: &StreamTo) -> Result<Volume>
         open: &open,
         tail: if h.gzip { Some(&tail) } else { None },
         slab_bytes: super::super::slabs::SLAB_BYTES,
+        negate: false,
     };
     super::super::slabs::stream(&file, to, path.display().to_string(), h.spacing)
 }
