@@ -295,6 +295,17 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
             other => panic!("{other:?}"),
         }
     }
+    // As Slicer and teem write a vector volume: `none` first in the space
+    // directions, for the component axis.
+    let slicer = String::from_utf8(nrrd.clone()).unwrap().replacen(
+        "spacings: nan 1 1 2",
+        "space: left-posterior-superior\nspace directions: none (1,0,0) (0, 0.5,0) (0,0,2)",
+        1,
+    );
+    let path = dir.path().join("slicer.nrrd");
+    std::fs::write(&path, slicer.as_bytes()).unwrap();
+    let v = load(path.to_str().unwrap());
+    assert_eq!((v.channel_count(), v.dims, v.spacing), (3, [4, 3, 2], [1.0, 0.5, 2.0]));
     // A time axis last is a series; anywhere else it is not contiguous.
     let mut timed =
         b"NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 3\nkinds: domain domain domain time\nencoding: raw\n\n"

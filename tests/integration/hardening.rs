@@ -146,7 +146,8 @@ fn sizes_are_checked_before_allocation() {
     // one 32767^2 double layer is 8 GiB, so a gzip file too small to hold
     // the grid is refused before it (deflate inflates at most 1032:1).
     let gz_nrrd = d.join("huge_gz.nrrd");
-    let mut bytes = b"NRRD0004\ntype: double\ndimension: 3\nsizes: 32767 32767 32767\nencoding: gzip\n\n".to_vec();
+    let mut bytes =
+        b"NRRD0004\ntype: double\ndimension: 3\nsizes: 32767 32767 32767\nendian: little\nencoding: gzip\n\n".to_vec();
     bytes.extend(common::gzip(&[0; 4096]));
     std::fs::write(&gz_nrrd, bytes).unwrap();
     let mut nii = nifti_header([32767, 32767, 32767]);
@@ -267,6 +268,23 @@ fn hostile_files_are_one_line_errors() {
         std::fs::write(p(name), bytes).unwrap();
         fails(dir.path(), &["info", &p(name)], false, &[needle]);
     }
+    // Data split over a list of files: named, not a puzzling header line.
+    std::fs::write(
+        p("list.nhdr"),
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: LIST\na.raw\nb.raw\n",
+    )
+    .unwrap();
+    fails(dir.path(), &["info", &p("list.nhdr")], false, &["'data file: LIST'"]);
+    // Multi-byte voxels without a byte order: refused, not guessed.
+    let mut bytes = b"NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n".to_vec();
+    bytes.extend([0u8; 128]);
+    std::fs::write(p("endian.nrrd"), bytes).unwrap();
+    fails(
+        dir.path(),
+        &["info", &p("endian.nrrd")],
+        false,
+        &["no 'endian' field, which int16 voxels need"],
+    );
     // An attached NRRD far longer than its header describes: refused
     // from its length, before its data is read.
     let long = p("long.nrrd");

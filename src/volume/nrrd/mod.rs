@@ -42,24 +42,29 @@ fn numbers(path: &Path, field: &str, value: &str) -> Result<Vec<f64>> {
 
 /// Lengths of the vectors in `space directions: (a,b,c) (d,e,f) (g,h,i)`.
 fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
+    let bad = |what: &str| Error::format(path, format!("NRRD space directions: bad vector '{what}'"));
     let mut out = Vec::new();
-    for part in value.split(')') {
-        let inner = part.trim().trim_start_matches('(');
-        if inner.is_empty() {
+    let mut rest = value.trim_start();
+    // Each axis is `none` (a non-spatial axis, anywhere: Slicer writes a
+    // vector axis first) or a parenthesised vector.
+    while !rest.is_empty() {
+        if let Some(after) = rest.strip_prefix("none") {
+            rest = after.trim_start();
             continue;
         }
-        if inner == "none" {
-            continue;
-        }
+        let Some(open) = rest.strip_prefix('(') else {
+            return Err(bad(rest.split_whitespace().next().unwrap_or(rest)));
+        };
+        let Some(close) = open.find(')') else {
+            return Err(bad(rest));
+        };
+        let inner = &open[..close];
         let comps: Result<Vec<f64>> = inner
             .split(',')
-            .map(|t| {
-                t.trim()
-                    .parse::<f64>()
-                    .map_err(|_| Error::format(path, format!("NRRD space directions: bad vector '({inner})'")))
-            })
+            .map(|t| t.trim().parse::<f64>().map_err(|_| bad(&format!("({inner})"))))
             .collect();
         out.push(comps?.iter().map(|c| c * c).sum::<f64>().sqrt());
+        rest = open[close + 1..].trim_start();
     }
     Ok(out)
 }
@@ -288,6 +293,13 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         // spellings ("byte skip" and "byteskip", "data file" and
         // "datafile") are one field; each may be given once.
         let name = k.trim().to_lowercase();
+        // The lines after it name the files, so it is refused here, by name.
+        if field_key(&name) == field_key("data file") && v.trim().starts_with("LIST") {
+            return Err(Error::format(
+                path,
+                "NRRD 'data file: LIST' (data split over listed files) is not supported: join them into one file",
+            ));
+        }
         if fields.insert(field_key(&name), v.trim().to_string()).is_some() {
             return Err(Error::format(
                 path,
@@ -316,6 +328,14 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
     let axes = axes(path, dimension, &sizes, get("kinds"))?;
     let dims = axes.spatial.map(|a| sizes[a] as u32);
     let little = match get("endian") {
+        // Multi-byte voxels are read in the byte order the file states, as
+        // teem requires; a guess would read a big-endian file as noise.
+        None if ty.bytes() > 1 => {
+            return Err(Error::format(
+                path,
+                format!("NRRD header has no 'endian' field, which {ty} voxels need (little or big)"),
+            ))
+        }
         None | Some("little") => true,
         Some("big") => false,
         Some(e) => return Err(Error::format(path, format!("NRRD endian '{e}' is not little or big"))),
