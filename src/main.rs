@@ -41,7 +41,8 @@ enum Command {
 }
 
 /// Output to a closed pipe (`lacuna info ... | head`) ends the process
-/// quietly, as it does for other Unix tools, instead of a panic on EPIPE.
+/// quietly, as it does for other Unix tools, instead of a panic on EPIPE
+/// (`render --out` outlives it: `cli::stdout`).
 fn reset_sigpipe() {
     #[cfg(unix)]
     // SAFETY: called first in main, before any thread exists; restores the
@@ -104,6 +105,10 @@ fn main() -> ExitCode {
         ),
         (command, Ok(false)) => (dispatch(command), true),
     };
+    // Lines that could not be written (a full disk) fail the command, after
+    // its work; a closed pipe does not.
+    let printed = cli::stdout::finish();
+    let result = result.and_then(|code| printed.map(|()| code));
     match result {
         Ok(code) => code,
         Err(e) => {

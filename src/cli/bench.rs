@@ -108,17 +108,24 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
                 eprintln!("hard case: {case}");
             }
         })?;
-        println!("device {} ({})", ctx.info().name, ctx.info().driver);
-        println!("{}", bench::hard::table(&outcomes));
+        say!("device {} ({})", ctx.info().name, ctx.info().driver);
+        say!("{}", bench::hard::table(&outcomes));
         let failed: Vec<_> = outcomes.iter().filter(|o| !o.passed()).collect();
         for o in &failed {
-            println!(
+            say!(
                 "FAIL {} / {} / {} / {}: identical {}, validation messages {}, finite {}; {}",
-                o.case, o.look, o.filter, o.structure, o.identical, o.validation_messages, o.finite, o.detail
+                o.case,
+                o.look,
+                o.filter,
+                o.structure,
+                o.identical,
+                o.validation_messages,
+                o.finite,
+                o.detail
             );
         }
         let naive = outcomes.iter().filter(|o| o.mode_fallback).count();
-        println!(
+        say!(
             "hard cases: {} of {} structure runs passed ({} of them marched naively: no structure skips in average mode)",
             outcomes.len() - failed.len(),
             outcomes.len(),
@@ -182,8 +189,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         .map(|(table, _)| ("contract.md", table.clone()))
         .collect();
     let written = bench::write_outputs(&out_dir, &output, &extra)?;
-    println!("device {} ({})", ctx.info().name, ctx.info().driver);
-    println!(
+    say!("device {} ({})", ctx.info().name, ctx.info().driver);
+    say!(
         "config {}: {}x{}, {} views x {} interleaved rounds, step {}, ERT {}, filter {}, {} interleaved builds per structure, \
          warm-up until two consecutive times agree within {}% (at least {}, at most {})",
         config.name,
@@ -199,16 +206,16 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         config.warmup.max(2),
         config.warmup_cap
     );
-    println!();
-    println!("{}", bench::tables::table2_md(&output.records));
-    println!("{}", bench::tables::frames_md(&output.records));
-    println!("{}", bench::tables::table1_md(&output.records));
-    println!("{}", bench::tables::exactness_md(&output.records));
+    say!();
+    say!("{}", bench::tables::table2_md(&output.records));
+    say!("{}", bench::tables::frames_md(&output.records));
+    say!("{}", bench::tables::table1_md(&output.records));
+    say!("{}", bench::tables::exactness_md(&output.records));
     if !output.steps.is_empty() {
-        println!("{}", output.steps_md());
+        say!("{}", output.steps_md());
     }
     for r in bench::tables::fastest(&output.records) {
-        println!(
+        say!(
             "fastest on {}: {} ({:.2} ms median, {:.2}x naive{})",
             r.dataset,
             r.structure,
@@ -218,15 +225,15 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         );
     }
     for note in &output.notes {
-        println!("note: {note}");
+        say!("note: {note}");
     }
     let mut contract_held = true;
     if let Some((table, passed)) = contract {
-        println!("{table}");
-        println!("wrote {}", out_dir.join("contract.md").display());
+        say!("{table}");
+        say!("wrote {}", out_dir.join("contract.md").display());
         contract_held = passed;
     }
-    println!("wrote {} files to {}", written.len(), out_dir.display());
+    say!("wrote {} files to {}", written.len(), out_dir.display());
     let verdict = validation_verdict(&ctx);
     Ok(if contract_held { verdict } else { ExitCode::from(1) })
 }
@@ -270,9 +277,9 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
             "no data set x structure is in both runs",
         ));
     }
-    println!("{}", c.markdown(&a.display().to_string(), &b.display().to_string()));
+    say!("{}", c.markdown(&a.display().to_string(), &b.display().to_string()));
     let ok = c.worst() <= tolerance && c.same_fastest();
-    println!(
+    say!(
         "{}: every median within {:.0} % and the same (or a tied) fastest structure per data set",
         if ok { "PASS" } else { "FAIL" },
         100.0 * tolerance

@@ -11,7 +11,7 @@ pub fn run() -> Result<ExitCode> {
         ));
     }
     for d in list {
-        println!(
+        say!(
             "{}: {} ({}, Vulkan {}, {}){}",
             d.index,
             d.name,

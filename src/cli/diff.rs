@@ -39,10 +39,10 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
     let a = Frame::read_exr(&args.a)?;
     let b = Frame::read_exr(&args.b)?;
     let stats = diff(&a, &b)?;
-    println!("{stats}");
+    say!("{stats}");
     if let Some(path) = &args.heatmap {
         write_heatmap(&a, &b, path, None)?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     if let Some(m) = args.max_abs {
         if stats.max_abs > m {

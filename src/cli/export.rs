@@ -39,7 +39,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     series.check_step(args.time)?;
     let volume = series.load(args.time, None)?;
     let written = write_raw(&volume, &args.out, args.ty)?;
-    println!("{}", written.path.display());
+    say!("{}", written.path.display());
     let [sx, sy, sz] = volume.spacing;
     if volume.spacing != [1.0; 3] {
         eprintln!(

@@ -22,26 +22,26 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     let v = series.load(args.volume.time, None)?;
     // Checked before the report, so a bad --tf is one error line.
     let tf = tf_for(&args.tf, &v)?;
-    println!("volume   {}", v.name);
+    say!("volume   {}", v.name);
     if let Some(step) = args.volume.step_line(&series) {
-        println!("time     {step}; every step normalised as step 0");
+        say!("time     {step}; every step normalised as step 0");
     }
-    println!(
+    say!(
         "dims     {}x{}x{} ({} voxels)",
         v.dims[0],
         v.dims[1],
         v.dims[2],
         v.voxel_count()
     );
-    println!("type     {}", v.source_type);
-    println!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
+    say!("type     {}", v.source_type);
+    say!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
     let d = v.no_data;
     match d.total() == v.voxel_count() {
-        true => println!("values   none (every voxel is no data)"),
-        false => println!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1])),
+        true => say!("values   none (every voxel is no data)"),
+        false => say!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1])),
     }
     if d.total() > 0 {
-        println!(
+        say!(
             "no data  {} voxels ({:.3} %): {} NaN, {} +inf, {} -inf (transparent; ranges ignore them)",
             d.total(),
             100.0 * d.total() as f64 / v.voxel_count() as f64,
@@ -60,22 +60,22 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
             let device = &ctx.info().name;
             match lacuna::volume::resolve_storage(&ctx, &v, asked) {
                 Storage::Bricks { edge } => match PoolLayout::of_volume(&v, edge, limits) {
-                    Ok(pool) => println!("storage  {} (--storage {asked}, on {device})", pool.stats()),
-                    Err(e) => println!("storage  --storage {asked} does not fit {device}: {e}"),
+                    Ok(pool) => say!("storage  {} (--storage {asked}, on {device})", pool.stats()),
+                    Err(e) => say!("storage  --storage {asked} does not fit {device}: {e}"),
                 },
                 _ => {
                     // Asked for, dense must fit the device (auto checked it).
                     match lacuna::volume::check_dense(ctx.info(), &v) {
-                        Ok(_) => println!("storage  dense (--storage {asked}, on {device})"),
-                        Err(e) => println!("storage  --storage {asked} does not fit {device}: {e}"),
+                        Ok(_) => say!("storage  dense (--storage {asked}, on {device})"),
+                        Err(e) => say!("storage  --storage {asked} does not fit {device}: {e}"),
                     }
                     if let Ok(pool) = PoolLayout::of_volume(&v, POOL_BRICK, limits) {
-                        println!("         {} (with --storage {})", pool.stats(), Storage::BRICKS);
+                        say!("         {} (with --storage {})", pool.stats(), Storage::BRICKS);
                     }
                 }
             }
         }
-        Err(e) => println!("storage  not planned: {e}"),
+        Err(e) => say!("storage  not planned: {e}"),
     }
     let mut bins = [0u64; 10];
     for i in 0..v.data.len() {
@@ -85,7 +85,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         }
     }
     let total = v.voxel_count() as f64;
-    println!("histogram of normalised values (10 bins, % of voxels):");
+    say!("histogram of normalised values (10 bins, % of voxels):");
     let cells: Vec<String> = bins
         .iter()
         .enumerate()
@@ -100,7 +100,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         })
         .collect();
     for row in cells.chunks(5) {
-        println!("  {}", row.join("  "));
+        say!("  {}", row.join("  "));
     }
     if let Some(tf) = tf {
         let visible = (0..v.data.len())
@@ -109,9 +109,9 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
             .count();
         let grid = BrickGrid::new(&v, BRICK, lacuna::volume::APRON);
         let active = grid.active(&tf).iter().filter(|a| **a).count();
-        println!("tf       {}", tf.spec);
-        println!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
-        println!(
+        say!("tf       {}", tf.spec);
+        say!("visible  {:.3} % of voxels (alpha > 0)", 100.0 * visible as f64 / total);
+        say!(
             "active   {:.3} % of {}^3 bricks ({} of {}, value ranges over a one-voxel apron)",
             100.0 * active as f64 / grid.len() as f64,
             BRICK,

@@ -1,5 +1,7 @@
 //! The command line: one module per command; what they share lives here.
 
+#[macro_use]
+pub mod stdout;
 pub mod args;
 pub mod bench;
 pub mod devices;

@@ -140,10 +140,10 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
         for (m, d) in configs {
             let (row, image) = report::run(&backend, max_bytes, scene, &traced, m, d, &all_kinds, &options)?;
             if !args.all {
-                println!("{}", report::format_counts(scene.kind, &row.counts, default_size));
-                print!("{}", report::format_row(&row));
+                say!("{}", report::format_counts(scene.kind, &row.counts, default_size));
+                say_text!("{}", report::format_row(&row));
                 if all_kinds.len() > 1 {
-                    println!("rays whose hit differs between traversals: {}", row.disagreements);
+                    say!("rays whose hit differs between traversals: {}", row.disagreements);
                 }
             } else {
                 eprintln!(
@@ -153,14 +153,14 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
             }
             if let (Some(path), Some(format), Some(frame)) = (&args.out, format, image) {
                 frame.write(path, format)?;
-                println!("wrote {}", path.display());
+                say!("wrote {}", path.display());
             }
             rows.push(row);
         }
     }
     if args.all {
         let md = report::format_all(&rows);
-        print!("{md}");
+        say_text!("{md}");
         if let Some(path) = &args.report {
             lacuna::frame::write_atomically(path, |tmp| {
                 std::fs::write(tmp, md.as_bytes()).map_err(|e| Error::io(path, e))

@@ -245,16 +245,18 @@ fn finish(
         return Ok(validation_verdict(&part.ctx));
     };
     let info = part.ctx.info();
-    println!(
+    say!(
         "device  {} ({}), subTexelPrecisionBits {}",
-        info.name, info.driver, info.sub_texel_precision_bits
+        info.name,
+        info.driver,
+        info.sub_texel_precision_bits
     );
     for line in &part.report {
-        println!("{line}");
+        say!("{line}");
     }
-    println!("per rank (wall ms for load and upload; build ms of its phases, GPU timestamps and CPU wall; GPU ms for march):");
+    say!("per rank (wall ms for load and upload; build ms of its phases, GPU timestamps and CPU wall; GPU ms for march):");
     for (rank, s) in stats.chunks_exact(6).enumerate() {
-        println!(
+        say!(
             "  rank {rank}: load {:.0}, upload {:.0}, build {:.1}, march {:.3}, bricks stored {}, host peak {:.1} MiB",
             s[0],
             s[1],
@@ -264,11 +266,11 @@ fn finish(
             s[5] / (1u64 << 20) as f64
         );
     }
-    println!(
+    say!(
         "composite {composite_ms:.3} ms wall ({})",
         composited_how(part.desc.mode(), &part.order)
     );
-    println!("render GPU time per pass on rank 0:\n{}", part.timings);
+    say!("render GPU time per pass on rank 0:\n{}", part.timings);
     if let Some(out) = &args.out {
         let mut frame = Frame::new(part.frame.width, part.frame.height, pixels);
         frame.metadata = part.frame.metadata;
@@ -280,7 +282,7 @@ fn finish(
             Some(background) => frame.write_png_over(out, background)?,
             None => frame.write(out, lacuna::frame::FrameFormat::from_path(out)?)?,
         }
-        println!("wrote {}", out.display());
+        say!("wrote {}", out.display());
     }
     Ok(validation_verdict(&part.ctx))
 }

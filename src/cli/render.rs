@@ -1,6 +1,7 @@
 //! `lacuna render`: one frame with any structure, GPU time per pass, EXR or PNG out.
 
 use super::args::{AccelParser, FrameArgs, ModelArgs, StructureArgs};
+use super::stdout;
 use super::{check_parent, context, tf_for, validation_verdict, VolumeArgs};
 use clap::Args;
 use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
@@ -222,6 +223,11 @@ pub(super) fn frames(
 }
 
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
+    if args.out.is_some() {
+        // The frame is the product: `render --out f.exr | grep -m1 ...`
+        // still writes it after grep has gone.
+        stdout::outlive_a_closed_pipe();
+    }
     let (params, desc, format) = args.options()?;
     // The device first: the volume's size is checked against its limits
     // from the spec or header, before any voxel is read or made.
@@ -260,27 +266,33 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     };
 
     let info = ctx.info();
-    println!(
+    say!(
         "device  {} ({}), subTexelPrecisionBits {}",
-        info.name, info.driver, info.sub_texel_precision_bits
+        info.name,
+        info.driver,
+        info.sub_texel_precision_bits
     );
-    println!(
+    say!(
         "volume  {} ({}x{}x{} {})",
-        volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
+        volume.name,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
+        volume.source_type
     );
     if let Some(step) = args.volume.step_line(&series) {
-        println!("time    {step}");
+        say!("time    {step}");
     }
-    println!("storage {}", gpu_volume.describe_storage());
-    println!("loaded  in {load_ms:.0} ms, uploaded in {upload_ms:.0} ms (wall time; the upload with the pool's sorting, or the cells copy)");
+    say!("storage {}", gpu_volume.describe_storage());
+    say!("loaded  in {load_ms:.0} ms, uploaded in {upload_ms:.0} ms (wall time; the upload with the pool's sorting, or the cells copy)");
     if let lacuna::volume::VoxelData::Bricks(host) = &volume.data {
-        println!(
+        say!(
             "        streamed into bricks: the host holds {:.1} MiB of slots and table, not the dense volume",
             host.host_bytes() as f64 / (1u64 << 20) as f64
         );
     }
-    println!("tf      {}", tf.spec);
-    println!(
+    say!("tf      {}", tf.spec);
+    say!(
         "frame   {width}x{height}, {}, step {}, filter {}{}, accel {}",
         desc.camera().describe(),
         desc.step(),
@@ -298,44 +310,45 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         .map(|(k, v)| format!("{k} {v}"))
         .collect();
     if !look.is_empty() {
-        println!("look    {}", look.join("; "));
+        say!("look    {}", look.join("; "));
     }
     for note in look_notes(&desc) {
-        println!("note: {note}");
+        say!("note: {note}");
     }
     if args.repeat > 1 || args.warmup > 0 {
-        println!(
+        say!(
             "timings are medians of {} runs after {} untimed warm-up runs",
-            args.repeat, args.warmup
+            args.repeat,
+            args.warmup
         );
     }
     if let Some(build) = &build {
-        println!("structure {}", args.accel.method().description());
+        say!("structure {}", args.accel.method().description());
         for (k, v) in params.describe() {
-            println!("  {k} {v}");
+            say!("  {k} {v}");
         }
-        println!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
+        say!("build time per phase (GPU timestamps; CPU phases in wall time; ranges once per volume, the rest per TF change):\n{build}");
     }
     if let Some(m) = structure.marched_as_reason() {
-        println!("{} -> {}", args.accel, m.label);
-        println!("  {}", m.reason);
+        say!("{} -> {}", args.accel, m.label);
+        say!("  {}", m.reason);
     }
     if let Some(fallback) = fallback {
-        println!("note: {fallback}");
+        say!("note: {fallback}");
     }
     if let Some(stats) = structure.stats()? {
-        println!("structure {stats}");
+        say!("structure {stats}");
     }
     let octants = structure.octants();
     if octants != Octants::ALL {
-        println!(
+        say!(
             "  octants {} of 8 ({octants}): the frame's ray directions; other directions walk cell by cell",
             octants.len()
         );
     }
-    println!("render GPU time per pass:\n{timings}");
+    say!("render GPU time per pass:\n{timings}");
     if let Some(peak) = peak_host_bytes() {
-        println!(
+        say!(
             "host peak {:.1} MiB (VmHWM: the most resident memory so far; on a CPU device it includes device memory)",
             peak as f64 / (1u64 << 20) as f64
         );
@@ -349,7 +362,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             Some(background) => frame.write_png_over(out, background)?,
             None => frame.write(out, format)?,
         }
-        println!("wrote {}", out.display());
+        say!("wrote {}", out.display());
     }
     Ok(validation_verdict(&ctx))
 }

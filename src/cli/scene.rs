@@ -26,8 +26,8 @@ pub fn run(args: &SceneArgs) -> Result<ExitCode> {
     }
     let scene = Scene::generate(kind, args.size)?;
     let b = scene.bounds();
-    println!("{} (size factor {}): {}", kind, scene.size_factor, scene.counts());
-    println!(
+    say!("{} (size factor {}): {}", kind, scene.size_factor, scene.counts());
+    say!(
         "bounds: [{:.4}, {:.4}, {:.4}] - [{:.4}, {:.4}, {:.4}]; {} lights",
         b.lo[0],
         b.lo[1],
@@ -39,7 +39,7 @@ pub fn run(args: &SceneArgs) -> Result<ExitCode> {
     );
     if let Some(path) = &args.nff {
         scene.write_nff(path)?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -366,6 +366,52 @@ fn a_closed_pipe_ends_output_quietly() {
     assert!(!out.status.success(), "lacuna wrote to a closed pipe and succeeded");
 }
 
+#[test]
+fn render_writes_its_frame_after_the_reader_of_its_output_has_gone() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args(["render", "menger:16", "--size", "16x16", "--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // As `| grep -m1 device` does: gone before the frame is written.
+    drop(child.stdout.take());
+    let run = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success() && stderr.is_empty(), "{:?}: {stderr}", run.status);
+    let frame = lacuna::frame::Frame::read_exr(&out).unwrap();
+    assert!(frame.pixels.iter().any(|p| p[3] > 0.0), "an empty frame");
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn output_to_a_full_disk_is_one_error_line_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.exr");
+    let out = out.to_str().unwrap();
+    for args in [
+        &["info", "menger:16"][..],
+        &["render", "menger:16", "--size", "16x16", "--out", out][..],
+        &["devices"][..],
+    ] {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let run = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+            .args(args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(
+            stderr.trim_end(),
+            "error: standard output: No space left on device (os error 28)",
+            "{args:?}"
+        );
+    }
+}
+
 /// A perspective frame is the same at any physical scale: its rays were
 /// formed one world unit from the eye, which at 1e7 units a voxel lay
 /// within f32's rounding of the eye, so no ray had a direction and the

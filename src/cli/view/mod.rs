@@ -425,7 +425,7 @@ impl Viewer {
             }
         }
         if last {
-            println!("{}", self.summary());
+            say!("{}", self.summary());
         }
         if shots > 0 {
             self.shots_written += 1;
@@ -485,7 +485,7 @@ impl Viewer {
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
         self.scene.describe(&mut frame, &desc)?;
         frame.write(path, format)?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
         Ok(())
     }
 

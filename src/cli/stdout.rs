@@ -1,0 +1,76 @@
+//! The command line's standard output. A line that cannot be written never
+//! panics, as `println!` does: a closed pipe stops the printing quietly
+//! (where SIGPIPE is ignored: `render --out` ignores it so its frame is
+//! still written), and any other error (a full disk) is kept and reported
+//! by `finish` once the command is done.
+
+use lacuna::{Error, Result};
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+static STOPPED: AtomicBool = AtomicBool::new(false);
+static FAILED: Mutex<Option<std::io::Error>> = Mutex::new(None);
+
+/// `println!` for the command line (`say!`).
+macro_rules! say {
+    () => {
+        $crate::cli::stdout::write(format_args!(""), true)
+    };
+    ($($t:tt)*) => {
+        $crate::cli::stdout::write(format_args!($($t)*), true)
+    };
+}
+
+/// `print!` for the command line.
+macro_rules! say_text {
+    ($($t:tt)*) => {
+        $crate::cli::stdout::write(format_args!($($t)*), false)
+    };
+}
+
+/// Writes `args` (and a newline) unless an earlier write failed.
+pub fn write(args: std::fmt::Arguments, newline: bool) {
+    if STOPPED.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut out = std::io::stdout().lock();
+    let written = out.write_fmt(args).and_then(|()| match newline {
+        true => out.write_all(b"\n"),
+        false => Ok(()),
+    });
+    if let Err(e) = written {
+        stop(e);
+    }
+}
+
+fn stop(e: std::io::Error) {
+    STOPPED.store(true, Ordering::Relaxed);
+    if e.kind() != std::io::ErrorKind::BrokenPipe {
+        FAILED.lock().unwrap_or_else(|p| p.into_inner()).get_or_insert(e);
+    }
+}
+
+/// Ignores SIGPIPE from here on: a closed pipe then stops the printing, not
+/// the process, so a command whose product is a file still writes it.
+pub fn outlive_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: sets a disposition; no handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_IGN);
+    }
+}
+
+/// After the command: flushes, and an error naming standard output unless
+/// everything was written (a closed pipe excepted).
+pub fn finish() -> Result<()> {
+    if !STOPPED.load(Ordering::Relaxed) {
+        if let Err(e) = std::io::stdout().lock().flush() {
+            stop(e);
+        }
+    }
+    match FAILED.lock().unwrap_or_else(|p| p.into_inner()).take() {
+        Some(e) => Err(Error::io("standard output", e)),
+        None => Ok(()),
+    }
+}
