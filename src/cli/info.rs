@@ -4,7 +4,7 @@ use super::{context, tf_for, VolumeArgs};
 use clap::Args;
 use lacuna::error::number;
 use lacuna::volume::{BrickGrid, PoolLayout, Storage, BRICK, POOL_BRICK};
-use lacuna::{Result, TransferFunction};
+use lacuna::{Result, TransferFunction, Volume};
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -33,22 +33,10 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         v.dims[2],
         v.voxel_count()
     );
-    say!("type     {}", v.source_type);
     say!("spacing  {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
-    let d = v.no_data;
-    match d.total() == v.voxel_count() {
-        true => say!("values   none (every voxel is no data)"),
-        false => say!("values   {} .. {}", number(v.value_range[0]), number(v.value_range[1])),
-    }
-    if d.total() > 0 {
-        say!(
-            "no data  {} voxels ({:.3} %): {} NaN, {} +inf, {} -inf (transparent; ranges ignore them)",
-            d.total(),
-            100.0 * d.total() as f64 / v.voxel_count() as f64,
-            d.nan,
-            d.pos_inf,
-            d.neg_inf
-        );
+    let many = v.channel_count() > 1;
+    if !many {
+        describe_values(&v, "");
     }
     // What --storage (auto by default) resolves to on this device (the
     // pool's slot grid follows its 3D image limit); with dense, what bricks
@@ -77,35 +65,26 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         }
         Err(e) => say!("storage  not planned: {e}"),
     }
-    let mut bins = [0u64; 10];
-    for i in 0..v.data.len() {
-        let n = v.normalize(v.data.texel(i));
-        if !n.is_nan() {
-            bins[((n * 10.0) as usize).min(9)] += 1;
+    let total = v.voxel_count() as f64;
+    match many {
+        false => histogram(&v, ""),
+        true => {
+            for (c, channel) in v.channels().enumerate() {
+                say!("channel {} of {}: {}", c + 1, v.channel_count(), channel.name);
+                describe_values(channel, "  ");
+                histogram(channel, "  ");
+            }
         }
     }
-    let total = v.voxel_count() as f64;
-    say!("histogram of normalised values (10 bins, % of voxels):");
-    let cells: Vec<String> = bins
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            format!(
-                "[{:.1},{:.1}{} {:.2}",
-                i as f32 / 10.0,
-                (i + 1) as f32 / 10.0,
-                if i == 9 { "]" } else { ")" },
-                100.0 * *c as f64 / total
-            )
-        })
-        .collect();
-    for row in cells.chunks(5) {
-        say!("  {}", row.join("  "));
-    }
     if let Some(tf) = tf {
+        // Visible where any channel's transfer function shows its value.
         let visible = (0..v.data.len())
-            .map(|i| v.normalize(v.data.texel(i)))
-            .filter(|n| !n.is_nan() && tf.lookup(*n)[3] > 0.0)
+            .filter(|&i| {
+                v.channels().enumerate().any(|(c, ch)| {
+                    let n = ch.normalize(ch.data.texel(i));
+                    !n.is_nan() && tf.channel(c).lookup(n)[3] > 0.0
+                })
+            })
             .count();
         let grid = BrickGrid::new(&v, BRICK, lacuna::volume::APRON);
         let active = grid.active(&tf).iter().filter(|a| **a).count();
@@ -120,4 +99,58 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The type, value range and no-data counts of one channel, each line
+/// after `indent`.
+fn describe_values(v: &Volume, indent: &str) {
+    say!("{indent}type     {}", v.source_type);
+    let d = v.no_data;
+    match d.total() == v.voxel_count() {
+        true => say!("{indent}values   none (every voxel is no data)"),
+        false => say!(
+            "{indent}values   {} .. {}",
+            number(v.value_range[0]),
+            number(v.value_range[1])
+        ),
+    }
+    if d.total() > 0 {
+        say!(
+            "{indent}no data  {} voxels ({:.3} %): {} NaN, {} +inf, {} -inf (transparent; ranges ignore them)",
+            d.total(),
+            100.0 * d.total() as f64 / v.voxel_count() as f64,
+            d.nan,
+            d.pos_inf,
+            d.neg_inf
+        );
+    }
+}
+
+/// The histogram of one channel's normalised values, after `indent`.
+fn histogram(v: &Volume, indent: &str) {
+    let mut bins = [0u64; 10];
+    for i in 0..v.data.len() {
+        let n = v.normalize(v.data.texel(i));
+        if !n.is_nan() {
+            bins[((n * 10.0) as usize).min(9)] += 1;
+        }
+    }
+    let total = v.voxel_count() as f64;
+    say!("{indent}histogram of normalised values (10 bins, % of voxels):");
+    let cells: Vec<String> = bins
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            format!(
+                "[{:.1},{:.1}{} {:.2}",
+                i as f32 / 10.0,
+                (i + 1) as f32 / 10.0,
+                if i == 9 { "]" } else { ")" },
+                100.0 * *c as f64 / total
+            )
+        })
+        .collect();
+    for row in cells.chunks(5) {
+        say!("{indent}  {}", row.join("  "));
+    }
 }

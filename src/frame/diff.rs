@@ -11,7 +11,8 @@ use std::path::Path;
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct DiffStats {
     pub rmse: f64,
-    /// Peak signal 1.0; infinite for identical frames.
+    /// Peak signal 1.0; infinite for identical frames, minus infinity where
+    /// a channel is non-finite in one frame and differs.
     pub psnr: f64,
     pub max_abs: f64,
     /// Pixels where any channel differs (bitwise; NaN equals only itself).
@@ -25,8 +26,10 @@ impl std::fmt::Display for DiffStats {
             f,
             "rmse {:.6e}  psnr {}  max_abs {:.6e}  differing {} of {} pixels",
             self.rmse,
+            // +inf: identical; -inf: a non-finite difference (a NaN or an
+            // infinity against a number), the largest there is.
             if self.psnr.is_infinite() {
-                "inf dB".to_string()
+                format!("{} dB", self.psnr)
             } else {
                 format!("{:.2} dB", self.psnr)
             },
@@ -120,4 +123,22 @@ pub fn write_heatmap(a: &Frame, b: &Frame, path: &Path, scale: Option<f64>) -> R
         rgb.extend_from_slice(&px);
     }
     super::png::write_png8(path, a.width, a.height, ::png::ColorType::Rgb, &rgb, &[])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_non_finite_difference_is_the_worst_psnr_and_equal_frames_the_best() {
+        let zeros = Frame::new(2, 1, vec![[0.0; 4]; 2]);
+        for bad in [f32::NAN, f32::INFINITY] {
+            let other = Frame::new(2, 1, vec![[0.0; 4], [bad, 0.0, 0.0, 0.0]]);
+            let d = diff(&zeros, &other).unwrap();
+            assert_eq!((d.psnr, d.differing), (f64::NEG_INFINITY, 1), "{bad}");
+            assert!(d.to_string().contains("psnr -inf dB"), "{d}");
+        }
+        let d = diff(&zeros, &zeros).unwrap();
+        assert!(d.psnr == f64::INFINITY && d.to_string().contains("psnr inf dB"), "{d}");
+    }
 }

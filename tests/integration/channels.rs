@@ -327,3 +327,43 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
     std::fs::write(&path, &bad_bytes).unwrap();
     fails(&["info", path.to_str().unwrap()], &[], "time axis is not contiguous");
 }
+
+#[test]
+fn info_describes_every_channel_and_counts_visible_voxels_over_all_of_them() {
+    let line = |out: &str, key: &str| -> String {
+        out.lines()
+            .find(|l| l.trim_start().starts_with(key))
+            .unwrap_or_else(|| panic!("no {key} in {out}"))
+            .trim()
+            .to_string()
+    };
+    let alone: Vec<String> = ["vessels:16", "nbody:16"]
+        .iter()
+        .map(|v| common::lacuna(&["info", v], &[]).stdout)
+        .collect();
+    let run = common::lacuna(&["info", "vessels:16+nbody:16", "--tf", "ramp:0.3:1"], &[]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let blocks: Vec<&str> = run.stdout.split("channel ").skip(1).collect();
+    assert_eq!(blocks.len(), 2, "{}", run.stdout);
+    for (c, (block, alone)) in blocks.iter().zip(&alone).enumerate() {
+        assert!(block.starts_with(&format!("{} of 2:", c + 1)), "{block}");
+        for key in ["type", "values", "[0.0,0.1)"] {
+            assert_eq!(line(block, key), line(alone, key), "channel {}: {key}", c + 1);
+        }
+    }
+    // Visible where either channel is: at least as many as each alone.
+    let share = |out: &str| -> f64 { line(out, "visible").split_whitespace().nth(1).unwrap().parse().unwrap() };
+    let each: Vec<f64> = ["vessels:16", "nbody:16"]
+        .iter()
+        .map(|v| share(&common::lacuna(&["info", v, "--tf", "ramp:0.3:1"], &[]).stdout))
+        .collect();
+    let both = share(&run.stdout);
+    assert!(
+        both >= each[0].max(each[1]) && both <= each[0] + each[1],
+        "{both} against {each:?}"
+    );
+    assert!(
+        both > each[0].max(each[1]),
+        "nbody and vessels overlap entirely? {both} {each:?}"
+    );
+}
