@@ -299,6 +299,14 @@ impl BenchConfig {
     /// A config from TOML `text` read from `origin` (a path, or a built-in
     /// config's name), whose stem names the run when the config does not.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let c = Self::parse_unchecked(text, origin)?;
+        c.validate(origin)?;
+        Ok(c)
+    }
+
+    /// As `parse`, without the protocol's checks (`validate`): the command
+    /// line overrides fields first, then validates.
+    pub fn parse_unchecked(text: &str, origin: &str) -> Result<Self> {
         let mut c: BenchConfig = toml::from_str(text).map_err(|e| {
             // The place as a line and column, not the parser's drawing of it.
             let at = e.span().map_or(String::new(), |span| {
@@ -325,13 +333,19 @@ impl BenchConfig {
                 ),
             ));
         }
-        c.validate(origin)?;
         Ok(c)
     }
 
     pub fn load(path: &Path) -> Result<Self> {
+        let c = Self::load_unchecked(path)?;
+        c.validate(&path.display().to_string())?;
+        Ok(c)
+    }
+
+    /// As `load`, without `validate` (see `parse_unchecked`).
+    pub fn load_unchecked(path: &Path) -> Result<Self> {
         let text = crate::limits::read_input_text(path, "bench config", crate::limits::MAX_TEXT_INPUT)?;
-        Self::parse(&text, &path.display().to_string())
+        Self::parse_unchecked(&text, &path.display().to_string())
     }
 
     /// Checks the protocol; run again after command-line overrides.
@@ -390,6 +404,12 @@ impl BenchConfig {
         if !(self.step.is_finite() && self.step > 0.0) {
             return bad("step must be > 0");
         }
+        if !(-90.0..=90.0).contains(&self.elevation) {
+            return bad(&format!(
+                "elevation must be in [-90, 90] degrees, not {}",
+                self.elevation
+            ));
+        }
         self.timed_filter().map_err(|e| Error::format(origin, e.to_string()))?;
         if self.datasets.is_empty() || self.structures.is_empty() {
             return bad("needs at least one [[dataset]] and one [[structure]]");
@@ -400,7 +420,11 @@ impl BenchConfig {
         for d in &self.datasets {
             let label = d
                 .label(self)
-                .map_err(|e| Error::format(origin, format!("data set '{}': look: {e}", d.volume)))?;
+                .map_err(|e| Error::format(origin, format!("data set '{}': {e}", d.volume)))?;
+            if let Some(spec) = &d.tf {
+                crate::tf::TransferFunction::parse_channels(spec)
+                    .map_err(|e| Error::format(origin, format!("data set '{}': {e}", d.volume)))?;
+            }
             if !datasets.insert(label.clone()) {
                 return bad(&format!(
                     "data set '{label}' appears twice (data sets are told apart by volume, look, ert and storage, not by transfer function alone)"

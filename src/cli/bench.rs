@@ -137,11 +137,30 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             ExitCode::from(1)
         });
     }
-    let mut config = match (&args.config, args.quick, auto_suite) {
-        (Some(path), _, _) => BenchConfig::load(path)?,
-        (None, true, _) => BenchConfig::parse(bench::config::QUICK, "bench/quick.toml (built in)")?,
-        (None, _, true) => BenchConfig::parse(bench::config::AUTO, "bench/auto.toml (built in)")?,
-        (None, false, false) => BenchConfig::parse(bench::config::PAPER, "bench/paper.toml (built in)")?,
+    // Overridden, then validated: `--rounds 2` mends a file's `rounds = 1`.
+    let (mut config, origin) = match (&args.config, args.quick, auto_suite) {
+        (Some(path), _, _) => (BenchConfig::load_unchecked(path)?, path.display().to_string()),
+        (None, true, _) => {
+            let origin = "bench/quick.toml (built in)";
+            (
+                BenchConfig::parse_unchecked(bench::config::QUICK, origin)?,
+                origin.into(),
+            )
+        }
+        (None, _, true) => {
+            let origin = "bench/auto.toml (built in)";
+            (
+                BenchConfig::parse_unchecked(bench::config::AUTO, origin)?,
+                origin.into(),
+            )
+        }
+        (None, false, false) => {
+            let origin = "bench/paper.toml (built in)";
+            (
+                BenchConfig::parse_unchecked(bench::config::PAPER, origin)?,
+                origin.into(),
+            )
+        }
     };
     if let Some(f) = args.frames {
         config.frames = f;
@@ -165,7 +184,19 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if let Some(f) = args.filter {
         config.filter = Some(f.to_string());
     }
-    config.validate("the command line")?;
+    let overridden = [
+        args.frames.is_some(),
+        args.size.is_some(),
+        args.builds.is_some(),
+        args.warmup.is_some(),
+        args.rounds.is_some(),
+        args.ert.is_some(),
+        args.filter.is_some(),
+    ];
+    match overridden.contains(&true) {
+        true => config.validate(&format!("{origin} with the command line's overrides"))?,
+        false => config.validate(&origin)?,
+    }
     let out_dir = args
         .out
         .clone()
@@ -182,6 +213,12 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             recalibrate: args.model.recalibrate,
         },
     )?;
+    if output.records.is_empty() {
+        return Err(Error::format(
+            &origin,
+            "every data set was skipped (optional, and its file missing): nothing was measured",
+        ));
+    }
     // auto's contract, written with the run's other files.
     let contract = auto_suite.then(|| bench::contract::markdown(&bench::contract::verdicts(&output.records)));
     let extra: Vec<(&str, String)> = contract

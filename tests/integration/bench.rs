@@ -502,6 +502,21 @@ fn bad_bench_input_is_one_line() {
     let base = "name = \"x\"\nsize = [8, 8]\nframes = 1\nwarmup = 0\nbuilds = 1\nstep = 0.5\nelevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"\n[[structure]]\nlabel = \"a\"\naccel = \"grid\"\n[error]\nsteps = [1.0]\nert = [0.0]\nreference_step = 0.5\nframes = 1\naccel = \"grid\"\n";
     let faults = [
         (
+            "elevation",
+            ("elevation = 0.0", "elevation = inf"),
+            "elevation must be in [-90, 90] degrees, not inf",
+        ),
+        (
+            "tf",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\ntf = \"ramp:1:0\""),
+            "data set 'nbody:8': invalid transfer function 'ramp:1:0'",
+        ),
+        (
+            "storage",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\nstorage = \"bricks:0\""),
+            "data set 'nbody:8': invalid storage 'bricks:0'",
+        ),
+        (
             "escape",
             ("name = \"x\"", "name = \"../../escape\""),
             "must be a plain folder name",
@@ -613,6 +628,41 @@ fn bad_bench_input_is_one_line() {
         vec!["bench", "--quick", "--out", under_file.to_str().unwrap()],
         "a-file: exists and is not a folder",
     ));
+    // `--rounds 2` mends a file's `rounds = 1`: the run gets past the
+    // protocol's checks to the output folder.
+    let one_round = dir.path().join("one-round.toml");
+    std::fs::write(&one_round, format!("rounds = 1\n{base}")).unwrap();
+    cases.push((
+        vec!["bench", one_round.to_str().unwrap()],
+        "one-round.toml: rounds must be at least 2",
+    ));
+    cases.push((
+        vec![
+            "bench",
+            one_round.to_str().unwrap(),
+            "--rounds",
+            "2",
+            "--out",
+            under_file.to_str().unwrap(),
+        ],
+        "a-file: exists and is not a folder",
+    ));
+    cases.push((
+        vec!["bench", "--quick", "--rounds", "1"],
+        "bench/quick.toml (built in) with the command line's overrides: rounds must be at least 2",
+    ));
+    // Nothing measured is no result: every data set optional and missing.
+    let none = dir.path().join("none.toml");
+    std::fs::write(
+        &none,
+        base.split("[error]").next().unwrap().replacen(
+            "volume = \"nbody:8\"",
+            "volume = \"/no/such/v.nii\"\noptional = true",
+            1,
+        ),
+    )
+    .unwrap();
+    let none_out = dir.path().join("none-out");
     for (path, needle) in &fault_cases {
         cases.push((vec!["bench", path.to_str().unwrap()], needle));
     }
@@ -622,6 +672,18 @@ fn bad_bench_input_is_one_line() {
         assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
         assert!(stderr.contains(needle), "{args:?}: {stderr}");
     }
+    // The skipped data set's note, then one error.
+    let (code, _, stderr) = lacuna(&["bench", none.to_str().unwrap(), "--out", none_out.to_str().unwrap()]);
+    let last = stderr.trim().lines().last().unwrap_or_default();
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        last.starts_with("error: ") && last.contains("none.toml: every data set was skipped"),
+        "{stderr}"
+    );
+    assert!(
+        !none_out.join("results.json").exists(),
+        "results of nothing were written"
+    );
 }
 
 #[test]
