@@ -402,6 +402,8 @@ fn volume_spec_errors() {
         ("menger:8:x", "not a number"),
         ("nbody:8:-1", "seed"),
         ("nbody:8:1e20", "the seed must be an integer from 0 to 2^53"),
+        // Echoed as the number read, not a rounded integer like the one given.
+        ("nbody:8:18446744073709551615", "'nbody:1.8446744073709552e19'"),
         ("", "is empty"),
         ("no/such/file.raw", "No such file"),
         ("volume.xyz", "No such file"),

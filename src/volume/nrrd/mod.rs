@@ -321,7 +321,10 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         if !(size.fract() == 0.0 && (1.0..=u32::MAX as f64).contains(&size)) {
             return Err(Error::format(
                 path,
-                format!("NRRD size '{size}' is not a positive 32-bit integer"),
+                format!(
+                    "NRRD size '{}' is not a positive 32-bit integer",
+                    crate::error::number(size)
+                ),
             ));
         }
     }

@@ -122,7 +122,9 @@ impl Generator {
         let bad = |why: &str| {
             Error::invalid(
                 "generator parameter",
-                format!("{}:{}", self.name(), param.unwrap_or(0.0)),
+                // Past 1e15 in exponent form: the f64 read, not a rounded
+                // integer that looks like the one given.
+                format!("{}:{}", self.name(), crate::error::number(param.unwrap_or(0.0))),
                 why.to_string(),
             )
         };
