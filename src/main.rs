@@ -1,6 +1,7 @@
 //! The `lacuna` command line: parses the arguments and dispatches to the
 //! command's module in `cli/`; every command is a thin layer over the library.
 
+#[macro_use]
 mod cli;
 
 use clap::{Parser, Subcommand};
@@ -84,7 +85,7 @@ fn main() -> ExitCode {
                 line = format!("{line} {}", listed.join(", "));
             }
             if echo {
-                eprintln!("{}", line.trim_end());
+                say_err!("{}", line.trim_end());
             }
             return ExitCode::from(2);
         }
@@ -115,7 +116,7 @@ fn main() -> ExitCode {
             if echo {
                 // One line whatever a path or value held (a newline in a
                 // file name would start a second).
-                eprintln!("error: {}", lacuna::error::one_line(e.to_string()));
+                say_err!("error: {}", lacuna::error::one_line(e.to_string()));
             }
             ExitCode::from(2)
         }

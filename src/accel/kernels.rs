@@ -79,12 +79,25 @@ impl MarchKernels {
         })
     }
 
-    fn create(&self, march: March, frame: KernelConstants, probe: ProbeConstants) -> Result<Kernel> {
+    /// The workgroup size `get` would give the kernel, read from its SPIR-V
+    /// without creating it (every output variant shares it).
+    pub(crate) fn local_size(&self, march: March, frame: KernelConstants) -> [u32; 3] {
+        march
+            .shader
+            .local_size_for(&self.constants(march, frame, ProbeConstants::PLAIN))
+    }
+
+    fn constants(&self, march: March, frame: KernelConstants, probe: ProbeConstants) -> Vec<(u32, u32)> {
         let mut constants: Vec<(u32, u32)> = (0..).zip(march.constants.iter().copied()).collect();
         constants.extend(frame);
         constants.push((COUNT_CONSTANT_ID, probe.count as u32));
         constants.push((TILE_STRIDE_CONSTANT_ID, probe.tile_stride));
         constants.push((LOOP_CHECK_CONSTANT_ID, self.ctx.info().loop_pass_limit.is_some() as u32));
+        constants
+    }
+
+    fn create(&self, march: March, frame: KernelConstants, probe: ProbeConstants) -> Result<Kernel> {
+        let constants = self.constants(march, frame, probe);
         let shader = march.shader;
         // SAFETY: the structure's constants are its `Method`'s (an unsafe
         // trait: `march` names them for this shader), the frame's come from

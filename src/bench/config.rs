@@ -421,7 +421,9 @@ impl BenchConfig {
             let label = d
                 .label(self)
                 .map_err(|e| Error::format(origin, format!("data set '{}': {e}", d.volume)))?;
-            if let Some(spec) = &d.tf {
+            // An optional data set's transfer function file may be missing
+            // with its volume: checked where the volume loads.
+            if let Some(spec) = d.tf.as_ref().filter(|_| !d.optional) {
                 crate::tf::TransferFunction::parse_channels(spec)
                     .map_err(|e| Error::format(origin, format!("data set '{}': {e}", d.volume)))?;
             }

@@ -70,10 +70,22 @@ pub struct Warmup {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ImageError {
     pub rmse: f64,
-    /// Infinite psnr is written as null.
+    /// Infinite psnr is written as null: +inf where nothing differs, -inf
+    /// where something does (a non-finite difference).
     pub psnr: Option<f64>,
     pub max_abs: f64,
     pub differing: u64,
+}
+
+impl ImageError {
+    /// The psnr with `decimals`, or `inf` (identical) / `-inf`.
+    pub fn psnr_text(&self, decimals: usize) -> String {
+        match self.psnr {
+            Some(v) => format!("{v:.decimals$}"),
+            None if self.differing > 0 => "-inf".into(),
+            None => "inf".into(),
+        }
+    }
 }
 
 impl From<crate::frame::DiffStats> for ImageError {
@@ -169,4 +181,28 @@ pub struct ErrorPoint {
     pub frame: FrameTimes,
     pub reference_step: f32,
     pub error: ImageError,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn psnr_reads_inf_only_where_nothing_differs() {
+        let error = |psnr, differing| ImageError {
+            rmse: 0.0,
+            psnr,
+            max_abs: 0.0,
+            differing,
+        };
+        assert_eq!(error(None, 0).psnr_text(2), "inf");
+        assert_eq!(error(None, 3).psnr_text(2), "-inf");
+        assert_eq!(error(Some(41.234), 3).psnr_text(2), "41.23");
+        let from = |a: f32| {
+            let zeros = crate::frame::Frame::new(1, 1, vec![[0.0; 4]]);
+            let other = crate::frame::Frame::new(1, 1, vec![[a, 0.0, 0.0, 0.0]]);
+            ImageError::from(crate::frame::diff(&zeros, &other).unwrap()).psnr_text(1)
+        };
+        assert_eq!((from(f32::NAN), from(0.0)), ("-inf".to_string(), "inf".to_string()));
+    }
 }

@@ -217,7 +217,7 @@ pub fn errors_md(points: &[ErrorPoint]) -> String {
             p.ert.map_or("off".into(), |e| e.to_string()),
             p.frame.median_ms,
             p.error.rmse,
-            p.error.psnr.map_or("inf".into(), |v| format!("{v:.2}")),
+            p.error.psnr_text(2),
             p.error.max_abs
         );
     }
@@ -243,7 +243,7 @@ pub fn errors_csv(points: &[ErrorPoint]) -> String {
             p.frame.max_ms,
             p.reference_step,
             p.error.rmse,
-            p.error.psnr.map_or("inf".into(), |v| format!("{v:.3}")),
+            p.error.psnr_text(3),
             p.error.max_abs
         );
     }

@@ -105,7 +105,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         let progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
         let outcomes = bench::hard::run(&ctx, &only, |case| {
             if progress {
-                eprintln!("hard case: {case}");
+                say_err!("hard case: {case}");
             }
         })?;
         say!("device {} ({})", ctx.info().name, ctx.info().driver);

@@ -46,7 +46,7 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
     }
     if let Some(m) = args.max_abs {
         if stats.max_abs > m {
-            eprintln!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
+            say_err!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
             return Ok(ExitCode::from(1));
         }
     }

@@ -14,8 +14,8 @@ pub struct ExportArgs {
     volume: String,
     /// Output: a stem (_WxHxD_TYPE.raw is appended) or the Open SciVis name NAME_WxHxD_TYPE.raw.
     out: PathBuf,
-    /// Voxel type written: uint8, uint16 or float32 (default: the source type if it is one of them,
-    /// else the smallest that holds every value).
+    /// Voxel type written: uint8, uint16 or float32 (default: the source type if it is one of them
+    /// and holds every value, else the smallest that does).
     #[arg(long = "type", value_name = "TYPE", value_parser = parse_export_type)]
     ty: Option<VoxelType>,
     /// Dimensions of a raw input file whose name does not give them (WxHxD).
@@ -42,7 +42,7 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     say!("{}", written.path.display());
     let [sx, sy, sz] = volume.spacing;
     if volume.spacing != [1.0; 3] {
-        eprintln!(
+        say_err!(
             "note: the spacing {sx} x {sy} x {sz} is not stored in a raw file; lacuna's raw loader has no spacing \
              option and reads 1 x 1 x 1 (in ParaView set the reader's Data Spacing to {sx} {sy} {sz})"
         );

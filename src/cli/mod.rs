@@ -90,9 +90,9 @@ pub fn validation_verdict(ctx: &Context) -> ExitCode {
         return ExitCode::SUCCESS;
     }
     for m in &messages {
-        eprintln!("validation: {m}");
+        say_err!("validation: {m}");
     }
-    eprintln!("error: {} Vulkan validation message(s)", messages.len());
+    say_err!("error: {} Vulkan validation message(s)", messages.len());
     ExitCode::from(1)
 }
 

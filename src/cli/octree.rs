@@ -146,9 +146,13 @@ pub fn run(args: &OctreeArgs) -> Result<ExitCode> {
                     say!("rays whose hit differs between traversals: {}", row.disagreements);
                 }
             } else {
-                eprintln!(
+                say_err!(
                     "{} {}{}: T_B {:.3} s, hit disagreements {}",
-                    row.scene, row.mode, row.max_depth, row.build.build_s, row.disagreements
+                    row.scene,
+                    row.mode,
+                    row.max_depth,
+                    row.build.build_s,
+                    row.disagreements
                 );
             }
             if let (Some(path), Some(format), Some(frame)) = (&args.out, format, image) {

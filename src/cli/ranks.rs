@@ -89,7 +89,7 @@ fn composited_how(mode: &Mode, order: &[u32]) -> String {
 fn fail(world: &World, first: Option<u32>, outcome: Result<()>) -> Result<ExitCode> {
     if let (Some(r), Err(e)) = (first, outcome) {
         if r == world.rank {
-            eprintln!("error: {e} (rank {} of {})", world.rank, world.size);
+            say_err!("error: {e} (rank {} of {})", world.rank, world.size);
         }
     }
     world.barrier();

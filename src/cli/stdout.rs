@@ -2,7 +2,8 @@
 //! panics, as `println!` does: a closed pipe stops the printing quietly
 //! (where SIGPIPE is ignored: `render --out` ignores it so its frame is
 //! still written), and any other error (a full disk) is kept and reported
-//! by `finish` once the command is done.
+//! by `finish` once the command is done. Standard error's lines (`say_err!`)
+//! are dropped where they cannot be written.
 
 use lacuna::{Error, Result};
 use std::io::Write;
@@ -20,6 +21,15 @@ macro_rules! say {
     ($($t:tt)*) => {
         $crate::cli::stdout::write(format_args!($($t)*), true)
     };
+}
+
+/// `eprintln!` for the command line: a line standard error cannot take
+/// (a closed pipe, where SIGPIPE is ignored) is dropped, not a panic.
+macro_rules! say_err {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
 }
 
 /// `print!` for the command line.

@@ -36,6 +36,8 @@ impl fmt::Display for ValidationMessage {
 pub(crate) struct Messages {
     kept: Vec<ValidationMessage>,
     dropped: u64,
+    /// Whether an error was among the dropped.
+    dropped_error: bool,
 }
 
 /// How many messages are kept until taken.
@@ -45,7 +47,10 @@ impl Messages {
     fn push(&mut self, message: ValidationMessage) {
         match self.kept.len() < MAX_KEPT {
             true => self.kept.push(message),
-            false => self.dropped += 1,
+            false => {
+                self.dropped += 1;
+                self.dropped_error |= message.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR);
+            }
         }
     }
 
@@ -54,7 +59,10 @@ impl Messages {
         let mut list = self.kept.clone();
         if self.dropped > 0 {
             list.push(ValidationMessage {
-                severity: vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                severity: match self.dropped_error {
+                    true => vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                    false => vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                },
                 id: "lacuna-messages-dropped".into(),
                 text: format!(
                     "{} more validation messages were dropped: lacuna keeps the first {MAX_KEPT} until they are taken",
@@ -168,6 +176,8 @@ mod tests {
             "{}",
             list[MAX_KEPT]
         );
+        // The dropped were errors: so is the message that counts them.
+        assert!(list[MAX_KEPT].to_string().starts_with("[error]"), "{}", list[MAX_KEPT]);
         assert_eq!(store.take().len(), MAX_KEPT + 1);
         assert!(store.take().is_empty());
         store.push(message(7));

@@ -88,6 +88,13 @@ impl Renderer {
         self.output_kernel(march, desc, volume, None, desc.writes_depth())
     }
 
+    /// The march kernel's workgroup size for frames of `desc`, without
+    /// creating the kernel (bands are cut by it).
+    fn local_size(&self, scene: Scene, desc: &FrameDesc) -> [u32; 3] {
+        let constants = crate::desc::with_depth_out(desc.kernel_constants(scene.volume), desc.writes_depth());
+        self.kernels.local_size(scene.structure.march(), constants)
+    }
+
     /// Creates now the kernel that `record` of `scene` and `desc` to an
     /// output like `output` (its kind and host image format) would create
     /// on first use: a host warms a new look before its frame loop, so the
@@ -175,9 +182,9 @@ impl Renderer {
     /// samples gives bands of one row each, over the budget.
     pub fn bands(&self, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<Vec<Band>> {
         let (_, height) = desc.size();
-        let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
-        let rows = band_rows(&kernel, scene, desc, max_samples)?;
-        let local = kernel.local_size()[1];
+        let local = self.local_size(scene, desc);
+        let rows = band_rows(self.ctx.info(), local, scene, desc, max_samples)?;
+        let local = local[1];
         let groups = height.div_ceil(local);
         Ok((0..groups)
             .step_by(rows as usize)
@@ -204,7 +211,7 @@ impl Renderer {
         output: Output,
         band: Band,
     ) -> Result<()> {
-        let local = self.kernel(scene.structure.march(), desc, scene.volume)?.local_size()[1];
+        let local = self.local_size(scene, desc)[1];
         let (_, height) = desc.size();
         let end = band.first_row.checked_add(band.rows).filter(|&e| e <= height);
         if !band.first_row.is_multiple_of(local) || band.rows == 0 || end.is_none() {
@@ -468,7 +475,7 @@ impl Renderer {
         let with_depth = desc.writes_depth();
         let kernel = self.kernel(scene.structure.march(), desc, scene.volume)?;
         let groups = kernel.groups("frame", [target.width, target.height, 1])?;
-        let rows_per_band = band_rows(&kernel, scene, desc, max_samples)?;
+        let rows_per_band = band_rows(self.ctx.info(), kernel.local_size(), scene, desc, max_samples)?;
         let mut timings = Timings::default();
         let mut first = 0;
         let mut bands = 0u32;
@@ -511,14 +518,20 @@ impl Renderer {
     }
 }
 
-/// Workgroup rows per band of at most `max_samples` samples, for `kernel`
-/// marching `desc`.
-fn band_rows(kernel: &Kernel, scene: Scene, desc: &FrameDesc, max_samples: u64) -> Result<u32> {
+/// Workgroup rows per band of at most `max_samples` samples, for a kernel
+/// of workgroup size `local` marching `desc`.
+fn band_rows(
+    info: &crate::gpu::DeviceInfo,
+    local: [u32; 3],
+    scene: Scene,
+    desc: &FrameDesc,
+    max_samples: u64,
+) -> Result<u32> {
     let (width, height) = desc.size();
     let per_ray = crate::limits::check_samples_per_ray(scene.volume.dims, desc.step())?;
-    let groups = kernel.groups("frame", [width, height, 1])?;
+    let groups = crate::gpu::record::groups_for(info, "frame", [width, height, 1], local)?;
     // Rays in one row of workgroups; at least one row per band.
-    let row_rays = width as u64 * kernel.local_size()[1] as u64;
+    let row_rays = width as u64 * local[1] as u64;
     Ok((max_samples / per_ray.max(1) / row_rays.max(1)).clamp(1, groups[1] as u64) as u32)
 }
 

@@ -74,7 +74,6 @@ pub(super) fn words<const N: usize>(bytes: &[u8], little: bool) -> impl Iterator
     })
 }
 
-/// A signed byte shifted into the unsigned range, so it stays native.
 /// Negates raw voxels of `ty` in place, within their type: the bitwise
 /// complement of an integer (`MAX - x` unsigned, `-1 - x` signed), the
 /// sign of a float (NaN stays NaN). A NIfTI's negative `scl_slope` is then
@@ -91,6 +90,7 @@ pub(super) fn negate_raw(bytes: &mut [u8], ty: VoxelType, little: bool) {
     }
 }
 
+/// A signed byte shifted into the unsigned range, so it stays native.
 pub(super) fn shifted_i8(b: u8) -> u8 {
     (b as i8 as i16 + 128) as u8
 }

@@ -60,7 +60,7 @@ impl<'a> SourceValues<'a> {
             4 => span.abs() * (-24f64).exp2() * if halves { 2.0 } else { 1.0 },
             _ => 0.0,
         };
-        SourceValues {
+        let mut values = SourceValues {
             data: &volume.data,
             dims: volume.dims,
             stored_min: smin,
@@ -68,13 +68,18 @@ impl<'a> SourceValues<'a> {
             scale,
             halves,
             source_type: volume.source_type,
-            // Integer sources stay integers unless scaled (a NIfTI's
-            // scl_slope / scl_inter) by a fraction.
-            integer: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64)
-                && lo.fract() == 0.0
-                && scale.fract() == 0.0,
+            integer: false,
             tolerance,
-        }
+        };
+        // Integer sources stay integers unless scaled by a fraction (a
+        // NIfTI's scl_slope / scl_inter): told from the values themselves,
+        // as wider integer types are stored normalised.
+        values.integer = !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64)
+            && (0..values.len()).all(|i| {
+                let v = values.get(i);
+                (v - v.round()).abs() <= tolerance
+            });
+        values
     }
 
     pub fn len(&self) -> usize {

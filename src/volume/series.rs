@@ -18,7 +18,7 @@ use super::procedural::{self, Generator};
 use super::spec::is_nifti;
 use super::spec::{is_nrrd, LoadOptions, VolumeSpec};
 use super::{PoolLimits, Storage, StreamProgress, StreamTo, Volume, VoxelType, POOL_BRICK};
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::gpu::DeviceInfo;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -46,6 +46,25 @@ pub struct StepNorm {
     /// Step 0's range in source units: float texels are stored normalised
     /// to their own step's range, and are mapped back onto this one.
     range: [f64; 2],
+    /// How step 0's integer texels map to source units (`source_affine`),
+    /// which every integer step must share: `norm` is applied to them as
+    /// they are.
+    affine: Option<[f64; 2]>,
+}
+
+/// `[k, c]` with source value = k x stored + c for a volume of integer
+/// texels (a scaled NIfTI's slope and intercept, int8's shift); None for
+/// float texels or a volume of one stored value (no slope to tell).
+fn source_affine(v: &Volume) -> Option<[f64; 2]> {
+    if v.data.texel_bytes() == 4 {
+        return None;
+    }
+    let (smin, smax) = v.data.stored_range();
+    let [lo, hi] = v.value_range;
+    (smax > smin).then(|| {
+        let k = (hi - lo) / (smax - smin);
+        [k, lo - smin * k]
+    })
 }
 
 enum Source {
@@ -308,6 +327,7 @@ impl StepNorm {
             // One unit above, or as far above as |lo| where a unit is
             // lost to rounding (|lo| past 2^53).
             range: [lo, if hi > lo { hi } else { lo + lo.abs().max(1.0) }],
+            affine: source_affine(v),
         }
     }
 
@@ -327,6 +347,21 @@ impl StepNorm {
                     step.source_type, self.ty
                 ),
             ));
+        }
+        if let (Some(a0), Some(a)) = (self.affine, source_affine(step)) {
+            let near = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0);
+            if !(near(a[0], a0[0]) && near(a[1], a0[1])) {
+                let show = |[k, c]: [f64; 2]| format!("{} x stored + {}", number(k), number(c));
+                return Err(Error::invalid(
+                    "time step",
+                    what.to_string(),
+                    format!(
+                        "its values are {} where step 0's are {}: the steps of a series of integer voxels share one scaling (a NIfTI's scl_slope and scl_inter)",
+                        show(a),
+                        show(a0)
+                    ),
+                ));
+            }
         }
         step.norm = self.norm_for(step);
         // A subnormal step in a series spanning f64 maps onto step 0's

@@ -657,7 +657,7 @@ fn bad_bench_input_is_one_line() {
         &none,
         base.split("[error]").next().unwrap().replacen(
             "volume = \"nbody:8\"",
-            "volume = \"/no/such/v.nii\"\noptional = true",
+            "volume = \"/no/such/v.nii\"\noptional = true\ntf = \"/no/such/tf.json\"",
             1,
         ),
     )

@@ -502,6 +502,9 @@ fn scaled_nifti_voxels_load_render_and_export_as_slope_times_raw_plus_intercept(
         (VoxelType::U8, 2, values(0.0, 1.0), 0.5, 0.0, VoxelType::F32),
         (VoxelType::I16, 4, values(-1200.0, 31.0), -2.0, 5.0, VoxelType::F32),
         (VoxelType::F32, 16, floats.clone(), -0.5, 1.0, VoxelType::F32),
+        // Stored normalised as f32: halves over an even range are still halves.
+        (VoxelType::I32, 8, values(-100.0, 1.0), 0.5, 0.0, VoxelType::F32),
+        (VoxelType::U32, 768, values(0.0, 1.0), 0.5, 0.0, VoxelType::F32),
     ]
     .into_iter()
     .enumerate()
@@ -538,7 +541,7 @@ fn scaled_nifti_voxels_load_render_and_export_as_slope_times_raw_plus_intercept(
         assert_eq!(w.ty, want, "{name}");
         for (i, (g, s)) in file_values(&w.path, want).iter().zip(&scaled).enumerate() {
             let tol = match ty {
-                VoxelType::F32 => span * 2f64.powi(-24) + s.abs() * 2f64.powi(-23),
+                VoxelType::F32 | VoxelType::I32 | VoxelType::U32 => span * 2f64.powi(-24) + s.abs() * 2f64.powi(-23),
                 _ => 0.0,
             };
             assert!((g - s).abs() <= tol, "{name}: voxel {i} exported {g}, want {s}");

@@ -275,6 +275,27 @@ fn hostile_files_are_one_line_errors() {
     )
     .unwrap();
     fails(dir.path(), &["info", &p("list.nhdr")], false, &["'data file: LIST'"]);
+    // A file whose name starts so is a file.
+    std::fs::write(p("LISTING.raw"), [7u8; 64]).unwrap();
+    std::fs::write(
+        p("listing.nhdr"),
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: LISTING.raw\n",
+    )
+    .unwrap();
+    let (code, stderr) = run(&["info", &p("listing.nhdr")]);
+    assert_eq!(code, Some(0), "{stderr}");
+    // Text encodings need no byte order: the encoding is what is named.
+    std::fs::write(
+        p("ascii.nrrd"),
+        "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2 2\nencoding: ascii\n\n1 2 3 4 5 6 7 8\n",
+    )
+    .unwrap();
+    fails(
+        dir.path(),
+        &["info", &p("ascii.nrrd")],
+        false,
+        &["NRRD encoding 'ascii' is not supported"],
+    );
     // Multi-byte voxels without a byte order: refused, not guessed.
     let mut bytes = b"NRRD0004\ntype: short\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n".to_vec();
     bytes.extend([0u8; 128]);
@@ -383,6 +404,24 @@ fn render_writes_its_frame_after_the_reader_of_its_output_has_gone() {
     assert!(run.status.success() && stderr.is_empty(), "{:?}: {stderr}", run.status);
     let frame = lacuna::frame::Frame::read_exr(&out).unwrap();
     assert!(frame.pixels.iter().any(|p| p[3] > 0.0), "an empty frame");
+    // Its error line with both pipes closed: dropped, and exit code 2, not
+    // a panic.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
+        .args([
+            "render",
+            "no_such_4x4x4_uint8.raw",
+            "--size",
+            "8x8",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    assert_eq!(child.wait().unwrap().code(), Some(2));
 }
 
 #[cfg(target_os = "linux")]

@@ -323,6 +323,10 @@ fn prepare_makes_the_kernel_a_host_image_frame_records_so_recording_compiles_not
             let like = unsafe { HostImage::new(vk::ImageView::null(), format, vk::ImageLayout::GENERAL, SIZE, SIZE) };
             f.renderer.prepare(f.scene(i), &view, Output::Image(like)).unwrap();
             let made = f.ctx.kernels_created();
+            // Cutting a frame into bands reads the kernel's workgroup size
+            // without creating a kernel.
+            let bands = f.renderer.bands(f.scene(i), &view, 1).unwrap();
+            assert_eq!(bands.len(), SIZE.div_ceil(8) as usize, "one workgroup row a band");
             let pixels = render_to_image(&f, i, &view, format, texel);
             assert!(
                 pixels.iter().any(|&b| b != 0),

@@ -225,6 +225,39 @@ fn steps_on_different_grids_are_refused_by_name() {
 }
 
 #[test]
+fn integer_steps_share_step_0s_scaling_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data: Vec<u8> = (0..64u8).map(|i| i * 3).collect();
+    let scaled = |slope: f32, inter: f32| {
+        let mut b = nifti_bytes(&[4, 4, 4], 2, 8, [1.0; 3], &data);
+        b[112..116].copy_from_slice(&slope.to_le_bytes());
+        b[116..120].copy_from_slice(&inter.to_le_bytes());
+        b
+    };
+    for (name, slope, inter) in [("same", 2.0, 1.0), ("half", 0.5, 0.0), ("negative", -1.0, 0.0)] {
+        std::fs::write(dir.path().join(format!("{name}0.nii")), scaled(2.0, 1.0)).unwrap();
+        std::fs::write(dir.path().join(format!("{name}1.nii")), scaled(slope, inter)).unwrap();
+        let series = open(dir.path().join(format!("{name}%d.nii")).to_str().unwrap());
+        let (step0, step1) = (series.load(0, None).unwrap(), series.load(1, None));
+        match name {
+            // The same values, the same normalised texels.
+            "same" => {
+                let step1 = step1.unwrap();
+                let norm = |v: &Volume, i: usize| v.normalize(v.data.texel(i));
+                assert!((0..64).all(|i| norm(&step1, i) == norm(&step0, i)), "{name}");
+            }
+            _ => {
+                let err = step1.unwrap_err().to_string();
+                assert!(
+                    err.contains("where step 0's are 2 x stored + 1") && err.contains("share one scaling"),
+                    "{name}: {err}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn a_nifti_time_axis_loads_one_step_at_a_time() {
     let dir = tempfile::tempdir().unwrap();
     let dims = [3u32, 2, 2];

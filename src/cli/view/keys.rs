@@ -35,7 +35,7 @@ impl Viewer {
         };
         let change = self.controls.key(name, shift);
         if let Some(why) = change.ignored {
-            eprintln!("note: key {name}: {why}");
+            say_err!("note: key {name}: {why}");
         }
         // A look this volume cannot show is skipped: the key is pressed
         // again (the mode key's next mode; a toggle's way back).
@@ -51,7 +51,7 @@ impl Viewer {
             self.controls.key(name, shift);
         }
         if let Some(e) = refused {
-            eprintln!("note: look skipped: {e}");
+            say_err!("note: look skipped: {e}");
         }
         if self.look_fits().is_err() {
             self.controls.look = look;
@@ -90,7 +90,7 @@ impl Viewer {
             match TransferFunction::parse_channels(&self.controls.tf_spec()) {
                 Ok(tf) => self.scene.set_tf(tf)?,
                 Err(e) => {
-                    eprintln!("note: transfer function not changed: {e}");
+                    say_err!("note: transfer function not changed: {e}");
                     (self.controls.presets, self.controls.preset) = before;
                 }
             }

@@ -14,60 +14,9 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 mod bricks;
+mod fields;
 pub use bricks::load_step_bricks;
-
-fn nrrd_type(s: &str) -> Option<VoxelType> {
-    Some(match s {
-        "uchar" | "unsigned char" | "uint8" | "uint8_t" => VoxelType::U8,
-        "signed char" | "int8" | "int8_t" => VoxelType::I8,
-        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => VoxelType::U16,
-        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => VoxelType::I16,
-        "uint" | "unsigned int" | "uint32" | "uint32_t" => VoxelType::U32,
-        "int" | "signed int" | "int32" | "int32_t" => VoxelType::I32,
-        "float" => VoxelType::F32,
-        "double" => VoxelType::F64,
-        _ => return None,
-    })
-}
-
-fn numbers(path: &Path, field: &str, value: &str) -> Result<Vec<f64>> {
-    value
-        .split_whitespace()
-        .map(|t| {
-            t.parse::<f64>()
-                .map_err(|_| Error::format(path, format!("NRRD field '{field}': '{t}' is not a number")))
-        })
-        .collect()
-}
-
-/// Lengths of the vectors in `space directions: (a,b,c) (d,e,f) (g,h,i)`.
-fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
-    let bad = |what: &str| Error::format(path, format!("NRRD space directions: bad vector '{what}'"));
-    let mut out = Vec::new();
-    let mut rest = value.trim_start();
-    // Each axis is `none` (a non-spatial axis, anywhere: Slicer writes a
-    // vector axis first) or a parenthesised vector.
-    while !rest.is_empty() {
-        if let Some(after) = rest.strip_prefix("none") {
-            rest = after.trim_start();
-            continue;
-        }
-        let Some(open) = rest.strip_prefix('(') else {
-            return Err(bad(rest.split_whitespace().next().unwrap_or(rest)));
-        };
-        let Some(close) = open.find(')') else {
-            return Err(bad(rest));
-        };
-        let inner = &open[..close];
-        let comps: Result<Vec<f64>> = inner
-            .split(',')
-            .map(|t| t.trim().parse::<f64>().map_err(|_| bad(&format!("({inner})"))))
-            .collect();
-        out.push(comps?.iter().map(|c| c * c).sum::<f64>().sqrt());
-        rest = open[close + 1..].trim_start();
-    }
-    Ok(out)
-}
+use fields::{direction_lengths, is_list, nrrd_type, numbers};
 
 pub fn load(path: &Path, device: Option<&DeviceInfo>) -> Result<Volume> {
     load_step(path, 0, device)
@@ -294,7 +243,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         // "datafile") are one field; each may be given once.
         let name = k.trim().to_lowercase();
         // The lines after it name the files, so it is refused here, by name.
-        if field_key(&name) == field_key("data file") && v.trim().starts_with("LIST") {
+        if field_key(&name) == field_key("data file") && is_list(v.trim()) {
             return Err(Error::format(
                 path,
                 "NRRD 'data file: LIST' (data split over listed files) is not supported: join them into one file",
@@ -333,7 +282,8 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
     let little = match get("endian") {
         // Multi-byte voxels are read in the byte order the file states, as
         // teem requires; a guess would read a big-endian file as noise.
-        None if ty.bytes() > 1 => {
+        // (An encoding lacuna does not read is named below instead.)
+        None if ty.bytes() > 1 && matches!(get("encoding"), Some("raw" | "gzip" | "gz")) => {
             return Err(Error::format(
                 path,
                 format!("NRRD header has no 'endian' field, which {ty} voxels need (little or big)"),
@@ -413,7 +363,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
                     format!("NRRD data file '{name}' is detached; load the header from its path"),
                 ));
             }
-            if name.starts_with("LIST") || name.contains('%') {
+            if is_list(name) || name.contains('%') {
                 return Err(Error::format(
                     path,
                     "NRRD multi-file data ('LIST' or format patterns) is not supported",
