@@ -1,7 +1,7 @@
 //! A bench data set loaded: its volume (step FIRST of a series) and its
 //! transfer function, one per channel.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::DeviceInfo;
 use crate::tf::TransferFunction;
 use crate::volume::{Series, Storage};
@@ -24,7 +24,10 @@ pub fn load(
 ) -> Result<Loaded> {
     let volume = series.load_stored(time.map_or(0, |[first, _]| first), storage, device, None)?;
     let tf = match tf {
-        Some(spec) => TransferFunction::parse_channels(spec)?,
+        // Not an Io error: `optional` skips a missing volume, not a
+        // missing transfer function file.
+        Some(spec) => TransferFunction::parse_channels(spec)
+            .map_err(|e| Error::invalid("transfer function", spec, e.to_string()))?,
         None => volume.default_transfer_function()?,
     };
     tf.check_channels(volume.channel_count())?;

@@ -2,7 +2,7 @@
 //! Hidden with `--quiet` or when stderr is not a terminal.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 
 pub struct Progress {
     bar: ProgressBar,
@@ -37,7 +37,8 @@ impl Progress {
     /// Prints a line above the bar (or plainly when hidden).
     pub fn note(&self, line: &str) {
         if self.bar.is_hidden() {
-            eprintln!("{line}");
+            // Dropped where stderr cannot take it, never a panic.
+            let _ = writeln!(std::io::stderr(), "{line}");
         } else {
             self.bar.println(line);
         }

@@ -82,8 +82,9 @@ impl ImageError {
     pub fn psnr_text(&self, decimals: usize) -> String {
         match self.psnr {
             Some(v) => format!("{v:.decimals$}"),
-            None if self.differing > 0 => "-inf".into(),
-            None => "inf".into(),
+            // +0 against -0 differs bitwise with an rmse of 0: identical.
+            None if self.rmse == 0.0 => "inf".into(),
+            None => "-inf".into(),
         }
     }
 }
@@ -189,20 +190,23 @@ mod tests {
 
     #[test]
     fn psnr_reads_inf_only_where_nothing_differs() {
-        let error = |psnr, differing| ImageError {
-            rmse: 0.0,
+        let error = |psnr, rmse| ImageError {
+            rmse,
             psnr,
             max_abs: 0.0,
-            differing,
+            differing: 3,
         };
-        assert_eq!(error(None, 0).psnr_text(2), "inf");
-        assert_eq!(error(None, 3).psnr_text(2), "-inf");
-        assert_eq!(error(Some(41.234), 3).psnr_text(2), "41.23");
+        assert_eq!(error(None, 0.0).psnr_text(2), "inf");
+        assert_eq!(error(None, f64::INFINITY).psnr_text(2), "-inf");
+        assert_eq!(error(Some(41.234), 0.1).psnr_text(2), "41.23");
         let from = |a: f32| {
             let zeros = crate::frame::Frame::new(1, 1, vec![[0.0; 4]]);
             let other = crate::frame::Frame::new(1, 1, vec![[a, 0.0, 0.0, 0.0]]);
             ImageError::from(crate::frame::diff(&zeros, &other).unwrap()).psnr_text(1)
         };
-        assert_eq!((from(f32::NAN), from(0.0)), ("-inf".to_string(), "inf".to_string()));
+        assert_eq!(
+            (from(f32::NAN), from(0.0), from(-0.0)),
+            ("-inf".to_string(), "inf".to_string(), "inf".to_string())
+        );
     }
 }

@@ -74,7 +74,10 @@ impl<'a> SourceValues<'a> {
         // Integer sources stay integers unless scaled by a fraction (a
         // NIfTI's scl_slope / scl_inter): told from the values themselves,
         // as wider integer types are stored normalised.
+        // Past a tolerance of a quarter every value would pass: rounding
+        // could only lose a scaled value's fraction then.
         values.integer = !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64)
+            && tolerance < 0.25
             && (0..values.len()).all(|i| {
                 let v = values.get(i);
                 (v - v.round()).abs() <= tolerance

@@ -651,6 +651,30 @@ fn bad_bench_input_is_one_line() {
         vec!["bench", "--quick", "--rounds", "1"],
         "bench/quick.toml (built in) with the command line's overrides: rounds must be at least 2",
     ));
+    // `optional` skips a missing volume, not a missing transfer function.
+    let tf_missing = dir.path().join("tf-missing.toml");
+    std::fs::write(
+        &tf_missing,
+        base.replacen(
+            "volume = \"nbody:8\"",
+            "volume = \"nbody:8\"\noptional = true\ntf = \"/no/such/tf.json\"",
+            1,
+        ),
+    )
+    .unwrap();
+    let tf_out = dir.path().join("tf-out");
+    let (code, _, stderr) = lacuna(&[
+        "bench",
+        tf_missing.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        tf_out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("invalid transfer function '/no/such/tf.json'"),
+        "{stderr}"
+    );
     // Nothing measured is no result: every data set optional and missing.
     let none = dir.path().join("none.toml");
     std::fs::write(

@@ -547,6 +547,15 @@ fn scaled_nifti_voxels_load_render_and_export_as_slope_times_raw_plus_intercept(
             assert!((g - s).abs() <= tol, "{name}: voxel {i} exported {g}, want {s}");
         }
     }
+    // A wide int32 range (f32 storage cannot tell integers there): the
+    // scaled least value keeps its half, not rounded to an integer.
+    let raw = values(1.0, 330_000.0);
+    let mut bytes = crate::common::nifti_bytes(&DIMS, 8, 32, [1.0; 3], &raw_bytes(VoxelType::I32, &raw));
+    bytes[112..116].copy_from_slice(&0.5f32.to_le_bytes());
+    let wide = dir.path().join("wide.nii");
+    std::fs::write(&wide, bytes).unwrap();
+    let w = write_raw(&load(&wide), &dir.path().join("wide"), None).unwrap();
+    assert_eq!((w.ty, file_values(&w.path, VoxelType::F32)[0]), (VoxelType::F32, 0.5));
     // Halves are not integers: uint8 cannot hold them, and says so.
     let halves = dir.path().join("scaled3.nii");
     let err = write_raw(&load(&halves), &dir.path().join("halves"), Some(VoxelType::U8)).unwrap_err();
