@@ -41,20 +41,9 @@ enum Command {
     View(Box<cli::view::ViewArgs>),
 }
 
-/// Output to a closed pipe (`lacuna info ... | head`) ends the process
-/// quietly, as it does for other Unix tools, instead of a panic on EPIPE
-/// (`render --out` outlives it: `cli::stdout`).
-fn reset_sigpipe() {
-    #[cfg(unix)]
-    // SAFETY: called first in main, before any thread exists; restores the
-    // default disposition Rust's runtime replaced with SIG_IGN.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-}
-
 fn main() -> ExitCode {
-    reset_sigpipe();
+    // `lacuna info ... | head` ends quietly, as other Unix tools do.
+    cli::stdout::end_at_a_closed_pipe();
     // Under mpirun, an error every rank meets alike is said by rank 0 alone.
     let echo = lacuna::parallel::launched_rank().is_none_or(|r| r == 0);
     let cli = match Cli::try_parse() {

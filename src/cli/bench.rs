@@ -138,62 +138,18 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         });
     }
     // Overridden, then validated: `--rounds 2` mends a file's `rounds = 1`.
-    let (mut config, origin) = match (&args.config, args.quick, auto_suite) {
-        (Some(path), _, _) => (BenchConfig::load_unchecked(path)?, path.display().to_string()),
-        (None, true, _) => {
-            let origin = "bench/quick.toml (built in)";
-            (
-                BenchConfig::parse_unchecked(bench::config::QUICK, origin)?,
-                origin.into(),
-            )
-        }
-        (None, _, true) => {
-            let origin = "bench/auto.toml (built in)";
-            (
-                BenchConfig::parse_unchecked(bench::config::AUTO, origin)?,
-                origin.into(),
-            )
-        }
-        (None, false, false) => {
-            let origin = "bench/paper.toml (built in)";
-            (
-                BenchConfig::parse_unchecked(bench::config::PAPER, origin)?,
-                origin.into(),
-            )
+    let (mut config, origin) = match &args.config {
+        Some(path) => (BenchConfig::load_unchecked(path)?, path.display().to_string()),
+        None => {
+            let (text, origin) = match (args.quick, auto_suite) {
+                (true, _) => (bench::config::QUICK, "bench/quick.toml (built in)"),
+                (_, true) => (bench::config::AUTO, "bench/auto.toml (built in)"),
+                _ => (bench::config::PAPER, "bench/paper.toml (built in)"),
+            };
+            (BenchConfig::parse_unchecked(text, origin)?, origin.to_string())
         }
     };
-    if let Some(f) = args.frames {
-        config.frames = f;
-    }
-    if let Some((w, h)) = args.size {
-        config.size = [w, h];
-    }
-    if let Some(b) = args.builds {
-        config.builds = b;
-    }
-    if let Some(w) = args.warmup {
-        config.warmup = w;
-        config.warmup_cap = config.warmup_cap.max(w);
-    }
-    if let Some(r) = args.rounds {
-        config.rounds = r;
-    }
-    if args.ert.is_some() {
-        config.ert = args.ert;
-    }
-    if let Some(f) = args.filter {
-        config.filter = Some(f.to_string());
-    }
-    let overridden = [
-        args.frames.is_some(),
-        args.size.is_some(),
-        args.builds.is_some(),
-        args.warmup.is_some(),
-        args.rounds.is_some(),
-        args.ert.is_some(),
-        args.filter.is_some(),
-    ];
-    match overridden.contains(&true) {
+    match override_protocol(args, &mut config) {
         true => config.validate(&format!("{origin} with the command line's overrides"))?,
         false => config.validate(&origin)?,
     }
@@ -322,6 +278,39 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
         100.0 * tolerance
     );
     Ok(if ok { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// Sets the protocol fields the command line gives; whether it gave any.
+fn override_protocol(args: &BenchArgs, config: &mut lacuna::bench::BenchConfig) -> bool {
+    if let Some(f) = args.frames {
+        config.frames = f;
+    }
+    if let Some((w, h)) = args.size {
+        config.size = [w, h];
+    }
+    if let Some(b) = args.builds {
+        config.builds = b;
+    }
+    if let Some(w) = args.warmup {
+        config.warmup = w;
+        config.warmup_cap = config.warmup_cap.max(w);
+    }
+    if let Some(r) = args.rounds {
+        config.rounds = r;
+    }
+    if args.ert.is_some() {
+        config.ert = args.ert;
+    }
+    if let Some(f) = args.filter {
+        config.filter = Some(f.to_string());
+    }
+    args.frames.is_some()
+        || args.size.is_some()
+        || args.builds.is_some()
+        || args.warmup.is_some()
+        || args.rounds.is_some()
+        || args.ert.is_some()
+        || args.filter.is_some()
 }
 
 /// Refuses an option the chosen source does not read, naming it: a run's

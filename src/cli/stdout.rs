@@ -61,13 +61,26 @@ fn stop(e: std::io::Error) {
     }
 }
 
+/// Restores SIGPIPE's default (Rust's runtime ignores it): output to a
+/// closed pipe ends the process quietly, as it does other Unix tools.
+pub fn end_at_a_closed_pipe() {
+    #[cfg(unix)]
+    sigpipe(libc::SIG_DFL);
+}
+
 /// Ignores SIGPIPE from here on: a closed pipe then stops the printing, not
 /// the process, so a command whose product is a file still writes it.
 pub fn outlive_a_closed_pipe() {
     #[cfg(unix)]
-    // SAFETY: sets a disposition; no handler runs Rust code.
+    sigpipe(libc::SIG_IGN);
+}
+
+#[cfg(unix)]
+fn sigpipe(disposition: libc::sighandler_t) {
+    // SAFETY: sets a default or ignoring disposition; no handler runs Rust
+    // code.
     unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_IGN);
+        libc::signal(libc::SIGPIPE, disposition);
     }
 }
 

@@ -91,7 +91,7 @@ impl Renderer {
     /// The march kernel's workgroup size for frames of `desc`, without
     /// creating the kernel (bands are cut by it).
     fn local_size(&self, scene: Scene, desc: &FrameDesc) -> [u32; 3] {
-        let constants = crate::desc::with_depth_out(desc.kernel_constants(scene.volume), desc.writes_depth());
+        let constants = frame_constants(desc, scene.volume, desc.writes_depth());
         self.kernels.local_size(scene.structure.march(), constants)
     }
 
@@ -119,8 +119,12 @@ impl Renderer {
         variant: Option<&'static str>,
         write_depth: bool,
     ) -> Result<Arc<Kernel>> {
-        let constants = crate::desc::with_depth_out(desc.kernel_constants(volume), write_depth);
-        self.kernels.get(march, variant, constants, ProbeConstants::PLAIN)
+        self.kernels.get(
+            march,
+            variant,
+            frame_constants(desc, volume, write_depth),
+            ProbeConstants::PLAIN,
+        )
     }
 
     /// Records one frame of `desc` into `cmd` (timed as "march" when `timer`
@@ -516,6 +520,12 @@ impl Renderer {
         };
         Ok((frame, timings, bands))
     }
+}
+
+/// The march kernel's constants for frames of `desc` on `volume`, with
+/// depth written or not.
+fn frame_constants(desc: &FrameDesc, volume: &GpuVolume, write_depth: bool) -> crate::desc::KernelConstants {
+    crate::desc::with_depth_out(desc.kernel_constants(volume), write_depth)
 }
 
 /// Workgroup rows per band of at most `max_samples` samples, for a kernel

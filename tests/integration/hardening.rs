@@ -371,17 +371,25 @@ fn hostile_files_are_one_line_errors() {
     assert!(stderr.contains("EXR") && !stderr.contains("panicked"), "{stderr}");
 }
 
-#[test]
-fn a_closed_pipe_ends_output_quietly() {
+/// `lacuna args` with its standard output's reading end closed at once (and
+/// standard error's too, with `stderr_too`), before it has printed.
+fn with_closed_pipes(args: &[&str], stderr_too: bool) -> std::process::Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
-        .args(["info", "menger:16"])
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // Close the reading end before lacuna has loaded the volume and printed.
     drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
+    if stderr_too {
+        drop(child.stderr.take());
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_closed_pipe_ends_output_quietly() {
+    let out = with_closed_pipes(&["info", "menger:16"], false);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.is_empty(), "{stderr}");
     assert!(!out.status.success(), "lacuna wrote to a closed pipe and succeeded");
@@ -391,37 +399,29 @@ fn a_closed_pipe_ends_output_quietly() {
 fn render_writes_its_frame_after_the_reader_of_its_output_has_gone() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("f.exr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
-        .args(["render", "menger:16", "--size", "16x16", "--out", out.to_str().unwrap()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
     // As `| grep -m1 device` does: gone before the frame is written.
-    drop(child.stdout.take());
-    let run = child.wait_with_output().unwrap();
+    let run = with_closed_pipes(
+        &["render", "menger:16", "--size", "16x16", "--out", out.to_str().unwrap()],
+        false,
+    );
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success() && stderr.is_empty(), "{:?}: {stderr}", run.status);
     let frame = lacuna::frame::Frame::read_exr(&out).unwrap();
     assert!(frame.pixels.iter().any(|p| p[3] > 0.0), "an empty frame");
     // Its error line with both pipes closed: dropped, and exit code 2, not
     // a panic.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lacuna"))
-        .args([
+    let run = with_closed_pipes(
+        &[
             "render",
             "no_such_4x4x4_uint8.raw",
             "--size",
             "8x8",
             "--out",
             out.to_str().unwrap(),
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    drop(child.stdout.take());
-    drop(child.stderr.take());
-    assert_eq!(child.wait().unwrap().code(), Some(2));
+        ],
+        true,
+    );
+    assert_eq!(run.status.code(), Some(2));
 }
 
 #[cfg(target_os = "linux")]
