@@ -30,6 +30,14 @@ impl Row {
     }
 }
 
+/// Names joined by commas, or `none`.
+fn list(names: &[String]) -> String {
+    match names.is_empty() {
+        true => "none".into(),
+        false => names.join(", "),
+    }
+}
+
 /// One data set's fastest structure in each of two runs.
 pub struct Fastest {
     pub dataset: String,
@@ -55,8 +63,59 @@ pub struct Comparison {
     pub rows: Vec<Row>,
     /// Per data set, the fastest structure of each run.
     pub fastest: Vec<Fastest>,
-    /// Records in only one of the runs.
-    pub unmatched: usize,
+    /// Records (`data set / structure`) in A only: a structure or data set
+    /// that B lost fails the comparison.
+    pub only_a: Vec<String>,
+    /// Records in B only.
+    pub only_b: Vec<String>,
+    /// Per record in both runs whose frames differ in what defines them
+    /// (size, step, ERT, views, filter, transfer function, grid): the
+    /// record and each such field with both values. Such runs measure
+    /// different work and are not compared.
+    pub mismatched: Vec<(String, Vec<String>)>,
+    /// Differences that do not change the work (device, driver, config
+    /// name): named, and compared anyway.
+    pub notes: Vec<String>,
+}
+
+/// What defines a record's frames, by name, as text.
+fn frame_fields(r: &Record) -> [(&'static str, String); 7] {
+    let ert = r.setup.timed_ert.map_or("off".to_string(), |e| e.to_string());
+    [
+        ("size", format!("{}x{}", r.setup.width, r.setup.height)),
+        ("step", r.setup.step.to_string()),
+        ("ert", ert),
+        ("views", r.setup.camera.clone()),
+        ("filter", r.filter.clone()),
+        ("tf", r.tf.clone()),
+        ("dims", format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2])),
+    ]
+}
+
+/// The fields of `frame_fields` in which `a` and `b` differ, as `name A against B`.
+fn differences(a: &Record, b: &Record) -> Vec<String> {
+    frame_fields(a)
+        .into_iter()
+        .zip(frame_fields(b))
+        .filter(|((_, x), (_, y))| x != y)
+        .map(|((name, x), (_, y))| format!("{name} {x} against {y}"))
+        .collect()
+}
+
+/// Run-wide differences that leave the work alike: where each ran.
+fn run_notes(a: &[Record], b: &[Record]) -> Vec<String> {
+    let (Some(ra), Some(rb)) = (a.first(), b.first()) else {
+        return Vec::new();
+    };
+    [
+        ("device", &ra.setup.device, &rb.setup.device),
+        ("driver", &ra.setup.driver, &rb.setup.driver),
+        ("config", &ra.setup.config, &rb.setup.config),
+    ]
+    .into_iter()
+    .filter(|(_, x, y)| x != y)
+    .map(|(name, x, y)| format!("{name}: A {x}, B {y}"))
+    .collect()
 }
 
 impl Comparison {
@@ -76,7 +135,21 @@ impl Comparison {
                 })
             })
             .collect();
-        let unmatched = a.len() + b.len() - 2 * rows.len();
+        let name = |r: &Record| format!("{} / {}", r.dataset, r.structure);
+        let only = |x: &[Record], y: &[Record]| -> Vec<String> {
+            x.iter()
+                .filter(|r| !y.iter().any(|o| key(o) == key(r)))
+                .map(name)
+                .collect()
+        };
+        let mismatched = a
+            .iter()
+            .filter_map(|ra| {
+                let rb = b.iter().find(|rb| key(rb) == key(ra))?;
+                let d = differences(ra, rb);
+                (!d.is_empty()).then(|| (name(ra), d))
+            })
+            .collect();
         let fb = fastest(b);
         let fastest = fastest(a)
             .into_iter()
@@ -94,8 +167,16 @@ impl Comparison {
         Comparison {
             rows,
             fastest,
-            unmatched,
+            only_a: only(a, b),
+            only_b: only(b, a),
+            mismatched,
+            notes: run_notes(a, b),
         }
+    }
+
+    /// Every record of each run is in the other.
+    pub fn complete(&self) -> bool {
+        self.only_a.is_empty() && self.only_b.is_empty()
     }
 
     /// The largest relative change of a median.
@@ -148,10 +229,14 @@ impl Comparison {
             100.0 * TIE,
             self.fastest.iter().filter(|f| f.agrees()).count(),
             self.fastest.len(),
-            if self.unmatched > 0 {
-                format!(", {} records in only one run", self.unmatched)
-            } else {
+            if self.complete() {
                 String::new()
+            } else {
+                format!(
+                    "; records in A only: {}; in B only: {}",
+                    list(&self.only_a),
+                    list(&self.only_b)
+                )
             }
         )
     }

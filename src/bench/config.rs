@@ -177,7 +177,8 @@ impl DatasetConfig {
     }
 
     /// Its name in reports: the volume, and its look where that is not the
-    /// default (`nbody:96 [mode iso; iso 0.3]`), so one volume can be
+    /// default (`nbody:96 [mode iso; iso 0.3; shade]`), and its time range
+    /// (`nbody:96 [time 1..4]`), so one volume can be
     /// measured in several looks.
     pub fn label(&self, config: &BenchConfig) -> Result<String> {
         let desc = self.look(config).apply(FrameDesc::builder(1, 1))?.build()?;
@@ -193,6 +194,10 @@ impl DatasetConfig {
         let mut look = look;
         if let Some(e) = self.ert {
             look.push(format!("ert {e}"));
+        }
+        // The frames are step FIRST's, and the steps' records these steps'.
+        if let Some([first, last]) = self.time {
+            look.push(format!("time {first}..{last}"));
         }
         let storage = self.storage()?;
         if storage != Storage::Auto {
@@ -348,6 +353,35 @@ impl BenchConfig {
         Self::parse_unchecked(&text, &path.display().to_string())
     }
 
+    /// With `--frames-out`: an error, before anything runs, where two
+    /// runs' frames would get one file (labels that differ only in
+    /// characters a file name drops: `my grid` and `my_grid`).
+    pub fn check_frame_files(&self, origin: &str) -> Result<()> {
+        let mut structures: Vec<&str> = self.structures.iter().map(|s| s.label.as_str()).collect();
+        if !self
+            .structures
+            .iter()
+            .any(|s| s.resolve().is_ok_and(|r| r.accel == Accel::naive()))
+        {
+            structures.push("naive");
+        }
+        let mut files = std::collections::HashMap::new();
+        for d in &self.datasets {
+            let dataset = d.label(self)?;
+            for s in &structures {
+                let file = super::files::frame_file(&dataset, s);
+                let run = format!("{dataset} / {s}");
+                if let Some(other) = files.insert(file.clone(), run.clone()) {
+                    return Err(Error::format(
+                        origin,
+                        format!("--frames-out would write '{other}' and '{run}' to one file, {file}: give one structure or data set another label"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Checks the protocol; run again after command-line overrides.
     pub fn validate(&self, origin: &str) -> Result<()> {
         let bad = |m: &str| Err(Error::format(origin, m.to_string()));
@@ -435,8 +469,16 @@ impl BenchConfig {
         }
         let mut labels = std::collections::HashSet::new();
         for s in &self.structures {
-            s.resolve()
+            let resolved = s
+                .resolve()
                 .map_err(|e| Error::format(origin, format!("structure '{}': {e}", s.label)))?;
+            // The run adds naive under that label where a config has none.
+            if s.label == "naive" && resolved.accel != Accel::naive() {
+                return bad(&format!(
+                    "structure label 'naive' is the naive march's (every run times it), not {}'s: give it another label",
+                    s.accel
+                ));
+            }
             if !labels.insert(&s.label) {
                 return bad(&format!("structure label '{}' appears twice", s.label));
             }

@@ -7,9 +7,11 @@ pub mod compare;
 pub mod config;
 pub mod contract;
 mod dataset;
+pub mod files;
 mod frame_timer;
 pub mod hard;
 mod plots;
+pub mod preflight;
 mod progress;
 pub mod record;
 pub mod run;
@@ -68,7 +70,47 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) ->
     if moved.is_err() && created {
         let _ = std::fs::remove_dir_all(dir);
     }
+    if let Ok(paths) = &moved {
+        remove_stale(dir, paths);
+    }
     moved
+}
+
+/// Files a run writes only sometimes: an earlier run's would read as this
+/// one's (a sweep, steps or frames this config has not).
+const SOMETIMES: [&str; 9] = [
+    "error.json",
+    "error.csv",
+    "error.md",
+    "error.svg",
+    "error.png",
+    "steps.json",
+    "steps.md",
+    "notes.txt",
+    "contract.md",
+];
+
+/// Removes the outputs of an earlier run in `dir` that this one (which
+/// wrote `written`) did not replace: the files above and frames/*.exr.
+/// Anything else there is the user's and stays.
+fn remove_stale(dir: &Path, written: &[String]) {
+    let ours = |p: &Path| written.iter().any(|w| Path::new(w) == p);
+    for name in SOMETIMES {
+        let path = dir.join(name);
+        if !ours(&path) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+    let Ok(frames) = std::fs::read_dir(dir.join("frames")) else {
+        return;
+    };
+    for entry in frames.flatten() {
+        let path = entry.path();
+        let exr = path.extension().is_some_and(|e| e == "exr");
+        if exr && !ours(&path) && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
 }
 
 /// Writes the outputs into `dir`; returns their names relative to it.
@@ -119,18 +161,9 @@ fn write_into(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) -> Result
     if !out.frames.is_empty() {
         let frames = dir.join("frames");
         std::fs::create_dir_all(&frames).map_err(|e| Error::io(&frames, e))?;
-        for (name, frame) in &out.frames {
-            let file = format!("frames/{}.exr", run::slug(name).display());
-            // Two labels that slug alike would overwrite one frame.
-            if written.contains(&file) {
-                return Err(Error::invalid(
-                    "frame name",
-                    file,
-                    format!("two runs' labels make it (one is '{name}')"),
-                ));
-            }
-            frame.write_exr(&dir.join(&file))?;
-            written.push(file);
+        for (file, frame) in &out.frames {
+            frame.write_exr(&dir.join(file))?;
+            written.push(file.clone());
         }
     }
     Ok(written)

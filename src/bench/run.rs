@@ -9,6 +9,7 @@
 
 use super::config::{BenchConfig, ErrorConfig, StructureSpec, UNSTABLE_SPREAD};
 use super::dataset::load;
+use super::files::frame_file;
 use super::frame_timer::FrameTimer;
 use super::progress::Progress;
 use super::record::{ErrorPoint, FrameTimes, ImageError, Record, Setup, Warmup};
@@ -19,17 +20,18 @@ use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
 use crate::gpu::Context;
+use crate::render::metadata::describe;
 use crate::render::{Filter, FrameBuilder, FrameDesc, Octants, Projection, Renderer, Scene};
 use crate::tf::GpuTransferFunction;
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 /// What a run produced.
 pub struct BenchOutput {
     pub records: Vec<Record>,
     pub errors: Vec<ErrorPoint>,
-    /// Frame 0 of each run, when asked for.
+    /// Frame 0 of each run, when asked for, with its file under the
+    /// output folder (`frame_file`).
     pub frames: Vec<(String, Frame)>,
     pub notes: Vec<String>,
     /// New-step times of the data sets with a `time` range.
@@ -492,7 +494,15 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                     .map(|m| m.label),
             });
             if let Some(first) = &run.first {
-                out.frames.push((format!("{}-{}", loaded.spec, s.label), first.clone()));
+                // As `render` describes its frame: view 0, its median march.
+                let mut kept = first.clone();
+                let march = run.times.first().map(|t| median(t.clone()));
+                let scene = scene_of(&run.structure, &gv, &lut);
+                describe(&mut kept, (v, tf), scene, &views[0], ctx.info(), march)?;
+                if let Some([step, _]) = ds.time {
+                    kept.metadata.insert("time".into(), step.to_string());
+                }
+                out.frames.push((frame_file(&loaded.spec, &s.label), kept));
             }
         }
         // New time steps: the first exact frame of each, per structure.
@@ -577,19 +587,4 @@ fn advance(progress: &Progress, i: u32, least: u64) {
 
 fn missing(what: &str) -> Error {
     Error::invalid("benchmark", what, "was not read back")
-}
-
-/// A file name for a run label.
-pub fn slug(s: &str) -> PathBuf {
-    PathBuf::from(
-        s.chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect::<String>(),
-    )
 }

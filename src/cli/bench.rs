@@ -153,6 +153,10 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         true => config.validate(&format!("{origin} with the command line's overrides"))?,
         false => config.validate(&origin)?,
     }
+    if args.frames_out {
+        config.check_frame_files(&origin)?;
+    }
+    bench::preflight::check(&config, &origin)?;
     let out_dir = args
         .out
         .clone()
@@ -270,10 +274,28 @@ fn compare(a: &Path, b: &Path, tolerance: f64) -> Result<ExitCode> {
             "no data set x structure is in both runs",
         ));
     }
+    // Runs of different frames measure different work: no verdict.
+    if let Some((record, fields)) = c.mismatched.first() {
+        let others = match c.mismatched.len() - 1 {
+            0 => String::new(),
+            n => format!(" (and {n} more records)"),
+        };
+        return Err(Error::invalid(
+            "compare",
+            format!("{} and {}", a.display(), b.display()),
+            format!(
+                "the runs rendered different frames: {record}: {}{others}",
+                fields.join(", ")
+            ),
+        ));
+    }
+    for note in &c.notes {
+        say!("note: the runs differ in {note}");
+    }
     say!("{}", c.markdown(&a.display().to_string(), &b.display().to_string()));
-    let ok = c.worst() <= tolerance && c.same_fastest();
+    let ok = c.worst() <= tolerance && c.same_fastest() && c.complete();
     say!(
-        "{}: every median within {:.0} % and the same (or a tied) fastest structure per data set",
+        "{}: every median within {:.0} %, the same (or a tied) fastest structure per data set, and every record in both runs",
         if ok { "PASS" } else { "FAIL" },
         100.0 * tolerance
     );

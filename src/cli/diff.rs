@@ -1,7 +1,7 @@
 //! `lacuna diff`: compare two EXR frames (exit 1 past --max-abs).
 
 use clap::Args;
-use lacuna::frame::diff::{diff, write_heatmap};
+use lacuna::frame::diff::{diff, write_heatmap, DepthDiff};
 use lacuna::frame::Frame;
 use lacuna::{Error, Result};
 use std::path::PathBuf;
@@ -11,7 +11,8 @@ use std::process::ExitCode;
 pub struct DiffArgs {
     a: PathBuf,
     b: PathBuf,
-    /// Fail (exit 1) when the max abs difference exceeds this.
+    /// Fail (exit 1) when the max abs difference of a colour channel exceeds
+    /// this, or where both frames' depth (Z) differs at all.
     #[arg(long, allow_hyphen_values = true)]
     max_abs: Option<f64>,
     /// Write a PNG heatmap of per-pixel differences.
@@ -48,6 +49,15 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
         if stats.max_abs > m {
             say_err!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
             return Ok(ExitCode::from(1));
+        }
+        // The depth is in the frame's distance units, not colour's: any
+        // difference fails. A depth in one frame only (a viewer's
+        // screenshot against render's iso frame) was named above.
+        if let DepthDiff::Both { differing, .. } = stats.depth {
+            if differing > 0 {
+                say_err!("error: the depth (Z) differs at {differing} pixels, with --max-abs {m}");
+                return Ok(ExitCode::from(1));
+            }
         }
     }
     Ok(ExitCode::SUCCESS)

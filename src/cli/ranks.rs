@@ -179,7 +179,7 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
         volume: &gpu_volume,
         tf: &lut,
     };
-    describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
+    describe(&mut frame, (&volume, &tf), scene, &desc, &ctx, &timings)?;
 
     let (width, height) = desc.size();
     let rays = desc.camera().rays(volume.dims, volume.spacing, width, height)?;

@@ -354,7 +354,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         );
     }
     if let (Some(out), Some(format)) = (&args.out, format) {
-        describe(&mut frame, &volume, &tf, scene, &desc, &ctx, &timings)?;
+        describe(&mut frame, (&volume, &tf), scene, &desc, &ctx, &timings)?;
         if series.steps() > 1 {
             frame.metadata.insert("time".into(), args.volume.time.to_string());
         }
@@ -383,35 +383,17 @@ pub(super) fn look_notes(desc: &FrameDesc) -> Vec<String> {
     notes
 }
 
-/// The frame's metadata: what made it (the scene, its structure and
-/// parameters, what marched it, the frame's description, the device).
+/// The frame's metadata (`render::metadata`), with its march pass's time.
 pub(super) fn describe(
     frame: &mut Frame,
-    volume: &Volume,
-    tf: &TransferFunction,
+    data: (&Volume, &TransferFunction),
     scene: Scene,
     desc: &FrameDesc,
     ctx: &Context,
     timings: &Timings,
 ) -> Result<()> {
-    let info = ctx.info();
-    let structure = scene.structure;
-    let meta = &mut frame.metadata;
-    meta.insert("volume".into(), volume.name.clone());
-    meta.insert("tf".into(), tf.spec.clone());
-    meta.insert("accel".into(), structure.accel().to_string());
-    if let Some(m) = structure.marched_as_reason() {
-        meta.insert("marched_as".into(), m.label);
-    }
-    for (k, v) in structure.params().describe() {
-        meta.insert(k.to_string(), v);
-    }
-    for (k, v) in desc.describe(scene.volume) {
-        meta.insert(k.to_string(), v);
-    }
-    meta.insert("device".into(), format!("{} ({})", info.name, info.driver));
-    meta.insert("gpu_ms".into(), format!("{:.4}", timings.phase("march")?));
-    Ok(())
+    let march = Some(timings.phase("march")?);
+    render::metadata::describe(frame, data, scene, desc, ctx.info(), march)
 }
 
 /// The process's peak resident memory (Linux `VmHWM`), where known.

@@ -1,5 +1,6 @@
 //! Frame comparison: rmse, psnr, max abs difference over all RGBA channels,
-//! and the count of pixels that differ at all; optional PNG heatmap.
+//! the same of the depth (`Z`) where both frames have one, and the count of
+//! pixels that differ at all; optional PNG heatmap.
 
 use super::Frame;
 use crate::error::{Error, Result};
@@ -15,9 +16,26 @@ pub struct DiffStats {
     /// a channel is non-finite in one frame and differs.
     pub psnr: f64,
     pub max_abs: f64,
-    /// Pixels where any channel differs (bitwise; NaN equals only itself).
+    /// Pixels where any channel differs, the depth included where both
+    /// frames have one (bitwise; NaN equals only itself).
     pub differing: u64,
     pub pixels: u64,
+    pub depth: DepthDiff,
+}
+
+/// How two frames' depth (`Z`: an iso frame's surface depth) differ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub enum DepthDiff {
+    /// Neither frame has one.
+    Neither,
+    /// Both have one: the largest difference (infinite where one is
+    /// non-finite and differs) and the pixels whose depth differs.
+    Both { max_abs: f64, differing: u64 },
+    /// Only the first frame (A) has one.
+    OnlyA,
+    /// Only the second (B).
+    OnlyB,
 }
 
 impl std::fmt::Display for DiffStats {
@@ -36,7 +54,19 @@ impl std::fmt::Display for DiffStats {
             self.max_abs,
             self.differing,
             self.pixels
-        )
+        )?;
+        match self.depth {
+            DepthDiff::Neither => Ok(()),
+            DepthDiff::Both { max_abs, differing } => {
+                write!(
+                    f,
+                    "\ndepth (Z): max_abs {max_abs:.6e}  differing {differing} of {} pixels",
+                    self.pixels
+                )
+            }
+            DepthDiff::OnlyA => write!(f, "\ndepth (Z): only in the first frame"),
+            DepthDiff::OnlyB => write!(f, "\ndepth (Z): only in the second frame"),
+        }
     }
 }
 
@@ -70,7 +100,8 @@ pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
     let mut sum = 0.0f64;
     let mut max_abs = 0.0f64;
     let mut differing = 0u64;
-    for (pa, pb) in a.pixels.iter().zip(&b.pixels) {
+    let (mut depth_max, mut depth_differing) = (0.0f64, 0u64);
+    for (i, (pa, pb)) in a.pixels.iter().zip(&b.pixels).enumerate() {
         let mut any = false;
         for c in 0..4 {
             let d = channel_diff(pa[c], pb[c]);
@@ -78,8 +109,23 @@ pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
             sum += d * d;
             max_abs = max_abs.max(d);
         }
+        if let (Some(za), Some(zb)) = (&a.depth, &b.depth) {
+            let differs = za[i].to_bits() != zb[i].to_bits();
+            depth_max = depth_max.max(channel_diff(za[i], zb[i]));
+            depth_differing += differs as u64;
+            any |= differs;
+        }
         differing += any as u64;
     }
+    let depth = match (&a.depth, &b.depth) {
+        (None, None) => DepthDiff::Neither,
+        (Some(_), Some(_)) => DepthDiff::Both {
+            max_abs: depth_max,
+            differing: depth_differing,
+        },
+        (Some(_), None) => DepthDiff::OnlyA,
+        (None, Some(_)) => DepthDiff::OnlyB,
+    };
     let n = (a.pixels.len() * 4).max(1) as f64;
     let rmse = (sum / n).sqrt();
     let psnr = if rmse == 0.0 {
@@ -93,6 +139,7 @@ pub fn diff(a: &Frame, b: &Frame) -> Result<DiffStats> {
         max_abs,
         differing,
         pixels: a.pixels.len() as u64,
+        depth,
     })
 }
 
@@ -140,5 +187,34 @@ mod tests {
         }
         let d = diff(&zeros, &zeros).unwrap();
         assert!(d.psnr == f64::INFINITY && d.to_string().contains("psnr inf dB"), "{d}");
+    }
+
+    #[test]
+    fn a_depth_is_compared_where_both_frames_have_one_and_named_where_one_has() {
+        let with = |z: [f32; 2]| Frame {
+            depth: Some(z.to_vec()),
+            ..Frame::new(2, 1, vec![[0.5; 4]; 2])
+        };
+        let d = diff(&with([1.0, 2.0]), &with([1.0, 7.0])).unwrap();
+        assert_eq!(
+            (d.differing, d.max_abs, d.depth),
+            (
+                1,
+                0.0,
+                DepthDiff::Both {
+                    max_abs: 5.0,
+                    differing: 1
+                }
+            )
+        );
+        assert!(
+            d.to_string()
+                .contains("depth (Z): max_abs 5.000000e0  differing 1 of 2 pixels"),
+            "{d}"
+        );
+        let plain = Frame::new(2, 1, vec![[0.5; 4]; 2]);
+        let d = diff(&plain, &with([1.0, 2.0])).unwrap();
+        assert_eq!((d.differing, d.depth), (0, DepthDiff::OnlyB));
+        assert!(d.to_string().contains("depth (Z): only in the second frame"), "{d}");
     }
 }

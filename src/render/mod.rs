@@ -4,6 +4,7 @@
 //! their files in `crate::frame`.
 
 mod marcher;
+pub mod metadata;
 mod mix;
 pub mod reference;
 mod target;

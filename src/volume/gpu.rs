@@ -457,13 +457,7 @@ impl GpuVolume {
     /// An error naming `what` unless the volume has one channel: shading
     /// and isosurfaces read one field's gradient.
     pub fn check_one_channel(&self, what: &str) -> Result<()> {
-        if self.channels > 1 {
-            return Err(Error::Unsupported(format!(
-                "the volume has {} channels, and {what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode",
-                self.channels
-            )));
-        }
-        Ok(())
+        check_one_channel(self.channels as usize, what)
     }
 
     /// How the voxels are stored, in a line: "dense (N MiB)" or the pool's
@@ -574,4 +568,15 @@ impl Drop for GpuVolume {
         let samplers = std::iter::once(self.sampler).chain(self.linear);
         self.ctx.retire(samplers.map(crate::gpu::Retired::Sampler));
     }
+}
+
+/// An error naming `what` unless a volume of `channels` has one: shading
+/// and isosurfaces read one field's gradient.
+pub fn check_one_channel(channels: usize, what: &str) -> Result<()> {
+    if channels > 1 {
+        return Err(Error::Unsupported(format!(
+            "the volume has {channels} channels, and {what} read one channel's gradient and values; render a multi-channel volume unshaded in composite, mip, minip or average mode"
+        )));
+    }
+    Ok(())
 }

@@ -40,7 +40,7 @@ pub use export::{
     check_raw_out, parse_export_type, raw_path, raw_suffix, write_raw, RawExport, SourceValues, EXPORT_TYPES,
 };
 pub use filter::{value_margin, Filter, FILTER_CONSTANT_ID, NAN_CONSTANT_ID};
-pub use gpu::{check_dense, resolve_storage, GpuVolume, StepMark};
+pub use gpu::{check_dense, check_one_channel, resolve_storage, GpuVolume, StepMark};
 pub use gradient::{gradient_texels, GRADIENT_TEXEL_BYTES};
 pub use gradient_cells::{check_gradient_cells, GRADIENT_CELL_BYTES};
 pub use pool::{

@@ -152,6 +152,34 @@ impl Series {
         }
     }
 
+    /// Its channels where the spec tells them without a header read:
+    /// generators and raw files have one, a `+` join the sum of its parts;
+    /// None where a NIfTI or NRRD header decides.
+    pub fn channels_known(&self) -> Option<usize> {
+        match &self.source {
+            Source::Channels(parts) => parts.iter().map(Series::channels_known).sum(),
+            Source::Generator { .. } | Source::Still(VolumeSpec::Procedural { .. }) => Some(1),
+            Source::Still(VolumeSpec::File(path)) => self.raw_layout(path).map(|_| 1),
+            Source::Files(files) => self.raw_layout(&files[0]).map(|_| 1),
+            _ => None,
+        }
+    }
+
+    /// An error (the file's I/O error) where a file the spec names is
+    /// missing: found before a long run reaches the volume.
+    pub fn check_files(&self) -> Result<()> {
+        let exists = |path: &Path| match std::fs::metadata(path) {
+            Ok(_) => Ok(()),
+            Err(e) => Err(Error::io(path, e)),
+        };
+        match &self.source {
+            Source::Channels(parts) => parts.iter().try_for_each(Series::check_files),
+            Source::Still(VolumeSpec::File(path)) => exists(path),
+            Source::Files(files) => files.iter().try_for_each(|f| exists(f)),
+            _ => Ok(()),
+        }
+    }
+
     /// What step `k` is, for messages: the file of a pattern, else the spec
     /// and the step.
     pub fn step_name(&self, k: u32) -> String {
@@ -181,15 +209,7 @@ impl Series {
     /// generator, raw files, one-channel NRRD and NIfTI files), known
     /// before any voxel is read; None for the others.
     pub fn streamed_layout(&self) -> Option<([u32; 3], VoxelType)> {
-        let raw = |path: &Path| -> Option<([u32; 3], VoxelType)> {
-            let name = path.file_name()?.to_str()?.to_lowercase();
-            let layout = match self.options.raw {
-                Some(l) => l,
-                None if name.ends_with(".raw") => super::raw::layout_from_name(path).ok()?,
-                None => return None,
-            };
-            Some((layout.dims, layout.ty))
-        };
+        let raw = |path: &Path| self.raw_layout(path);
         match &self.source {
             Source::Generator { dims, .. } | Source::Still(VolumeSpec::Procedural { dims, .. }) => {
                 Some((*dims, VoxelType::U8))
@@ -204,6 +224,17 @@ impl Series {
             Source::Nifti { path, .. } => super::nifti::streamed_layout(path),
             _ => None,
         }
+    }
+
+    /// A raw file's grid and type: from the options, or its name.
+    fn raw_layout(&self, path: &Path) -> Option<([u32; 3], VoxelType)> {
+        let name = path.file_name()?.to_str()?.to_lowercase();
+        let layout = match self.options.raw {
+            Some(l) => l,
+            None if name.ends_with(".raw") => super::raw::layout_from_name(path).ok()?,
+            None => return None,
+        };
+        Some((layout.dims, layout.ty))
     }
 
     /// Step `k` for `storage` on the device `info` describes: dense, checked

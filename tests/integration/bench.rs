@@ -60,7 +60,7 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     for r in &steps {
         assert_eq!(
             (r.dataset.as_str(), r.steps.as_slice()),
-            ("nbody:32", &[3, 4][..]),
+            ("nbody:32 [time 2..4]", &[3, 4][..]),
             "{r:?}"
         );
         if !r.structure.contains("paper classification") {
@@ -71,7 +71,29 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         // Medians of sums are not sums of medians, but they bound each other.
         assert!(r.new_step_ms <= 4.0 * parts && parts <= 4.0 * r.new_step_ms, "{r:?}");
     }
-    let datasets = ["nbody:32", "menger:27"];
+    let datasets = ["nbody:32 [time 2..4]", "menger:27"];
+    // Each kept frame says how to make it again, as `render`'s does: the
+    // series' frames are its step FIRST's.
+    let kept = lacuna::frame::Frame::read_exr(&out.join("frames/nbody_32__time_2..4_-grid_8.exr")).unwrap();
+    for (key, value) in [
+        ("volume", "nbody:32x32x32"),
+        ("accel", "grid"),
+        ("cell", "8"),
+        ("time", "2"),
+        ("step", "0.5"),
+    ] {
+        assert_eq!(
+            kept.metadata.get(key).map(String::as_str),
+            Some(value),
+            "{key}: {:?}",
+            kept.metadata
+        );
+    }
+    assert!(
+        kept.metadata.contains_key("device") && kept.metadata.contains_key("camera"),
+        "{:?}",
+        kept.metadata
+    );
     assert_eq!(records.len(), datasets.len() * config.structures.len());
     for d in datasets {
         for s in &config.structures {
@@ -177,7 +199,7 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     let unstable = records.iter().filter(|r| r.unstable).count();
     assert_eq!(marked(&table2), unstable, "{table2}");
     assert_eq!(marked(&frames_md), unstable, "{frames_md}");
-    assert!(stdout.contains("fastest on nbody:32: "), "{stdout}");
+    assert!(stdout.contains("fastest on nbody:32 [time 2..4]: "), "{stdout}");
     // Only an exact structure can be the fastest: a faster one whose image
     // differs from naive's (the paper's classification can) is passed over.
     let mut fast = records.clone();
@@ -217,6 +239,52 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         stdout.contains("largest change of a median 100.0 %") && stdout.contains("FAIL"),
         "{stdout}"
     );
+    // A record B lost fails, named; so does one B gained.
+    let lost = records[..last].to_vec();
+    let lost_path = dir.path().join("lost.json");
+    std::fs::write(&lost_path, serde_json::to_string(&lost).unwrap()).unwrap();
+    let gone = format!("{} / {}", records[last].dataset, records[last].structure);
+    for (a, b, side) in [
+        (&results, &lost_path, "in A only: "),
+        (&lost_path, &results, "in B only: "),
+    ] {
+        let (code, stdout, _) = lacuna(&["bench", "--compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+        assert_eq!(code, 1, "{stdout}");
+        assert!(
+            stdout.contains(&format!("{side}{gone}")) && stdout.contains("FAIL"),
+            "{stdout}"
+        );
+    }
+    // Another device is named and compared; another frame size (or
+    // filter, step, ...) is not the same work: one error line, no verdict.
+    let mut elsewhere = records.clone();
+    for r in &mut elsewhere {
+        r.setup.device = "another GPU".into();
+    }
+    let mut smaller = records.clone();
+    smaller[0].setup.width /= 2;
+    smaller[0].filter = "hardware".into();
+    for (name, other, code, needle) in [
+        ("elsewhere.json", &elsewhere, 0, "note: the runs differ in device: A "),
+        ("smaller.json", &smaller, 2, "the runs rendered different frames: "),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_string(other).unwrap()).unwrap();
+        let (got, stdout, stderr) = lacuna(&["bench", "--compare", results.to_str().unwrap(), path.to_str().unwrap()]);
+        assert_eq!(got, code, "{name}: {stdout}\n{stderr}");
+        assert!(
+            stdout.contains(needle) || stderr.contains(needle),
+            "{name}: {stdout}\n{stderr}"
+        );
+        if code == 2 {
+            assert!(
+                stderr.trim().lines().count() == 1
+                    && stderr.contains("filter manual against hardware")
+                    && !stdout.contains("PASS"),
+                "{stderr}"
+            );
+        }
+    }
     // Records no run writes are refused, not compared as NaN: a time of
     // zero or less, and a data set x structure twice.
     let mut zero = records.clone();
@@ -564,6 +632,45 @@ fn bad_bench_input_is_one_line() {
             ("size = [8, 8]", "size = [8, 8"),
             "invalid array: expected `]`",
         ),
+        // What a data set's spec and headers tell is checked before any
+        // data set runs, naming the file and the data set.
+        (
+            "missingraw",
+            ("volume = \"nbody:8\"", "volume = \"/no/such/v_8x8x8_uint8.raw\""),
+            "missingraw.toml: data set '/no/such/v_8x8x8_uint8.raw': /no/such/v_8x8x8_uint8.raw: No such file",
+        ),
+        (
+            "timepast",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\ntime = [70, 80]"),
+            "timepast.toml: data set 'nbody:8 [time 70..80]': invalid time '80': nbody:8 has 64 steps",
+        ),
+        (
+            "timeback",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\ntime = [3, 1]"),
+            "timeback.toml: data set 'nbody:8 [time 3..1]': invalid time '[3, 1]'",
+        ),
+        (
+            "tfcount",
+            (
+                "volume = \"nbody:8\"",
+                "volume = \"nbody:8\"\ntf = \"ramp:0.3:1|ramp:0.2:1\"",
+            ),
+            "tfcount.toml: data set 'nbody:8': invalid transfer function",
+        ),
+        (
+            "shadechannels",
+            (
+                "volume = \"nbody:8\"",
+                "volume = \"nbody:8+vessels:8\"\nlook = { shade = true }",
+            ),
+            "shadechannels.toml: data set 'nbody:8+vessels:8 [shade]': the volume has 2 channels",
+        ),
+        // The run adds naive under that label: two records of one name.
+        (
+            "naivelabel",
+            ("label = \"a\"", "label = \"naive\""),
+            "structure label 'naive' is the naive march's (every run times it), not grid's",
+        ),
     ];
     let mut fault_cases = Vec::new();
     for (name, (from, to), needle) in faults {
@@ -627,6 +734,21 @@ fn bad_bench_input_is_one_line() {
     cases.push((
         vec!["bench", "--quick", "--out", under_file.to_str().unwrap()],
         "a-file: exists and is not a folder",
+    ));
+    // Two labels one frame file: refused before anything runs.
+    let one_file = dir.path().join("one-file.toml");
+    std::fs::write(
+        &one_file,
+        base.replacen(
+            "accel = \"grid\"\n[error]",
+            "accel = \"grid\"\n[[structure]]\nlabel = \"x y\"\naccel = \"lbvh\"\n[[structure]]\nlabel = \"x_y\"\naccel = \"kd-cpu\"\n[error]",
+            1,
+        ),
+    )
+    .unwrap();
+    cases.push((
+        vec!["bench", one_file.to_str().unwrap(), "--frames-out"],
+        "--frames-out would write 'nbody:8 / x y' and 'nbody:8 / x_y' to one file, frames/nbody_8-x_y.exr",
     ));
     // `--rounds 2` mends a file's `rounds = 1`: the run gets past the
     // protocol's checks to the output folder.
@@ -786,8 +908,15 @@ fn bench_outputs_are_all_or_nothing() {
         .collect();
     names.sort();
     assert_eq!(names, ["results.json", "table1.md"]);
-    // Once the folder is gone the same run writes the whole set.
+    // Once the folder is gone the same run writes the whole set, and an
+    // earlier run's outputs it does not write (a sweep, steps, frames of
+    // other labels) go; the user's own files stay.
     std::fs::remove_dir(out.join("table1.md")).unwrap();
+    std::fs::create_dir_all(out.join("frames")).unwrap();
+    for stale in ["steps.md", "error.json", "notes.txt", "frames/other-naive.exr"] {
+        std::fs::write(out.join(stale), "an earlier run's").unwrap();
+    }
+    std::fs::write(out.join("mine.txt"), "the user's").unwrap();
     let (code, stdout, stderr) = lacuna(&[
         "bench",
         config.to_str().unwrap(),
@@ -795,12 +924,19 @@ fn bench_outputs_are_all_or_nothing() {
         out.to_str().unwrap(),
         "--quiet",
         "--validate",
+        "--frames-out",
     ]);
     assert_eq!(code, 0, "{stdout}{stderr}");
     assert!(std::fs::read_to_string(out.join("results.json"))
         .unwrap()
         .starts_with('['));
     assert!(out.join("table1.md").is_file() && out.join("fig3-fps.png").is_file());
+    for stale in ["steps.md", "error.json", "notes.txt", "frames/other-naive.exr"] {
+        // Gone, or this run's own (its notes).
+        let old = std::fs::read_to_string(out.join(stale)).is_ok_and(|t| t == "an earlier run's");
+        assert!(!old, "{stale} stayed");
+    }
+    assert!(out.join("mine.txt").is_file() && out.join("frames/nbody_8-grid.exr").is_file());
     let under_file = out.join("results.json").join("deeper");
     let (code, _, stderr) = lacuna(&["bench", config.to_str().unwrap(), "--out", under_file.to_str().unwrap()]);
     assert_eq!(code, 2);

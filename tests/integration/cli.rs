@@ -397,6 +397,42 @@ fn diff_reports_metrics_and_exit_codes() {
     }
     let r = lacuna(&["diff", a.to_str().unwrap(), small.to_str().unwrap()], &[]);
     assert!(r.stderr.contains("sizes differ"), "{}", r.stderr);
+    // Iso frames' depth (Z) is compared too: colour alike, one depth moved.
+    let iso = dir.path().join("iso.exr");
+    render_ok("shells:24", &iso, &["--mode", "iso", "--iso", "0.5"]);
+    let mut moved = lacuna::frame::Frame::read_exr(&iso).unwrap();
+    let z = moved.depth.as_mut().unwrap();
+    let hit = z.iter().position(|d| d.is_finite()).unwrap();
+    z[hit] += 5.0;
+    let moved_path = dir.path().join("moved.exr");
+    moved.write_exr(&moved_path).unwrap();
+    moved.depth = None;
+    let flat = dir.path().join("flat.exr");
+    moved.write_exr(&flat).unwrap();
+    // A depth in one frame only (a viewer's screenshot) is named; the
+    // colours decide.
+    for (other, code, needle) in [
+        (&moved_path, 1, "the depth (Z) differs at 1 pixels"),
+        (&flat, 0, "depth (Z): only in the first frame"),
+    ] {
+        let r = lacuna(
+            &["diff", iso.to_str().unwrap(), other.to_str().unwrap(), "--max-abs", "0"],
+            &[],
+        );
+        assert_eq!(r.code, code, "{}{}", r.stdout, r.stderr);
+        assert!(
+            r.stderr.contains(needle) || r.stdout.contains(needle),
+            "{}{}",
+            r.stdout,
+            r.stderr
+        );
+    }
+    let r = lacuna(&["diff", iso.to_str().unwrap(), moved_path.to_str().unwrap()], &[]);
+    assert!(
+        r.stdout.contains("differing 1 of 1280 pixels") && r.stdout.contains("depth (Z): max_abs 5.000000e0"),
+        "{}",
+        r.stdout
+    );
 }
 
 #[test]

@@ -341,6 +341,7 @@ impl Scene {
             volume: self.gpu_volume()?,
             tf: &self.lut,
         };
-        super::super::render::describe(frame, &self.volume, &self.tf, scene, desc, &self.ctx, &self.march)
+        let march = Some(self.march.phase("march")?);
+        lacuna::render::metadata::describe(frame, (&self.volume, &self.tf), scene, desc, self.ctx.info(), march)
     }
 }

@@ -1,0 +1,58 @@
+//! What a config's data sets can be checked for before anything runs,
+//! from their specs and headers, no voxel read: a missing file, a time
+//! range past the series' end, more transfer functions than channels, a
+//! look a multi-channel volume cannot take, bricks with the hardware
+//! filter. Found minutes into a run, each would throw the data sets
+//! already timed away.
+
+use super::config::BenchConfig;
+use crate::error::{Error, Result};
+use crate::render::{Filter, FrameDesc, Mode};
+use crate::tf::TransferFunction;
+use crate::volume::{check_one_channel, LoadOptions, Series, Storage};
+
+/// Checks every data set of `config` read from `origin`; an error names
+/// the file and the data set.
+pub fn check(config: &BenchConfig, origin: &str) -> Result<()> {
+    for ds in &config.datasets {
+        let label = ds.label(config)?;
+        let within = |e: Error| Error::format(origin, format!("data set '{label}': {e}"));
+        let series = match Series::open(&ds.volume, &LoadOptions::default()).and_then(|s| s.check_files().map(|_| s)) {
+            Ok(s) => s,
+            // Skipped with a note when the run reaches it.
+            Err(Error::Io { .. }) if ds.optional => continue,
+            Err(e) => return Err(within(e)),
+        };
+        if let Some([first, last]) = ds.time {
+            if first >= last {
+                return Err(within(Error::invalid(
+                    "time",
+                    format!("[{first}, {last}]"),
+                    "expected [FIRST, LAST] with FIRST < LAST: the first step warms up, the rest are timed",
+                )));
+            }
+            series.check_step(last).map_err(within)?;
+        }
+        let desc = ds.look(config).apply(FrameDesc::builder(1, 1))?.build()?;
+        if let Some(channels) = series.channels_known() {
+            if let Some(spec) = &ds.tf {
+                // Not an I/O error: `optional` skips a missing volume only.
+                let tf = TransferFunction::parse_channels(spec)
+                    .map_err(|e| within(Error::invalid("transfer function", spec, e.to_string())))?;
+                tf.check_channels(channels).map_err(within)?;
+            }
+            if desc.lighting().is_some() || matches!(desc.mode(), Mode::Iso(_)) {
+                check_one_channel(channels, "shaded and iso frames").map_err(within)?;
+            }
+        }
+        let bricks = matches!(ds.storage()?, Storage::Bricks { .. });
+        if bricks && config.timed_filter()? == Some(Filter::Hardware) {
+            return Err(within(Error::invalid(
+                "filter",
+                "hardware",
+                "bricked storage is sampled by the manual filter only; use filter = \"manual\" or another storage",
+            )));
+        }
+    }
+    Ok(())
+}
