@@ -467,7 +467,71 @@ fn the_viewer_steps_and_plays_a_series_and_matches_render() {
         let diff = lacuna(&["diff", a_str, b_str, "--max-abs", "0"], &[]);
         assert_eq!(diff.code, 0, "{keys}: {}{}", diff.stdout, diff.stderr);
         assert!(diff.stdout.contains("differing 0 of 3072"), "{}", diff.stdout);
+        // The screenshot says which step it shows, as render's frame does.
+        let shot = Frame::read_exr(&a).unwrap();
+        assert_eq!(shot.metadata.get("time").map(String::as_str), Some(step), "{keys}");
     }
+}
+
+/// A step of a series that does not load (a file cut short) is named in a
+/// note and the step shown kept; the session goes on to the next keys.
+#[test]
+fn a_step_that_does_not_load_is_a_note_not_the_end_of_the_session() {
+    let dir = tempfile::tempdir().unwrap();
+    for k in 0..3 {
+        let file = dir.path().join(format!("run_{k:04}_16x16x16_uint8.raw"));
+        let time = k.to_string();
+        let export = ["export", "vessels:16", file.to_str().unwrap(), "--time", &time];
+        ok(&lacuna(&export, &[]), &format!("{export:?}"));
+    }
+    let cut = dir.path().join("run_0001_16x16x16_uint8.raw");
+    std::fs::File::options()
+        .write(true)
+        .open(&cut)
+        .unwrap()
+        .set_len(100)
+        .unwrap();
+    let pattern = dir.path().join("run_%04d_16x16x16_uint8.raw");
+    let pattern = pattern.to_str().unwrap();
+    let (a, b) = (dir.path().join("view.exr"), dir.path().join("render.exr"));
+    let size = ["--size", "32x32", "--validate"];
+    // `.` asks for the cut step 1; after a frame, `,` goes back from 0 to 2.
+    let view = [
+        &[
+            "view",
+            pattern,
+            "--keys",
+            ".,frame,Comma",
+            "--frames",
+            "2",
+            "--screenshot",
+            a.to_str().unwrap(),
+        ][..],
+        &size,
+    ]
+    .concat();
+    let r = lacuna_windowed(&view);
+    assert_eq!(r.code, 0, "{view:?}: {}{}", r.stdout, r.stderr);
+    // That note and nothing else (--validate prints any message).
+    assert!(
+        r.stderr.lines().count() == 1
+            && r.stderr.starts_with("note: time step 1 not shown: ")
+            && r.stderr.contains("run_0001_16x16x16_uint8.raw: holds 100 bytes"),
+        "{}",
+        r.stderr
+    );
+    let render = [
+        &["render", pattern, "--time", "2", "--out", b.to_str().unwrap()][..],
+        &size,
+    ]
+    .concat();
+    ok(&lacuna(&render, &[]), &format!("{render:?}"));
+    let diff = lacuna(
+        &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--max-abs", "0"],
+        &[],
+    );
+    assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
+    assert_eq!(Frame::read_exr(&a).unwrap().metadata["time"], "2");
 }
 
 /// A frame lavapipe's loop cap cut short (the LBVH on vessels:32 at the

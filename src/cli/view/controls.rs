@@ -83,6 +83,9 @@ pub struct Change {
     pub screenshot: bool,
     /// The time step changed: load it, upload it, rebuild.
     pub time: bool,
+    /// T cycled the presets: one that does not read (a JSON file gone
+    /// since) is passed over, not returned to.
+    pub cycled: bool,
     pub quit: bool,
     /// Why the key changed nothing the frame shows (a `note:`), if so.
     pub ignored: Option<&'static str>,
@@ -173,6 +176,26 @@ impl Controls {
         self.presets[self.preset].spec()
     }
 
+    /// The current preset, read by `read`; None (and why, in the notes)
+    /// where it does not read, as a JSON file gone since. Where T cycled
+    /// to it (`cycled`), such a preset is passed over to the next that
+    /// reads, so T cannot stick on it.
+    pub fn read_preset<T>(&mut self, cycled: bool, read: impl Fn(&str) -> Result<T>) -> (Option<T>, Vec<String>) {
+        let n = self.presets.len();
+        let mut notes = Vec::new();
+        for _ in 0..if cycled { n } else { 1 } {
+            match read(&self.tf_spec()) {
+                Ok(tf) => return (Some(tf), notes),
+                Err(e) if cycled => {
+                    notes.push(format!("transfer function {} skipped: {e}", self.tf_spec()));
+                    self.preset = (self.preset + 1) % n;
+                }
+                Err(e) => notes.push(format!("transfer function not changed: {e}")),
+            }
+        }
+        (None, notes)
+    }
+
     /// Orbits by a mouse drag of `(dx, dy)` pixels.
     pub fn orbit(&mut self, dx: f64, dy: f64) {
         let o = &mut self.orbit;
@@ -208,6 +231,7 @@ impl Controls {
             "t" | "T" => {
                 self.preset = (self.preset + 1) % self.presets.len();
                 change.tf = true;
+                change.cycled = true;
             }
             "j" | "J" => {
                 if let Some(path) = &self.json {
@@ -457,6 +481,28 @@ mod tests {
         assert_eq!(c.ert, Some(ERT));
         c.key("e", false);
         assert_eq!(c.ert, None);
+    }
+
+    #[test]
+    fn t_passes_over_a_preset_that_no_longer_reads_and_j_does_not() {
+        let mut c = controls("band:0.4:0.6:0.5");
+        c.json = Some("gone.json".into());
+        c.key("j", false);
+        let gone = c.preset;
+        // The file went after J loaded it: it no longer reads.
+        let read = |spec: &str| match spec {
+            "gone.json" => Err(lacuna::Error::invalid("transfer function", spec, "no such file")),
+            _ => Ok(spec.to_string()),
+        };
+        let (tf, notes) = c.read_preset(false, read);
+        assert_eq!((tf, notes.len(), c.preset), (None, 1, gone));
+        // T from the preset before it lands on it, and goes on past it.
+        c.preset = gone - 1;
+        let change = c.key("t", false);
+        assert_eq!(c.preset, gone);
+        let (tf, notes) = c.read_preset(change.cycled, read);
+        assert_eq!(tf.as_deref(), Some("band:0.4:0.6:0.5"), "{notes:?}");
+        assert!(notes[0].starts_with("transfer function gone.json skipped"), "{notes:?}");
     }
 
     #[test]

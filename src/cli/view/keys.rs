@@ -87,12 +87,15 @@ impl Viewer {
         if change.tf {
             // A TF the keys made invalid, or a JSON file that no longer
             // reads, is reported and the current one kept.
-            match TransferFunction::parse_channels(&self.controls.tf_spec()) {
-                Ok(tf) => self.scene.set_tf(tf)?,
-                Err(e) => {
-                    say_err!("note: transfer function not changed: {e}");
-                    (self.controls.presets, self.controls.preset) = before;
-                }
+            let (read, notes) = self
+                .controls
+                .read_preset(change.cycled, TransferFunction::parse_channels);
+            for note in notes {
+                say_err!("note: {note}");
+            }
+            match read {
+                Some(tf) => self.scene.set_tf(tf)?,
+                None => (self.controls.presets, self.controls.preset) = before,
             }
         }
         if change.structure && self.scene.accel.name() != self.controls.accel.name() {

@@ -126,7 +126,7 @@ impl LookControls {
                     None => change.ignored = Some("no clip plane is shown (C shows one)"),
                 }
             }
-            _ => change.ignored = Some("not a look key"),
+            _ => change.ignored = Some("no key of the viewer's (README, \"Viewer\", lists them)"),
         }
         change
     }

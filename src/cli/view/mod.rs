@@ -1,7 +1,8 @@
 //! `lacuna view`: an interactive window on a volume. The viewer is a host
 //! like any engine (`host`: its own instance, device, swapchain) that adopts
 //! its device into lacuna (`scene`: the renderer's use, in one module);
-//! `controls` turns mouse and keys into camera, TF and structure changes.
+//! `controls` turns mouse and keys into camera, TF and structure changes;
+//! `title` says what the window shows; `window` holds winit's side.
 
 mod blit;
 mod controls;
@@ -10,6 +11,8 @@ mod keys;
 mod look;
 mod scene;
 mod tf_shape;
+mod title;
+mod window;
 
 use super::args::{AccelParser, FrameArgs, ModelArgs};
 use super::{check_parent, tf_for, validation_verdict, VolumeArgs};
@@ -18,7 +21,7 @@ use controls::Controls;
 use host::Host;
 use lacuna::accel::Accel;
 use lacuna::frame::{Frame, FrameFormat};
-use lacuna::render::{self, Filter, FrameDesc, Octants};
+use lacuna::render::{self, Filter, FrameDesc};
 use lacuna::volume::Series;
 use lacuna::{Error, Result, TransferFunction};
 use scene::Scene;
@@ -28,6 +31,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
+use window::{fit, is_modifier, without_source_location};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -149,6 +153,9 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let volume = series.load(args.volume.time, None)?;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
+    for note in super::render::look_notes(&desc) {
+        say!("note: {note}");
+    }
     let event_loop = EventLoop::new().map_err(|e| {
         let e = without_source_location(&e.to_string());
         Error::NoDevice(format!(
@@ -299,7 +306,10 @@ impl ApplicationHandler for App<'_> {
                 viewer.modifiers = m.state();
                 Ok(())
             }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // A modifier or lock key alone is part of another key, not one.
+            WindowEvent::KeyboardInput { event, .. }
+                if event.state == ElementState::Pressed && !is_modifier(&event.logical_key) =>
+            {
                 let name = match &event.logical_key {
                     Key::Named(named) => format!("{named:?}"),
                     Key::Character(c) => c.to_string(),
@@ -361,7 +371,7 @@ impl Viewer {
         if self.resize {
             let size = self.window.inner_size();
             let extent = self.host.resize((size.width, size.height))?;
-            self.controls.size = (extent.width, extent.height);
+            self.controls.size = self.render_size((extent.width, extent.height));
             self.resize = false;
         }
         let last = args.frames.is_some_and(|n| self.drawn + 1 >= n);
@@ -370,10 +380,20 @@ impl Viewer {
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
         let lit = desc.lighting().is_some();
         if self.shown != self.controls.time {
-            let (volume, load_ms) = self.take_step(self.controls.time)?;
-            self.load_ms = load_ms;
-            self.scene.set_volume(volume, lit)?;
-            self.shown = self.controls.time;
+            // A step that does not load (a file cut short) is named and
+            // the shown one kept; play stops there.
+            match self.take_step(self.controls.time) {
+                Ok((volume, load_ms)) => {
+                    self.load_ms = load_ms;
+                    self.scene.set_volume(volume, lit)?;
+                    self.shown = self.controls.time;
+                }
+                Err(e) => {
+                    say_err!("note: time step {} not shown: {e}", self.controls.time);
+                    self.controls.time = self.shown;
+                    self.controls.playing = false;
+                }
+            }
         }
         // The next step loads while this one uploads, builds and renders.
         if self.controls.playing && self.prefetch.is_none() {
@@ -446,6 +466,27 @@ impl Viewer {
         Ok(last)
     }
 
+    /// The frame's size for a window of `window` pixels: the window's, or
+    /// where the device cannot render that many (its storage range), the
+    /// largest of the same shape it can, which the present step scales up.
+    fn render_size(&self, window: (u32, u32)) -> (u32, u32) {
+        let info = self.scene.context().info();
+        let size = fit(window, |(w, h)| {
+            lacuna::render::RenderTarget::check_size(info, w, h).is_ok()
+        });
+        if size != window {
+            say_err!(
+                "note: the window's {}x{} pixels are more than {} renders: rendering {}x{}, scaled to the window",
+                window.0,
+                window.1,
+                info.name,
+                size.0,
+                size.1
+            );
+        }
+        size
+    }
+
     /// Step `k`: the one loading on the host thread when it is `k` (a
     /// step that failed to load fails here), else loaded now.
     fn take_step(&mut self, k: u32) -> Result<(lacuna::Volume, f64)> {
@@ -462,19 +503,6 @@ impl Viewer {
         Ok((volume, t.elapsed().as_secs_f64() * 1000.0))
     }
 
-    /// "time step K of N" for a series; empty for one volume.
-    fn step_text(&self) -> String {
-        match self.series.steps() {
-            1 => String::new(),
-            n => format!(
-                "time step {} of {n} (load {:.1} ms, upload {:.1} ms)",
-                self.shown,
-                self.load_ms,
-                self.scene.upload_ms()
-            ),
-        }
-    }
-
     fn write(&self, path: &Path, format: FrameFormat) -> Result<()> {
         let Some(mut frame): Option<Frame> = self.scene.frame()? else {
             return Ok(());
@@ -484,93 +512,11 @@ impl Viewer {
         let volume = &self.scene.volume;
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
         self.scene.describe(&mut frame, &desc)?;
+        if self.series.steps() > 1 {
+            frame.metadata.insert("time".into(), self.shown.to_string());
+        }
         frame.write(path, format)?;
         say!("wrote {}", path.display());
         Ok(())
-    }
-
-    /// The `--frames` run's last line: what the title showed last.
-    fn summary(&self) -> String {
-        let step = self.step_text();
-        // An octant map holds the ray directions of the frames so far.
-        let octants = match self.scene.structure.octants() {
-            o if o == Octants::ALL => String::new(),
-            o => format!(", {} of 8 octants", o.len()),
-        };
-        format!(
-            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}{octants}){}{step}{}",
-            self.drawn,
-            self.fps,
-            self.scene.march_ms(),
-            self.scene.rebuild_ms(),
-            self.scene.accel,
-            if step.is_empty() { "" } else { ", " },
-            self.cut_text(),
-        )
-    }
-
-    /// What a frame the device's loop cap cut short adds to the title
-    /// (`Renderer::check_whole`): that it is not the exact frame.
-    fn cut_text(&self) -> String {
-        match self.scene.cut_groups {
-            0 => String::new(),
-            n => format!(" · NOT EXACT: the device's loop cap cut {n} SIMD group(s) short, take a coarser step"),
-        }
-    }
-
-    fn title(&self) -> String {
-        let scene = &self.scene;
-        let accel = match scene.structure.marched_as_reason() {
-            Some(m) => format!("{} -> {}", scene.accel, m.label),
-            None => scene.accel.to_string(),
-        };
-        let c = &self.controls;
-        let step = self.step_text();
-        let cut = self.cut_text();
-        format!(
-            "lacuna view · {}{}{step} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
-            scene.volume.name,
-            if step.is_empty() { "" } else { " · " },
-            scene.tf.spec,
-            c.look.describe(),
-            self.fps,
-            scene.march_ms(),
-            scene.rebuild_ms(),
-            c.step,
-            c.ert.map_or("off".to_string(), |e| e.to_string()),
-        )
-    }
-}
-
-/// A windowing error without where in winit's sources it was raised: winit
-/// writes `os error at /path/to/registry/winit-x/src/...rs:765: reason`,
-/// and a user needs the reason, not a build path.
-fn without_source_location(message: &str) -> String {
-    let Some(at) = message.find("os error at ") else {
-        return message.to_string();
-    };
-    let rest = &message[at + "os error at ".len()..];
-    // The location ends at the first ".rs:LINE: ".
-    let reason = rest.find(".rs:").and_then(|i| {
-        let after = &rest[i + 4..];
-        let digits = after.chars().take_while(char::is_ascii_digit).count();
-        after[digits..].strip_prefix(": ").filter(|_| digits > 0)
-    });
-    match reason {
-        Some(reason) => format!("{}{}", &message[..at], reason),
-        None => message.to_string(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn window_errors_name_no_build_path() {
-        let winit = "os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set.";
-        assert_eq!(
-            super::without_source_location(winit),
-            "neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set."
-        );
-        assert_eq!(super::without_source_location("no display"), "no display");
     }
 }

@@ -1,0 +1,92 @@
+//! The window's part: which keys are keys, the frame's size for a window
+//! past the device's limits, and winit's errors without build paths.
+
+use winit::keyboard::Key;
+
+/// `size`, or where it does not `fits`, the first of the same shape that
+/// does, each side 9/10 of the one before.
+pub(super) fn fit(size: (u32, u32), fits: impl Fn((u32, u32)) -> bool) -> (u32, u32) {
+    let mut size = size;
+    while !fits(size) && size.0.max(size.1) > 1 {
+        size = ((size.0 * 9 / 10).max(1), (size.1 * 9 / 10).max(1));
+    }
+    size
+}
+
+/// Shift, Control, Alt and the like, and the lock keys: pressed on their
+/// own they ask for nothing.
+pub(super) fn is_modifier(key: &Key) -> bool {
+    use winit::keyboard::NamedKey::*;
+    matches!(
+        key,
+        Key::Named(
+            Shift
+                | Control
+                | Alt
+                | AltGraph
+                | Super
+                | Meta
+                | Hyper
+                | Fn
+                | FnLock
+                | CapsLock
+                | NumLock
+                | ScrollLock
+                | Symbol
+                | SymbolLock
+        )
+    )
+}
+
+/// A windowing error without where in winit's sources it was raised: winit
+/// writes `os error at /path/to/registry/winit-x/src/...rs:765: reason`,
+/// and a user needs the reason, not a build path.
+pub(super) fn without_source_location(message: &str) -> String {
+    let Some(at) = message.find("os error at ") else {
+        return message.to_string();
+    };
+    let rest = &message[at + "os error at ".len()..];
+    // The location ends at the first ".rs:LINE: ".
+    let reason = rest.find(".rs:").and_then(|i| {
+        let after = &rest[i + 4..];
+        let digits = after.chars().take_while(char::is_ascii_digit).count();
+        after[digits..].strip_prefix(": ").filter(|_| digits > 0)
+    });
+    match reason {
+        Some(reason) => format!("{}{}", &message[..at], reason),
+        None => message.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn window_errors_name_no_build_path() {
+        let winit = "os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set.";
+        assert_eq!(
+            super::without_source_location(winit),
+            "neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set."
+        );
+        assert_eq!(super::without_source_location("no display"), "no display");
+    }
+
+    #[test]
+    fn a_window_past_the_device_renders_the_largest_frame_of_its_shape_that_fits() {
+        // lavapipe's 128 MiB storage range at 16 bytes a pixel.
+        let fits = |(w, h): (u32, u32)| w as u64 * h as u64 * 16 <= 1 << 27;
+        assert_eq!(super::fit((256, 256), fits), (256, 256));
+        let (w, h) = super::fit((3000, 3000), fits);
+        assert!(fits((w, h)) && w == h && w > 2000, "{w}x{h}");
+        let (w, h) = super::fit((6000, 1000), fits);
+        assert!(fits((w, h)) && w / h == 6, "{w}x{h}");
+    }
+
+    #[test]
+    fn modifier_keys_alone_are_no_keys() {
+        use winit::keyboard::{Key, NamedKey};
+        assert!(super::is_modifier(&Key::Named(NamedKey::Shift)));
+        assert!(super::is_modifier(&Key::Named(NamedKey::CapsLock)));
+        assert!(!super::is_modifier(&Key::Named(NamedKey::Tab)));
+        assert!(!super::is_modifier(&Key::Character("t".into())));
+    }
+}
