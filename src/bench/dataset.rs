@@ -24,10 +24,7 @@ pub fn load(
 ) -> Result<Loaded> {
     let volume = series.load_stored(time.map_or(0, |[first, _]| first), storage, device, None)?;
     let tf = match tf {
-        // Not an Io error: `optional` skips a missing volume, not a
-        // missing transfer function file.
-        Some(spec) => TransferFunction::parse_channels(spec)
-            .map_err(|e| Error::invalid("transfer function", spec, e.to_string()))?,
+        Some(spec) => parse_tf(spec)?,
         None => volume.default_transfer_function()?,
     };
     tf.check_channels(volume.channel_count())?;
@@ -35,5 +32,15 @@ pub fn load(
         spec: label,
         tf,
         volume,
+    })
+}
+
+/// A data set's `tf`; a file it cannot read is an invalid transfer
+/// function, not an I/O error: `optional` skips a missing volume, not a
+/// missing transfer function file.
+pub fn parse_tf(spec: &str) -> Result<TransferFunction> {
+    TransferFunction::parse_channels(spec).map_err(|e| match e {
+        Error::Io { .. } => Error::invalid("transfer function", spec, e.to_string()),
+        e => e,
     })
 }

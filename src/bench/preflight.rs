@@ -6,9 +6,9 @@
 //! already timed away.
 
 use super::config::BenchConfig;
+use super::dataset::parse_tf;
 use crate::error::{Error, Result};
 use crate::render::{Filter, FrameDesc, Mode};
-use crate::tf::TransferFunction;
 use crate::volume::{check_one_channel, LoadOptions, Series, Storage};
 
 /// Checks every data set of `config` read from `origin`; an error names
@@ -36,9 +36,7 @@ pub fn check(config: &BenchConfig, origin: &str) -> Result<()> {
         let desc = ds.look(config).apply(FrameDesc::builder(1, 1))?.build()?;
         if let Some(channels) = series.channels_known() {
             if let Some(spec) = &ds.tf {
-                // Not an I/O error: `optional` skips a missing volume only.
-                let tf = TransferFunction::parse_channels(spec)
-                    .map_err(|e| within(Error::invalid("transfer function", spec, e.to_string())))?;
+                let tf = parse_tf(spec).map_err(within)?;
                 tf.check_channels(channels).map_err(within)?;
             }
             if desc.lighting().is_some() || matches!(desc.mode(), Mode::Iso(_)) {

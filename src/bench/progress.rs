@@ -34,13 +34,13 @@ impl Progress {
         self.bar.inc(n);
     }
 
-    /// Prints a line above the bar (or plainly when hidden).
+    /// Prints a `note:` line above the bar (or plainly when hidden).
     pub fn note(&self, line: &str) {
         if self.bar.is_hidden() {
             // Dropped where stderr cannot take it, never a panic.
-            let _ = writeln!(std::io::stderr(), "{line}");
+            let _ = writeln!(std::io::stderr(), "note: {line}");
         } else {
-            self.bar.println(line);
+            self.bar.println(format!("note: {line}"));
         }
     }
 

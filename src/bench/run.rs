@@ -519,8 +519,17 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
                 storage: ds.storage()?,
             };
             let step_frame = |scene: Scene, desc: &FrameDesc, read: bool| frames.frame(scene, desc, read);
-            out.steps
-                .extend(bench.run(&loaded.spec, &series, range, step_frame, &progress)?);
+            let steps = bench.run(&loaded.spec, &series, range, step_frame, &progress)?;
+            // An inexact structure's steps (the paper's classification).
+            for r in steps.iter().filter(|r| r.differing_pixels > 0) {
+                let note = format!(
+                    "{} - {}: {} pixels of its new-step frames differ from naive's",
+                    r.dataset, r.structure, r.differing_pixels
+                );
+                progress.note(&note);
+                out.notes.push(note);
+            }
+            out.steps.extend(steps);
         }
         // Speed against error, on the volume and ranges already uploaded.
         if let Some(e) = config

@@ -170,12 +170,6 @@ impl StepBench<'_> {
             on_device = Some((gv, volume));
         }
         let load_ms = median(loads);
-        for (s, d) in self.structures.iter().zip(&differing).filter(|(_, d)| **d > 0) {
-            progress.note(&format!(
-                "{label} - {}: {d} pixels of its new-step frames differ from naive's",
-                s.label
-            ));
-        }
         let timed = last - first;
         let chosen: Vec<Option<String>> = choices
             .iter()

@@ -74,6 +74,25 @@ fn dagger(r: &Record) -> &'static str {
     }
 }
 
+/// The dagger's legend, under a table where a record has one.
+fn unstable_note(records: &[Record]) -> String {
+    match records.iter().any(|r| r.unstable) {
+        true => format!("\n{UNSTABLE_NOTE}\n"),
+        false => String::new(),
+    }
+}
+
+/// Seconds to three significant digits (a grid's build is 0.0000123 s).
+fn seconds(s: f64) -> String {
+    match s {
+        s if s >= 1.0 || s == 0.0 => format!("{s:.3}"),
+        s => {
+            let decimals = (2 - s.log10().floor() as i32).max(3) as usize;
+            format!("{s:.decimals$}")
+        }
+    }
+}
+
 const UNSTABLE_NOTE: &str =
     "† unstable: a view's frame times (or the builds) spread more than 1.5x over the rounds; re-run on a quieter machine.";
 
@@ -86,13 +105,11 @@ pub fn table2_md(records: &[Record]) -> String {
             let build = if r.accel == "naive" {
                 "-".to_string()
             } else {
-                format!("{:.4}", r.build_ms / 1000.0)
+                seconds(r.build_ms / 1000.0)
             };
             format!("{build} / {:.2} ({:.2}x){}", r.fps, r.speedup, dagger(r))
         },
-    ) + "\n"
-        + UNSTABLE_NOTE
-        + "\n"
+    ) + &unstable_note(records)
 }
 
 /// Frame times: median [min, max] ms over every view and round, and the
@@ -112,9 +129,7 @@ pub fn frames_md(records: &[Record]) -> String {
                 dagger(r)
             )
         },
-    ) + "\n"
-        + UNSTABLE_NOTE
-        + "\n"
+    ) + &unstable_note(records)
 }
 
 /// The fastest exact structure per data set (by median frame; a structure
@@ -248,4 +263,21 @@ pub fn errors_csv(points: &[ErrorPoint]) -> String {
         );
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn build_seconds_keep_three_significant_digits() {
+        let cases = [
+            (0.0000123, "0.0000123"),
+            (0.0039, "0.00390"),
+            (0.5, "0.500"),
+            (12.345, "12.345"),
+            (0.0, "0.000"),
+        ];
+        for (s, text) in cases {
+            assert_eq!(super::seconds(s), text, "{s}");
+        }
+    }
 }

@@ -12,7 +12,8 @@ use crate::error::{Error, Result};
 pub struct LookSpec {
     /// composite, mip, minip, average or iso.
     pub mode: Option<String>,
-    /// Iso values V[,V2,...] (mode iso).
+    /// Iso values V[,V2,...] (mode iso); in TOML also a number, `iso = 0.3`.
+    #[cfg_attr(feature = "serde", serde(default, deserialize_with = "number_or_text"))]
     pub iso: Option<String>,
     /// Iso surface colour R,G,B.
     pub iso_color: Option<String>,
@@ -30,6 +31,31 @@ pub struct LookSpec {
     /// Crop box X0:X1,Y0:Y1,Z0:Z1.
     pub crop: Option<String>,
     pub jitter: Option<bool>,
+}
+
+/// A value given as text or as a number (`"0.3,0.5"` or `0.3`), as text.
+#[cfg(feature = "serde")]
+fn number_or_text<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<String>, D::Error> {
+    struct Given;
+    impl serde::de::Visitor<'_> for Given {
+        type Value = String;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a number or a string of numbers separated by commas")
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+        fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+    }
+    d.deserialize_any(Given).map(Some)
 }
 
 impl LookSpec {

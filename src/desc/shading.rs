@@ -110,7 +110,8 @@ impl Shading {
             Light::Fixed {
                 azimuth_deg,
                 elevation_deg,
-            } => format!("{azimuth_deg},{elevation_deg}"),
+                // Read as f32 (`parse`): printed as one, 30 is not 30.000001907348633.
+            } => format!("{},{}", azimuth_deg as f32, elevation_deg as f32),
         };
         let mut s = format!(
             "light {light}, phong {},{},{},{}",

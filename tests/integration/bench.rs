@@ -538,6 +538,25 @@ fn protocol_fields_have_documented_defaults_and_data_sets_their_own_ert() {
     assert_eq!(c.datasets[1].ert, Some(0.99));
     assert_eq!(c.datasets[1].label(&c).unwrap(), "nbody:8 [ert 0.99]");
     assert_eq!(c.datasets[0].label(&c).unwrap(), "nbody:8");
+    // An iso value as a TOML number is the same as its text; a time range
+    // is in the label.
+    let iso = |value: &str| {
+        let c = BenchConfig::parse(
+            &format!(
+                "[[dataset]]\nvolume = \"nbody:8\"\ntime = [1, 3]\nlook = {{ mode = \"iso\", iso = {value} }}\n\
+                 [[structure]]\nlabel = \"n\"\naccel = \"naive\"\n"
+            ),
+            "iso.toml",
+        );
+        c.and_then(|c| c.datasets[0].label(&c)).map_err(|e| e.to_string())
+    };
+    assert_eq!(iso("0.3"), iso("\"0.3\""));
+    assert_eq!(iso("0.3").unwrap(), "nbody:8 [mode iso; iso 0.3; shade; time 1..3]");
+    assert!(
+        iso("true").unwrap_err().contains("a number or a string of numbers"),
+        "{:?}",
+        iso("true")
+    );
     // The built-in auto suite times every data set with ERT off and on.
     let auto = BenchConfig::parse(lacuna::bench::config::AUTO, "auto").unwrap();
     let on = auto.datasets.iter().filter(|d| d.ert.is_some()).count();
