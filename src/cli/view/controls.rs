@@ -285,13 +285,20 @@ impl Controls {
                 self.pan = DVec2::ZERO;
             }
             "s" | "S" => change.screenshot = true,
-            "Space" => self.playing = !self.playing && self.steps > 1,
+            "Space" => {
+                self.playing = !self.playing && self.steps > 1;
+                if self.steps <= 1 {
+                    change.ignored = Some("one volume: no time steps to play");
+                }
+            }
             // In a series `,` and `.` step through time; `<` and `>` (and,
             // in one volume, `,` and `.`) move the iso value.
             "," | "." if self.steps > 1 => change.time = self.step_time(if key == "," { -1 } else { 1 }),
             "<" | ">" => {
                 let nudge = if key == "<" { "," } else { "." };
-                change.structure = self.look.key(nudge, &self.orbit).rebuild;
+                let look = self.look.key(nudge, &self.orbit);
+                change.structure = look.rebuild;
+                change.ignored = look.ignored;
             }
             "Escape" | "q" | "Q" => change.quit = true,
             _ => {
@@ -379,10 +386,19 @@ mod tests {
     fn comma_and_period_step_a_series_and_nudge_the_iso_value_of_one_volume() {
         let mut one = controls("ramp:0.3:1");
         let iso = one.look.iso.values()[0];
-        assert!(!one.key(",", false).time);
+        // Outside iso mode the value moves unseen, and the key says so.
+        let nudged = one.key(",", false);
+        assert!(!nudged.time && nudged.ignored.is_some_and(|w| w.contains("once M reaches iso")));
         assert!(one.look.iso.values()[0] < iso);
-        one.key("Space", false);
+        let play = one.key("Space", false);
         assert!(!one.playing, "one volume does not play");
+        assert_eq!(play.ignored, Some("one volume: no time steps to play"));
+        let lit = one.key("m", false);
+        assert!(lit.ignored.is_none());
+        assert!(one
+            .key("l", false)
+            .ignored
+            .is_some_and(|w| w.starts_with("shading lights composite")));
         let mut series = controls("ramp:0.3:1");
         series.steps = 3;
         assert!(series.key(",", false).time);

@@ -90,12 +90,21 @@ impl LookControls {
                 if let Ok(moved) = moved {
                     self.iso = moved;
                 }
-                if let Mode::Iso(_) = self.mode {
-                    self.mode = Mode::Iso(self.iso);
-                    change.rebuild = true;
+                match self.mode {
+                    Mode::Iso(_) => {
+                        self.mode = Mode::Iso(self.iso);
+                        change.rebuild = true;
+                    }
+                    _ => change.ignored = Some("the iso value moved; it shows once M reaches iso"),
                 }
             }
-            "l" | "L" => self.shade = !self.shade,
+            "l" | "L" => {
+                self.shade = !self.shade;
+                if matches!(self.mode, Mode::Mip | Mode::MinIp | Mode::Average) {
+                    change.ignored =
+                        Some("shading lights composite frames (iso surfaces always): it shows once M reaches them");
+                }
+            }
             "x" | "X" => self.jitter = !self.jitter,
             // The command line's planes may leave no room for another.
             "c" | "C" | "v" | "V" if self.plane.is_none() && self.clip.planes().len() == MAX_CLIP => {

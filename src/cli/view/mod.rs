@@ -111,12 +111,17 @@ struct Viewer {
     load_ms: f64,
 }
 
-/// A time step loading on a host thread: the volume and its load time.
-type Loading = JoinHandle<Result<(lacuna::Volume, f64)>>;
+/// A time step and how long its host load took, ms.
+type LoadedStep = (lacuna::Volume, f64);
+
+/// A time step loading on a host thread.
+type Loading = JoinHandle<Result<LoadedStep>>;
 
 struct App<'a> {
     args: &'a ViewArgs,
-    setup: Option<(Arc<Series>, lacuna::Volume, TransferFunction, FrameDesc)>,
+    /// The series, its first step and how long that took to load, its TF
+    /// and the first frame.
+    setup: Option<(Arc<Series>, LoadedStep, TransferFunction, FrameDesc)>,
     viewer: Option<Viewer>,
     error: Option<Error>,
 }
@@ -150,7 +155,9 @@ impl ViewArgs {
 pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let desc = args.desc()?;
     let series = Arc::new(args.volume.series()?);
+    let loading = Instant::now();
     let volume = series.load(args.volume.time, None)?;
+    let load_ms = loading.elapsed().as_secs_f64() * 1000.0;
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
     for note in super::render::look_notes(&desc) {
@@ -165,7 +172,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App {
         args,
-        setup: Some((series, volume, tf, desc)),
+        setup: Some((series, (volume, load_ms), tf, desc)),
         viewer: None,
         error: None,
     };
@@ -204,7 +211,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
 
 impl App<'_> {
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let Some((series, volume, tf, desc)) = self.setup.take() else {
+        let Some((series, (volume, first_load_ms), tf, desc)) = self.setup.take() else {
             return Ok(());
         };
         let (width, height) = desc.size();
@@ -259,7 +266,7 @@ impl App<'_> {
             shown: self.args.volume.time,
             series,
             prefetch: None,
-            load_ms: 0.0,
+            load_ms: first_load_ms,
         });
         if let Some(viewer) = self.viewer.as_mut() {
             viewer.pending_keys = self.args.keys.iter().cloned().collect();
@@ -489,7 +496,7 @@ impl Viewer {
 
     /// Step `k`: the one loading on the host thread when it is `k` (a
     /// step that failed to load fails here), else loaded now.
-    fn take_step(&mut self, k: u32) -> Result<(lacuna::Volume, f64)> {
+    fn take_step(&mut self, k: u32) -> Result<LoadedStep> {
         if let Some((next, load)) = self.prefetch.take() {
             let loaded = load
                 .join()

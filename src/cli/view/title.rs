@@ -31,7 +31,7 @@ impl Viewer {
             self.fps,
             self.scene.march_ms(),
             self.scene.rebuild_ms(),
-            self.scene.accel,
+            self.accel_text(),
             if step.is_empty() { "" } else { ", " },
             self.cut_text(),
         )
@@ -46,12 +46,19 @@ impl Viewer {
         }
     }
 
-    pub(super) fn title(&self) -> String {
+    /// The structure, and what marched it where another kernel did
+    /// (`auto -> distance-octant (cell 4)`, `kd-cpu -> naive`).
+    fn accel_text(&self) -> String {
         let scene = &self.scene;
-        let accel = match scene.structure.marched_as_reason() {
+        match scene.structure.marched_as_reason() {
             Some(m) => format!("{} -> {}", scene.accel, m.label),
             None => scene.accel.to_string(),
-        };
+        }
+    }
+
+    pub(super) fn title(&self) -> String {
+        let scene = &self.scene;
+        let accel = self.accel_text();
         let c = &self.controls;
         let step = self.step_text();
         let cut = self.cut_text();
