@@ -37,3 +37,25 @@ pub fn slug(s: &str) -> PathBuf {
             .collect::<String>(),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::frame_file;
+
+    #[test]
+    fn long_frame_names_keep_a_prefix_and_a_stable_hash_and_stay_apart() {
+        assert_eq!(
+            frame_file("nbody:8 [shade]", "grid 8"),
+            "frames/nbody_8__shade_-grid_8.exr"
+        );
+        let clip = "clip 1,0,0,-4; ".repeat(20);
+        let (a, b) = (frame_file(&clip, "grid"), frame_file(&clip, "lbvh"));
+        let prefix = format!("frames/{}", &super::slug(&clip).display().to_string()[..180]);
+        for f in [&a, &b] {
+            // 180 bytes of slug, `~`, 16 hex digits, `.exr`: under 255.
+            assert!(f.starts_with(&prefix) && f.len() == prefix.len() + 1 + 16 + 4, "{f}");
+        }
+        assert_ne!(a, b, "two structures, two files");
+        assert_eq!(a, frame_file(&clip, "grid"), "the same name every run");
+    }
+}

@@ -40,6 +40,9 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 /// files as they were, not half of a new set.
 pub fn write_outputs(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) -> Result<Vec<String>> {
     let created = !dir.exists();
+    // Only a folder an earlier run wrote holds its outputs to remove: any
+    // other (`--out .`) may hold the user's own notes.txt.
+    let earlier_run = dir.join("results.json").is_file();
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let stage = dir.join(format!(".lacuna-bench-{}.tmp", std::process::id()));
     // Left by a killed run whose process id this one reuses.
@@ -70,7 +73,7 @@ pub fn write_outputs(dir: &Path, out: &BenchOutput, extra: &[(&str, String)]) ->
     if moved.is_err() && created {
         let _ = std::fs::remove_dir_all(dir);
     }
-    if let Ok(paths) = &moved {
+    if let (Ok(paths), true) = (&moved, earlier_run) {
         remove_stale(dir, paths);
     }
     moved
@@ -90,9 +93,10 @@ const SOMETIMES: [&str; 9] = [
     "contract.md",
 ];
 
-/// Removes the outputs of an earlier run in `dir` that this one (which
-/// wrote `written`) did not replace: the files above and frames/*.exr.
-/// Anything else there is the user's and stays.
+/// Removes the outputs of an earlier run in `dir` (a folder that held a
+/// results.json) that this one (which wrote `written`) did not replace:
+/// the files above and frames/*.exr. Anything else there is the user's
+/// and stays.
 fn remove_stale(dir: &Path, written: &[String]) {
     let ours = |p: &Path| written.iter().any(|w| Path::new(w) == p);
     for name in SOMETIMES {
@@ -101,7 +105,12 @@ fn remove_stale(dir: &Path, written: &[String]) {
             let _ = std::fs::remove_file(&path);
         }
     }
-    let Ok(frames) = std::fs::read_dir(dir.join("frames")) else {
+    // Its own frames folder, not one a link leads to.
+    let folder = dir.join("frames");
+    if !std::fs::symlink_metadata(&folder).is_ok_and(|m| m.is_dir()) {
+        return;
+    }
+    let Ok(frames) = std::fs::read_dir(&folder) else {
         return;
     };
     for entry in frames.flatten() {

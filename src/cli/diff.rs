@@ -11,8 +11,8 @@ use std::process::ExitCode;
 pub struct DiffArgs {
     a: PathBuf,
     b: PathBuf,
-    /// Fail (exit 1) when the max abs difference of a colour channel exceeds
-    /// this, or where both frames' depth (Z) differs at all.
+    /// Fail (exit 1) when the max abs difference of a colour channel, or of
+    /// both frames' depth (Z), exceeds this (0: any difference).
     #[arg(long, allow_hyphen_values = true)]
     max_abs: Option<f64>,
     /// Write a PNG heatmap of per-pixel differences.
@@ -50,12 +50,12 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
             say_err!("error: max_abs {:.6e} exceeds --max-abs {m}", stats.max_abs);
             return Ok(ExitCode::from(1));
         }
-        // The depth is in the frame's distance units, not colour's: any
-        // difference fails. A depth in one frame only (a viewer's
-        // screenshot against render's iso frame) was named above.
-        if let DepthDiff::Both { differing, .. } = stats.depth {
-            if differing > 0 {
-                say_err!("error: the depth (Z) differs at {differing} pixels, with --max-abs {m}");
+        // The depth, in its own units, by the same bound (0: bit for bit).
+        // A depth in one frame only (a viewer's screenshot against
+        // render's iso frame) was named above.
+        if let DepthDiff::Both { max_abs, differing } = stats.depth {
+            if max_abs > m || (m == 0.0 && differing > 0) {
+                say_err!("error: the depth (Z) differs by {max_abs:.6e} at {differing} pixels, past --max-abs {m}");
                 return Ok(ExitCode::from(1));
             }
         }

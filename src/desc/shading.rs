@@ -164,3 +164,21 @@ pub fn whole_exponent(shininess: f32) -> u32 {
         false => 0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{Light, Shading};
+
+    #[test]
+    fn a_fixed_light_is_described_as_given() {
+        let shading = Shading {
+            light: Light::parse("45,30.1").unwrap(),
+            ..Shading::default()
+        };
+        assert!(
+            shading.describe().starts_with("light 45,30.1, phong "),
+            "{}",
+            shading.describe()
+        );
+    }
+}

@@ -199,6 +199,12 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     let unstable = records.iter().filter(|r| r.unstable).count();
     assert_eq!(marked(&table2), unstable, "{table2}");
     assert_eq!(marked(&frames_md), unstable, "{frames_md}");
+    // The legend only where a record is marked.
+    let legend = |t: &str| t.contains("† unstable: ");
+    assert_eq!((legend(&table2), legend(&frames_md)), (unstable > 0, unstable > 0), "{table2}");
+    let mut steady = records.clone();
+    steady.iter_mut().for_each(|r| r.unstable = false);
+    assert!(!legend(&lacuna::bench::tables::table2_md(&steady)));
     assert!(stdout.contains("fastest on nbody:32 [time 2..4]: "), "{stdout}");
     // Only an exact structure can be the fastest: a faster one whose image
     // differs from naive's (the paper's classification can) is passed over.
@@ -257,15 +263,22 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     }
     // Another device is named and compared; another frame size (or
     // filter, step, ...) is not the same work: one error line, no verdict.
+    // There the default filter may be the other one: a note too.
     let mut elsewhere = records.clone();
     for r in &mut elsewhere {
         r.setup.device = "another GPU".into();
+        r.filter = "hardware".into();
     }
     let mut smaller = records.clone();
     smaller[0].setup.width /= 2;
     smaller[0].filter = "hardware".into();
     for (name, other, code, needle) in [
-        ("elsewhere.json", &elsewhere, 0, "note: the runs differ in device: A "),
+        (
+            "elsewhere.json",
+            &elsewhere,
+            0,
+            "note: the runs differ in sample filter: A manual, B hardware",
+        ),
         ("smaller.json", &smaller, 2, "the runs rendered different frames: "),
     ] {
         let path = dir.path().join(name);
@@ -677,6 +690,14 @@ fn bad_bench_input_is_one_line() {
             "tfcount.toml: data set 'nbody:8': invalid transfer function",
         ),
         (
+            "brickshardware",
+            (
+                "elevation = 0.0\n[[dataset]]\nvolume = \"nbody:8\"",
+                "elevation = 0.0\nfilter = \"hardware\"\n[[dataset]]\nvolume = \"nbody:8\"\nstorage = \"bricks:8\"",
+            ),
+            "data set 'nbody:8 [storage bricks:8]': invalid filter 'hardware': bricked storage",
+        ),
+        (
             "shadechannels",
             (
                 "volume = \"nbody:8\"",
@@ -956,6 +977,19 @@ fn bench_outputs_are_all_or_nothing() {
         assert!(!old, "{stale} stayed");
     }
     assert!(out.join("mine.txt").is_file() && out.join("frames/nbody_8-grid.exr").is_file());
+    // A folder no run wrote before (no results.json) loses nothing.
+    let plain = dir.path().join("plain");
+    std::fs::create_dir_all(&plain).unwrap();
+    std::fs::write(plain.join("error.md"), "the user's").unwrap();
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        config.to_str().unwrap(),
+        "--out",
+        plain.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    assert_eq!(std::fs::read_to_string(plain.join("error.md")).unwrap(), "the user's");
     let under_file = out.join("results.json").join("deeper");
     let (code, _, stderr) = lacuna(&["bench", config.to_str().unwrap(), "--out", under_file.to_str().unwrap()]);
     assert_eq!(code, 2);

@@ -412,7 +412,7 @@ fn diff_reports_metrics_and_exit_codes() {
     // A depth in one frame only (a viewer's screenshot) is named; the
     // colours decide.
     for (other, code, needle) in [
-        (&moved_path, 1, "the depth (Z) differs at 1 pixels"),
+        (&moved_path, 1, "the depth (Z) differs by 5.000000e0 at 1 pixels"),
         (&flat, 0, "depth (Z): only in the first frame"),
     ] {
         let r = lacuna(
@@ -427,6 +427,18 @@ fn diff_reports_metrics_and_exit_codes() {
             r.stderr
         );
     }
+    // A bound past the depth's difference passes it.
+    let r = lacuna(
+        &[
+            "diff",
+            iso.to_str().unwrap(),
+            moved_path.to_str().unwrap(),
+            "--max-abs",
+            "6",
+        ],
+        &[],
+    );
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
     let r = lacuna(&["diff", iso.to_str().unwrap(), moved_path.to_str().unwrap()], &[]);
     assert!(
         r.stdout.contains("differing 1 of 1280 pixels") && r.stdout.contains("depth (Z): max_abs 5.000000e0"),

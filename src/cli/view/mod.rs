@@ -161,7 +161,7 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     let tf = tf_for(&args.tf, &volume)?.unwrap_or(TransferFunction::parse("ramp:0:1")?);
     desc.check_for(volume.dims, volume.spacing)?;
     for note in super::render::look_notes(&desc) {
-        say!("note: {note}");
+        say_err!("note: {note}");
     }
     let event_loop = EventLoop::new().map_err(|e| {
         let e = without_source_location(&e.to_string());
@@ -344,7 +344,11 @@ impl ApplicationHandler for App<'_> {
                     if viewer.buttons.0 {
                         viewer.controls.orbit(dx, dy);
                     } else if viewer.buttons.1 {
-                        viewer.controls.drag_pan(dx, dy);
+                        // In frame pixels: fewer than the window's where
+                        // the frame is scaled up to it (`render_size`).
+                        let window = viewer.window.inner_size().height.max(1) as f64;
+                        let k = viewer.controls.size.1 as f64 / window;
+                        viewer.controls.drag_pan(dx * k, dy * k);
                     }
                 }
                 viewer.cursor = Some(now);
@@ -481,7 +485,8 @@ impl Viewer {
         let size = fit(window, |(w, h)| {
             lacuna::render::RenderTarget::check_size(info, w, h).is_ok()
         });
-        if size != window {
+        // Once per frame size, not at every event of a drag.
+        if size != window && size != self.controls.size {
             say_err!(
                 "note: the window's {}x{} pixels are more than {} renders: rendering {}x{}, scaled to the window",
                 window.0,

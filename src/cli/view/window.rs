@@ -3,14 +3,25 @@
 
 use winit::keyboard::Key;
 
-/// `size`, or where it does not `fits`, the first of the same shape that
-/// does, each side 9/10 of the one before.
+/// `size`, or where it does not `fits`, the largest of the same shape that
+/// does (to within 0.1 % of its sides: a bisection of the scale).
 pub(super) fn fit(size: (u32, u32), fits: impl Fn((u32, u32)) -> bool) -> (u32, u32) {
-    let mut size = size;
-    while !fits(size) && size.0.max(size.1) > 1 {
-        size = ((size.0 * 9 / 10).max(1), (size.1 * 9 / 10).max(1));
+    if fits(size) {
+        return size;
     }
-    size
+    let scaled = |s: f64| {
+        let side = |n: u32| ((n as f64 * s).floor() as u32).max(1);
+        (side(size.0), side(size.1))
+    };
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..20 {
+        let mid = (lo + hi) / 2.0;
+        match fits(scaled(mid)) {
+            true => lo = mid,
+            false => hi = mid,
+        }
+    }
+    scaled(lo)
 }
 
 /// Shift, Control, Alt and the like, and the lock keys: pressed on their
@@ -75,10 +86,10 @@ mod tests {
         // lavapipe's 128 MiB storage range at 16 bytes a pixel.
         let fits = |(w, h): (u32, u32)| w as u64 * h as u64 * 16 <= 1 << 27;
         assert_eq!(super::fit((256, 256), fits), (256, 256));
-        let (w, h) = super::fit((3000, 3000), fits);
-        assert!(fits((w, h)) && w == h && w > 2000, "{w}x{h}");
-        let (w, h) = super::fit((6000, 1000), fits);
-        assert!(fits((w, h)) && w / h == 6, "{w}x{h}");
+        // The largest square that fits is 2896x2896.
+        assert_eq!(super::fit((3000, 3000), fits), (2896, 2896));
+        let (w, h) = super::fit((9000, 1500), fits);
+        assert!(fits((w, h)) && w / h == 6 && !fits((w + 6, h + 1)), "{w}x{h}");
     }
 
     #[test]
