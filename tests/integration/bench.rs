@@ -201,7 +201,11 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
     assert_eq!(marked(&frames_md), unstable, "{frames_md}");
     // The legend only where a record is marked.
     let legend = |t: &str| t.contains("† unstable: ");
-    assert_eq!((legend(&table2), legend(&frames_md)), (unstable > 0, unstable > 0), "{table2}");
+    assert_eq!(
+        (legend(&table2), legend(&frames_md)),
+        (unstable > 0, unstable > 0),
+        "{table2}"
+    );
     let mut steady = records.clone();
     steady.iter_mut().for_each(|r| r.unstable = false);
     assert!(!legend(&lacuna::bench::tables::table2_md(&steady)));
