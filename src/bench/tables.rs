@@ -169,7 +169,7 @@ pub fn exactness_md(records: &[Record]) -> String {
 /// One CSV row per record.
 pub fn records_csv(records: &[Record]) -> String {
     let mut out = String::from(
-        "dataset,structure,accel,params,device,width,height,frames,rounds,step,ert,tf,visible_percent,active_brick_percent,ranges_ms,build_ms,build_min_ms,build_max_ms,nodes,leaves,tree_height,bytes,frame_median_ms,frame_min_ms,frame_max_ms,fps,speedup,frame_spread,build_spread,unstable,warmup_builds,warmup_frames,warmup_capped,error_max_abs,error_rmse,error_differing\n",
+        "dataset,structure,accel,params,device,width,height,frames,rounds,step,ert,tf,visible_percent,active_brick_percent,ranges_ms,build_ms,build_min_ms,build_max_ms,nodes,leaves,tree_height,bytes,frame_median_ms,frame_min_ms,frame_max_ms,fps,speedup,frame_spread,build_spread,unstable,warmup_builds,warmup_frames,warmup_capped,error_max_abs,error_rmse,error_differing,driver,camera,filter,chosen\n",
     );
     for r in records {
         let params: Vec<String> = r.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
@@ -210,6 +210,10 @@ pub fn records_csv(records: &[Record]) -> String {
             format!("{:e}", r.error_vs_naive.max_abs),
             format!("{:e}", r.error_vs_naive.rmse),
             r.error_vs_naive.differing.to_string(),
+            csv_escape(&r.setup.driver),
+            csv_escape(&r.setup.camera),
+            r.filter.clone(),
+            csv_escape(r.chosen.as_deref().unwrap_or("")),
         ];
         out += &fields.join(",");
         out.push('\n');

@@ -181,6 +181,10 @@ fn tiny_bench_writes_consistent_tables_json_csv_and_plots() {
         "speedup",
         "unstable",
         "warmup_capped",
+        "driver",
+        "camera",
+        "filter",
+        "chosen",
     ] {
         assert!(header.contains(&column), "CSV lacks {column}");
     }
