@@ -48,6 +48,13 @@ pub fn steps(path: &Path) -> Result<u32> {
     Ok(l.steps)
 }
 
+/// The channels of a NIfTI file (its 5th dimension; 1 without one), from
+/// its header.
+pub fn channels(path: &Path) -> Result<u32> {
+    let header = header(path, open(path)?)?;
+    Ok(layout(path, &header)?.channels)
+}
+
 /// Whether the file starts with the gzip magic.
 fn gzipped(path: &Path) -> Result<bool> {
     let mut magic = [0u8; 2];

@@ -259,6 +259,8 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
     std::fs::write(&nii, common::nifti_bytes(&[4, 3, 2, 2, 2], 16, 32, [1.0; 3], &data)).unwrap();
     let series = Series::open(nii.to_str().unwrap(), &LoadOptions::default()).unwrap();
     assert_eq!(series.steps(), 2);
+    // Told by the header, before a voxel is read (bench's preflight).
+    assert_eq!(series.channels_known(), Some(2));
     for t in 0..2 {
         let v = series.load(t as u32, None).unwrap();
         assert_eq!(v.channel_count(), 2);
