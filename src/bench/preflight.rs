@@ -8,6 +8,7 @@
 
 use super::config::BenchConfig;
 use super::dataset::parse_tf;
+use super::series::check_range;
 use crate::error::{Error, Result};
 use crate::render::{Filter, FrameDesc, Mode};
 use crate::volume::{check_one_channel, LoadOptions, Series, Storage};
@@ -24,15 +25,8 @@ pub fn check(config: &BenchConfig, origin: &str) -> Result<()> {
             Err(Error::Io { .. }) if ds.optional => continue,
             Err(e) => return Err(within(e)),
         };
-        if let Some([first, last]) = ds.time {
-            if first >= last {
-                return Err(within(Error::invalid(
-                    "time",
-                    format!("[{first}, {last}]"),
-                    "expected [FIRST, LAST] with FIRST < LAST: the first step warms up, the rest are timed",
-                )));
-            }
-            series.check_step(last).map_err(within)?;
+        if let Some(range) = ds.time {
+            check_range(&series, range).map_err(within)?;
         }
         let desc = ds.look(config).apply(FrameDesc::builder(1, 1))?.build()?;
         if let Some(channels) = series.channels_known() {

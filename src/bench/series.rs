@@ -71,6 +71,19 @@ pub struct StepBench<'a> {
     pub storage: Storage,
 }
 
+/// An error unless `[first, last]` is a range of `series`' steps with
+/// FIRST < LAST (the first step warms up, the rest are timed).
+pub(super) fn check_range(series: &Series, [first, last]: [u32; 2]) -> Result<()> {
+    if first >= last {
+        return Err(Error::invalid(
+            "time",
+            format!("[{first}, {last}]"),
+            "expected [FIRST, LAST] with FIRST < LAST: the first step warms up, the rest are timed",
+        ));
+    }
+    series.check_step(last)
+}
+
 impl StepBench<'_> {
     /// Times steps `first..=last` of `series` (`first` warms up untimed).
     pub fn run(
@@ -81,14 +94,7 @@ impl StepBench<'_> {
         mut frame: impl FnMut(Scene, &FrameDesc, bool) -> Result<(f64, Option<Frame>)>,
         progress: &Progress,
     ) -> Result<Vec<StepRecord>> {
-        series.check_step(last)?;
-        if first >= last {
-            return Err(Error::invalid(
-                "time",
-                format!("[{first}, {last}]"),
-                "expected [FIRST, LAST] with FIRST < LAST: the first step warms up, the rest are timed",
-            ));
-        }
+        check_range(series, [first, last])?;
         let n = self.structures.len();
         let mut times: Vec<[Vec<f64>; 6]> = vec![Default::default(); n];
         let mut loads = Vec::new();
