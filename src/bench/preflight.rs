@@ -1,9 +1,8 @@
 //! What a config's data sets can be checked for before anything runs,
 //! from their specs and headers, no voxel read: a missing file, a time
-//! range past the series' end, bricks with the hardware filter, and where
-//! the spec or a NIfTI header tells the channels (`Series::channels_known`)
-//! more transfer functions than channels or a look several channels cannot
-//! take. Found minutes into a run, each would throw the data sets already
+//! range past the series' end, bricks with the hardware filter, and (from
+//! `Series::channels_known`) more transfer functions than channels or a
+//! look several channels cannot take. Found minutes into a run, each would throw the data sets already
 //! timed away.
 
 use super::config::BenchConfig;

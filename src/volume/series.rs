@@ -152,15 +152,16 @@ impl Series {
         }
     }
 
-    /// Its channels where the spec or a NIfTI header tells them, no voxel
-    /// read: generators and raw files have one, a `+` join the sum of its
-    /// parts; None for a NRRD (its axes decide as it loads).
+    /// Its channels where the spec or a header tells them, no voxel read:
+    /// generators and raw files have one, a NIfTI or NRRD what its header
+    /// says, a `+` join the sum of its parts.
     pub fn channels_known(&self) -> Option<usize> {
         match &self.source {
             Source::Channels(parts) => parts.iter().map(Series::channels_known).sum(),
             Source::Generator { .. } | Source::Still(VolumeSpec::Procedural { .. }) => Some(1),
             #[cfg(feature = "loaders")]
             Source::Nifti { path, .. } => super::nifti::channels(path).ok().map(|c| c as usize),
+            Source::Nrrd { path, .. } => super::nrrd::channels(path).ok().map(|c| c as usize),
             Source::Still(VolumeSpec::File(path)) => self.raw_layout(path).map(|_| 1),
             Source::Files(files) => self.raw_layout(&files[0]).map(|_| 1),
             _ => None,

@@ -308,6 +308,9 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
     std::fs::write(&path, slicer.as_bytes()).unwrap();
     let v = load(path.to_str().unwrap());
     assert_eq!((v.channel_count(), v.dims, v.spacing), (3, [4, 3, 2], [1.0, 0.5, 2.0]));
+    // Told by the header, before a voxel is read (bench's preflight).
+    let series = Series::open(path.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    assert_eq!(series.channels_known(), Some(3));
     // A time axis last is a series; anywhere else it is not contiguous.
     let mut timed =
         b"NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 3\nkinds: domain domain domain time\nencoding: raw\n\n"

@@ -72,14 +72,22 @@ fn stepped(path: &Path, parsed: Result<(Option<Volume>, u32)>) -> Result<Volume>
 
 /// How many time steps a NRRD holds (1 without a time axis); reads its header.
 pub fn steps(path: &Path) -> Result<u32> {
+    header_only(path).map(|h| h.axes.steps)
+}
+
+/// How many channels a NRRD holds (its component axis; 1 without one);
+/// reads its header.
+pub fn channels(path: &Path) -> Result<u32> {
+    header_only(path).map(|h| h.axes.channels)
+}
+
+/// A NRRD's header, read from its first bytes.
+fn header_only(path: &Path) -> Result<Header> {
     // Headers are short: the first 64 KiB hold one, else the first 16 MiB.
     let head = head(path)?;
-    match parse(path, &head, true, None, None) {
-        Ok((_, steps)) => Ok(steps),
-        Err(_) if !holds_header(&head) => {
-            let longer = first_bytes(path, crate::limits::MAX_TEXT_INPUT)?;
-            parse(path, &longer, true, None, None).map(|v| v.1)
-        }
+    match header(path, &head, true) {
+        Ok(h) => Ok(h),
+        Err(_) if !holds_header(&head) => header(path, &first_bytes(path, crate::limits::MAX_TEXT_INPUT)?, true),
         Err(e) => Err(e),
     }
 }
