@@ -591,7 +591,12 @@ vec4 march_result(March m) {
 // An iso frame's depth at the surface hit (render_params.glsl, depth_out).
 float march_depth(March m) {
     if (params.depth_out == 3u) {
-        return m.best;
+        // A ray value at or past value_bound maps to transparent, and
+        // structures skip regions of only such values: it is written as no
+        // sample, so every structure writes naive's value bit for bit.
+        bool minip = MARCH_MODE == MODE_MINIP;
+        bool shows = minip ? m.best < params.value_bound : m.best > params.value_bound;
+        return shows ? m.best : (minip ? 2.0 : -1.0);
     }
     if (!m.hit) {
         return params.no_hit_depth;

@@ -395,8 +395,7 @@ impl FrameDesc {
     /// Whether the frame's depth output holds each ray's value instead of
     /// a depth: a segment's (a rank's part) MIP or MinIP frame, whose
     /// ranks keep the colour of the largest (smallest) value
-    /// (`crate::parallel::pick`). -1 (2) where the segment took no sample;
-    /// any value mapping to transparent where the pixel is (structures skip those).
+    /// (`crate::parallel::pick`). -1 (2) where no sample shows (past `Mode::value_bound`).
     pub fn writes_ray_values(&self) -> bool {
         self.segment.is_some() && matches!(self.mode, Mode::Mip | Mode::MinIp)
     }
