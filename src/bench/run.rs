@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 use crate::frame::{diff, Frame};
 use crate::gpu::timings::{median, Timings};
 use crate::gpu::Context;
-use crate::render::metadata::describe;
+use crate::render::metadata::{describe, Source};
 use crate::render::{Filter, FrameBuilder, FrameDesc, Octants, Projection, Renderer, Scene};
 use crate::tf::GpuTransferFunction;
 use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
@@ -495,13 +495,14 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
             });
             if let Some(first) = &run.first {
                 // As `render` describes its frame: view 0, its median march.
-                let mut kept = first.clone();
+                let (mut kept, scene) = (first.clone(), scene_of(&run.structure, &gv, &lut));
                 let march = run.times.first().map(|t| median(t.clone()));
-                let scene = scene_of(&run.structure, &gv, &lut);
-                describe(&mut kept, (v, tf), scene, &views[0], ctx.info(), march)?;
-                if let Some([step, _]) = ds.time {
-                    kept.metadata.insert("time".into(), step.to_string());
-                }
+                let source = Source {
+                    volume: v,
+                    time: ds.time.map(|[first, _]| first),
+                    tf,
+                };
+                describe(&mut kept, source, scene, &views[0], ctx.info(), march)?;
                 out.frames.push((frame_file(&loaded.spec, &s.label), kept));
             }
         }

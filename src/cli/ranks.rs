@@ -179,7 +179,12 @@ fn render_block(args: &RenderArgs, world: &World) -> Result<Part> {
         volume: &gpu_volume,
         tf: &lut,
     };
-    describe(&mut frame, (&volume, &tf), scene, &desc, &ctx, &timings)?;
+    let source = lacuna::render::metadata::Source {
+        volume: &volume,
+        time: (series.steps() > 1).then_some(args.volume.time),
+        tf: &tf,
+    };
+    describe(&mut frame, source, scene, &desc, &ctx, &timings)?;
 
     let (width, height) = desc.size();
     let rays = desc.camera().rays(volume.dims, volume.spacing, width, height)?;

@@ -8,6 +8,7 @@ use lacuna::accel::{Accel, BuildInput, Builder, MarchedKind, Params, Structure};
 use lacuna::frame::{Background, Frame, FrameFormat};
 use lacuna::gpu::Context;
 use lacuna::limits::MAX_RUNS;
+use lacuna::render::metadata::Source;
 use lacuna::render::{self, FrameDesc, Mode, Octants, Renderer, Scene};
 use lacuna::tf::GpuTransferFunction;
 use lacuna::volume::GpuVolume;
@@ -354,10 +355,12 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         );
     }
     if let (Some(out), Some(format)) = (&args.out, format) {
-        describe(&mut frame, (&volume, &tf), scene, &desc, &ctx, &timings)?;
-        if series.steps() > 1 {
-            frame.metadata.insert("time".into(), args.volume.time.to_string());
-        }
+        let source = Source {
+            volume: &volume,
+            time: (series.steps() > 1).then_some(args.volume.time),
+            tf: &tf,
+        };
+        describe(&mut frame, source, scene, &desc, &ctx, &timings)?;
         match &args.background {
             Some(background) => frame.write_png_over(out, background)?,
             None => frame.write(out, format)?,
@@ -386,7 +389,7 @@ pub(super) fn look_notes(desc: &FrameDesc) -> Vec<String> {
 /// The frame's metadata (`render::metadata`), with its march pass's time.
 pub(super) fn describe(
     frame: &mut Frame,
-    data: (&Volume, &TransferFunction),
+    data: Source,
     scene: Scene,
     desc: &FrameDesc,
     ctx: &Context,

@@ -10,12 +10,20 @@ use crate::gpu::DeviceInfo;
 use crate::tf::TransferFunction;
 use crate::Volume;
 
-/// Adds the frame's metadata: the volume, the transfer function, the
-/// structure with its parameters and what marched it, the frame's
-/// description, the device, and the march pass's time where timed.
+/// What a frame was made of: the volume, step `time` of a series (None:
+/// one volume), and its transfer function.
+pub struct Source<'a> {
+    pub volume: &'a Volume,
+    pub time: Option<u32>,
+    pub tf: &'a TransferFunction,
+}
+
+/// Adds the frame's metadata: the volume and its step, the transfer
+/// function, the structure with its parameters and what marched it, the
+/// frame's description, the device, and the march pass's time where timed.
 pub fn describe(
     frame: &mut Frame,
-    (volume, tf): (&Volume, &TransferFunction),
+    Source { volume, time, tf }: Source,
     scene: Scene,
     desc: &FrameDesc,
     info: &DeviceInfo,
@@ -24,6 +32,9 @@ pub fn describe(
     let structure = scene.structure;
     let meta = &mut frame.metadata;
     meta.insert("volume".into(), volume.name.clone());
+    if let Some(k) = time {
+        meta.insert("time".into(), k.to_string());
+    }
     meta.insert("tf".into(), tf.spec.clone());
     meta.insert("accel".into(), structure.accel().to_string());
     if let Some(m) = structure.marched_as_reason() {

@@ -523,10 +523,8 @@ impl Viewer {
         self.scene.check_whole()?;
         let volume = &self.scene.volume;
         let desc = self.controls.desc(volume.dims, volume.spacing, self.filter)?;
-        self.scene.describe(&mut frame, &desc)?;
-        if self.series.steps() > 1 {
-            frame.metadata.insert("time".into(), self.shown.to_string());
-        }
+        let time = (self.series.steps() > 1).then_some(self.shown);
+        self.scene.describe(&mut frame, &desc, time)?;
         frame.write(path, format)?;
         say!("wrote {}", path.display());
         Ok(())

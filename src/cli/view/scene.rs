@@ -335,13 +335,18 @@ impl Scene {
     }
 
     /// The frame's metadata, as `render` writes it, with this scene's state.
-    pub fn describe(&self, frame: &mut Frame, desc: &FrameDesc) -> Result<()> {
+    pub fn describe(&self, frame: &mut Frame, desc: &FrameDesc, time: Option<u32>) -> Result<()> {
         let scene = lacuna::render::Scene {
             structure: &self.structure,
             volume: self.gpu_volume()?,
             tf: &self.lut,
         };
         let march = Some(self.march.phase("march")?);
-        lacuna::render::metadata::describe(frame, (&self.volume, &self.tf), scene, desc, self.ctx.info(), march)
+        let source = lacuna::render::metadata::Source {
+            volume: &self.volume,
+            time,
+            tf: &self.tf,
+        };
+        lacuna::render::metadata::describe(frame, source, scene, desc, self.ctx.info(), march)
     }
 }
