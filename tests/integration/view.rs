@@ -8,12 +8,12 @@ use lacuna::frame::Frame;
 use std::process::Command;
 use std::sync::Mutex;
 
-/// Runs `lacuna ARGS` where a window can open: on $DISPLAY when it is set,
-/// else under `xvfb-run -a`. Neither is a failure, not a skip.
-fn lacuna_windowed(args: &[&str]) -> Run {
-    // One at a time: concurrent `xvfb-run -a` can pick the same display number.
-    static ONE_WINDOW: Mutex<()> = Mutex::new(());
-    let _one = ONE_WINDOW.lock().unwrap_or_else(|p| p.into_inner());
+/// One window at a time: concurrent `xvfb-run -a` can pick the same display number.
+static ONE_WINDOW: Mutex<()> = Mutex::new(());
+
+/// `lacuna ARGS` where a window can open: on $DISPLAY when it is set, else
+/// under `xvfb-run -a`. Neither is a failure, not a skip.
+fn windowed(args: &[&str]) -> Command {
     let exe = env!("CARGO_BIN_EXE_lacuna");
     let display = std::env::var("DISPLAY").is_ok_and(|d| !d.is_empty());
     let mut cmd = if display {
@@ -24,9 +24,15 @@ fn lacuna_windowed(args: &[&str]) -> Run {
         c.args(["-a", "-s", "-screen 0 640x480x24", exe]);
         c
     };
-    let out = cmd.args(args).output().unwrap_or_else(|e| {
-        panic!("DISPLAY is not set and xvfb-run cannot run ({e}): install the Debian package xvfb (.ci/run does)")
-    });
+    cmd.args(args);
+    cmd
+}
+
+const NO_XVFB: &str = "DISPLAY is not set and xvfb-run cannot run: install the Debian package xvfb (.ci/run does)";
+
+fn lacuna_windowed(args: &[&str]) -> Run {
+    let _one = ONE_WINDOW.lock().unwrap_or_else(|p| p.into_inner());
+    let out = windowed(args).output().unwrap_or_else(|e| panic!("{NO_XVFB} ({e})"));
     Run {
         code: out.status.code().unwrap_or(-1),
         stdout: String::from_utf8_lossy(&out.stdout).into(),
@@ -699,4 +705,79 @@ fn arrows_move_every_channels_window() {
         &[],
     );
     assert_eq!(diff.code, 0, "{}{}", diff.stdout, diff.stderr);
+}
+
+/// The lacuna process `child` runs: itself, or xvfb-run's child.
+fn viewer_pid(child: &std::process::Child) -> Option<i32> {
+    let named_lacuna =
+        |pid: &str| std::fs::read_to_string(format!("/proc/{pid}/comm")).is_ok_and(|c| c.trim() == "lacuna");
+    let id = child.id().to_string();
+    if named_lacuna(&id) {
+        return id.parse().ok();
+    }
+    let children = std::fs::read_to_string(format!("/proc/{id}/task/{id}/children")).ok()?;
+    let found = children.split_whitespace().find(|pid| named_lacuna(pid));
+    found.and_then(|pid| pid.parse().ok())
+}
+
+/// An unchanged window is not redrawn: the frames an idle session draws
+/// are those its keys asked for, where it used to redraw without end (two
+/// cores busy). Ctrl-C ends the session as Q does: exit 0, the title's
+/// figures printed, validation clean.
+#[test]
+fn an_idle_window_draws_nothing_and_ctrl_c_ends_the_session() {
+    let dir = tempfile::tempdir().unwrap();
+    let stem = dir.path().join("idle.png");
+    let _one = ONE_WINDOW.lock().unwrap_or_else(|p| p.into_inner());
+    let mut child = windowed(&[
+        "view",
+        "nbody:32",
+        "--size",
+        "48x48",
+        "--validate",
+        "--keys",
+        "frame,s",
+        "--screenshot",
+        stem.to_str().unwrap(),
+    ])
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .unwrap_or_else(|e| panic!("{NO_XVFB} ({e})"));
+    // S, pressed after the first frame, is written with the second.
+    let shot = dir.path().join("idle-1.png");
+    while !shot.is_file() {
+        if let Some(status) = child.try_wait().unwrap() {
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "the viewer ended before its screenshot ({status}): {}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // Time for a viewer that redraws without end to draw many more frames.
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    let pid = viewer_pid(&child).expect("the lacuna process under the window");
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0, "SIGINT to {pid}");
+    let out = child.wait_with_output().unwrap();
+    let r = Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into(),
+        stderr: String::from_utf8_lossy(&out.stderr).into(),
+    };
+    ok(&r, "Ctrl-C ends the session");
+    assert!(r.stdout.contains(&format!("wrote {}", shot.display())), "{}", r.stdout);
+    // The two frames asked for; the window system's expose may add one.
+    let frames = r
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("frames ")?.split(':').next()?.parse::<u32>().ok())
+        .unwrap_or_else(|| panic!("no summary: {}", r.stdout));
+    assert!(
+        (2..=3).contains(&frames),
+        "an idle window drew {frames} frames: {}",
+        r.stdout
+    );
 }

@@ -27,6 +27,7 @@ impl Viewer {
 
     /// Applies a key: a new TF or structure is rebuilt now. True to quit.
     pub(super) fn key(&mut self, name: &str) -> bool {
+        self.dirty = true;
         let before = (self.controls.presets.clone(), self.controls.preset);
         let look = self.controls.look.clone();
         let (name, shift) = match name {

@@ -31,7 +31,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
-use window::{fit, is_modifier, without_source_location};
+use window::{end_on_signals, fit, is_modifier, without_source_location, Signalled};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
@@ -95,8 +95,15 @@ struct Viewer {
     /// Screenshots asked for by the S key since the last frame, and in all.
     shots: u32,
     shots_written: u32,
-    last: Instant,
+    /// The last frame's end, when the next one followed at once (an idle
+    /// wait is no frame interval), and the frame rate over such intervals.
+    last: Option<Instant>,
     fps: f64,
+    /// The last frame's wall time, from its draw to its present, ms.
+    frame_ms: f64,
+    /// Something on screen changed since the last frame: draw one. An
+    /// unchanged window is not redrawn (`wants_frame`).
+    dirty: bool,
     modifiers: ModifiersState,
     cursor: Option<(f64, f64)>,
     buttons: (bool, bool),
@@ -163,13 +170,16 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     for note in super::render::look_notes(&desc) {
         say_err!("note: {note}");
     }
-    let event_loop = EventLoop::new().map_err(|e| {
+    let event_loop = EventLoop::with_user_event().build().map_err(|e| {
         let e = without_source_location(&e.to_string());
         Error::NoDevice(format!(
             "cannot open a window ({e}); set DISPLAY, or run under xvfb-run"
         ))
     })?;
-    event_loop.set_control_flow(ControlFlow::Poll);
+    // Frames are drawn when asked for (`Viewer::wants_frame`), so an idle
+    // window waits for events rather than spinning.
+    event_loop.set_control_flow(ControlFlow::Wait);
+    end_on_signals(&event_loop);
     let mut app = App {
         args,
         setup: Some((series, (volume, load_ms), tf, desc)),
@@ -257,8 +267,10 @@ impl App<'_> {
             quit: false,
             shots: 0,
             shots_written: 0,
-            last: Instant::now(),
+            last: None,
             fps: 0.0,
+            frame_ms: 0.0,
+            dirty: true,
             modifiers: ModifiersState::empty(),
             cursor: None,
             buttons: (false, false),
@@ -284,7 +296,7 @@ impl App<'_> {
     }
 }
 
-impl ApplicationHandler for App<'_> {
+impl ApplicationHandler<Signalled> for App<'_> {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
         if let Err(e) = self.open(event_loop) {
             self.fail(event_loop, e);
@@ -302,6 +314,7 @@ impl ApplicationHandler for App<'_> {
             }
             WindowEvent::Resized(_) => {
                 viewer.resize = true;
+                viewer.dirty = true;
                 Ok(())
             }
             WindowEvent::RedrawRequested => viewer.draw(self.args).map(|done| {
@@ -341,6 +354,7 @@ impl ApplicationHandler for App<'_> {
                 let now = (position.x, position.y);
                 if let Some(before) = viewer.cursor {
                     let (dx, dy) = (now.0 - before.0, now.1 - before.1);
+                    viewer.dirty |= viewer.buttons.0 || viewer.buttons.1;
                     if viewer.buttons.0 {
                         viewer.controls.orbit(dx, dy);
                     } else if viewer.buttons.1 {
@@ -360,6 +374,7 @@ impl ApplicationHandler for App<'_> {
                     MouseScrollDelta::PixelDelta(p) => p.y / 40.0,
                 };
                 viewer.controls.scroll(lines);
+                viewer.dirty = true;
                 Ok(())
             }
             _ => Ok(()),
@@ -370,17 +385,38 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        if let Some(viewer) = &self.viewer {
+        if let Some(viewer) = self.viewer.as_ref().filter(|v| v.wants_frame(self.args)) {
             viewer.window.request_redraw();
         }
+    }
+
+    /// Ctrl-C or SIGTERM (`end_on_signals`): the session ends as Q ends it.
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, _: Signalled) {
+        if let Some(viewer) = &self.viewer {
+            say!("{}", viewer.summary());
+        }
+        event_loop.exit();
     }
 }
 
 impl Viewer {
+    /// Whether to draw now: after a change, while a series plays, and
+    /// through `--frames` and `--keys`. An unchanged window is not redrawn
+    /// (only when the window system asks, `RedrawRequested`).
+    fn wants_frame(&self, args: &ViewArgs) -> bool {
+        self.dirty || self.controls.playing || args.frames.is_some() || !self.pending_keys.is_empty()
+    }
+
     /// Draws one frame; true when `--frames` are done.
     fn draw(&mut self, args: &ViewArgs) -> Result<bool> {
+        let started = Instant::now();
         if self.resize {
             let size = self.window.inner_size();
+            if size.width == 0 || size.height == 0 {
+                // Minimised: nothing to draw until it is resized back.
+                self.dirty = false;
+                return Ok(false);
+            }
             let extent = self.host.resize((size.width, size.height))?;
             self.controls.size = self.render_size((extent.width, extent.height));
             self.resize = false;
@@ -432,6 +468,7 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
+        self.dirty = false;
         // S presses this frame was read back for; keys pressed now ask of the next.
         let shots = std::mem::take(&mut self.shots);
         self.press_pending()?;
@@ -440,15 +477,18 @@ impl Viewer {
             self.controls.step_time(1);
         }
         let now = Instant::now();
-        let dt = now.duration_since(self.last).as_secs_f64();
-        self.last = now;
-        if dt > 0.0 {
-            self.fps = if self.fps == 0.0 {
-                1.0 / dt
-            } else {
-                0.9 * self.fps + 0.1 / dt
+        self.frame_ms = now.duration_since(started).as_secs_f64() * 1000.0;
+        if let Some(dt) = self
+            .last
+            .map(|l| now.duration_since(l).as_secs_f64())
+            .filter(|dt| *dt > 0.0)
+        {
+            self.fps = match self.fps {
+                0.0 => 1.0 / dt,
+                fps => 0.9 * fps + 0.1 / dt,
             };
         }
+        self.last = self.wants_frame(args).then_some(now);
         self.window.set_title(&self.title());
         if shot {
             if let Some(path) = &args.screenshot {

@@ -26,15 +26,25 @@ impl Viewer {
             o => format!(", {} of 8 octants", o.len()),
         };
         format!(
-            "frames {}: {:.1} fps, march {:.3} ms, rebuild {:.3} ms ({}{octants}){}{step}{}",
+            "frames {}: {}, march {:.3} ms, rebuild {:.3} ms ({}{octants}){}{step}{}",
             self.drawn,
-            self.fps,
+            self.rate_text(),
             self.scene.march_ms(),
             self.scene.rebuild_ms(),
             self.accel_text(),
             if step.is_empty() { "" } else { ", " },
             self.cut_text(),
         )
+    }
+
+    /// The frame rate over back-to-back frames (`--frames`, a playing
+    /// series, scripted keys), else the last frame's wall time: the window
+    /// is not redrawn while nothing changes, so idle time is no frame's.
+    fn rate_text(&self) -> String {
+        match self.fps {
+            0.0 => format!("frame {:.1} ms", self.frame_ms),
+            fps => format!("{fps:.1} fps"),
+        }
     }
 
     /// What a frame the device's loop cap cut short adds to the title
@@ -63,12 +73,12 @@ impl Viewer {
         let step = self.step_text();
         let cut = self.cut_text();
         format!(
-            "lacuna view · {}{}{step} · {accel} · {} · {} · {:.1} fps · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
+            "lacuna view · {}{}{step} · {accel} · {} · {} · frame {:.1} ms · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
             scene.volume.name,
             if step.is_empty() { "" } else { " · " },
             scene.tf.spec,
             c.look.describe(),
-            self.fps,
+            self.frame_ms,
             scene.march_ms(),
             scene.rebuild_ms(),
             c.step,

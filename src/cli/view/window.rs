@@ -1,6 +1,8 @@
 //! The window's part: which keys are keys, the frame's size for a window
-//! past the device's limits, and winit's errors without build paths.
+//! past the device's limits, winit's errors without build paths, and
+//! Ctrl-C as an event of the window's loop.
 
+use winit::event_loop::EventLoop;
 use winit::keyboard::Key;
 
 /// `size`, or where it does not `fits`, the largest of the same shape that
@@ -66,6 +68,21 @@ pub(super) fn without_source_location(message: &str) -> String {
     match reason {
         Some(reason) => format!("{}{}", &message[..at], reason),
         None => message.to_string(),
+    }
+}
+
+/// Ctrl-C or SIGTERM arrived.
+pub(super) struct Signalled;
+
+/// Ctrl-C and SIGTERM end the session as Q does: lacuna's and the window's
+/// objects are released, validation's verdict stands and the title's
+/// figures are printed, rather than the process dying mid-frame.
+pub(super) fn end_on_signals(event_loop: &EventLoop<Signalled>) {
+    let proxy = event_loop.create_proxy();
+    if let Err(e) = ctrlc::set_handler(move || {
+        let _ = proxy.send_event(Signalled);
+    }) {
+        say_err!("note: Ctrl-C ends the process, not the session: {e}");
     }
 }
 
