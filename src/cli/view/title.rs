@@ -1,7 +1,7 @@
 //! What the viewer's title and its `--frames` summary say.
 
 use super::Viewer;
-use lacuna::render::{self, Octants};
+use lacuna::render::{self, Octants, Projection};
 
 impl Viewer {
     /// "time step K of N" for a series; empty for one volume.
@@ -66,6 +66,24 @@ impl Viewer {
         }
     }
 
+    /// The orbit as `render` takes it, and the zoom where the wheel moved
+    /// it: `camera 30.0,20.0 perspective 40 · zoom 1.50x`.
+    fn camera_text(&self) -> String {
+        let c = &self.controls;
+        let projection = match c.orbit.projection {
+            Projection::Orthographic => "orthographic".to_string(),
+            Projection::Perspective { fov_deg, .. } => format!("perspective {fov_deg}"),
+        };
+        let zoom = match c.zoom {
+            1.0 => String::new(),
+            z => format!(" · zoom {z:.2}x"),
+        };
+        format!(
+            "camera {:.1},{:.1} {projection}{zoom}",
+            c.orbit.azimuth_deg, c.orbit.elevation_deg
+        )
+    }
+
     pub(super) fn title(&self) -> String {
         let scene = &self.scene;
         let accel = self.accel_text();
@@ -73,11 +91,12 @@ impl Viewer {
         let step = self.step_text();
         let cut = self.cut_text();
         format!(
-            "lacuna view · {}{}{step} · {accel} · {} · {} · frame {:.1} ms · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
+            "lacuna view · {}{}{step} · {accel} · {} · {} · {} · frame {:.1} ms · march {:.2} ms · rebuild {:.2} ms · step {} · ERT {}{cut}",
             scene.volume.name,
             if step.is_empty() { "" } else { " · " },
             scene.tf.spec,
             c.look.describe(),
+            self.camera_text(),
             self.frame_ms,
             scene.march_ms(),
             scene.rebuild_ms(),
