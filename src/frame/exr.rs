@@ -171,14 +171,85 @@ impl Frame {
         } else {
             None
         };
-        Ok(Frame {
+        let frame = Frame {
             width: size.width() as u32,
             height: size.height() as u32,
             pixels: image.layer_data.channel_data.pixels.1,
             metadata,
             depth,
-        })
+        };
+        let data_at = image.layer_data.attributes.layer_position;
+        in_display_window(frame, data_at, image.attributes.display_window, origin)
     }
+}
+
+/// The frame as its display window shows it: an EXR's pixels are its data
+/// window, which other tools crop to the visible pixels or offset (lacuna
+/// writes the two the same). Outside the data window a pixel is
+/// transparent black, as EXR viewers show it; data outside the display
+/// window is not part of the image. A depth has no such "empty" value, so
+/// a frame with one must cover its display window.
+fn in_display_window(
+    frame: Frame,
+    data_at: exr::math::Vec2<i32>,
+    display: exr::meta::attribute::IntegerBounds,
+    origin: &Path,
+) -> Result<Frame> {
+    let (dw, dh) = (display.size.width() as u64, display.size.height() as u64);
+    if data_at == display.position && (dw, dh) == (frame.width as u64, frame.height as u64) {
+        return Ok(frame);
+    }
+    let window = |at: exr::math::Vec2<i32>, w: u64, h: u64| {
+        format!(
+            "({}, {})-({}, {})",
+            at.x(),
+            at.y(),
+            at.x() as i64 + w as i64 - 1,
+            at.y() as i64 + h as i64 - 1
+        )
+    };
+    let windows = format!(
+        "its data window {} is not its display window {}",
+        window(data_at, frame.width as u64, frame.height as u64),
+        window(display.position, dw, dh)
+    );
+    if frame.depth.is_some() {
+        return Err(crate::Error::format(
+            origin,
+            format!("{windows}, and a depth (Z) outside the data window has no value"),
+        ));
+    }
+    if dw > u32::MAX as u64 || dh > u32::MAX as u64 {
+        return Err(crate::Error::format(
+            origin,
+            format!("{windows}, of more than 2^32 pixels a side"),
+        ));
+    }
+    let what = format_args!("EXR display window {dw}x{dh} ({})", origin.display());
+    let mut pixels: Vec<[f32; 4]> = crate::limits::zeroed(what, dw * dh)?;
+    // The data window's pixel (x, y) in display coordinates, where it is one.
+    let dx = data_at.x() as i64 - display.position.x() as i64;
+    let dy = data_at.y() as i64 - display.position.y() as i64;
+    for y in 0..frame.height as i64 {
+        let Ok(row) = u64::try_from(y + dy) else { continue };
+        if row >= dh {
+            continue;
+        }
+        for x in 0..frame.width as i64 {
+            match u64::try_from(x + dx) {
+                Ok(col) if col < dw => {
+                    pixels[(row * dw + col) as usize] = frame.pixels[(y * frame.width as i64 + x) as usize]
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(Frame {
+        width: dw as u32,
+        height: dh as u32,
+        pixels,
+        ..frame
+    })
 }
 
 #[cfg(test)]
@@ -192,5 +263,74 @@ mod tests {
         let e = Frame::read_exr(&path).unwrap_err().to_string();
         let _ = std::fs::remove_file(&path);
         assert!(e.contains("no A (alpha) channel"), "{e}");
+    }
+
+    /// An EXR whose 3x2 data window sits at `at` in a 6x4 display window
+    /// at (-1, 0); pixel (x, y) of the data is (x, y, 0.5, 1).
+    fn offset_exr(name: &str, at: (i32, i32), depth: bool) -> std::path::PathBuf {
+        use exr::prelude::*;
+        let path = std::env::temp_dir().join(format!("lacuna-{name}-{}.exr", std::process::id()));
+        let attributes = LayerAttributes {
+            layer_position: Vec2(at.0, at.1),
+            ..LayerAttributes::default()
+        };
+        let display = IntegerBounds::new((-1, 0), (6, 4));
+        let rgba = |p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5, 1.0);
+        if depth {
+            let channels = SpecificChannels::build()
+                .with_channel("R")
+                .with_channel("G")
+                .with_channel("B")
+                .with_channel("A")
+                .with_channel("Z")
+                .with_pixel_fn(|p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5f32, 1.0f32, 2.0f32));
+            let mut image = Image::from_layer(Layer::new((3, 2), attributes, Encoding::UNCOMPRESSED, channels));
+            image.attributes.display_window = display;
+            image.write().to_file(&path).unwrap();
+        } else {
+            let channels = SpecificChannels::rgba(rgba);
+            let mut image = Image::from_layer(Layer::new((3, 2), attributes, Encoding::UNCOMPRESSED, channels));
+            image.attributes.display_window = display;
+            image.write().to_file(&path).unwrap();
+        }
+        path
+    }
+
+    #[test]
+    fn a_data_window_is_placed_in_the_display_window_and_the_rest_is_transparent() {
+        // At (1, 1): display columns 2..5 and rows 1..3 hold the data.
+        let path = offset_exr("window", (1, 1), false);
+        let frame = Frame::read_exr(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!((frame.width, frame.height), (6, 4));
+        for y in 0..4 {
+            for x in 0..6 {
+                let inside = (2..5).contains(&x) && (1..3).contains(&y);
+                let want = match inside {
+                    true => [(x - 2) as f32, (y - 1) as f32, 0.5, 1.0],
+                    false => [0.0; 4],
+                };
+                assert_eq!(frame.pixels[y * 6 + x], want, "display pixel ({x}, {y})");
+            }
+        }
+        // Data past the display window's left and top edges is cut.
+        let path = offset_exr("overscan", (-2, -1), false);
+        let frame = Frame::read_exr(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(frame.pixels[0], [1.0, 1.0, 0.5, 1.0], "data (1, 1) at display (0, 0)");
+        assert_eq!(frame.pixels[1], [2.0, 1.0, 0.5, 1.0]);
+        assert_eq!(frame.pixels[2], [0.0; 4]);
+        assert_eq!(frame.pixels[6], [0.0; 4], "the data's last row is row 0");
+    }
+
+    #[test]
+    fn a_depth_that_does_not_cover_its_display_window_is_refused() {
+        let path = offset_exr("window-z", (1, 1), true);
+        let e = Frame::read_exr(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(
+            e.contains("data window (1, 1)-(3, 2) is not its display window (-1, 0)-(4, 3)") && e.contains("depth (Z)"),
+            "{e}"
+        );
     }
 }
