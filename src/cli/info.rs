@@ -70,7 +70,7 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
         false => histogram(&v, ""),
         true => {
             for (c, channel) in v.channels().enumerate() {
-                say!("channel {} of {}: {}", c + 1, v.channel_count(), channel.name);
+                say!("channel {} of {}: {}", c + 1, v.channel_count(), v.channel_name(c));
                 describe_values(channel, "  ");
                 histogram(channel, "  ");
             }

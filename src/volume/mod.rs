@@ -425,6 +425,19 @@ impl Volume {
         }
     }
 
+    /// Channel `c`'s own name: channel 1's data is this volume's, whose
+    /// name `join` made every channel's, joined with `+`.
+    ///
+    /// # Panics
+    /// If `c >= channel_count()`, as `channel` does.
+    pub fn channel_name(&self, c: usize) -> &str {
+        if c > 0 {
+            return &self.other_channels[c - 1].name;
+        }
+        let others: String = self.other_channels.iter().map(|o| format!("+{}", o.name)).collect();
+        self.name.strip_suffix(&others).unwrap_or(&self.name)
+    }
+
     /// Every channel, channel 1 first.
     pub fn channels(&self) -> impl Iterator<Item = &Volume> {
         std::iter::once(self).chain(self.other_channels.iter())

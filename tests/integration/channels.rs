@@ -54,6 +54,10 @@ fn joined_generators_are_one_volume_of_channels() {
     let v = load("vessels:32+nbody:32");
     assert_eq!(v.channel_count(), 2);
     assert_eq!(v.name, "vessels:32x32x32+nbody:32x32x32");
+    assert_eq!(
+        [v.channel_name(0), v.channel_name(1)],
+        ["vessels:32x32x32", "nbody:32x32x32"]
+    );
     let (a, b) = (load("vessels:32"), load("nbody:32"));
     assert_eq!(v.channel(0).data.texel(999), a.data.texel(999));
     assert_eq!(v.channel(1).data.texel(999), b.data.texel(999));
@@ -350,8 +354,11 @@ fn info_describes_every_channel_and_counts_visible_voxels_over_all_of_them() {
     assert_eq!(run.code, 0, "{}", run.stderr);
     let blocks: Vec<&str> = run.stdout.split("channel ").skip(1).collect();
     assert_eq!(blocks.len(), 2, "{}", run.stdout);
+    let names = ["vessels:16x16x16", "nbody:16x16x16"];
     for (c, (block, alone)) in blocks.iter().zip(&alone).enumerate() {
-        assert!(block.starts_with(&format!("{} of 2:", c + 1)), "{block}");
+        // Each channel by its own name, not channel 1 by the joined one.
+        let head = format!("{} of 2: {}\n", c + 1, names[c]);
+        assert!(block.starts_with(&head), "{block}");
         for key in ["type", "values", "[0.0,0.1)"] {
             assert_eq!(line(block, key), line(alone, key), "channel {}: {key}", c + 1);
         }
