@@ -392,6 +392,10 @@ impl ApplicationHandler<Signalled> for App<'_> {
 
     /// Ctrl-C or SIGTERM (`end_on_signals`): the session ends as Q ends it.
     fn user_event(&mut self, event_loop: &ActiveEventLoop, _: Signalled) {
+        // A second Ctrl-C before the loop ends says nothing more.
+        if event_loop.exiting() {
+            return;
+        }
         if let Some(viewer) = &self.viewer {
             say!("{}", viewer.summary());
         }
