@@ -336,10 +336,15 @@ struct Scaling {
 }
 
 /// The file's scaling; None where it scales nothing (slope 0, as the
-/// format says, or not finite).
+/// format says, or not finite). A non-finite intercept is 0, as
+/// nifti_clib reads it: the slope still applies.
 fn scaling(header: &NiftiHeader, ty: VoxelType) -> Option<Scaling> {
-    let (slope, inter) = (header.scl_slope as f64, header.scl_inter as f64);
-    if slope == 0.0 || !slope.is_finite() || !inter.is_finite() {
+    let slope = header.scl_slope as f64;
+    let inter = match header.scl_inter as f64 {
+        i if i.is_finite() => i,
+        _ => 0.0,
+    };
+    if slope == 0.0 || !slope.is_finite() {
         return None;
     }
     if slope > 0.0 {

@@ -547,6 +547,16 @@ fn scaled_nifti_voxels_load_render_and_export_as_slope_times_raw_plus_intercept(
             assert!((g - s).abs() <= tol, "{name}: voxel {i} exported {g}, want {s}");
         }
     }
+    // A non-finite intercept is 0 and the slope still applies, as
+    // nifti_clib reads it.
+    let raw = values(0.0, 1.0);
+    let mut bytes = crate::common::nifti_bytes(&DIMS, 4, 16, [1.0; 3], &raw_bytes(VoxelType::I16, &raw));
+    bytes[112..116].copy_from_slice(&2.0f32.to_le_bytes());
+    bytes[116..120].copy_from_slice(&f32::NAN.to_le_bytes());
+    let nan_inter = dir.path().join("nan-inter.nii");
+    std::fs::write(&nan_inter, bytes).unwrap();
+    let hi = 2.0 * raw.iter().fold(0.0f64, |a, &b| a.max(b));
+    assert_eq!(load(&nan_inter).value_range, [0.0, hi], "slope 2, intercept NaN");
     // A wide int32 range (f32 storage cannot tell integers there): the
     // scaled least value keeps its half, not rounded to an integer.
     let raw = values(1.0, 330_000.0);
