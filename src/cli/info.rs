@@ -26,6 +26,9 @@ pub fn run(args: &InfoArgs) -> Result<ExitCode> {
     if let Some(step) = args.volume.step_line(&series) {
         say!("time     {step}; every step normalised as step 0");
     }
+    if let Some(note) = series.norm_note() {
+        say_err!("note: {note}");
+    }
     say!(
         "dims     {}x{}x{} ({} voxels)",
         v.dims[0],

@@ -284,6 +284,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     if let Some(step) = args.volume.step_line(&series) {
         say!("time    {step}");
     }
+    if let Some(note) = series.norm_note() {
+        say_err!("note: {note}");
+    }
     say!("storage {}", gpu_volume.describe_storage());
     say!("loaded  in {load_ms:.0} ms, uploaded in {upload_ms:.0} ms (wall time; the upload with the pool's sorting, or the cells copy)");
     if let lacuna::volume::VoxelData::Bricks(host) = &volume.data {

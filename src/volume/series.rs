@@ -39,6 +39,7 @@ pub struct Series {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepNorm {
     dims: [u32; 3],
+    spacing: [f32; 3],
     ty: VoxelType,
     channels: usize,
     /// Step 0's normalisation of integer texels (stored as they are).
@@ -50,6 +51,9 @@ pub struct StepNorm {
     /// which every integer step must share: `norm` is applied to them as
     /// they are.
     affine: Option<[f64; 2]>,
+    /// Step 0 held one value throughout: `range` and `norm` were chosen,
+    /// not measured (`of`).
+    constant: bool,
 }
 
 /// `[k, c]` with source value = k x stored + c for a volume of integer
@@ -115,7 +119,9 @@ impl Series {
             Source::Channels(channels)
         } else if let Some(pattern) = Pattern::parse(spec) {
             super::spec::check_raw_options(spec, options)?;
-            Source::Files(pattern.files()?)
+            let files = pattern.files()?;
+            one_step(&files[0])?;
+            Source::Files(files)
         } else {
             match VolumeSpec::parse(spec, options)? {
                 VolumeSpec::Procedural { generator, dims, param } => Source::Generator { generator, dims, param },
@@ -137,6 +143,17 @@ impl Series {
             options: options.clone(),
             first: OnceLock::new(),
         })
+    }
+
+    /// A note for a series whose step 0, once loaded, held one value
+    /// throughout: every step is normalised as step 0, over a range that
+    /// value could not give (`StepNorm::of`). None otherwise.
+    pub fn norm_note(&self) -> Option<String> {
+        if let Source::Channels(parts) = &self.source {
+            return parts.iter().find_map(Series::norm_note);
+        }
+        let note = self.first.get()?.constant_note()?;
+        (self.steps() > 1).then(|| format!("{}: {note}", self.spec))
     }
 
     /// How many steps it has (at least 1).
@@ -315,7 +332,8 @@ impl Series {
         match (&self.source, bricks) {
             (Source::Still(spec), Some(b)) => spec.load_bricks(&self.options, b),
             (Source::Files(files), Some(b)) => {
-                VolumeSpec::File(files[k as usize].clone()).load_bricks(&self.options, b)
+                let file = one_step(&files[k as usize])?;
+                VolumeSpec::File(file.to_path_buf()).load_bricks(&self.options, b)
             }
             (Source::Generator { generator, dims, param }, Some(b)) => generator.generate_bricks(*dims, *param, k, b),
             (Source::Nrrd { path, .. }, Some(b)) => super::nrrd::load_step_bricks(path, k, b),
@@ -334,12 +352,35 @@ impl Series {
                 super::check_size(*dims, VoxelType::U8, &what, device)?;
                 generator.generate_at(*dims, *param, k)
             }
-            Source::Files(files) => VolumeSpec::File(files[k as usize].clone()).load_within(&self.options, device),
+            Source::Files(files) => {
+                let file = one_step(&files[k as usize])?;
+                VolumeSpec::File(file.to_path_buf()).load_within(&self.options, device)
+            }
             #[cfg(feature = "loaders")]
             Source::Nifti { path, .. } => super::nifti::load_step(path, k, device),
             Source::Nrrd { path, .. } => super::nrrd::load_step(path, k, device),
             Source::Channels(_) => unreachable!("Series::load joins channels' steps"),
         }
+    }
+}
+
+/// `path`, a pattern's file, where it holds one time step: a NIfTI or
+/// NRRD with a time axis would give its step 0 alone, its other steps
+/// unseen. Its header only is read.
+fn one_step(path: &Path) -> Result<&Path> {
+    let steps = match path {
+        p if is_nrrd(p) => super::nrrd::steps(p)?,
+        #[cfg(feature = "loaders")]
+        p if is_nifti(p) => super::nifti::steps(p)?,
+        _ => 1,
+    };
+    match steps {
+        1 => Ok(path),
+        n => Err(Error::invalid(
+            "time step",
+            path.display().to_string(),
+            format!("holds {n} time steps: the files of a printf pattern hold one step each (give a file with a time axis alone)"),
+        )),
     }
 }
 
@@ -355,6 +396,7 @@ impl StepNorm {
         let [lo, hi] = v.value_range;
         StepNorm {
             dims: v.dims,
+            spacing: v.spacing,
             ty: v.source_type,
             channels: v.channel_count(),
             norm,
@@ -362,7 +404,26 @@ impl StepNorm {
             // lost to rounding (|lo| past 2^53).
             range: [lo, if hi > lo { hi } else { lo + lo.abs().max(1.0) }],
             affine: source_affine(v),
+            constant: hi <= lo,
         }
+    }
+
+    /// What a step 0 of one value throughout means for the steps after it
+    /// (`of` chose the range), None for one with a range.
+    fn constant_note(&self) -> Option<String> {
+        let [lo, hi] = self.range;
+        let over = match self.ty {
+            VoxelType::U8 | VoxelType::U16 | VoxelType::I8 | VoxelType::I16 => {
+                format!("its type's full {} range", self.ty)
+            }
+            _ => format!("{} .. {}", number(lo), number(hi)),
+        };
+        self.constant.then(|| {
+            format!(
+                "step 0 holds one value ({}) throughout, so every step is normalised over {over} (a transfer function's 0 .. 1), and values past it clamp",
+                number(lo)
+            )
+        })
     }
 
     /// Normalises `step` as step 0 (its `norm`); an error naming
@@ -382,18 +443,40 @@ impl StepNorm {
                 ),
             ));
         }
+        if step.spacing != self.spacing {
+            let show = |[x, y, z]: [f32; 3]| format!("{x} x {y} x {z}");
+            return Err(Error::invalid(
+                "time step",
+                what.to_string(),
+                format!(
+                    "has spacing {} where step 0 has {}: every step must share one grid",
+                    show(step.spacing),
+                    show(self.spacing)
+                ),
+            ));
+        }
         if let (Some(a0), Some(a)) = (self.affine, source_affine(step)) {
             let near = |x: f64, y: f64| (x - y).abs() <= 1e-9 * x.abs().max(y.abs()).max(1.0);
             if !(near(a[0], a0[0]) && near(a[1], a0[1])) {
-                let show = |[k, c]: [f64; 2]| format!("{} x stored + {}", number(k), number(c));
+                // In the file's terms: a stored texel is the raw voxel
+                // shifted, or complemented under a negative slope, so the
+                // slope's magnitude is the file's and the offset between
+                // two steps' values of one voxel is what differs.
+                let how = match near(a[0], a0[0]) {
+                    false => format!(
+                        "its voxels scale by {} per raw unit (in magnitude) where step 0's scale by {} (a NIfTI's scl_slope)",
+                        number(a[0]),
+                        number(a0[0])
+                    ),
+                    true => format!(
+                        "a raw voxel's value is {} off step 0's (a NIfTI's scl_inter, or its scl_slope's sign)",
+                        number(a[1] - a0[1])
+                    ),
+                };
                 return Err(Error::invalid(
                     "time step",
                     what.to_string(),
-                    format!(
-                        "its values are {} where step 0's are {}: the steps of a series of integer voxels share one scaling (a NIfTI's scl_slope and scl_inter)",
-                        show(a),
-                        show(a0)
-                    ),
+                    format!("{how}: the steps of a series of integer voxels share one scaling (a NIfTI's scl_slope and scl_inter)"),
                 ));
             }
         }

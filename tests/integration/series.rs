@@ -234,7 +234,23 @@ fn integer_steps_share_step_0s_scaling_or_are_refused() {
         b[116..120].copy_from_slice(&inter.to_le_bytes());
         b
     };
-    for (name, slope, inter) in [("same", 2.0, 1.0), ("half", 0.5, 0.0), ("negative", -1.0, 0.0)] {
+    let off = "a raw voxel's value is -1 off step 0's (a NIfTI's scl_inter";
+    for (name, slope, inter, why) in [
+        ("same", 2.0, 1.0, ""),
+        (
+            "half",
+            0.5,
+            0.0,
+            "scale by 0.5 per raw unit (in magnitude) where step 0's scale by 2 ",
+        ),
+        (
+            "negative",
+            -1.0,
+            0.0,
+            "scale by 1 per raw unit (in magnitude) where step 0's scale by 2 ",
+        ),
+        ("intercept", 2.0, 0.0, off),
+    ] {
         std::fs::write(dir.path().join(format!("{name}0.nii")), scaled(2.0, 1.0)).unwrap();
         std::fs::write(dir.path().join(format!("{name}1.nii")), scaled(slope, inter)).unwrap();
         let series = open(dir.path().join(format!("{name}%d.nii")).to_str().unwrap());
@@ -248,13 +264,78 @@ fn integer_steps_share_step_0s_scaling_or_are_refused() {
             }
             _ => {
                 let err = step1.unwrap_err().to_string();
-                assert!(
-                    err.contains("where step 0's are 2 x stored + 1") && err.contains("share one scaling"),
-                    "{name}: {err}"
-                );
+                assert!(err.contains(why) && err.contains("share one scaling"), "{name}: {err}");
             }
         }
     }
+}
+
+/// A step on another spacing is another grid, refused as channels on
+/// different spacings are.
+#[test]
+fn steps_share_step_0s_spacing_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data: Vec<u8> = (0..64u8).collect();
+    for (k, spacing) in [[1.0, 1.0, 1.0], [1.0, 1.0, 2.0]].into_iter().enumerate() {
+        let bytes = nifti_bytes(&[4, 4, 4], 2, 8, spacing, &data);
+        std::fs::write(dir.path().join(format!("s{k}.nii")), bytes).unwrap();
+    }
+    let series = open(dir.path().join("s%d.nii").to_str().unwrap());
+    series.load(0, None).unwrap();
+    let err = series.load(1, None).unwrap_err().to_string();
+    assert!(
+        err.contains("has spacing 1 x 1 x 2 where step 0 has 1 x 1 x 1: every step must share one grid"),
+        "{err}"
+    );
+}
+
+/// A step 0 of one value gives no range to normalise the series by: the
+/// range chosen is named in a note, where before later steps saturated
+/// without a word.
+#[test]
+fn a_constant_step_0_is_named_in_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let step = |k: u32| -> Vec<u8> { (0..64u32).flat_map(|i| ((i * k) as f32 * 10.0).to_le_bytes()).collect() };
+    for k in 0..2 {
+        std::fs::write(dir.path().join(format!("sim_{k}_4x4x4_float32.raw")), step(k)).unwrap();
+    }
+    let spec = dir.path().join("sim_%d_4x4x4_float32.raw");
+    let run = lacuna(&["info", spec.to_str().unwrap(), "--time", "1"], &[]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("step 0 holds one value (0) throughout, so every step is normalised over 0 .. 1"),
+        "{}",
+        run.stderr
+    );
+    // A step 0 with a range says nothing.
+    std::fs::write(dir.path().join("sim_0_4x4x4_float32.raw"), step(2)).unwrap();
+    let run = lacuna(&["info", spec.to_str().unwrap(), "--time", "1"], &[]);
+    assert!(run.code == 0 && run.stderr.is_empty(), "{}", run.stderr);
+}
+
+/// A pattern's file with a time axis of its own would show its step 0
+/// alone: refused, at open and where a later file has one.
+#[test]
+fn a_patterns_files_hold_one_step_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let data: Vec<u8> = (0..24u8).collect();
+    let one = nifti_bytes(&[3, 2, 2], 2, 8, [1.0; 3], &data[..12]);
+    let two = nifti_bytes(&[3, 2, 2, 2], 2, 8, [1.0; 3], &data);
+    let why = "holds 2 time steps: the files of a printf pattern hold one step each";
+    std::fs::write(dir.path().join("a0.nii"), &two).unwrap();
+    std::fs::write(dir.path().join("a1.nii"), &two).unwrap();
+    let spec = dir.path().join("a%d.nii");
+    match Series::open(spec.to_str().unwrap(), &LoadOptions::default()) {
+        Err(e) => assert!(e.to_string().contains(why), "{e}"),
+        Ok(_) => panic!("a pattern of two-step files opened"),
+    }
+    std::fs::write(dir.path().join("b0.nii"), &one).unwrap();
+    std::fs::write(dir.path().join("b1.nii"), &two).unwrap();
+    let series = open(dir.path().join("b%d.nii").to_str().unwrap());
+    series.load(0, None).unwrap();
+    let err = series.load(1, None).unwrap_err().to_string();
+    assert!(err.contains("b1.nii") && err.contains(why), "{err}");
 }
 
 #[test]

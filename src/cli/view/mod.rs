@@ -170,6 +170,9 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
     for note in super::render::look_notes(&desc) {
         say_err!("note: {note}");
     }
+    if let Some(note) = series.norm_note() {
+        say_err!("note: {note}");
+    }
     let event_loop = EventLoop::with_user_event().build().map_err(|e| {
         let e = without_source_location(&e.to_string());
         Error::NoDevice(format!(
