@@ -137,9 +137,20 @@ fn unreadable(path: &Path, e: std::io::Error) -> Error {
     )
 }
 
-fn header(path: &Path, reader: impl Read) -> Result<NiftiHeader> {
+fn header(path: &Path, mut reader: impl Read) -> Result<NiftiHeader> {
+    // NIfTI-2 (HCP's, nibabel's Nifti2Image) starts with its header's size
+    // too: named, rather than refused as a broken NIfTI-1.
+    let mut size = [0u8; 4];
+    reader.read_exact(&mut size).map_err(|e| unreadable(path, e))?;
+    if [i32::from_le_bytes(size), i32::from_be_bytes(size)].contains(&540) {
+        return Err(Error::format(
+            path,
+            "is NIfTI-2 (sizeof_hdr 540), and lacuna reads NIfTI-1: save it as NIfTI-1 (nibabel's Nifti1Image)",
+        ));
+    }
     // Exactly the header's bytes, so what follows is where the caller is.
-    NiftiHeader::from_reader(reader.take(HEADER_BYTES)).map_err(|e| match e {
+    let header = (&size[..]).chain(reader).take(HEADER_BYTES);
+    NiftiHeader::from_reader(header).map_err(|e| match e {
         nifti::NiftiError::Io(io) => unreadable(path, io),
         // The crate's index and value do not name the offending field reliably.
         nifti::NiftiError::InconsistentDim(..) => {

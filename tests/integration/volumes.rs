@@ -174,6 +174,13 @@ fn nrrd_attached_detached_raw_and_gzip_with_spacing() {
     let v = load(&p).unwrap();
     assert_pattern(&v, dims);
     assert!((v.spacing[0] - 0.9).abs() < 1e-6 && (v.spacing[1] - 1.2).abs() < 1e-6 && v.spacing[2] == 3.0);
+    // Spacings of nan beside space directions say nothing: the directions hold.
+    let p = dir.path().join("nan.nrrd");
+    let extra = "spacings: nan nan nan\nspace directions: (0.9,0,0) (0,1.2,0) (0,0,3)\n\n";
+    let mut bytes = nrrd_header("int16", dims, "raw", extra).into_bytes();
+    bytes.extend(&data);
+    write(&p, &bytes);
+    assert_eq!(load(&p).unwrap().spacing[2], 3.0);
     // Detached header, raw and gzip data files.
     write(&dir.path().join("c.raw"), &data);
     write(
@@ -231,6 +238,10 @@ fn nrrd_errors_name_what_is_wrong() {
         ("line skip: 2\n\n", "'line skip' is not supported"),
         ("byte skip: -1\n\n", "'byte skip: -1'"),
         ("byte skip: -7\n\n", "must be >= 0, not '-7'"),
+        (
+            "spacings: 1 1 1\nspace directions: (2,0,0) (0,2,0) (0,0,2)\n\n",
+            "gives both 'spacings' and 'space directions'",
+        ),
     ] {
         let p = dir.path().join("fields.nrrd");
         let mut bytes = nrrd_header("uchar", dims, "raw", extra).into_bytes();
@@ -305,6 +316,18 @@ fn nifti_errors_name_what_is_wrong() {
     write(&p, &nifti_bytes([2, 0, 2], 2, 8, [1.0; 3], &[]));
     let err = load(&p).unwrap_err();
     assert!(err.to_string().contains("zero dimension"), "{err}");
+    // NIfTI-2 (sizeof_hdr 540), either byte order, is named as such.
+    for size in [540i32.to_le_bytes(), 540i32.to_be_bytes()] {
+        let p = dir.path().join("two.nii");
+        let mut bytes = vec![0u8; 560];
+        bytes[..4].copy_from_slice(&size);
+        write(&p, &bytes);
+        let err = load(&p).unwrap_err();
+        assert!(
+            matches!(err, Error::Format { .. }) && err.to_string().contains("is NIfTI-2 (sizeof_hdr 540)"),
+            "{err}"
+        );
+    }
     assert!(matches!(load(&dir.path().join("none.nii")), Err(Error::Io { .. })));
 }
 

@@ -301,11 +301,23 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         Some("big") => false,
         Some(e) => return Err(Error::format(path, format!("NRRD endian '{e}' is not little or big"))),
     };
-    let spacing = if let Some(s) = get("spacings") {
-        let all = numbers(path, "spacings", s)?;
+    // The format gives an axis one of the two: both, with spacings that
+    // are not NaN, would leave one to be ignored without a word.
+    let spacings = get("spacings").map(|s| numbers(path, "spacings", s)).transpose()?;
+    let spacings = match (spacings, get("space directions")) {
+        (Some(all), Some(_)) if all.iter().all(|v| v.is_nan()) => None,
+        (Some(_), Some(_)) => {
+            return Err(Error::format(
+                path,
+                "NRRD header gives both 'spacings' and 'space directions', which the format does not allow for one axis: keep one (or make the spacings nan)",
+            ))
+        }
+        (spacings, _) => spacings,
+    };
+    let spacing = if let Some(all) = &spacings {
         match all.len() == sizes.len() {
             true => axes.spatial.iter().map(|&a| all[a]).collect(),
-            false => all,
+            false => all.clone(),
         }
     } else if let Some(d) = get("space directions") {
         direction_lengths(path, d)?
@@ -313,7 +325,7 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         vec![1.0; 3]
     };
     // Checked as f32, as the volume keeps them (1e-300 would be 0, 1e308 inf).
-    let field = if get("spacings").is_some() {
+    let field = if spacings.is_some() {
         "spacings"
     } else {
         "space directions' lengths"
