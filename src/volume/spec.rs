@@ -172,12 +172,33 @@ pub(super) fn check_raw_options(spec: &str, options: &LoadOptions) -> Result<()>
         _ if options.raw.is_none() => return Ok(()),
         _ if is_nrrd(path) || is_nifti(path) => "this file's header gives its grid and type",
         _ if !path.exists() && generator() => "this names a generator",
-        _ => return Ok(()),
+        _ => return named_layout_agrees(spec, options),
     };
     Err(Error::invalid(
         "volume",
         spec,
         format!("--dims and --type describe a raw file, and {why}"),
+    ))
+}
+
+/// A raw file whose name gives its layout (`v_12x10x8_uint8.raw`) is that
+/// layout: `--dims` and `--type` may repeat it, not replace it unseen.
+fn named_layout_agrees(spec: &str, options: &LoadOptions) -> Result<()> {
+    let (Some(given), Ok(named)) = (options.raw, super::raw::layout_from_name(Path::new(spec))) else {
+        return Ok(());
+    };
+    if (given.dims, given.ty) == (named.dims, named.ty) {
+        return Ok(());
+    }
+    let show = |l: RawLayout| format!("{}x{}x{} {}", l.dims[0], l.dims[1], l.dims[2], l.ty);
+    Err(Error::invalid(
+        "volume",
+        spec,
+        format!(
+            "its name gives {}, and --dims and --type say {}: rename the file, or leave the flags out",
+            show(named),
+            show(given)
+        ),
     ))
 }
 

@@ -699,6 +699,19 @@ fn bad_input_is_one_line_nonzero_and_leaves_no_file() {
         let args = [&["info", volume][..], &raw].concat();
         fails(&args, &[], &format!("--dims and --type describe a raw file, and {why}"));
     }
+    // A raw file's name is its layout: the flags may repeat it, not
+    // replace it (the file itself need not exist to be refused).
+    let named = "/no/such/v_12x10x8_uint8.raw";
+    fails(
+        &["info", named, "--dims", "10x12x8", "--type", "uint8"],
+        &[],
+        "its name gives 12x10x8 uint8, and --dims and --type say 10x12x8 uint8",
+    );
+    fails(
+        &["info", named, "--dims", "12x10x8", "--type", "uint8"],
+        &[],
+        "v_12x10x8_uint8.raw: No such file",
+    );
     for (flag, n) in [("--repeat", "4000000000"), ("--warmup", "100001")] {
         let needle = format!("invalid {} '{n}': at most 100000", &flag[2..]);
         fails(&["render", "menger:16", flag, n], &[], &needle);
