@@ -3,6 +3,7 @@
 
 use super::{parse_dims, parse_type};
 use clap::Args;
+use lacuna::error::number;
 use lacuna::volume::{check_raw_out, parse_export_type, write_raw, LoadOptions, RawLayout, Series, VoxelType};
 use lacuna::Result;
 use std::path::PathBuf;
@@ -40,6 +41,16 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     let volume = series.load(args.time, None)?;
     let written = write_raw(&volume, &args.out, args.ty)?;
     say!("{}", written.path.display());
+    if written.within > 0.0 {
+        let [lo, hi] = volume.value_range;
+        say_err!(
+            "note: {} voxels are kept normalised to 0 .. 1 in float32 over their range ({} .. {}), so each exported value is within {:.3e} of the file's, not a bit-exact copy",
+            volume.source_type,
+            number(lo),
+            number(hi),
+            written.within
+        );
+    }
     let [sx, sy, sz] = volume.spacing;
     if volume.spacing != [1.0; 3] {
         say_err!(

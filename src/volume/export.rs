@@ -308,11 +308,17 @@ pub fn check_raw_out(out: &Path) -> Result<()> {
 const OTHER_FORMATS: [&str; 7] = [".nrrd", ".nhdr", ".nii", ".nii.gz", ".gz", ".exr", ".png"];
 
 /// What [`write_raw`] wrote.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RawExport {
     pub path: PathBuf,
     pub ty: VoxelType,
     pub bytes: u64,
+    /// How far an exported value may lie from the source's: 0 where every
+    /// value is the source's own; for values kept normalised in f32
+    /// (float32, float64, a fractionally scaled integer file), half an ulp
+    /// of [0, 1] in source units, (max - min) x 2^-24: a value much nearer
+    /// 0 than the range is wide keeps none of its digits.
+    pub within: f64,
 }
 
 /// Voxels encoded per write (bounded memory for any volume size).
@@ -362,5 +368,14 @@ pub fn write_raw(volume: &Volume, out: &Path, ty: Option<VoxelType>) -> Result<R
         }
         file.sync_all().map_err(io)
     })?;
-    Ok(RawExport { path, ty, bytes })
+    let within = match values.integer {
+        true => 0.0,
+        false => values.tolerance,
+    };
+    Ok(RawExport {
+        path,
+        ty,
+        bytes,
+        within,
+    })
 }

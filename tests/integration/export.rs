@@ -369,6 +369,28 @@ fn cli_loader_options_and_the_spacing_note() {
     );
     let back = load(&dir.path().join("spaced_2x2x2_uint8.raw"));
     assert_eq!(u8s(&back), &[0, 1, 2, 3, 4, 5, 6, 7]);
+
+    // float32 kept normalised: a note gives the bound, and every value
+    // keeps to it; small values in a wide range lose their digits.
+    let floats: Vec<f64> = values(0.0, 1.0).iter().map(|v| v * 9523.8 - 1000.0).collect();
+    let src = write_source(dir.path(), "wide", DIMS, VoxelType::F32, &floats);
+    let r = lacuna(&["export", src.to_str().unwrap(), stem.to_str().unwrap()], &[]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let (lo, hi) = (-1000.0f64, 104.0 * 9523.8 - 1000.0);
+    let within = (hi as f32 as f64 - lo) * (-24f64).exp2();
+    let note = format!(
+        "note: float32 voxels are kept normalised to 0 .. 1 in float32 over their range (-1000 .. {}), so each exported value is within {within:.3e} of the file's",
+        hi as f32 as f64
+    );
+    assert!(r.stderr.starts_with(&note), "{}\nwanted {note}", r.stderr);
+    let out = file_values(&dir.path().join("out_7x5x3_float32.raw"), VoxelType::F32);
+    for (i, (got, want)) in out.iter().zip(&floats).enumerate() {
+        let want = *want as f32 as f64;
+        assert!((got - want).abs() <= within, "voxel {i}: {got} against {want}");
+    }
+    // Integers exported exactly say nothing.
+    let r = lacuna(&["export", "menger:9", stem.to_str().unwrap()], &[]);
+    assert!(r.code == 0 && r.stderr.is_empty(), "{}", r.stderr);
 }
 
 /// Runs `lacuna export ARGS` with `{in}` and `{out}` replaced by the input
