@@ -204,6 +204,35 @@ fn nrrd_attached_detached_raw_and_gzip_with_spacing() {
     assert_pattern(&load(&p).unwrap(), dims);
 }
 
+/// A slice or a row is a volume one voxel thick, as a 2-D NIfTI is; its
+/// spacings and space directions give the axes it has.
+#[test]
+fn a_2d_or_1d_nrrd_is_a_volume_one_voxel_thick() {
+    let dir = tempfile::tempdir().unwrap();
+    let dims = [6, 5, 1];
+    let data = encode(&pattern(dims), VoxelType::I16, true);
+    for (name, fields) in [
+        ("slice.nrrd", "dimension: 2\nsizes: 6 5\nspacings: 0.5 2\n"),
+        (
+            "dirs.nrrd",
+            "dimension: 2\nsizes: 6 5\nspace dimension: 2\nspace directions: (0.5,0) (0,2)\n",
+        ),
+    ] {
+        let p = dir.path().join(name);
+        let header = format!("NRRD0004\ntype: short\n{fields}endian: little\nencoding: raw\n\n");
+        write(&p, &[header.into_bytes(), data.clone()].concat());
+        let v = load(&p).unwrap();
+        assert_eq!(v.spacing, [0.5, 2.0, 1.0], "{name}");
+        assert_pattern(&v, dims);
+    }
+    let p = dir.path().join("row.nrrd");
+    let header = "NRRD0004\ntype: short\ndimension: 1\nsizes: 30\nendian: little\nencoding: raw\n\n";
+    write(&p, &[header.as_bytes(), &data].concat());
+    let v = load(&p).unwrap();
+    assert_eq!((v.dims, v.spacing), ([30, 1, 1], [1.0; 3]));
+    assert_pattern(&v, [30, 1, 1]);
+}
+
 #[test]
 fn nrrd_errors_name_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();

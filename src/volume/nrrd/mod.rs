@@ -128,7 +128,9 @@ fn axes(path: &Path, dimension: usize, sizes: &[f64], kinds: Option<&str>) -> Re
     if dimension != 4 {
         return Err(Error::format(
             path,
-            format!("NRRD has dimension {dimension}; lacuna reads 3-D volumes, with channels or time as a 4th axis"),
+            format!(
+                "NRRD has dimension {dimension}; lacuna reads 1- to 3-D volumes, with channels or time as a 4th axis"
+            ),
         ));
     }
     let kinds: Vec<String> = kinds.unwrap_or("").split_whitespace().map(str::to_lowercase).collect();
@@ -285,6 +287,13 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
             ));
         }
     }
+    // A slice (or a row) is a volume one voxel thick, as a 2-D NIfTI is:
+    // its missing axes have size 1 and spacing 1.
+    let flat = (1..3).contains(&dimension) && sizes.len() == dimension;
+    let (dimension, sizes) = match flat {
+        true => (3, [sizes.clone(), vec![1.0; 3 - sizes.len()]].concat()),
+        false => (dimension, sizes),
+    };
     let axes = axes(path, dimension, &sizes, get("kinds"))?;
     let dims = axes.spatial.map(|a| sizes[a] as u32);
     let little = match get("endian") {
@@ -323,6 +332,10 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         direction_lengths(path, d)?
     } else {
         vec![1.0; 3]
+    };
+    let spacing = match flat && spacing.len() < 3 {
+        true => [spacing.clone(), vec![1.0; 3 - spacing.len()]].concat(),
+        false => spacing,
     };
     // Checked as f32, as the volume keeps them (1e-300 would be 0, 1e308 inf).
     let field = if spacings.is_some() {
