@@ -1,5 +1,5 @@
-//! NRRD reader (attached or detached header; raw or gzip encoding; 3-D).
-//! Honours `spacings` or the lengths of `space directions`. A 4-D NRRD
+//! NRRD reader (attached or detached header; raw or gzip encoding; 1- to 3-D,
+//! a slice or row one voxel thick). Honours `spacings` or the lengths of `space directions`. A 4-D NRRD
 //! holds channels on a component axis first (`kinds: vector domain domain
 //! domain`, or any non-domain kind: up to `MAX_CHANNELS`), or a time series
 //! on a `time` axis last.
