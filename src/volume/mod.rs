@@ -20,6 +20,7 @@ mod gradient_cells;
 #[cfg(feature = "loaders")]
 mod nifti;
 mod nrrd;
+mod pattern;
 mod pool;
 pub mod procedural;
 mod raw;

@@ -142,10 +142,17 @@ fn header(path: &Path, mut reader: impl Read) -> Result<NiftiHeader> {
     // too: named, rather than refused as a broken NIfTI-1.
     let mut size = [0u8; 4];
     reader.read_exact(&mut size).map_err(|e| unreadable(path, e))?;
-    if [i32::from_le_bytes(size), i32::from_be_bytes(size)].contains(&540) {
+    let sizes = [i32::from_le_bytes(size), i32::from_be_bytes(size)];
+    if sizes.contains(&540) {
         return Err(Error::format(
             path,
             "is NIfTI-2 (sizeof_hdr 540), and lacuna reads NIfTI-1: save it as NIfTI-1 (nibabel's Nifti1Image)",
+        ));
+    }
+    if !sizes.contains(&(HEADER_BYTES as i32)) {
+        return Err(Error::format(
+            path,
+            format!("not a NIfTI-1 header: its sizeof_hdr is {}, not 348", sizes[0]),
         ));
     }
     // Exactly the header's bytes, so what follows is where the caller is.

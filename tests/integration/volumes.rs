@@ -345,6 +345,12 @@ fn nifti_errors_name_what_is_wrong() {
     write(&p, &nifti_bytes([2, 0, 2], 2, 8, [1.0; 3], &[]));
     let err = load(&p).unwrap_err();
     assert!(err.to_string().contains("zero dimension"), "{err}");
+    // A header of another size is no NIfTI-1 header.
+    let p = dir.path().join("size.nii");
+    let mut bytes = nifti_bytes(dims, 2, 8, [1.0; 3], &[1u8; 8]);
+    bytes[..4].copy_from_slice(&100i32.to_le_bytes());
+    write(&p, &bytes);
+    expect_format(load(&p), "not a NIfTI-1 header: its sizeof_hdr is 100, not 348");
     // NIfTI-2 (sizeof_hdr 540), either byte order, is named as such.
     for size in [540i32.to_le_bytes(), 540i32.to_be_bytes()] {
         let p = dir.path().join("two.nii");
