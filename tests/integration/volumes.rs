@@ -181,6 +181,19 @@ fn nrrd_attached_detached_raw_and_gzip_with_spacing() {
     bytes.extend(&data);
     write(&p, &bytes);
     assert_eq!(load(&p).unwrap().spacing[2], 3.0);
+    // Per axis: a time axis's spacing beside the spatial axes' directions
+    // (`unu join -sp`) is the format's own way.
+    let p = dir.path().join("time.nrrd");
+    let header = format!(
+        "NRRD0004\ntype: int16\ndimension: 4\nsizes: {} {} {} 2\nendian: little\nencoding: raw\nkinds: domain domain domain time\nspacings: nan nan nan 0.5\nspace directions: (0.9,0,0) (0,1.2,0) (0,0,3) none\n\n",
+        dims[0], dims[1], dims[2]
+    );
+    write(&p, &[header.into_bytes(), data.clone(), data.clone()].concat());
+    let series = lacuna::volume::Series::open(p.to_str().unwrap(), &Default::default()).unwrap();
+    assert_eq!(series.steps(), 2);
+    let v = series.load(1, None).unwrap();
+    assert_eq!(v.spacing[2], 3.0);
+    assert_pattern(&v, dims);
     // Detached header, raw and gzip data files.
     write(&dir.path().join("c.raw"), &data);
     write(
@@ -269,7 +282,7 @@ fn nrrd_errors_name_what_is_wrong() {
         ("byte skip: -7\n\n", "must be >= 0, not '-7'"),
         (
             "spacings: 1 1 1\nspace directions: (2,0,0) (0,2,0) (0,0,2)\n\n",
-            "gives both 'spacings' and 'space directions'",
+            "NRRD axis 0 has both a spacing (1) and a space direction, which the format does not allow",
         ),
     ] {
         let p = dir.path().join("fields.nrrd");

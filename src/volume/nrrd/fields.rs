@@ -36,7 +36,7 @@ pub(super) fn is_list(value: &str) -> bool {
 }
 
 /// Lengths of the vectors in `space directions: (a,b,c) (d,e,f) (g,h,i)`.
-pub(super) fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
+pub(super) fn direction_lengths(path: &Path, value: &str) -> Result<Vec<Option<f64>>> {
     let bad = |what: &str| Error::format(path, format!("NRRD space directions: bad vector '{what}'"));
     let mut out = Vec::new();
     let mut rest = value.trim_start();
@@ -44,6 +44,7 @@ pub(super) fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
     // vector axis first) or a parenthesised vector.
     while !rest.is_empty() {
         if let Some(after) = rest.strip_prefix("none") {
+            out.push(None);
             rest = after.trim_start();
             continue;
         }
@@ -58,7 +59,7 @@ pub(super) fn direction_lengths(path: &Path, value: &str) -> Result<Vec<f64>> {
             .split(',')
             .map(|t| t.trim().parse::<f64>().map_err(|_| bad(&format!("({inner})"))))
             .collect();
-        out.push(comps?.iter().map(|c| c * c).sum::<f64>().sqrt());
+        out.push(Some(comps?.iter().map(|c| c * c).sum::<f64>().sqrt()));
         rest = open[close + 1..].trim_start();
     }
     Ok(out)

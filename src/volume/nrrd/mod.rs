@@ -310,39 +310,42 @@ fn header(path: &Path, bytes: &[u8], detached: bool) -> Result<Header> {
         Some("big") => false,
         Some(e) => return Err(Error::format(path, format!("NRRD endian '{e}' is not little or big"))),
     };
-    // The format gives an axis one of the two: both, with spacings that
-    // are not NaN, would leave one to be ignored without a word.
     let spacings = get("spacings").map(|s| numbers(path, "spacings", s)).transpose()?;
-    let spacings = match (spacings, get("space directions")) {
-        (Some(all), Some(_)) if all.iter().all(|v| v.is_nan()) => None,
-        (Some(_), Some(_)) => {
+    // Per axis, `none` for one without a direction (a component or time axis).
+    let directions = get("space directions")
+        .map(|d| direction_lengths(path, d))
+        .transpose()?;
+    // The format gives an axis one of the two: an axis with both, its
+    // spacing not nan, would have one ignored without a word.
+    if let (Some(spacings), Some(directions)) = (&spacings, &directions) {
+        let both = spacings
+            .iter()
+            .zip(directions)
+            .position(|(s, d)| d.is_some() && !s.is_nan());
+        if let Some(axis) = both {
             return Err(Error::format(
                 path,
-                "NRRD header gives both 'spacings' and 'space directions', which the format does not allow for one axis: keep one (or make the spacings nan)",
-            ))
+                format!(
+                    "NRRD axis {axis} has both a spacing ({}) and a space direction, which the format does not allow: keep one (or make its spacing nan)",
+                    crate::error::number(spacings[axis])
+                ),
+            ));
         }
-        (spacings, _) => spacings,
-    };
-    let spacing = if let Some(all) = &spacings {
-        match all.len() == sizes.len() {
-            true => axes.spatial.iter().map(|&a| all[a]).collect(),
-            false => all.clone(),
-        }
-    } else if let Some(d) = get("space directions") {
-        direction_lengths(path, d)?
-    } else {
-        vec![1.0; 3]
+    }
+    let lengths: Option<Vec<f64>> = directions
+        .map(|d| d.into_iter().flatten().collect::<Vec<f64>>())
+        .filter(|l| !l.is_empty());
+    let (spacing, field) = match (lengths, &spacings) {
+        (Some(lengths), _) => (lengths, "space directions' lengths"),
+        (None, Some(all)) if all.len() == sizes.len() => (axes.spatial.iter().map(|&a| all[a]).collect(), "spacings"),
+        (None, Some(all)) => (all.clone(), "spacings"),
+        (None, None) => (vec![1.0; 3], "spacings"),
     };
     let spacing = match flat && spacing.len() < 3 {
         true => [spacing.clone(), vec![1.0; 3 - spacing.len()]].concat(),
         false => spacing,
     };
     // Checked as f32, as the volume keeps them (1e-300 would be 0, 1e308 inf).
-    let field = if spacings.is_some() {
-        "spacings"
-    } else {
-        "space directions' lengths"
-    };
     let spacing = match spacing.as_slice() {
         [x, y, z] if [x, y, z].iter().all(|v| (**v as f32).is_finite() && **v as f32 > 0.0) => {
             [*x as f32, *y as f32, *z as f32]
