@@ -213,34 +213,43 @@ fn in_display_window(
         window(data_at, frame.width as u64, frame.height as u64),
         window(display.position, dw, dh)
     );
-    if frame.depth.is_some() {
+    let side = crate::limits::MAX_FRAME_SIDE as u64;
+    if dw > side || dh > side {
         return Err(crate::Error::format(
             origin,
-            format!("{windows}, and a depth (Z) outside the data window has no value"),
+            format!("{windows}, of more than {side} pixels a side, as no lacuna frame is"),
         ));
     }
-    if dw > u32::MAX as u64 || dh > u32::MAX as u64 {
-        return Err(crate::Error::format(
-            origin,
-            format!("{windows}, of more than 2^32 pixels a side"),
-        ));
-    }
-    let what = format_args!("EXR display window {dw}x{dh} ({})", origin.display());
-    let mut pixels: Vec<[f32; 4]> = crate::limits::zeroed(what, dw * dh)?;
     // The data window's pixel (x, y) in display coordinates, where it is one.
     let dx = data_at.x() as i64 - display.position.x() as i64;
     let dy = data_at.y() as i64 - display.position.y() as i64;
-    for y in 0..frame.height as i64 {
+    let (w, h) = (frame.width as i64, frame.height as i64);
+    let covers = dx <= 0 && dy <= 0 && dx + w >= dw as i64 && dy + h >= dh as i64;
+    if frame.depth.is_some() && !covers {
+        return Err(crate::Error::format(
+            origin,
+            format!("{windows}, and a depth (Z) where the data window does not reach has no value"),
+        ));
+    }
+    let what = format_args!("EXR display window {dw}x{dh} ({})", origin.display());
+    let mut pixels: Vec<[f32; 4]> = crate::limits::zeroed(&what, dw * dh)?;
+    let mut depth: Option<Vec<f32>> = match frame.depth {
+        Some(_) => Some(crate::limits::zeroed(&what, dw * dh)?),
+        None => None,
+    };
+    for y in 0..h {
         let Ok(row) = u64::try_from(y + dy) else { continue };
         if row >= dh {
             continue;
         }
-        for x in 0..frame.width as i64 {
-            match u64::try_from(x + dx) {
-                Ok(col) if col < dw => {
-                    pixels[(row * dw + col) as usize] = frame.pixels[(y * frame.width as i64 + x) as usize]
-                }
-                _ => {}
+        for x in 0..w {
+            let Some(col) = u64::try_from(x + dx).ok().filter(|&c| c < dw) else {
+                continue;
+            };
+            let (to, from) = ((row * dw + col) as usize, (y * w + x) as usize);
+            pixels[to] = frame.pixels[from];
+            if let (Some(out), Some(z)) = (depth.as_mut(), frame.depth.as_ref()) {
+                out[to] = z[from];
             }
         }
     }
@@ -248,7 +257,8 @@ fn in_display_window(
         width: dw as u32,
         height: dh as u32,
         pixels,
-        ..frame
+        depth,
+        metadata: frame.metadata,
     })
 }
 
@@ -265,16 +275,21 @@ mod tests {
         assert!(e.contains("no A (alpha) channel"), "{e}");
     }
 
-    /// An EXR whose 3x2 data window sits at `at` in a 6x4 display window
-    /// at (-1, 0); pixel (x, y) of the data is (x, y, 0.5, 1).
+    /// An EXR whose 3x2 data window sits at `at` in a display window at
+    /// (-1, 0) of `size` (6x4 unless said); pixel (x, y) of the data is
+    /// (x, y, 0.5, 1), its depth (with `depth`) 10 x + y.
     fn offset_exr(name: &str, at: (i32, i32), depth: bool) -> std::path::PathBuf {
+        offset_exr_in(name, at, (6, 4), depth)
+    }
+
+    fn offset_exr_in(name: &str, at: (i32, i32), size: (usize, usize), depth: bool) -> std::path::PathBuf {
         use exr::prelude::*;
         let path = std::env::temp_dir().join(format!("lacuna-{name}-{}.exr", std::process::id()));
         let attributes = LayerAttributes {
             layer_position: Vec2(at.0, at.1),
             ..LayerAttributes::default()
         };
-        let display = IntegerBounds::new((-1, 0), (6, 4));
+        let display = IntegerBounds::new((-1, 0), size);
         let rgba = |p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5, 1.0);
         if depth {
             let channels = SpecificChannels::build()
@@ -283,7 +298,10 @@ mod tests {
                 .with_channel("B")
                 .with_channel("A")
                 .with_channel("Z")
-                .with_pixel_fn(|p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5f32, 1.0f32, 2.0f32));
+                .with_pixel_fn(|p: Vec2<usize>| {
+                    let (x, y) = (p.x() as f32, p.y() as f32);
+                    (x, y, 0.5f32, 1.0f32, 10.0 * x + y)
+                });
             let mut image = Image::from_layer(Layer::new((3, 2), attributes, Encoding::UNCOMPRESSED, channels));
             image.attributes.display_window = display;
             image.write().to_file(&path).unwrap();
@@ -324,13 +342,30 @@ mod tests {
     }
 
     #[test]
-    fn a_depth_that_does_not_cover_its_display_window_is_refused() {
+    fn a_depth_that_does_not_cover_its_display_window_is_refused_and_overscan_is_cut() {
         let path = offset_exr("window-z", (1, 1), true);
         let e = Frame::read_exr(&path).unwrap_err().to_string();
         let _ = std::fs::remove_file(&path);
         assert!(
-            e.contains("data window (1, 1)-(3, 2) is not its display window (-1, 0)-(4, 3)") && e.contains("depth (Z)"),
+            e.contains("data window (1, 1)-(3, 2) is not its display window (-1, 0)-(4, 3)")
+                && e.contains("a depth (Z) where the data window does not reach"),
             "{e}"
         );
+        // Data (0..3, 0..2) at (-2, 0) covers a 2x1 display at (-1, 0):
+        // display (0, 0) is data (1, 0), display (1, 0) data (2, 0).
+        let path = offset_exr_in("overscan-z", (-2, 0), (2, 1), true);
+        let frame = Frame::read_exr(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!((frame.width, frame.height), (2, 1));
+        assert_eq!(frame.pixels, vec![[1.0, 0.0, 0.5, 1.0], [2.0, 0.0, 0.5, 1.0]]);
+        assert_eq!(frame.depth, Some(vec![10.0, 20.0]));
+    }
+
+    #[test]
+    fn a_display_window_past_a_frames_largest_side_is_refused() {
+        let path = offset_exr_in("huge", (0, 0), (20000, 4), false);
+        let e = Frame::read_exr(&path).unwrap_err().to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(e.contains("of more than 16384 pixels a side"), "{e}");
     }
 }
