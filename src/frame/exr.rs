@@ -232,9 +232,9 @@ fn in_display_window(
         ));
     }
     let what = format_args!("EXR display window {dw}x{dh} ({})", origin.display());
-    let mut pixels: Vec<[f32; 4]> = crate::limits::zeroed(&what, dw * dh)?;
+    let mut pixels: Vec<[f32; 4]> = crate::limits::zeroed(what, dw * dh)?;
     let mut depth: Option<Vec<f32>> = match frame.depth {
-        Some(_) => Some(crate::limits::zeroed(&what, dw * dh)?),
+        Some(_) => Some(crate::limits::zeroed(what, dw * dh)?),
         None => None,
     };
     for y in 0..h {
