@@ -427,16 +427,25 @@ impl Volume {
     }
 
     /// Channel `c`'s own name: channel 1's data is this volume's, whose
-    /// name `join` made every channel's, joined with `+`.
+    /// name `join` made every channel's, joined with `+`; a file of several
+    /// channels names them `FILE[c]`, and channel 1 `FILE[0]` likewise.
     ///
     /// # Panics
     /// If `c >= channel_count()`, as `channel` does.
-    pub fn channel_name(&self, c: usize) -> &str {
+    pub fn channel_name(&self, c: usize) -> String {
         if c > 0 {
-            return &self.other_channels[c - 1].name;
+            return self.other_channels[c - 1].name.clone();
         }
         let others: String = self.other_channels.iter().map(|o| format!("+{}", o.name)).collect();
-        self.name.strip_suffix(&others).unwrap_or(&self.name)
+        let components = self
+            .other_channels
+            .first()
+            .is_some_and(|o| o.name == format!("{}[1]", self.name));
+        match self.name.strip_suffix(&others) {
+            Some(own) if !others.is_empty() => own.to_string(),
+            _ if components => format!("{}[0]", self.name),
+            _ => self.name.clone(),
+        }
     }
 
     /// Every channel, channel 1 first.

@@ -268,6 +268,7 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
     for t in 0..2 {
         let v = series.load(t as u32, None).unwrap();
         assert_eq!(v.channel_count(), 2);
+        assert_eq!(v.channel_name(0), format!("{}[0]", nii.display()));
         for c in 0..2 {
             let ch = v.channel(c);
             let [lo, hi] = ch.value_range;
@@ -295,6 +296,10 @@ fn nifti_components_and_nrrd_component_axes_are_channels() {
     std::fs::write(&path, &nrrd).unwrap();
     let v = load(path.to_str().unwrap());
     assert_eq!((v.channel_count(), v.dims, v.spacing), (3, [4, 3, 2], [1.0, 1.0, 2.0]));
+    // Each component by its index, the first too (not the file's name).
+    let p = path.display();
+    let names: Vec<String> = (0..3).map(|c| v.channel_name(c)).collect();
+    assert_eq!(names, [format!("{p}[0]"), format!("{p}[1]"), format!("{p}[2]")]);
     for c in 0..3 {
         match &v.channel(c).data {
             VoxelData::U8(d) => assert_eq!(d[5], (c * 50 + 5) as u8),
