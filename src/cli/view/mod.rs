@@ -195,6 +195,11 @@ pub fn run(args: &ViewArgs) -> Result<ExitCode> {
             .error
             .unwrap_or_else(|| Error::NoDevice("the window closed before it opened".into())));
     };
+    // However the session ended (--frames, Q, Esc, the window closed,
+    // Ctrl-C), the title's figures.
+    if app.error.is_none() {
+        say!("{}", viewer.summary());
+    }
     // lacuna's objects go first, then the host's window objects, while the
     // adopted context still collects validation messages; then the device.
     let Viewer {
@@ -388,20 +393,19 @@ impl ApplicationHandler<Signalled> for App<'_> {
     }
 
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
-        if let Some(viewer) = self.viewer.as_ref().filter(|v| v.wants_frame(self.args)) {
+        // A minimised (zero-sized) window waits for its Resized, even
+        // while a series plays.
+        let shown = |v: &&Viewer| {
+            let size = v.window.inner_size();
+            size.width > 0 && size.height > 0
+        };
+        if let Some(viewer) = self.viewer.as_ref().filter(shown).filter(|v| v.wants_frame(self.args)) {
             viewer.window.request_redraw();
         }
     }
 
     /// Ctrl-C or SIGTERM (`end_on_signals`): the session ends as Q ends it.
     fn user_event(&mut self, event_loop: &ActiveEventLoop, _: Signalled) {
-        // A second Ctrl-C before the loop ends says nothing more.
-        if event_loop.exiting() {
-            return;
-        }
-        if let Some(viewer) = &self.viewer {
-            say!("{}", viewer.summary());
-        }
         event_loop.exit();
     }
 }
@@ -475,7 +479,8 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
-        self.dirty = false;
+        // A frame presented to a swapchain gone stale is drawn again on the new one.
+        self.dirty = presented.stale;
         // S presses this frame was read back for; keys pressed now ask of the next.
         let shots = std::mem::take(&mut self.shots);
         self.press_pending()?;
@@ -501,9 +506,6 @@ impl Viewer {
             if let Some(path) = &args.screenshot {
                 self.write(path, FrameFormat::from_path(path)?)?;
             }
-        }
-        if last {
-            say!("{}", self.summary());
         }
         if shots > 0 {
             self.shots_written += 1;

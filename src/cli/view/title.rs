@@ -66,8 +66,9 @@ impl Viewer {
         }
     }
 
-    /// The orbit as `render` takes it, and the zoom where the wheel moved
-    /// it: `camera 30.0,20.0 perspective 40 · zoom 1.50x`.
+    /// The orbit as `render` takes it, and the zoom and pan where they
+    /// moved (`render` has neither): `camera 30.0,20.0 perspective 40 ·
+    /// zoom 1.50x · pan 0.10,0.00`.
     fn camera_text(&self) -> String {
         let c = &self.controls;
         let projection = match c.orbit.projection {
@@ -78,8 +79,13 @@ impl Viewer {
             1.0 => String::new(),
             z => format!(" · zoom {z:.2}x"),
         };
+        // In viewport heights, as `Controls::pan` keeps it.
+        let pan = match c.pan == glam::DVec2::ZERO {
+            true => String::new(),
+            false => format!(" · pan {:.2},{:.2}", c.pan.x, c.pan.y),
+        };
         format!(
-            "camera {:.1},{:.1} {projection}{zoom}",
+            "camera {:.1},{:.1} {projection}{zoom}{pan}",
             c.orbit.azimuth_deg, c.orbit.elevation_deg
         )
     }

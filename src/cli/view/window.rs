@@ -76,10 +76,15 @@ pub(super) struct Signalled;
 
 /// Ctrl-C and SIGTERM end the session as Q does: lacuna's and the window's
 /// objects are released, validation's verdict stands and the title's
-/// figures are printed, rather than the process dying mid-frame.
+/// figures are printed, rather than the process dying mid-frame. A second
+/// one ends the process at once (exit 130), for a session stuck in a frame.
 pub(super) fn end_on_signals(event_loop: &EventLoop<Signalled>) {
     let proxy = event_loop.create_proxy();
+    let asked = std::sync::atomic::AtomicBool::new(false);
     if let Err(e) = ctrlc::set_handler(move || {
+        if asked.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
         let _ = proxy.send_event(Signalled);
     }) {
         say_err!("note: Ctrl-C ends the process, not the session: {e}");
