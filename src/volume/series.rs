@@ -444,7 +444,9 @@ impl StepNorm {
                 ),
             ));
         }
-        if step.spacing != self.spacing {
+        // To f32's last bits: converters round a pixdim differently.
+        let near = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs());
+        if !(0..3).all(|i| near(step.spacing[i], self.spacing[i])) {
             let show = |[x, y, z]: [f32; 3]| format!("{x} x {y} x {z}");
             return Err(Error::invalid(
                 "time step",
@@ -470,7 +472,7 @@ impl StepNorm {
                         number(a0[0])
                     ),
                     true => format!(
-                        "a raw voxel's value is {} off step 0's (a NIfTI's scl_inter, or its scl_slope's sign)",
+                        "a raw voxel's value is {} off step 0's (a NIfTI's scl_inter), or its scl_slope's sign is not step 0's",
                         number(a[1] - a0[1])
                     ),
                 };

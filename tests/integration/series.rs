@@ -280,6 +280,13 @@ fn steps_share_step_0s_spacing_or_are_refused() {
         let bytes = nifti_bytes(&[4, 4, 4], 2, 8, spacing, &data);
         std::fs::write(dir.path().join(format!("s{k}.nii")), bytes).unwrap();
     }
+    // A pixdim rounded another way is the same grid.
+    let bytes = nifti_bytes(&[4, 4, 4], 2, 8, [1.0, 1.0, 1.000_001], &data);
+    std::fs::write(dir.path().join("r1.nii"), bytes).unwrap();
+    std::fs::copy(dir.path().join("s0.nii"), dir.path().join("r0.nii")).unwrap();
+    open(dir.path().join("r%d.nii").to_str().unwrap())
+        .load(1, None)
+        .unwrap();
     let series = open(dir.path().join("s%d.nii").to_str().unwrap());
     series.load(0, None).unwrap();
     let err = series.load(1, None).unwrap_err().to_string();
