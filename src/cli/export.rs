@@ -36,7 +36,8 @@ pub fn run(args: &ExportArgs) -> Result<ExitCode> {
     // Every volume opens as a series (one step where it has no time axis),
     // so a file pattern's step 0 is read as its other steps are.
     let raw = args.dims.zip(args.source_type).map(|(dims, ty)| RawLayout { dims, ty });
-    let series = Series::open(&args.volume, &LoadOptions { raw })?;
+    // Values are written in source units: no normalisation applies.
+    let series = Series::open(&args.volume, &LoadOptions { raw, value_range: None })?;
     series.check_step(args.time)?;
     let volume = series.load(args.time, None)?;
     let written = write_raw(&volume, &args.out, args.ty)?;

@@ -41,6 +41,23 @@ pub struct VolumeArgs {
     /// Voxel storage on the device: dense (one 3D image), bricks (a pool of the bricks that vary and a page table; constant bricks are not stored) or auto (dense while it fits the device's limits).
     #[arg(long, default_value_t = Storage::Auto)]
     pub storage: Storage,
+    /// Source values that a transfer function's 0 and 1 stand for, LO:HI (default: step 0's own range), in every step and channel: a series whose step 0 is empty, or volumes that share one TF.
+    #[arg(long, value_name = "LO:HI", value_parser = parse_value_range, allow_hyphen_values = true)]
+    pub value_range: Option<[f64; 2]>,
+}
+
+/// `LO:HI`, two finite numbers, LO below HI.
+pub fn parse_value_range(s: &str) -> Result<[f64; 2]> {
+    let bad = || lacuna::Error::invalid("value range", s, "expected LO:HI, two finite numbers with LO below HI");
+    let (lo, hi) = s.split_once(':').ok_or_else(bad)?;
+    let (lo, hi): (f64, f64) = (
+        lo.trim().parse().map_err(|_| bad())?,
+        hi.trim().parse().map_err(|_| bad())?,
+    );
+    match lo.is_finite() && hi.is_finite() && lo < hi {
+        true => Ok([lo, hi]),
+        false => Err(bad()),
+    }
 }
 
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {
@@ -72,6 +89,7 @@ impl VolumeArgs {
     fn options(&self) -> LoadOptions {
         LoadOptions {
             raw: self.dims.zip(self.voxel_type).map(|(dims, ty)| RawLayout { dims, ty }),
+            value_range: self.value_range,
         }
     }
 }

@@ -317,12 +317,20 @@ impl Series {
             return Volume::join(loaded);
         }
         let mut volume = self.load_raw(k, device, bricks)?;
+        // Step 0's range, or the one the options give.
+        let norm_of = |step0: &Volume| match self.options.value_range {
+            Some(range) => StepNorm::over(range, step0),
+            None => Ok(StepNorm::of(step0)),
+        };
         let first = match self.first.get() {
             Some(first) => *first,
-            None if k == 0 => *self.first.get_or_init(|| StepNorm::of(&volume)),
+            None if k == 0 => {
+                let norm = norm_of(&volume)?;
+                *self.first.get_or_init(|| norm)
+            }
             None => {
-                let step0 = self.load_raw(0, device, bricks)?;
-                *self.first.get_or_init(|| StepNorm::of(&step0))
+                let norm = norm_of(&self.load_raw(0, device, bricks)?)?;
+                *self.first.get_or_init(|| norm)
             }
         };
         first.apply(&mut volume, &self.step_name(k))?;
@@ -409,6 +417,46 @@ impl StepNorm {
         }
     }
 
+    /// Every step normalised over `[lo, hi]` in source units (a host's or
+    /// `--value-range`'s choice), the grid, type and scaling taken from
+    /// `v` (step 0): a value maps to `(value - lo) / (hi - lo)`, as a TF
+    /// sees it, whatever range each step's own values span.
+    pub fn over([lo, hi]: [f64; 2], v: &Volume) -> Result<StepNorm> {
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(Error::invalid(
+                "value range",
+                format!("{}:{}", number(lo), number(hi)),
+                "must be two finite values, the first below the second",
+            ));
+        }
+        if v.channel_count() > 1 {
+            return Err(Error::invalid(
+                "value range",
+                v.name.clone(),
+                "applies to one channel: join one-channel volumes with + to give each the range",
+            ));
+        }
+        let mut norm = StepNorm::of(v);
+        norm.range = [lo, hi];
+        norm.constant = false;
+        // Integer texels are read as stored / full (UNORM): source =
+        // k x stored + c, so the value's place in [lo, hi] is
+        // (texel - (lo - c) / (k full)) x k full / (hi - lo).
+        if v.data.texel_bytes() != 4 {
+            let full = match v.data.texel_bytes() {
+                1 => 255.0,
+                _ => 65535.0,
+            };
+            let [k, c] = norm.affine.unwrap_or_else(|| {
+                // One stored value: a unit per stored unit, through it.
+                let (smin, _) = v.data.stored_range();
+                [1.0, v.value_range[0] - smin]
+            });
+            norm.norm = [((lo - c) / (k * full)) as f32, (k * full / (hi - lo)) as f32];
+        }
+        Ok(norm)
+    }
+
     /// What a step 0 of one value throughout means for the steps after it
     /// (`of` chose the range), None for one with a range.
     fn constant_note(&self) -> Option<String> {
@@ -421,7 +469,7 @@ impl StepNorm {
         };
         self.constant.then(|| {
             format!(
-                "step 0 holds one value ({}) throughout, so every step is normalised over {over} (a transfer function's 0 .. 1), and values past it clamp",
+                "step 0 holds one value ({}) throughout, so every step is normalised over {over} (a transfer function's 0 .. 1), and values past it clamp: --value-range LO:HI chooses the range",
                 number(lo)
             )
         })

@@ -14,6 +14,10 @@ use std::path::{Path, PathBuf};
 pub struct LoadOptions {
     /// Layout of a raw file whose name does not encode it (`--dims`, `--type`).
     pub raw: Option<RawLayout>,
+    /// Source values that map to a transfer function's 0 and 1, in every
+    /// step and channel (`--value-range`; `StepNorm::over`); None: step
+    /// 0's own range.
+    pub value_range: Option<[f64; 2]>,
 }
 
 /// Where a volume comes from: a file or a generator.

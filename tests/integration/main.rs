@@ -45,5 +45,6 @@ mod soundness;
 mod stream;
 mod stream_files;
 mod transfer_function;
+mod value_range;
 mod view;
 mod volumes;

@@ -174,6 +174,7 @@ fn bad_patterns_and_steps_are_one_line_errors() {
             dims: [4, 4, 4],
             ty: lacuna::volume::VoxelType::U8,
         }),
+        ..LoadOptions::default()
     };
     let series = Series::open(other.to_str().unwrap(), &layout).unwrap();
     assert_eq!(series.steps(), 2);

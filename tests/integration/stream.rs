@@ -162,6 +162,7 @@ fn a_raw_file_streams_as_it_loads() {
             dims,
             ty: VoxelType::U16,
         }),
+        ..LoadOptions::default()
     };
     let plain = dir.path().join("plain.bin");
     std::fs::write(&plain, &bytes).unwrap();

@@ -91,6 +91,7 @@ fn raw_files_with_explicit_layout() {
             dims,
             ty: VoxelType::U16,
         }),
+        ..LoadOptions::default()
     };
     let v = Volume::load(path.to_str().unwrap(), &opts).unwrap();
     assert_pattern(&v, dims);
