@@ -55,6 +55,10 @@ pub struct StepNorm {
     /// Step 0 held one value throughout: `range` and `norm` were chosen,
     /// not measured (`of`).
     constant: bool,
+    /// `range` was given (`over`), not step 0's: an integer step's norm
+    /// comes from its own scaling, so a step 0 of one value (no scaling
+    /// to tell) maps later steps right.
+    given: bool,
 }
 
 /// `[k, c]` with source value = k x stored + c for a volume of integer
@@ -414,6 +418,7 @@ impl StepNorm {
             range: [lo, if hi > lo { hi } else { lo + lo.abs().max(1.0) }],
             affine: source_affine(v),
             constant: hi <= lo,
+            given: false,
         }
     }
 
@@ -439,22 +444,36 @@ impl StepNorm {
         let mut norm = StepNorm::of(v);
         norm.range = [lo, hi];
         norm.constant = false;
-        // Integer texels are read as stored / full (UNORM): source =
-        // k x stored + c, so the value's place in [lo, hi] is
-        // (texel - (lo - c) / (k full)) x k full / (hi - lo).
+        norm.given = true;
         if v.data.texel_bytes() != 4 {
-            let full = match v.data.texel_bytes() {
-                1 => 255.0,
-                _ => 65535.0,
-            };
-            let [k, c] = norm.affine.unwrap_or_else(|| {
-                // One stored value: a unit per stored unit, through it.
-                let (smin, _) = v.data.stored_range();
-                [1.0, v.value_range[0] - smin]
-            });
-            norm.norm = [((lo - c) / (k * full)) as f32, (k * full / (hi - lo)) as f32];
+            norm.norm = norm.integer_norm(v);
+            if !norm.norm.iter().all(|n| n.is_finite()) {
+                return Err(Error::invalid(
+                    "value range",
+                    format!("{}:{}", number(lo), number(hi)),
+                    format!("is too narrow or too wide for {}'s values in f32", v.name),
+                ));
+            }
         }
         Ok(norm)
+    }
+
+    /// An integer step's norm over the given `range`: its texels are read
+    /// as stored / full (UNORM) and source = k x stored + c, so a value's
+    /// place in [lo, hi] is (texel - (lo - c) / (k full)) x k full / (hi - lo).
+    /// A step of one stored value has no k to tell: a unit per stored
+    /// unit, through its value (any k maps one value exactly).
+    fn integer_norm(&self, step: &Volume) -> [f32; 2] {
+        let [lo, hi] = self.range;
+        let full = match step.data.texel_bytes() {
+            1 => 255.0,
+            _ => 65535.0,
+        };
+        let [k, c] = source_affine(step).unwrap_or_else(|| {
+            let (smin, _) = step.data.stored_range();
+            [1.0, step.value_range[0] - smin]
+        });
+        [((lo - c) / (k * full)) as f32, (k * full / (hi - lo)) as f32]
     }
 
     /// What a step 0 of one value throughout means for the steps after it
@@ -536,11 +555,15 @@ impl StepNorm {
         // range only by an offset past f32: an error, not NaN texels.
         if !step.norm.iter().all(|n| n.is_finite()) {
             let [lo, hi] = step.value_range;
+            let onto = match self.given {
+                true => "the value range",
+                false => "step 0's range",
+            };
             return Err(Error::invalid(
                 "time step",
                 what.to_string(),
                 format!(
-                    "its values ({} .. {}) cannot be mapped onto step 0's range ({} .. {}) in f32",
+                    "its values ({} .. {}) cannot be mapped onto {onto} ({} .. {}) in f32",
                     crate::error::number(lo),
                     crate::error::number(hi),
                     crate::error::number(self.range[0]),
@@ -556,7 +579,10 @@ impl StepNorm {
     /// their own step's range, so `v` is recovered and mapped onto step 0's.
     fn norm_for(&self, step: &Volume) -> [f32; 2] {
         if step.data.texel_bytes() != 4 {
-            return self.norm;
+            return match self.given {
+                true => self.integer_norm(step),
+                false => self.norm,
+            };
         }
         let [lo0, hi0] = self.range;
         let [lo, hi] = step.value_range;

@@ -16,7 +16,8 @@ pub struct LoadOptions {
     pub raw: Option<RawLayout>,
     /// Source values that map to a transfer function's 0 and 1, in every
     /// step and channel (`--value-range`; `StepNorm::over`); None: step
-    /// 0's own range.
+    /// 0's own range. `Series` applies it as it normalises each step;
+    /// `Volume::load` does not (`StepNorm::over(..).apply` does it there).
     pub value_range: Option<[f64; 2]>,
 }
 

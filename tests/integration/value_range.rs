@@ -54,6 +54,21 @@ fn every_step_maps_its_values_over_the_range_given() {
         let got = v.normalize(v.data.texel(i)) as f64;
         assert!((got - want).abs() < 1e-6, "scaled voxel {i}: {got} against {want}");
     }
+    // A scaled series whose step 0 is one value has no slope to tell:
+    // each later step maps by its own.
+    for (k, raw) in [vec![0u8; 64], data.clone()].into_iter().enumerate() {
+        let mut bytes = nifti_bytes(&[4, 4, 4], 2, 8, [1.0; 3], &raw);
+        bytes[112..116].copy_from_slice(&2.0f32.to_le_bytes());
+        std::fs::write(dir.path().join(format!("t{k}.nii")), bytes).unwrap();
+    }
+    let steps = series(&dir.path().join("t%d.nii"), [0.0, 126.0]);
+    assert_eq!(steps.load(0, None).unwrap().normalize(0.0), 0.0);
+    let v = steps.load(1, None).unwrap();
+    for i in [0usize, 20, 63] {
+        let want = 2.0 * i as f64 / 126.0;
+        let got = v.normalize(v.data.texel(i)) as f64;
+        assert!((got - want).abs() < 1e-6, "step 1 voxel {i}: {got} against {want}");
+    }
 }
 
 #[test]
@@ -109,7 +124,7 @@ fn every_structure_equals_naive_under_a_range_and_bad_ranges_are_one_line() {
         );
         assert_eq!(d.code, 0, "{accel} against naive: {}{}", d.stdout, d.stderr);
     }
-    for range in ["5:1", "1:1", "nan:1", "0:inf", "3", "a:b"] {
+    for range in ["5:1", "1:1", "nan:1", "0:inf", "3", "a:b", "0:1e-37"] {
         fails(
             &["info", "menger:9", "--value-range", range],
             &[],

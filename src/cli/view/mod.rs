@@ -104,6 +104,8 @@ struct Viewer {
     /// Something on screen changed since the last frame: draw one. An
     /// unchanged window is not redrawn (`wants_frame`).
     dirty: bool,
+    /// This frame redraws one presented to a stale swapchain.
+    stale_redraw: bool,
     modifiers: ModifiersState,
     cursor: Option<(f64, f64)>,
     buttons: (bool, bool),
@@ -279,6 +281,7 @@ impl App<'_> {
             fps: 0.0,
             frame_ms: 0.0,
             dirty: true,
+            stale_redraw: false,
             modifiers: ModifiersState::empty(),
             cursor: None,
             buttons: (false, false),
@@ -479,8 +482,10 @@ impl Viewer {
         }
         self.scene.finish()?;
         self.drawn += 1;
-        // A frame presented to a swapchain gone stale is drawn again on the new one.
-        self.dirty = presented.stale;
+        // A frame presented to a swapchain gone stale is drawn again on the
+        // new one, once: a surface that stays suboptimal must not spin.
+        self.dirty = presented.stale && !self.stale_redraw;
+        self.stale_redraw = self.dirty;
         // S presses this frame was read back for; keys pressed now ask of the next.
         let shots = std::mem::take(&mut self.shots);
         self.press_pending()?;
