@@ -157,9 +157,30 @@ pub struct DatasetConfig {
     /// Voxel storage on the device: dense, bricks, bricks:EDGE or auto
     /// (default auto, as `render --storage`).
     pub storage: Option<String>,
+    /// `[LO, HI]`: the source values the TF's 0 and 1 stand for, in every
+    /// step and channel (as `render --value-range`; default: step 0's own
+    /// range).
+    pub value_range: Option<[f64; 2]>,
 }
 
 impl DatasetConfig {
+    /// How its volume loads: with its `value_range`, checked.
+    pub fn options(&self) -> Result<crate::volume::LoadOptions> {
+        if let Some([lo, hi]) = self.value_range {
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(Error::invalid(
+                    "value_range",
+                    format!("[{lo}, {hi}]"),
+                    "must be two finite values, the first below the second",
+                ));
+            }
+        }
+        Ok(crate::volume::LoadOptions {
+            value_range: self.value_range,
+            ..Default::default()
+        })
+    }
+
     /// Its voxel storage (`storage`, default auto).
     pub fn storage(&self) -> Result<Storage> {
         self.storage.as_deref().map_or(Ok(Storage::Auto), Storage::parse)
@@ -198,6 +219,9 @@ impl DatasetConfig {
         // The frames are step FIRST's, and the steps' records these steps'.
         if let Some([first, last]) = self.time {
             look.push(format!("time {first}..{last}"));
+        }
+        if let Some([lo, hi]) = self.value_range {
+            look.push(format!("range {lo}..{hi}"));
         }
         let storage = self.storage()?;
         if storage != Storage::Auto {

@@ -10,7 +10,7 @@ use super::dataset::parse_tf;
 use super::series::check_range;
 use crate::error::{Error, Result};
 use crate::render::{Filter, FrameDesc, Mode};
-use crate::volume::{check_one_channel, LoadOptions, Series, Storage};
+use crate::volume::{check_one_channel, Series, Storage};
 
 /// Checks every data set of `config` read from `origin`; an error names
 /// the file and the data set.
@@ -18,7 +18,8 @@ pub fn check(config: &BenchConfig, origin: &str) -> Result<()> {
     for ds in &config.datasets {
         let label = ds.label(config)?;
         let within = |e: Error| Error::format(origin, format!("data set '{label}': {e}"));
-        let series = match Series::open(&ds.volume, &LoadOptions::default()).and_then(|s| s.check_files().map(|_| s)) {
+        let opened = ds.options().and_then(|o| Series::open(&ds.volume, &o));
+        let series = match opened.and_then(|s| s.check_files().map(|_| s)) {
             Ok(s) => s,
             // Skipped with a note when the run reaches it.
             Err(Error::Io { .. }) if ds.optional => continue,

@@ -23,7 +23,7 @@ use crate::gpu::Context;
 use crate::render::metadata::{describe, Source};
 use crate::render::{Filter, FrameBuilder, FrameDesc, Octants, Projection, Renderer, Scene};
 use crate::tf::GpuTransferFunction;
-use crate::volume::{BrickGrid, GpuVolume, LoadOptions, Series, BRICK};
+use crate::volume::{BrickGrid, GpuVolume, Series, BRICK};
 use std::collections::BTreeMap;
 
 /// What a run produced.
@@ -276,7 +276,7 @@ pub fn run(ctx: &Context, config: &BenchConfig, options: &RunOptions) -> Result<
 
     for ds in &config.datasets {
         progress.at(&format!("{} loading", ds.volume));
-        let series = Series::open(&ds.volume, &LoadOptions::default());
+        let series = ds.options().and_then(|o| Series::open(&ds.volume, &o));
         let loaded = match series.and_then(|s| {
             load(
                 (ds.storage()?, ctx.info()),

@@ -559,6 +559,13 @@ fn protocol_fields_have_documented_defaults_and_data_sets_their_own_ert() {
     assert_eq!(c.datasets[1].ert, Some(0.99));
     assert_eq!(c.datasets[1].label(&c).unwrap(), "nbody:8 [ert 0.99]");
     assert_eq!(c.datasets[0].label(&c).unwrap(), "nbody:8");
+    let ranged = BenchConfig::parse(
+        "[[dataset]]\nvolume = \"nbody:8\"\nvalue_range = [0.0, 500.0]\n[[structure]]\nlabel = \"n\"\naccel = \"naive\"\n",
+        "range.toml",
+    )
+    .unwrap();
+    assert_eq!(ranged.datasets[0].label(&ranged).unwrap(), "nbody:8 [range 0..500]");
+    assert_eq!(ranged.datasets[0].options().unwrap().value_range, Some([0.0, 500.0]));
     // An iso value as a TOML number is the same as its text; a time range
     // is in the label.
     let iso = |value: &str| {
@@ -583,6 +590,38 @@ fn protocol_fields_have_documented_defaults_and_data_sets_their_own_ert() {
     let on = auto.datasets.iter().filter(|d| d.ert.is_some()).count();
     assert_eq!(2 * on, auto.datasets.len());
     assert!(auto.structures.iter().any(|s| s.accel == "auto"));
+}
+
+/// A data set's `value_range` maps every step it times, and each new
+/// step's frame stays naive's.
+#[test]
+fn a_data_sets_value_range_is_timed_exact_over_its_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("range.toml");
+    std::fs::write(
+        &cfg,
+        "size = [16, 16]\nframes = 1\nwarmup = 0\nbuilds = 1\nrounds = 2\n\
+         [[dataset]]\nvolume = \"nbody:16\"\ntime = [0, 1]\nvalue_range = [0.0, 400.0]\ntf = \"ramp:0.2:1\"\n\
+         [[structure]]\nlabel = \"g\"\naccel = \"grid\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (code, stdout, stderr) = lacuna(&[
+        "bench",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--validate",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let steps: Vec<lacuna::bench::series::StepRecord> =
+        serde_json::from_str(&std::fs::read_to_string(out.join("steps.json")).unwrap()).unwrap();
+    assert!(!steps.is_empty());
+    for r in &steps {
+        assert_eq!(r.dataset, "nbody:16 [time 0..1; range 0..400]", "{r:?}");
+        assert_eq!(r.differing_pixels, 0, "{r:?}");
+    }
 }
 
 #[test]
@@ -633,6 +672,11 @@ fn bad_bench_input_is_one_line() {
             "size3",
             ("size = [8, 8]", "size = [8, 8, 8]"),
             "size must be [width, height], not 3 numbers",
+        ),
+        (
+            "range",
+            ("volume = \"nbody:8\"", "volume = \"nbody:8\"\nvalue_range = [5.0, 1.0]"),
+            "data set 'nbody:8 [range 5..1]': invalid value_range '[5, 1]': must be two finite values",
         ),
         (
             "time3",
