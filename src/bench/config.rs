@@ -166,14 +166,8 @@ pub struct DatasetConfig {
 impl DatasetConfig {
     /// How its volume loads: with its `value_range`, checked.
     pub fn options(&self) -> Result<crate::volume::LoadOptions> {
-        if let Some([lo, hi]) = self.value_range {
-            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return Err(Error::invalid(
-                    "value_range",
-                    format!("[{lo}, {hi}]"),
-                    "must be two finite values, the first below the second",
-                ));
-            }
+        if let Some(range) = self.value_range {
+            crate::volume::check_value_range(range)?;
         }
         Ok(crate::volume::LoadOptions {
             value_range: self.value_range,

@@ -2,8 +2,8 @@
 //! from their specs and headers, no voxel read: a missing file, a time
 //! range past the series' end, bricks with the hardware filter, and (from
 //! `Series::channels_known`) more transfer functions than channels or a
-//! look several channels cannot take. Found minutes into a run, each would throw the data sets already
-//! timed away.
+//! look several channels cannot take. Found minutes into a run, each
+//! would throw the data sets already timed away.
 
 use super::config::BenchConfig;
 use super::dataset::parse_tf;

@@ -46,18 +46,14 @@ pub struct VolumeArgs {
     pub value_range: Option<[f64; 2]>,
 }
 
-/// `LO:HI`, two finite numbers, LO below HI.
+/// `LO:HI`: two numbers, as `check_value_range` takes them.
 pub fn parse_value_range(s: &str) -> Result<[f64; 2]> {
     let bad = || lacuna::Error::invalid("value range", s, "expected LO:HI, two finite numbers with LO below HI");
     let (lo, hi) = s.split_once(':').ok_or_else(bad)?;
-    let (lo, hi): (f64, f64) = (
-        lo.trim().parse().map_err(|_| bad())?,
-        hi.trim().parse().map_err(|_| bad())?,
-    );
-    match lo.is_finite() && hi.is_finite() && lo < hi {
-        true => Ok([lo, hi]),
-        false => Err(bad()),
-    }
+    let range = [lo, hi].map(|v| v.trim().parse::<f64>());
+    let [Ok(lo), Ok(hi)] = range else { return Err(bad()) };
+    lacuna::volume::check_value_range([lo, hi])?;
+    Ok([lo, hi])
 }
 
 pub fn parse_dims(s: &str) -> Result<[u32; 3]> {

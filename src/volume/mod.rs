@@ -49,7 +49,7 @@ pub use pool::{
     POOL_IMAGES_CONSTANT_ID,
 };
 pub use raw::{parse_dims, parse_type, RawLayout};
-pub use series::{Series, StepNorm};
+pub use series::{check_value_range, Series, StepNorm};
 pub use spec::{LoadOptions, VolumeSpec};
 pub use stream::{HostPool, PoolStream, RangeAcross, StreamProgress, StreamTo};
 
@@ -100,6 +100,16 @@ impl VoxelData {
             VoxelData::U16(_) => 2,
             VoxelData::F32(_) => 4,
             VoxelData::Bricks(p) => p.layout.texel_bytes,
+        }
+    }
+
+    /// What a stored value is divided by where the GPU samples it (UNORM
+    /// u8 and u16 images: 255, 65535); 1 for floats.
+    pub fn unorm_scale(&self) -> f64 {
+        match self.texel_bytes() {
+            1 => 255.0,
+            2 => 65535.0,
+            _ => 1.0,
         }
     }
 
@@ -320,11 +330,7 @@ impl Volume {
             (lo, hi) if lo > hi => (0.0, 0.0),
             r => r,
         };
-        let full = match data.texel_bytes() {
-            1 => 255.0,
-            2 => 65535.0,
-            _ => 1.0,
-        };
+        let full = data.unorm_scale();
         let norm = if hi > lo {
             [(lo / full) as f32, (full / (hi - lo)) as f32]
         } else {

@@ -397,6 +397,19 @@ fn one_step(path: &Path) -> Result<&Path> {
     }
 }
 
+/// An error unless `[lo, hi]` can be a value range (`StepNorm::over`):
+/// two finite values, the first below the second.
+pub fn check_value_range([lo, hi]: [f64; 2]) -> Result<()> {
+    match lo.is_finite() && hi.is_finite() && lo < hi {
+        true => Ok(()),
+        false => Err(Error::invalid(
+            "value range",
+            format!("{}:{}", number(lo), number(hi)),
+            "must be two finite values, the first below the second",
+        )),
+    }
+}
+
 impl StepNorm {
     /// Step 0's grid, type and range; a step 0 with one value throughout
     /// (nothing to normalise by) gives the full texel range, or one unit
@@ -427,13 +440,7 @@ impl StepNorm {
     /// `v` (step 0): a value maps to `(value - lo) / (hi - lo)`, as a TF
     /// sees it, whatever range each step's own values span.
     pub fn over([lo, hi]: [f64; 2], v: &Volume) -> Result<StepNorm> {
-        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return Err(Error::invalid(
-                "value range",
-                format!("{}:{}", number(lo), number(hi)),
-                "must be two finite values, the first below the second",
-            ));
-        }
+        check_value_range([lo, hi])?;
         if v.channel_count() > 1 {
             return Err(Error::invalid(
                 "value range",
@@ -465,10 +472,7 @@ impl StepNorm {
     /// unit, through its value (any k maps one value exactly).
     fn integer_norm(&self, step: &Volume) -> [f32; 2] {
         let [lo, hi] = self.range;
-        let full = match step.data.texel_bytes() {
-            1 => 255.0,
-            _ => 65535.0,
-        };
+        let full = step.data.unorm_scale();
         let [k, c] = source_affine(step).unwrap_or_else(|| {
             let (smin, _) = step.data.stored_range();
             [1.0, step.value_range[0] - smin]

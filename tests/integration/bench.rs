@@ -676,7 +676,7 @@ fn bad_bench_input_is_one_line() {
         (
             "range",
             ("volume = \"nbody:8\"", "volume = \"nbody:8\"\nvalue_range = [5.0, 1.0]"),
-            "data set 'nbody:8 [range 5..1]': invalid value_range '[5, 1]': must be two finite values",
+            "data set 'nbody:8 [range 5..1]': invalid value range '5:1': must be two finite values",
         ),
         (
             "time3",
