@@ -1,6 +1,9 @@
 //! A printf pattern of files (`run_%04d_128x128x128_float32.raw`): the
 //! files of a time series, one step each, in number order.
 
+#[cfg(feature = "loaders")]
+use super::spec::is_nifti;
+use super::spec::is_nrrd;
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -85,5 +88,25 @@ impl Pattern {
             ));
         }
         Ok(found.into_iter().map(|(_, p)| p).collect())
+    }
+}
+
+/// `path`, a pattern's file, where it holds one time step: a NIfTI or
+/// NRRD with a time axis would give its step 0 alone, its other steps
+/// unseen. Its header only is read.
+pub(super) fn one_step(path: &Path) -> Result<&Path> {
+    let steps = match path {
+        p if is_nrrd(p) => super::nrrd::steps(p)?,
+        #[cfg(feature = "loaders")]
+        p if is_nifti(p) => super::nifti::steps(p)?,
+        _ => 1,
+    };
+    match steps {
+        1 => Ok(path),
+        n => Err(Error::invalid(
+            "time step",
+            path.display().to_string(),
+            format!("holds {n} time steps: the files of a printf pattern hold one step each (give a file with a time axis alone)"),
+        )),
     }
 }

@@ -13,7 +13,7 @@
 //! dimensions and voxel type.
 
 use super::decode::span_ratio;
-use super::pattern::Pattern;
+use super::pattern::{one_step, Pattern};
 use super::procedural::{self, Generator};
 #[cfg(feature = "loaders")]
 use super::spec::is_nifti;
@@ -374,26 +374,6 @@ impl Series {
             Source::Nrrd { path, .. } => super::nrrd::load_step(path, k, device),
             Source::Channels(_) => unreachable!("Series::load joins channels' steps"),
         }
-    }
-}
-
-/// `path`, a pattern's file, where it holds one time step: a NIfTI or
-/// NRRD with a time axis would give its step 0 alone, its other steps
-/// unseen. Its header only is read.
-fn one_step(path: &Path) -> Result<&Path> {
-    let steps = match path {
-        p if is_nrrd(p) => super::nrrd::steps(p)?,
-        #[cfg(feature = "loaders")]
-        p if is_nifti(p) => super::nifti::steps(p)?,
-        _ => 1,
-    };
-    match steps {
-        1 => Ok(path),
-        n => Err(Error::invalid(
-            "time step",
-            path.display().to_string(),
-            format!("holds {n} time steps: the files of a printf pattern hold one step each (give a file with a time axis alone)"),
-        )),
     }
 }
 
